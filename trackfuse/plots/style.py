@@ -1,0 +1,54 @@
+"""Shared figure style: one look for every trackfuse figure.
+
+Use :func:`new_figure` for axes with the house style, :func:`band` for a mean or proportion
+curve with its confidence band, and :func:`reference_line` for bounds and exact optima.
+"""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+RC = {
+    "figure.dpi": 110,
+    "savefig.dpi": 200,
+    "font.size": 9,
+    "axes.titlesize": 10,
+    "axes.labelsize": 9,
+    "legend.fontsize": 8,
+    "axes.grid": True,
+    "grid.alpha": 0.3,
+    "lines.linewidth": 1.4,
+    "lines.markersize": 4,
+    "figure.constrained_layout.use": True,
+}
+
+
+def new_figure(ncols: int = 1, nrows: int = 1, width: float = 5.0, height: float = 3.4):
+    """Return ``(fig, axes)`` with the house style; ``axes`` is a flat array if > 1 panel."""
+    with plt.rc_context(RC):
+        fig, axes = plt.subplots(nrows, ncols, figsize=(width * ncols, height * nrows),
+                                 squeeze=False)
+    fig.set_layout_engine("constrained")
+    flat = axes.ravel()
+    return fig, (flat[0] if flat.size == 1 else flat)
+
+
+def band(ax, x, y, low, high, label: str, marker: str = "o", **kw) -> None:
+    """Draw ``y`` against ``x`` with a shaded ``[low, high]`` confidence band."""
+    x = np.asarray(x, dtype=float)
+    (line,) = ax.plot(x, y, marker=marker, label=label, **kw)
+    ax.fill_between(x, np.asarray(low, dtype=float), np.asarray(high, dtype=float),
+                    color=line.get_color(), alpha=0.18, linewidth=0)
+
+
+def reference_line(ax, y: float, label: str, **kw) -> None:
+    """A horizontal reference (bound, exact optimum) drawn dashed in black."""
+    kw.setdefault("color", "k")
+    kw.setdefault("linestyle", "--")
+    kw.setdefault("linewidth", 1.0)
+    ax.axhline(y, label=label, **kw)
