@@ -23,7 +23,9 @@ An experiment module is the only place that knows its science. It exposes one mo
 Row columns: the runner adds ``point``, ``trial`` and the swept parameter values; the
 experiment supplies ``algorithm``, the keys listed in ``row_keys`` and numeric metric columns.
 Metrics listed in ``binary_metrics`` are 0/1 and get Wilson intervals in the summary; every
-other numeric column gets a mean with a Student-t interval.
+other numeric column gets a mean with a Student-t interval. Columns whose name ends in
+``_time_s`` are wall/CPU-time measurements: the runner keeps them out of ``trials.csv`` (which
+must be byte-identical for any worker count) and writes them to ``timings.csv`` instead.
 """
 
 from __future__ import annotations
@@ -43,9 +45,10 @@ Params = Mapping[str, Any]
 class Param:
     """One parameter of an experiment's schema.
 
-    ``kind`` is one of ``float``, ``int``, ``bool``, ``str`` or ``list`` (a list of floats);
-    ``low``/``high`` are inclusive bounds for numbers (and for every element of a list);
-    ``choices`` restricts strings (or numbers) to a fixed set.
+    ``kind`` is one of ``float``, ``int``, ``bool``, ``str`` or ``list`` (a non-empty list of
+    numbers, or of strings when ``choices`` is given); ``low``/``high`` are inclusive bounds
+    for numbers (and for every element of a list); ``choices`` restricts strings (or numbers,
+    or every element of a list) to a fixed set.
     """
 
     key: str

@@ -1,0 +1,179 @@
+"""The ``trackfuse`` command line: run, plot, validate, list.
+
+Exit status: 0 success; 1 figures or tables could not be drawn; 2 bad input (config,
+override, option, run folder); 3 the run finished but some trials failed; 130 interrupted
+(re-run the same command to resume).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+import yaml
+from rich.console import Console
+from rich.table import Table
+
+from trackfuse import experiments
+from trackfuse.config import ConfigError, allowed_text, load
+from trackfuse.executors import KINDS, ExecutorError, default_workers
+from trackfuse.sweep import SweepError, parse_sets, parse_sweeps
+
+app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
+                  help="Monte Carlo experiment runner for passive multi-sensor tracking.")
+out = Console()
+
+
+def fail(message: str, code: int = 2) -> None:
+    """Print a one-line error to stderr and exit."""
+    print(f"error: {message}", file=sys.stderr)
+    raise typer.Exit(code)
+
+
+def _load(cfg: Path, sets: list[str], sweeps: list[str], **top):
+    try:
+        overrides = parse_sets(sets)
+        overrides.update({k: v for k, v in top.items() if v is not None})
+        return load(cfg, overrides, parse_sweeps(sweeps))
+    except SweepError as err:
+        fail(f"{cfg}: override: {err}")
+    except ConfigError as err:
+        fail(str(err))
+
+
+Sets = Annotated[list[str], typer.Option("--set", help="Override a value: key=value "
+                                                        "(repeatable).")]
+Sweeps = Annotated[list[str], typer.Option("--sweep", help="Sweep an axis: key=v1,v2 or "
+                                                           "key=range(a,b,s) (repeatable).")]
+
+
+@app.command()
+def run(
+    cfg: Annotated[Path, typer.Argument(help="Scenario config (YAML).")],
+    trials: Annotated[int | None, typer.Option(help="Trials per sweep point.")] = None,
+    workers: Annotated[int, typer.Option(help="Parallel workers (default: all cores).")] = 0,
+    seed: Annotated[int | None, typer.Option(help="Root seed.")] = None,
+    out_dir: Annotated[Path, typer.Option("--out", help="Output root folder.")] = Path("results"),
+    sets: Sets = [],  # noqa: B006 - typer reads the default
+    sweeps: Sweeps = [],  # noqa: B006
+    executor: Annotated[str, typer.Option(help="serial, process or dask.")] = "process",
+    scheduler: Annotated[str | None, typer.Option(help="dask scheduler address, "
+                                                       "e.g. tcp://host:8786.")] = None,
+    scheduler_file: Annotated[str | None, typer.Option(help="dask scheduler file.")] = None,
+    dry_run: Annotated[bool, typer.Option("--dry-run", help="Print the resolved config and "
+                                                            "the work, run nothing.")] = False,
+    no_plots: Annotated[bool, typer.Option("--no-plots", help="Skip figures.")] = False,
+    no_progress: Annotated[bool, typer.Option("--no-progress", help="No progress output.")]
+    = False,
+) -> None:
+    """Run CFG: every sweep point x trial, then trials.csv, summary.csv and figures."""
+    from trackfuse.runner import RunInterrupted, Runner
+
+    config = _load(cfg, sets, sweeps, trials=trials, seed=seed)
+    if executor not in KINDS:
+        fail(f"--executor: got {executor!r}; allowed: {', '.join(KINDS)}")
+    if workers < 0:
+        fail(f"--workers: got {workers}; allowed: an integer >= 0 (0 = all cores)")
+    runner = Runner(config, out_dir, workers=workers or default_workers(), executor=executor,
+                    scheduler=scheduler, scheduler_file=scheduler_file, plots=not no_plots,
+                    progress=not no_progress, command=sys.argv)
+    if dry_run:
+        print(yaml.safe_dump(config.to_dict(), sort_keys=False), end="")
+        print(f"# {len(runner.points)} points x {config.trials} trials = "
+                  f"{runner.total_trials} trials in batches of {config.batch_size}; "
+                  f"output: {runner.folder.path}")
+        return
+    try:
+        outcome = runner.run()
+    except RunInterrupted as err:
+        print(f"interrupted: {err.done}/{err.total} trials saved in {err.folder}; run the same "
+              "command again to resume", file=sys.stderr)
+        raise typer.Exit(130) from None
+    except ExecutorError as err:
+        fail(str(err))
+    if outcome.computed_trials == 0 and outcome.rows == 0:
+        print(f"already complete: {outcome.folder}")
+    else:
+        print(f"wrote {outcome.folder}: {outcome.rows} rows, {outcome.total_trials} trials "
+                  f"({outcome.computed_trials} computed now) in {outcome.seconds:.1f} s, "
+                  f"{len(outcome.figures)} figure files")
+    for message in outcome.figure_errors:
+        print(f"warning: {message}", file=sys.stderr)
+    if outcome.failed_trials:
+        print(f"error: {outcome.failed_trials} trial rows failed (status=failed in trials.csv)",
+              file=sys.stderr)
+        raise typer.Exit(3)
+    if outcome.figure_errors:
+        raise typer.Exit(1)
+
+
+@app.command()
+def plot(run_dir: Annotated[Path, typer.Argument(help="A finished run folder.")]) -> None:
+    """Redraw every figure and table of RUN_DIR from its CSVs (nothing is recomputed)."""
+    from trackfuse.results import CONFIG, RunFolder
+    from trackfuse.runner import draw_reports
+
+    folder = RunFolder(run_dir)
+    manifest = folder.read_manifest()
+    if manifest is None:
+        fail(f"{run_dir}: not a trackfuse run folder (no readable manifest.json)")
+    if manifest.get("status") != "complete":
+        fail(f"{run_dir}: run is {manifest.get('status')}, not complete; run the same "
+             "`trackfuse run` command again to finish it")
+    resolved = yaml.safe_load((run_dir / CONFIG).read_text())
+    try:
+        experiment = experiments.get(resolved["experiment"])
+    except experiments.UnknownExperiment:
+        fail(f"{run_dir}: unknown experiment {resolved['experiment']!r}")
+    figures, errors = draw_reports(run_dir, experiment, resolved)
+    print(f"drew {len(figures)} figure files in {run_dir / 'figures'}")
+    for message in errors:
+        print(f"warning: {message}", file=sys.stderr)
+    if errors:
+        raise typer.Exit(1)
+
+
+@app.command()
+def validate(
+    cfg: Annotated[Path, typer.Argument(help="Scenario config (YAML).")],
+    sets: Sets = [],  # noqa: B006
+    sweeps: Sweeps = [],  # noqa: B006
+) -> None:
+    """Check CFG (and overrides) without running anything."""
+    from trackfuse.sweep import expand
+
+    config = _load(cfg, sets, sweeps)
+    points = len(expand(config.sweep, config.sweep_mode))
+    print(f"ok: {cfg}: {config.experiment.name}, {points} points x {config.trials} trials")
+
+
+@app.command("list")
+def list_experiments(
+    name: Annotated[str | None, typer.Argument(help="Show this experiment's parameters.")]
+    = None,
+) -> None:
+    """List experiments, or one experiment's parameters with defaults and units."""
+    if name is None:
+        table = Table("experiment", "title", "parameters")
+        for exp_name in experiments.names():
+            try:
+                exp = experiments.get(exp_name)
+                table.add_row(exp_name, exp.title, str(len(exp.params)))
+            except ImportError as err:
+                table.add_row(exp_name, f"(unavailable: {err})", "")
+        out.print(table)
+        return
+    try:
+        exp = experiments.get(name)
+    except experiments.UnknownExperiment:
+        fail(f"unknown experiment {name!r}; allowed: {', '.join(experiments.names())}")
+    table = Table("parameter", "default", "unit", "allowed", "meaning", title=exp.title)
+    for p in exp.params:
+        table.add_row(p.key, str(p.default), p.unit, allowed_text(p), p.doc)
+    out.print(table)
+
+
+if __name__ == "__main__":
+    app()

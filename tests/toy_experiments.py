@@ -1,0 +1,73 @@
+"""Experiments defined for the runner's tests only (never shipped in the package)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from trackfuse.experiments import register
+from trackfuse.experiments.base import Experiment, Param
+
+
+def gaussian_trial(params, rng: np.random.Generator) -> list[dict]:
+    """Sample mean of ``n`` draws from N(mu, sigma^2), two 'algorithms' on the same data."""
+    x = rng.normal(params["mu"], params["sigma"], int(params["n"]))
+    if params["fail_every"] and rng.integers(params["fail_every"]) == 0:
+        raise FloatingPointError("synthetic divergence")
+    return [
+        {"algorithm": "mean", "estimate": float(x.mean()), "covered":
+            int(abs(x.mean() - params["mu"]) < 1.96 * params["sigma"] / np.sqrt(len(x)))},
+        {"algorithm": "median", "estimate": float(np.median(x)), "covered":
+            int(abs(np.median(x) - params["mu"]) < 1.96 * params["sigma"] / np.sqrt(len(x)))},
+    ]
+
+
+def gaussian_batch(params, rngs) -> list[list[dict]]:
+    return [gaussian_trial(params, g) for g in rngs]
+
+
+def trivial_trial(params, rng: np.random.Generator) -> list[dict]:
+    """One uniform draw: measures the runner's per-trial overhead."""
+    return [{"algorithm": "a", "value": float(rng.random())}]
+
+
+def burn_trial(params, rng: np.random.Generator) -> list[dict]:
+    """CPU-bound trial: a fixed amount of dense linear algebra."""
+    a = rng.standard_normal((60, 60))
+    total = 0.0
+    for _ in range(int(params["work"])):
+        total += float(np.linalg.eigvalsh(a @ a.T)[-1])
+    return [{"algorithm": "burn", "value": total}]
+
+
+GAUSSIAN = register(Experiment(
+    name="toy_gaussian",
+    title="Coverage of the sample mean",
+    params=(
+        Param("mu", 0.0, "true mean", "m"),
+        Param("sigma", 1.0, "noise standard deviation", "m", low=0.0),
+        Param("n", 10, "samples per trial", "", kind=int, low=1),
+        Param("fail_every", 0, "make ~1/k trials raise (0 = never)", "", kind=int, low=0),
+        Param("label", "a", "a string choice", "", kind=str, choices=("a", "b")),
+        Param("p_d", 0.9, "a probability", "", low=0.0, high=1.0),
+    ),
+    run_trial=gaussian_trial,
+    run_batch=gaussian_batch,
+    binary_metrics=("covered",),
+    batch_size=7,
+))
+
+TRIVIAL = register(Experiment(
+    name="toy_trivial",
+    title="Almost no work per trial (runner overhead)",
+    params=(Param("x", 1.0, "a number", ""),),
+    run_trial=trivial_trial,
+    batch_size=2000,
+))
+
+BURN = register(Experiment(
+    name="toy_burn",
+    title="CPU-bound trials (parallel speed-up)",
+    params=(Param("work", 20, "eigen-decompositions per trial", "", kind=int, low=1),),
+    run_trial=burn_trial,
+    batch_size=4,
+))

@@ -1,0 +1,310 @@
+"""Load a YAML scenario config, apply command-line overrides, and validate it.
+
+Every problem raises :class:`ConfigError`, whose message is one line naming the file, the
+dotted key, what was given and what is allowed, e.g.::
+
+    configs/x.yaml: params.clutter.mean: got -1; allowed: a number >= 0
+
+Config layout (all keys but ``experiment`` optional)::
+
+    experiment: twin_sensor       # registered name, or "package.module:ATTR"
+    title: "..."
+    trials: 50                    # Monte Carlo trials per sweep point
+    seed: 1                       # root seed (non-negative integer)
+    batch_size: 25                # trials per task; default from the experiment
+    params: {clutter.mean: 5}     # flat dotted keys or nested mappings
+    sweep: {clutter.mean: "range(0, 16, 1)", assoc: [nn, mspda_parallel]}
+    sweep_mode: grid              # or zip
+    outputs: {figures: all, formats: [png, pdf]}
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from trackfuse import experiments
+from trackfuse.experiments.base import Experiment, Param
+from trackfuse.sweep import SweepError, parse_axis_values
+
+TOP_LEVEL = ("experiment", "title", "trials", "seed", "batch_size", "params", "sweep",
+             "sweep_mode", "outputs")
+OUTPUT_KEYS = ("figures", "formats")
+FORMATS = ("png", "pdf", "svg")
+MAX_TRIALS = 10**9
+
+
+class ConfigError(ValueError):
+    """A config problem; ``str(err)`` is the one-line message shown to the user."""
+
+    def __init__(self, source: str, key: str, message: str):
+        self.source, self.key = source, key
+        super().__init__(f"{source}: {key}: {message}" if key else f"{source}: {message}")
+
+
+@dataclass
+class Config:
+    """A validated config. ``params`` holds every schema key (defaults filled in)."""
+
+    source: str
+    experiment: Experiment
+    title: str
+    trials: int
+    seed: int
+    batch_size: int
+    params: dict[str, Any]
+    sweep: dict[str, list[Any]]
+    sweep_mode: str
+    figures: list[str] | str = "all"
+    formats: list[str] = field(default_factory=lambda: ["png", "pdf"])
+
+    def to_dict(self) -> dict[str, Any]:
+        """The resolved config as plain data (what ``config.yaml`` of a run holds)."""
+        return {
+            "experiment": self.experiment.name,
+            "title": self.title,
+            "trials": self.trials,
+            "seed": self.seed,
+            "batch_size": self.batch_size,
+            "params": dict(self.params),
+            "sweep": {k: list(v) for k, v in self.sweep.items()},
+            "sweep_mode": self.sweep_mode,
+            "outputs": {"figures": self.figures, "formats": list(self.formats)},
+        }
+
+
+def did_you_mean(word: str, options) -> str:
+    """``"; did you mean 'x'?"`` for the closest option, or ``""``."""
+    close = difflib.get_close_matches(str(word), [str(o) for o in options], n=1, cutoff=0.6)
+    return f"; did you mean '{close[0]}'?" if close else ""
+
+
+def _describe(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def allowed_text(p: Param) -> str:
+    if p.choices is not None:
+        what = "one of " + ", ".join(str(c) for c in p.choices)
+        return what if p.kind is not list else "a list of " + what
+    names = {float: "a number", int: "an integer", bool: "true or false", str: "a string",
+             list: "a non-empty list of numbers"}
+    text = names.get(p.kind, p.kind.__name__)
+    if p.low is not None and p.high is not None:
+        text += f" in [{p.low:g}, {p.high:g}]"
+    elif p.low is not None:
+        text += f" >= {p.low:g}"
+    elif p.high is not None:
+        text += f" <= {p.high:g}"
+    return text
+
+
+def _scalar(p: Param, value: Any, kind: type) -> Any:
+    """Coerce one scalar to ``kind`` and check it; raise ``ValueError`` if not allowed."""
+    if kind is bool:
+        if isinstance(value, bool):
+            return value
+        raise ValueError
+    if kind is str or (p.choices is not None and all(isinstance(c, str) for c in p.choices)):
+        if not isinstance(value, str) or (p.choices is not None and value not in p.choices):
+            raise ValueError
+        return value
+    if isinstance(value, bool):
+        raise ValueError
+    if isinstance(value, str):
+        value = float(value.strip())
+    if not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ValueError
+    if kind is int:
+        if float(value) != int(value):
+            raise ValueError
+        value = int(value)
+    else:
+        value = float(value)
+    if (p.low is not None and value < p.low) or (p.high is not None and value > p.high):
+        raise ValueError
+    if p.choices is not None and value not in p.choices:
+        raise ValueError
+    return value
+
+
+def check_value(p: Param, value: Any) -> Any:
+    """Return ``value`` coerced to the parameter's type, or raise ``ValueError``."""
+    if p.kind is list:
+        items = value if isinstance(value, list) else [value]
+        if not items:
+            raise ValueError
+        element = str if p.choices is not None and isinstance(p.choices[0], str) else float
+        return [_scalar(p, v, element) for v in items]
+    return _scalar(p, value, p.kind)
+
+
+def flatten(mapping: Mapping, prefix: str = "") -> dict[str, Any]:
+    """Flatten nested mappings into dotted keys: ``{a: {b: 1}} -> {"a.b": 1}``."""
+    flat: dict[str, Any] = {}
+    for key, value in mapping.items():
+        dotted = f"{prefix}{key}"
+        if isinstance(value, Mapping) and value:
+            flat.update(flatten(value, dotted + "."))
+        else:
+            flat[dotted] = value
+    return flat
+
+
+def _validated(source: str, exp: Experiment, where: str, key: str, value: Any) -> Any:
+    p = exp.schema.get(key)
+    if p is None:
+        raise ConfigError(source, f"{where}.{key}",
+                          f"unknown parameter of '{exp.name}'{did_you_mean(key, exp.schema)}"
+                          f" (see `trackfuse list {exp.name}`)")
+    try:
+        return check_value(p, value)
+    except (ValueError, TypeError, OverflowError):
+        raise ConfigError(source, f"{where}.{key}",
+                          f"got {_describe(value)}; allowed: {allowed_text(p)}") from None
+
+
+def _int(source: str, key: str, value: Any, low: int, high: int = MAX_TRIALS) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise ConfigError(source, key,
+                          f"got {_describe(value)}; allowed: an integer in [{low}, {high}]")
+    return value
+
+
+def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
+          sweeps: Mapping[str, Any] | None = None) -> Config:
+    """Validate a parsed YAML document plus overrides into a :class:`Config`.
+
+    ``sets`` are ``--set`` overrides (dotted key -> value; keys outside the top level are
+    experiment parameters, and a set on a swept key removes that axis); ``sweeps`` are
+    ``--sweep`` axes (dotted key -> list or ``"range(...)"``), replacing config axes.
+    """
+    if raw is None:
+        raise ConfigError(source, "", "the file is empty; expected a mapping with at least "
+                                      "'experiment'")
+    if not isinstance(raw, Mapping):
+        raise ConfigError(source, "", f"expected a mapping at the top level, got "
+                                      f"{type(raw).__name__}")
+    raw = dict(raw)
+    for key in raw:
+        if key not in TOP_LEVEL:
+            raise ConfigError(source, str(key), "unknown top-level key"
+                              f"{did_you_mean(key, TOP_LEVEL)}; allowed: {', '.join(TOP_LEVEL)}")
+    sets = dict(sets or {})
+    for key in [k for k in sets if k in ("trials", "seed", "batch_size", "title", "sweep_mode")]:
+        raw[key] = sets.pop(key)
+
+    name = raw.get("experiment")
+    if name is None:
+        raise ConfigError(source, "experiment", "missing; allowed: " + ", ".join(
+            experiments.names()))
+    if not isinstance(name, str):
+        raise ConfigError(source, "experiment", f"got {_describe(name)}; allowed: "
+                          + ", ".join(experiments.names()))
+    try:
+        exp = experiments.get(name)
+    except experiments.UnknownExperiment:
+        raise ConfigError(source, "experiment", f"unknown experiment {name!r}"
+                          f"{did_you_mean(name, experiments.names())}; allowed: "
+                          + ", ".join(experiments.names())) from None
+
+    title = raw.get("title", exp.title)
+    if not isinstance(title, str):
+        raise ConfigError(source, "title", f"got {_describe(title)}; allowed: a string")
+    trials = _int(source, "trials", raw.get("trials", 1), 1)
+    seed = _int(source, "seed", raw.get("seed", 0), 0, 2**63 - 1)
+    batch_size = _int(source, "batch_size", raw.get("batch_size", exp.batch_size), 1, 10**6)
+
+    params_raw = raw.get("params") or {}
+    if not isinstance(params_raw, Mapping):
+        raise ConfigError(source, "params", f"got {_describe(params_raw)}; allowed: a mapping "
+                                            "of parameter names to values")
+    params = exp.defaults()
+    for key, value in flatten(params_raw).items():
+        params[key] = _validated(source, exp, "params", str(key), value)
+
+    sweep_raw = raw.get("sweep") or {}
+    if not isinstance(sweep_raw, Mapping):
+        raise ConfigError(source, "sweep", f"got {_describe(sweep_raw)}; allowed: a mapping of "
+                                           "parameter names to value lists or 'range(a, b, s)'")
+    sweep_raw = {str(k): v for k, v in sweep_raw.items()}
+    sweep_raw.update({str(k): v for k, v in (sweeps or {}).items()})
+    for key, value in sets.items():
+        params[key] = _validated(source, exp, "set", key, value)
+        sweep_raw.pop(key, None)
+
+    sweep: dict[str, list[Any]] = {}
+    for key, spec in sweep_raw.items():
+        if key not in exp.schema:
+            _validated(source, exp, "sweep", key, None)
+        try:
+            values = parse_axis_values(spec)
+        except SweepError as err:
+            raise ConfigError(source, f"sweep.{key}", str(err)) from None
+        sweep[key] = [_validated(source, exp, "sweep", key, v) for v in values]
+
+    mode = raw.get("sweep_mode", "grid")
+    if mode not in ("grid", "zip"):
+        raise ConfigError(source, "sweep_mode", f"got {_describe(mode)}; allowed: grid, zip")
+    if mode == "zip" and len({len(v) for v in sweep.values()}) > 1:
+        lengths = ", ".join(f"{k}={len(v)}" for k, v in sweep.items())
+        raise ConfigError(source, "sweep", f"zip needs axes of equal length, got {lengths}")
+
+    figures, formats = _outputs(source, exp, raw.get("outputs") or {})
+    return Config(source, exp, title, trials, seed, batch_size, params, sweep, mode,
+                  figures, formats)
+
+
+def _outputs(source: str, exp: Experiment, outputs: Any) -> tuple[list[str] | str, list[str]]:
+    if not isinstance(outputs, Mapping):
+        raise ConfigError(source, "outputs", f"got {_describe(outputs)}; allowed: a mapping "
+                                             "with 'figures' and 'formats'")
+    for key in outputs:
+        if key not in OUTPUT_KEYS:
+            raise ConfigError(source, f"outputs.{key}", "unknown key"
+                              f"{did_you_mean(key, OUTPUT_KEYS)}; allowed: figures, formats")
+    figures = outputs.get("figures", "all")
+    if figures != "all" and not (isinstance(figures, list)
+                                 and all(isinstance(f, str) for f in figures)):
+        raise ConfigError(source, "outputs.figures",
+                          f"got {_describe(figures)}; allowed: 'all' or a list of figure names")
+    formats = outputs.get("formats", ["png", "pdf"])
+    if isinstance(formats, str):
+        formats = [formats]
+    if not isinstance(formats, list) or not formats or any(f not in FORMATS for f in formats):
+        raise ConfigError(source, "outputs.formats",
+                          f"got {_describe(formats)}; allowed: a list of {', '.join(FORMATS)}")
+    return figures, formats
+
+
+def read_yaml(path: str | Path) -> Any:
+    """Parse a YAML file, turning I/O and syntax errors into :class:`ConfigError`."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ConfigError(str(path), "", "no such file") from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise ConfigError(str(path), "", f"cannot read: {err.__class__.__name__}") from None
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as err:
+        mark = getattr(err, "problem_mark", None)
+        where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""
+        problem = getattr(err, "problem", None) or "invalid YAML"
+        raise ConfigError(str(path), "", f"invalid YAML: {where}{problem}") from None
+    except (ValueError, TypeError, RecursionError) as err:
+        raise ConfigError(str(path), "", f"invalid YAML: {err.__class__.__name__}") from None
+
+
+def load(path: str | Path, sets: Mapping[str, Any] | None = None,
+         sweeps: Mapping[str, Any] | None = None) -> Config:
+    """Read, override and validate the config at ``path``."""
+    return build(read_yaml(path), str(path), sets, sweeps)

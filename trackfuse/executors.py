@@ -1,0 +1,137 @@
+"""Where batches run: in this process, in a local process pool, or on a dask cluster.
+
+All executors share one method, :meth:`imap_unordered`, which yields results as batches
+finish and keeps at most ``in_flight`` batches submitted, so memory stays flat however many
+batches there are. Results carry their own (point, batch) identity; the runner orders them,
+so completion order never reaches the output files.
+
+* ``serial``: in this process (debugging, profiling, tiny runs).
+* ``process``: :class:`concurrent.futures.ProcessPoolExecutor` with the ``forkserver``
+  start method (safe next to the progress thread; workers import the package once).
+* ``dask``: a ``dask.distributed`` client to a running scheduler (``tcp://host:8786`` or a
+  scheduler file, the HPC way) or a LocalCluster started here. The scheduler retries a batch
+  whose worker died (``distributed.scheduler.allowed-failures``).
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import signal
+from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from itertools import islice
+from typing import Any
+
+KINDS = ("serial", "process", "dask")
+
+
+class ExecutorError(RuntimeError):
+    """The executor cannot start (missing extra, unreachable scheduler...)."""
+
+
+def default_workers() -> int:
+    """Cores available to this process."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:
+        return os.cpu_count() or 1
+
+
+class SerialExecutor:
+    """Run every batch in this process, in order."""
+
+    workers = 1
+
+    def imap_unordered(self, fn: Callable, tasks: Iterable) -> Iterator[Any]:
+        for task in tasks:
+            yield fn(task)
+
+    def close(self) -> None:
+        pass
+
+
+def _ignore_sigint() -> None:
+    """Workers leave Ctrl-C to the parent, which stops them cleanly."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+class ProcessExecutor:
+    """A local process pool with a bounded number of batches in flight."""
+
+    def __init__(self, workers: int):
+        self.workers = workers
+        ctx = multiprocessing.get_context("forkserver")
+        ctx.set_forkserver_preload(["trackfuse.runner"])
+        self._pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=_ignore_sigint)
+
+    def imap_unordered(self, fn: Callable, tasks: Iterable) -> Iterator[Any]:
+        tasks = iter(tasks)
+        pending = {self._pool.submit(fn, t) for t in islice(tasks, 2 * self.workers + 1)}
+        while pending:
+            done, pending = wait(pending, return_when=FIRST_COMPLETED)
+            for future in done:
+                for task in islice(tasks, 1):
+                    pending.add(self._pool.submit(fn, task))
+                yield future.result()
+
+    def close(self) -> None:
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+class DaskExecutor:
+    """Batches on a dask.distributed cluster (existing scheduler or a LocalCluster)."""
+
+    def __init__(self, workers: int, address: str | None = None,
+                 scheduler_file: str | None = None):
+        try:
+            from distributed import Client, LocalCluster
+        except ImportError:
+            raise ExecutorError("the dask executor needs the dask extra: "
+                                "pip install 'trackfuse[dask]'") from None
+        self._cluster = None
+        try:
+            if address or scheduler_file:
+                self._client = Client(address=address, scheduler_file=scheduler_file,
+                                      timeout="20s")
+            else:
+                self._cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
+                                             processes=True, dashboard_address=None)
+                self._client = Client(self._cluster)
+        except (OSError, TimeoutError, ValueError) as err:
+            target = address or scheduler_file or "a LocalCluster"
+            raise ExecutorError(f"cannot connect to {target}: {err}") from None
+        info = self._client.scheduler_info()
+        self.workers = max(1, sum(w.get("nthreads", 1) for w in info["workers"].values()))
+
+    def imap_unordered(self, fn: Callable, tasks: Iterable) -> Iterator[Any]:
+        from distributed import as_completed
+
+        tasks = iter(tasks)
+        first = [self._client.submit(fn, t, pure=False)
+                 for t in islice(tasks, 2 * self.workers + 1)]
+        stream = as_completed(first)
+        for future in stream:
+            for task in islice(tasks, 1):
+                stream.add(self._client.submit(fn, task, pure=False))
+            yield future.result()
+            future.release()
+
+    def close(self) -> None:
+        self._client.close()
+        if self._cluster is not None:
+            self._cluster.close()
+
+
+def make_executor(kind: str, workers: int, address: str | None = None,
+                  scheduler_file: str | None = None):
+    """Build the executor named ``kind`` (see :data:`KINDS`)."""
+    if address or scheduler_file:
+        kind = "dask"
+    if kind == "serial" or (kind == "process" and workers <= 1):
+        return SerialExecutor()
+    if kind == "process":
+        return ProcessExecutor(workers)
+    if kind == "dask":
+        return DaskExecutor(workers, address, scheduler_file)
+    raise ExecutorError(f"unknown executor {kind!r}; allowed: {', '.join(KINDS)}")

@@ -1,0 +1,85 @@
+"""Summaries of ``trials.csv``: per point x row keys x metric, n, mean, std and a 95 % CI.
+
+The CSV is read in fixed-size chunks and the per-chunk (n, mean, M2) are combined exactly
+(Chan, Golub & LeVeque 1979), so memory stays flat for any number of trials and the result
+does not depend on how the trials were scheduled. Rows of failed trials (``status ==
+"failed"``) are left out and counted separately.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from trackfuse.stats import t_interval, wilson_interval
+
+CHUNK_ROWS = 200_000
+NON_METRIC = ("point", "trial", "status", "error")
+
+
+def summarize(path: Path, keys: Sequence[str], binary: Sequence[str] = (),
+              chunk_rows: int = CHUNK_ROWS) -> tuple[pd.DataFrame, int]:
+    """Return ``(summary, failed_rows)`` for the CSV at ``path``.
+
+    ``keys`` are the grouping columns (``point``, swept keys, the experiment's row keys);
+    every other numeric column is a metric. ``binary`` metrics get Wilson intervals, the
+    rest Student-t intervals.
+    """
+    partial: list[pd.DataFrame] = []
+    failed = 0
+    try:
+        chunks = pd.read_csv(path, chunksize=chunk_rows, low_memory=False)
+    except pd.errors.EmptyDataError:
+        chunks = []
+    for chunk in chunks:
+        if "status" in chunk:
+            bad = chunk["status"].astype(str) == "failed"
+            failed += int(bad.sum())
+            chunk = chunk[~bad]
+        group = [k for k in keys if k in chunk]
+        metrics = [c for c in chunk.columns if c not in group and c not in NON_METRIC
+                   and pd.api.types.is_numeric_dtype(chunk[c])]
+        if chunk.empty or not metrics:
+            continue
+        long = chunk.melt(id_vars=group, value_vars=metrics, var_name="metric")
+        long = long.dropna(subset=["value"])
+        grouped = long.groupby([*group, "metric"], sort=False, dropna=False)["value"]
+        stats = grouped.agg(n="count", mean="mean", var=lambda v: v.var(ddof=0))
+        stats["m2"] = stats.pop("var") * stats["n"]
+        partial.append(stats.reset_index())
+    if not partial:
+        return pd.DataFrame(columns=[*keys, "metric", "n", "mean", "std", "ci_low", "ci_high",
+                                     "interval"]), failed
+    stats = pd.concat(partial, ignore_index=True)
+    group = [c for c in stats.columns if c not in ("n", "mean", "m2")]
+    if len(partial) > 1:
+        stats = _combine(stats, group)
+    n = stats["n"].to_numpy(float)
+    mean = stats["mean"].to_numpy(float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        std = np.where(n > 1, np.sqrt(stats["m2"].to_numpy(float) / (n - 1)), np.nan)
+    is_binary = stats["metric"].isin(list(binary)).to_numpy()
+    w_low, w_high = wilson_interval(np.round(mean * n), n)
+    t_low, t_high = t_interval(mean, std, n)
+    out = stats[group].copy()
+    out["n"] = n.astype(int)
+    out["mean"], out["std"] = mean, std
+    out["ci_low"] = np.where(is_binary, w_low, t_low)
+    out["ci_high"] = np.where(is_binary, w_high, t_high)
+    out["interval"] = np.where(is_binary, "wilson", "t")
+    return out, failed
+
+
+def _combine(stats: pd.DataFrame, group: list[str]) -> pd.DataFrame:
+    """Exact pooling of per-chunk (n, mean, M2) rows that share a group."""
+    stats = stats.assign(sum=stats["n"] * stats["mean"])
+    g = stats.groupby(group, sort=False, dropna=False)
+    pooled = g[["n", "sum"]].sum()
+    pooled["mean"] = pooled["sum"] / pooled["n"]
+    stats = stats.join(pooled["mean"].rename("pooled"), on=group)
+    stats["m2"] += stats["n"] * (stats["mean"] - stats["pooled"]) ** 2
+    pooled["m2"] = stats.groupby(group, sort=False, dropna=False)["m2"].sum()
+    return pooled.drop(columns="sum").reset_index()

@@ -1,0 +1,140 @@
+"""Sweep axes: value parsing, command-line overrides, and expansion into points.
+
+An axis is a list of values or the string ``"range(start, stop[, step])"`` (stop excluded,
+as in Python; floats allowed). Axes combine as a full grid (``itertools.product`` in the
+order the axes are written; the last axis varies fastest) or, with ``sweep_mode: zip``,
+element by element.
+
+Overrides follow Hydra's spelling: ``--set a.b=1`` and ``--sweep a.b=0,5,10`` or
+``--sweep "a.b=range(0,21,2)"``. Values are parsed as YAML scalars (``1`` is an int, ``1.5``
+a float, ``true`` a bool, anything else a string); ``[1, 2]`` is a list.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import yaml
+
+_RANGE = re.compile(r"^\s*range\s*\((.*)\)\s*$")
+MAX_POINTS = 1_000_000
+
+
+class SweepError(ValueError):
+    """A malformed axis or override; the message says what is allowed."""
+
+
+@dataclass(frozen=True)
+class SweepPoint:
+    """One point of the sweep: its index and the swept values (dotted key -> value)."""
+
+    index: int
+    values: dict[str, Any]
+
+
+def _number(text: str) -> float | int:
+    value = yaml.safe_load(text)
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        value = float(text)
+    return value
+
+
+def parse_range(text: str) -> list[float | int]:
+    """Expand ``"range(a, b, s)"``: integers as Python's ``range``, floats on a fixed grid."""
+    match = _RANGE.match(text)
+    if not match:
+        raise SweepError(f"got {text!r}; allowed: a list or 'range(start, stop, step)'")
+    try:
+        parts = [_number(p.strip()) for p in match.group(1).split(",")]
+    except (ValueError, yaml.YAMLError):
+        raise SweepError(f"got {text!r}; range() takes numbers") from None
+    if not 1 <= len(parts) <= 3 or any(not math.isfinite(p) for p in parts):
+        raise SweepError(f"got {text!r}; allowed: range(stop), range(start, stop[, step])")
+    start, stop, step = ([0] + parts + [1])[-3:] if len(parts) == 1 else (parts + [1])[:3]
+    if step == 0:
+        raise SweepError(f"got {text!r}; the step must not be 0")
+    if all(isinstance(p, int) for p in (start, stop, step)):
+        values: list[float | int] = list(range(start, stop, step))
+    else:
+        count = math.ceil((stop - start) / step - 1e-9)
+        if count > MAX_POINTS:
+            raise SweepError(f"got {text!r}; more than {MAX_POINTS} values")
+        values = [round(start + i * step, 12) for i in range(max(count, 0))]
+    if not values:
+        raise SweepError(f"got {text!r}; the range is empty")
+    if len(values) > MAX_POINTS:
+        raise SweepError(f"got {text!r}; more than {MAX_POINTS} values")
+    return values
+
+
+def parse_axis_values(spec: Any) -> list[Any]:
+    """Values of one axis from a config entry (a list or a range string)."""
+    if isinstance(spec, str):
+        if _RANGE.match(spec):
+            return parse_range(spec)
+        spec = [parse_scalar(s) for s in spec.split(",")] if "," in spec else [spec]
+    if not isinstance(spec, list):
+        spec = [spec]
+    if not spec:
+        raise SweepError("the axis is empty; allowed: a non-empty list or 'range(a, b, s)'")
+    return spec
+
+
+def parse_scalar(text: str) -> Any:
+    """Parse an override value as a YAML scalar or flow list (``"1e-3"`` becomes a float)."""
+    text = text.strip()
+    try:
+        value = yaml.safe_load(text) if text else ""
+    except yaml.YAMLError:
+        return text
+    if isinstance(value, str):
+        try:
+            return float(value)
+        except ValueError:
+            return value
+    return value
+
+
+def parse_override(text: str) -> tuple[str, str]:
+    """Split ``"key=value"``; raise :class:`SweepError` if there is no ``=`` or no key."""
+    key, sep, value = text.partition("=")
+    if not sep or not key.strip():
+        raise SweepError(f"got {text!r}; allowed: key=value")
+    return key.strip(), value
+
+
+def parse_sets(items: list[str]) -> dict[str, Any]:
+    """``--set`` items to ``{key: value}``."""
+    return {key: parse_scalar(value) for key, value in map(parse_override, items)}
+
+
+def parse_sweeps(items: list[str]) -> dict[str, Any]:
+    """``--sweep`` items to ``{key: [values]}`` (comma lists or ``range(...)``)."""
+    axes: dict[str, Any] = {}
+    for item in items:
+        key, value = parse_override(item)
+        value = value.strip()
+        if not value:
+            raise SweepError(f"got {item!r}; the axis is empty")
+        axes[key] = value if _RANGE.match(value) else [parse_scalar(v) for v in value.split(",")]
+    return axes
+
+
+def expand(sweep: Mapping[str, list[Any]], mode: str = "grid") -> list[SweepPoint]:
+    """All sweep points, indexed from 0; one empty point when there are no axes."""
+    if not sweep:
+        return [SweepPoint(0, {})]
+    keys = list(sweep)
+    if mode == "zip":
+        combos = zip(*(sweep[k] for k in keys), strict=True)
+    else:
+        total = math.prod(len(v) for v in sweep.values())
+        if total > MAX_POINTS:
+            raise SweepError(f"the grid has {total} points; at most {MAX_POINTS}")
+        combos = itertools.product(*(sweep[k] for k in keys))
+    return [SweepPoint(i, dict(zip(keys, c, strict=True))) for i, c in enumerate(combos)]
