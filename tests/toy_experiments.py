@@ -21,6 +21,20 @@ def gaussian_trial(params, rng: np.random.Generator) -> list[dict]:
     ]
 
 
+def gaussian_figures(trials, summary, config) -> dict:
+    """Estimate RMSE-free check figure: mean estimate per algorithm with its t band."""
+    from trackfuse.plots.style import band, new_figure
+
+    fig, ax = new_figure()
+    rows = summary[summary["metric"] == "estimate"]
+    for algorithm, group in rows.groupby("algorithm", sort=False):
+        band(ax, group["point"], group["mean"], group["ci_low"], group["ci_high"], algorithm)
+    ax.set_xlabel("sweep point")
+    ax.set_ylabel("estimate (m)")
+    ax.legend()
+    return {"estimate": fig}
+
+
 def gaussian_batch(params, rngs) -> list[list[dict]]:
     return [gaussian_trial(params, g) for g in rngs]
 
@@ -52,6 +66,7 @@ GAUSSIAN = register(Experiment(
     ),
     run_trial=gaussian_trial,
     run_batch=gaussian_batch,
+    figures=gaussian_figures,
     binary_metrics=("covered",),
     batch_size=7,
 ))

@@ -63,11 +63,17 @@ class Config:
     sweep_mode: str
     figures: list[str] | str = "all"
     formats: list[str] = field(default_factory=lambda: ["png", "pdf"])
+    reference: str = ""
+
+    @property
+    def experiment_ref(self) -> str:
+        """How the config named its experiment (a registered name or ``module:ATTR``)."""
+        return self.reference or self.experiment.name
 
     def to_dict(self) -> dict[str, Any]:
         """The resolved config as plain data (what ``config.yaml`` of a run holds)."""
         return {
-            "experiment": self.experiment.name,
+            "experiment": self.experiment_ref,
             "title": self.title,
             "trials": self.trials,
             "seed": self.seed,
@@ -259,7 +265,7 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
 
     figures, formats = _outputs(source, exp, raw.get("outputs") or {})
     return Config(source, exp, title, trials, seed, batch_size, params, sweep, mode,
-                  figures, formats)
+                  figures, formats, name)
 
 
 def _outputs(source: str, exp: Experiment, outputs: Any) -> tuple[list[str] | str, list[str]]:

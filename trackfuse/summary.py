@@ -18,6 +18,7 @@ from trackfuse.stats import t_interval, wilson_interval
 
 CHUNK_ROWS = 200_000
 NON_METRIC = ("point", "trial", "status", "error")
+_VALUE = "__value__"
 
 
 def summarize(path: Path, keys: Sequence[str], binary: Sequence[str] = (),
@@ -44,9 +45,9 @@ def summarize(path: Path, keys: Sequence[str], binary: Sequence[str] = (),
                    and pd.api.types.is_numeric_dtype(chunk[c])]
         if chunk.empty or not metrics:
             continue
-        long = chunk.melt(id_vars=group, value_vars=metrics, var_name="metric")
-        long = long.dropna(subset=["value"])
-        grouped = long.groupby([*group, "metric"], sort=False, dropna=False)["value"]
+        long = chunk.melt(id_vars=group, value_vars=metrics, var_name="metric",
+                          value_name=_VALUE).dropna(subset=[_VALUE])
+        grouped = long.groupby([*group, "metric"], sort=False, dropna=False)[_VALUE]
         stats = grouped.agg(n="count", mean="mean", var=lambda v: v.var(ddof=0))
         stats["m2"] = stats.pop("var") * stats["n"]
         partial.append(stats.reset_index())

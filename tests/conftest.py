@@ -1,0 +1,43 @@
+"""Shared fixtures: the toy experiments and helpers to run the real CLI."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+TESTS = Path(__file__).resolve().parent
+sys.path.insert(0, str(TESTS))
+
+import toy_experiments  # noqa: E402,F401 - registers the toy experiments
+
+ROOT = TESTS.parent
+
+
+def cli_env() -> dict[str, str]:
+    """Environment for a ``trackfuse`` subprocess that can import the toy experiments."""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(TESTS), str(ROOT),
+                                                      env.get("PYTHONPATH", "")]))
+    env.pop("CI", None)
+    return env
+
+
+def trackfuse(*args: str, cwd: Path | None = None, timeout: float = 120,
+              **kw) -> subprocess.CompletedProcess:
+    """Run the real CLI (``python -m cli.main``) and capture its output."""
+    return subprocess.run([sys.executable, "-m", "cli.main", *map(str, args)], cwd=cwd,
+                          env=cli_env(), capture_output=True, text=True, timeout=timeout, **kw)
+
+
+@pytest.fixture
+def write_config(tmp_path):
+    """Write a YAML text to ``tmp_path/<name>.yaml`` and return its path."""
+    def write(text: str, name: str = "cfg") -> Path:
+        path = tmp_path / f"{name}.yaml"
+        path.write_text(text)
+        return path
+    return write

@@ -1,0 +1,106 @@
+"""Config validation: good configs resolve; every bad one is a one-line error, exit 2."""
+
+from __future__ import annotations
+
+import pytest
+from conftest import trackfuse
+
+from trackfuse.config import ConfigError, build, load
+
+GOOD = """
+experiment: toy_experiments:GAUSSIAN
+trials: 4
+seed: 3
+params: {sigma: 2.5, n: 3}
+sweep:
+  mu: range(0, 1, 0.25)
+  label: [a, b]
+"""
+
+
+def test_good_config_resolves_defaults_and_sweep(write_config):
+    cfg = load(write_config(GOOD))
+    assert cfg.params["sigma"] == 2.5 and cfg.params["p_d"] == 0.9
+    assert cfg.sweep == {"mu": [0.0, 0.25, 0.5, 0.75], "label": ["a", "b"]}
+    assert cfg.batch_size == 7  # the experiment's default
+
+
+def test_nested_params_and_overrides(write_config):
+    cfg = load(write_config(GOOD), sets={"mu": 1.5, "trials": 9}, sweeps={"n": "range(1,3)"})
+    assert "mu" not in cfg.sweep and cfg.params["mu"] == 1.5  # --set removes the axis
+    assert cfg.trials == 9 and cfg.sweep["n"] == [1, 2]
+
+
+BAD = {
+    "bad_yaml": ("experiment: [unclosed", "invalid YAML"),
+    "empty_file": ("", "the file is empty"),
+    "not_mapping": ("- 1\n- 2", "expected a mapping"),
+    "unknown_top_key": ("experiment: toy_gaussian\ntrails: 5", "trails: unknown top-level key; "
+                        "did you mean 'trials'?"),
+    "unknown_param": ("experiment: toy_gaussian\nparams: {sigam: 1}",
+                      "params.sigam: unknown parameter of 'toy_gaussian'; did you mean 'sigma'?"),
+    "wrong_type": ("experiment: toy_gaussian\nparams: {n: many}",
+                   "params.n: got 'many'; allowed: an integer >= 1"),
+    "negative_sigma": ("experiment: toy_gaussian\nparams: {sigma: -0.1}",
+                       "params.sigma: got -0.1; allowed: a number >= 0"),
+    "probability": ("experiment: toy_gaussian\nparams: {p_d: 1.2}",
+                    "params.p_d: got 1.2; allowed: a number in [0, 1]"),
+    "unknown_experiment": ("experiment: toy_gausian", "unknown experiment 'toy_gausian'; "
+                           "did you mean 'toy_gaussian'?"),
+    "missing_experiment": ("trials: 3", "experiment: missing"),
+    "empty_sweep": ("experiment: toy_gaussian\nsweep: {mu: []}", "sweep.mu: the axis is empty"),
+    "empty_range": ("experiment: toy_gaussian\nsweep: {mu: 'range(5, 1)'}",
+                    "sweep.mu: got 'range(5, 1)'; the range is empty"),
+    "zero_step": ("experiment: toy_gaussian\nsweep: {mu: 'range(0, 1, 0)'}", "must not be 0"),
+    "negative_trials": ("experiment: toy_gaussian\ntrials: -5",
+                        "trials: got -5; allowed: an integer in [1,"),
+    "bool_as_number": ("experiment: toy_gaussian\nparams: {mu: true}", "params.mu: got True"),
+    "bad_choice": ("experiment: toy_gaussian\nsweep: {label: [a, c]}",
+                   "sweep.label: got 'c'; allowed: one of a, b"),
+    "zip_lengths": ("experiment: toy_gaussian\nsweep_mode: zip\nsweep: {mu: [1, 2], n: [1]}",
+                    "zip needs axes of equal length"),
+    "nan": ("experiment: toy_gaussian\nparams: {mu: .nan}", "params.mu: got nan"),
+    "bad_format": ("experiment: toy_gaussian\noutputs: {formats: [gif]}", "outputs.formats"),
+    "params_not_mapping": ("experiment: toy_gaussian\nparams: [1, 2]", "params: got [1, 2]"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_bad_config_message_names_file_and_key(case, write_config):
+    text, expected = BAD[case]
+    path = write_config(text, case)
+    with pytest.raises(ConfigError) as err:
+        load(path)
+    message = str(err.value)
+    assert message.startswith(str(path) + ": ")
+    assert expected in message
+    assert "\n" not in message
+
+
+@pytest.mark.parametrize("case", ["bad_yaml", "unknown_param", "negative_sigma", "empty_sweep",
+                                  "unknown_experiment"])
+def test_cli_reports_bad_config_in_one_line_exit_2(case, write_config):
+    path = write_config(BAD[case][0], case)
+    for command in (["validate", path], ["run", path, "--dry-run"]):
+        result = trackfuse(*command)
+        assert result.returncode == 2, result.stderr
+        assert "Traceback" not in result.stderr + result.stdout
+        lines = result.stderr.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith(f"error: {path}: ")
+
+
+def test_cli_bad_override_and_missing_file(tmp_path, write_config):
+    path = write_config(GOOD)
+    result = trackfuse("validate", path, "--set", "sigma")
+    assert result.returncode == 2 and "allowed: key=value" in result.stderr
+    result = trackfuse("validate", path, "--set", "n=0")
+    assert result.returncode == 2 and "set.n: got 0; allowed: an integer >= 1" in result.stderr
+    result = trackfuse("validate", tmp_path / "nope.yaml")
+    assert result.returncode == 2 and "nope.yaml: no such file" in result.stderr
+
+
+def test_every_top_level_value_type_is_checked():
+    for key, value in [("title", 3), ("seed", -1), ("batch_size", 0), ("sweep", [1]),
+                       ("outputs", {"figures": 3}), ("sweep_mode", "cartesian")]:
+        with pytest.raises(ConfigError, match=key.split(".")[0]):
+            build({"experiment": "toy_gaussian", key: value}, "x.yaml")

@@ -1,0 +1,176 @@
+"""The runner: determinism across executors, resume, failures, outputs, plot."""
+
+from __future__ import annotations
+
+import json
+import signal
+import subprocess
+import sys
+import time
+
+import pandas as pd
+import pytest
+from conftest import cli_env, trackfuse
+
+from trackfuse.config import load
+from trackfuse.results import RunFolder
+from trackfuse.runner import Runner, trial_rng
+
+CFG = """
+experiment: toy_experiments:GAUSSIAN
+trials: 23
+seed: 11
+params: {n: 4}
+sweep:
+  mu: [0, 2]
+  sigma: [0.5, 1.0]
+"""
+
+
+def run(path, out, **kw):
+    kw.setdefault("progress", False)
+    return Runner(load(path), out, **kw).run()
+
+
+def test_trials_csv_identical_for_serial_and_two_workers(write_config, tmp_path):
+    path = write_config(CFG)
+    serial = run(path, tmp_path / "a", executor="serial")
+    pooled = run(path, tmp_path / "b", executor="process", workers=2)
+    a = (serial.folder / "trials.csv").read_bytes()
+    assert a == (pooled.folder / "trials.csv").read_bytes()
+    assert (serial.folder / "summary.csv").read_bytes() == (pooled.folder /
+                                                            "summary.csv").read_bytes()
+    trials = pd.read_csv(serial.folder / "trials.csv")
+    assert len(trials) == 4 * 23 * 2  # points x trials x algorithms
+    assert list(trials.columns[:4]) == ["point", "trial", "mu", "sigma"]
+
+
+def test_trial_depends_only_on_trial_point_seed():
+    a = trial_rng(3, 1, 11).random(4)
+    assert (a == trial_rng(3, 1, 11).random(4)).all()
+    assert not (a == trial_rng(3, 2, 11).random(4)).any()
+
+
+def test_batch_size_is_part_of_the_run_but_not_the_numbers(write_config, tmp_path):
+    path = write_config(CFG)
+    small = Runner(load(path, sets={"batch_size": 3}), tmp_path, progress=False,
+                   executor="serial")
+    default = Runner(load(path), tmp_path, progress=False, executor="serial")
+    assert small.folder.path != default.folder.path
+    a, b = small.run(), default.run()
+    assert (a.folder / "trials.csv").read_bytes() == (b.folder / "trials.csv").read_bytes()
+
+
+def test_resume_after_interrupt_equals_uninterrupted(write_config, tmp_path, monkeypatch):
+    path = write_config(CFG)
+    reference = run(path, tmp_path / "ref", executor="serial")
+    original = RunFolder.write_part
+    calls = {"n": 0}
+
+    def flaky(self, *args):
+        calls["n"] += 1
+        if calls["n"] == 5:
+            raise KeyboardInterrupt
+        original(self, *args)
+
+    monkeypatch.setattr(RunFolder, "write_part", flaky)
+    from trackfuse.runner import RunInterrupted
+
+    with pytest.raises(RunInterrupted) as err:
+        run(path, tmp_path / "res", executor="serial")
+    folder = err.value.folder
+    assert json.loads((folder / "manifest.json").read_text())["status"] == "interrupted"
+    assert not (folder / "trials.csv").exists()
+    monkeypatch.setattr(RunFolder, "write_part", original)
+    resumed = run(path, tmp_path / "res", executor="process", workers=2)
+    assert resumed.computed_trials == 4 * 23 - 23  # point 0 (batches of 7, 7, 7, 2) was kept
+    assert (resumed.folder / "trials.csv").read_bytes() == (reference.folder /
+                                                            "trials.csv").read_bytes()
+    manifest = json.loads((folder / "manifest.json").read_text())
+    assert manifest["status"] == "complete" and manifest["sessions"] == 2
+
+
+def test_failed_trials_are_recorded_and_the_run_goes_on(write_config, tmp_path):
+    path = write_config(CFG + "  fail_every: [3]\n")
+    result = trackfuse("run", path, "--out", tmp_path, "--workers", "2", "--no-plots")
+    assert result.returncode == 3, result.stderr
+    assert "trial rows failed" in result.stderr and "Traceback" not in result.stderr
+    folder = next((tmp_path / "cfg").iterdir())
+    trials = pd.read_csv(folder / "trials.csv")
+    failed = trials[trials["status"] == "failed"]
+    assert 0 < len(failed) < 4 * 23
+    assert failed["error"].str.contains("FloatingPointError: synthetic divergence").all()
+    ok_trials = trials[trials["status"] != "failed"].groupby(["point", "trial"]).size()
+    assert (ok_trials == 2).all()  # both algorithms of every successful trial
+    manifest = json.loads((folder / "manifest.json").read_text())
+    assert manifest["trials_failed"] == len(failed)
+    summary = pd.read_csv(folder / "summary.csv")
+    assert summary.groupby("point")["n"].max().sum() + len(failed) == 4 * 23
+
+
+def test_cli_run_writes_outputs_and_plot_redraws_them(write_config, tmp_path):
+    path = write_config(CFG)
+    result = trackfuse("run", path, "--out", tmp_path, "--workers", "2")
+    assert result.returncode == 0, result.stderr
+    folder = next((tmp_path / "cfg").iterdir())
+    for name in ("config.yaml", "manifest.json", "trials.csv", "summary.csv",
+                 "figures/estimate.png", "figures/estimate.pdf"):
+        assert (folder / name).exists(), name
+    manifest = json.loads((folder / "manifest.json").read_text())
+    assert manifest["status"] == "complete" and manifest["root_seed"] == 11
+    assert manifest["trials_done"] == manifest["trials_total"] == 92
+    assert set(manifest["versions"]) >= {"trackfuse", "python", "numpy", "scipy"}
+    assert set(manifest["per_point_wall_s"]) == {"0", "1", "2", "3"}
+    png = (folder / "figures/estimate.png").read_bytes()
+    pdf = (folder / "figures/estimate.pdf").read_bytes()
+    for f in (folder / "figures").iterdir():
+        f.unlink()
+    result = trackfuse("plot", folder)
+    assert result.returncode == 0, result.stderr
+    assert (folder / "figures/estimate.png").read_bytes() == png
+    assert (folder / "figures/estimate.pdf").read_bytes() == pdf
+    again = trackfuse("run", path, "--out", tmp_path)
+    assert again.returncode == 0 and "already complete" in again.stdout
+
+
+def test_dry_run_runs_nothing(write_config, tmp_path):
+    result = trackfuse("run", write_config(CFG), "--dry-run", "--out", tmp_path,
+                       "--sweep", "n=range(1,4)")
+    assert result.returncode == 0, result.stderr
+    assert "12 points x 23 trials = 276 trials" in result.stdout
+    assert "experiment: toy_experiments:GAUSSIAN" in result.stdout
+    assert not any(tmp_path.glob("cfg/*"))
+
+
+def test_plot_refuses_an_incomplete_run(write_config, tmp_path):
+    path = write_config(CFG)
+    runner = Runner(load(path), tmp_path, progress=False)
+    runner.folder.prepare(runner.resolved)
+    runner.folder.write_manifest({"status": "interrupted"})
+    result = trackfuse("plot", runner.folder.path)
+    assert result.returncode == 2 and "not complete" in result.stderr
+
+
+def test_ctrl_c_stops_cleanly_and_the_run_resumes(write_config, tmp_path):
+    path = write_config("experiment: toy_experiments:BURN\ntrials: 400\nseed: 1\n"
+                        "params: {work: 30}\n", "burn")
+    command = [sys.executable, "-m", "cli.main", "run", str(path), "--out", str(tmp_path),
+               "--workers", "2", "--no-plots"]
+    proc = subprocess.Popen(command, env=cli_env(), stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and not list(tmp_path.glob("burn/*/parts/*.trials.csv")):
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert "run the same command again to resume" in err and "Traceback" not in err
+    resumed = subprocess.run(command, env=cli_env(), capture_output=True, text=True, timeout=120)
+    assert resumed.returncode == 0, resumed.stderr
+    assert "computed now" in resumed.stdout
+    reference = trackfuse("run", path, "--out", tmp_path / "ref", "--executor", "serial",
+                          "--no-plots")
+    assert reference.returncode == 0
+    got = next((tmp_path / "burn").iterdir()) / "trials.csv"
+    want = next((tmp_path / "ref" / "burn").iterdir()) / "trials.csv"
+    assert got.read_bytes() == want.read_bytes()
