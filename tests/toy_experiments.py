@@ -86,3 +86,29 @@ BURN = register(Experiment(
     run_trial=burn_trial,
     batch_size=4,
 ))
+
+
+def crash_once_trial(params, rng: np.random.Generator) -> list[dict]:
+    """Like the Gaussian trial, but the first trial run in any worker process kills that
+    worker (``os._exit``) once per marker file: a worker dying mid-batch."""
+    import multiprocessing
+    import os
+
+    if multiprocessing.parent_process() is not None:
+        try:
+            os.close(os.open(params["marker"], os.O_CREAT | os.O_EXCL))
+        except FileExistsError:
+            pass
+        else:
+            os._exit(1)
+    return [{"algorithm": "a", "value": float(rng.normal())}]
+
+
+CRASH = register(Experiment(
+    name="toy_crash",
+    title="A worker dies once mid-batch",
+    params=(Param("marker", "/nonexistent/marker", "file created when the worker dies", "",
+                  kind=str),),
+    run_trial=crash_once_trial,
+    batch_size=5,
+))

@@ -31,7 +31,7 @@ import yaml
 
 from trackfuse import experiments
 from trackfuse.experiments.base import Experiment, Param
-from trackfuse.sweep import SweepError, parse_axis_values
+from trackfuse.sweep import MAX_POINTS, SweepError, count_points, parse_axis_values
 
 TOP_LEVEL = ("experiment", "title", "trials", "seed", "batch_size", "params", "sweep",
              "sweep_mode", "outputs")
@@ -263,6 +263,9 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
         lengths = ", ".join(f"{k}={len(v)}" for k, v in sweep.items())
         raise ConfigError(source, "sweep", f"zip needs axes of equal length, got {lengths}")
 
+    if count_points(sweep, mode) > MAX_POINTS:
+        raise ConfigError(source, "sweep", f"the {mode} has {count_points(sweep, mode)} points;"
+                                           f" allowed: at most {MAX_POINTS}")
     figures, formats = _outputs(source, exp, raw.get("outputs") or {})
     return Config(source, exp, title, trials, seed, batch_size, params, sweep, mode,
                   figures, formats, name)

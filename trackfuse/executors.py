@@ -7,7 +7,8 @@ so completion order never reaches the output files.
 
 * ``serial``: in this process (debugging, profiling, tiny runs).
 * ``process``: :class:`concurrent.futures.ProcessPoolExecutor` with the ``forkserver``
-  start method (safe next to the progress thread; workers import the package once).
+  start method (safe next to the progress thread; workers import the package once). If a
+  worker dies, the pool is restarted and the unfinished batches are resubmitted.
 * ``dask``: a ``dask.distributed`` client to a running scheduler (``tcp://host:8786`` or a
   scheduler file, the HPC way) or a LocalCluster started here. The scheduler retries a batch
   whose worker died (``distributed.scheduler.allowed-failures``).
@@ -20,10 +21,12 @@ import os
 import signal
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from itertools import islice
 from typing import Any
 
 KINDS = ("serial", "process", "dask")
+MAX_POOL_RESTARTS = 3
 
 
 class ExecutorError(RuntimeError):
@@ -56,6 +59,30 @@ def _ignore_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
+BLAS_THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+def _start_forkserver_single_threaded() -> None:
+    """Start the fork server with one BLAS thread per worker (no oversubscription of cores).
+
+    The server is started once per process and every worker forks from it, so the
+    environment it starts with is what the workers' numpy sees.
+    """
+    from multiprocessing import forkserver
+
+    saved = {k: os.environ.get(k) for k in BLAS_THREAD_VARS}
+    for key in BLAS_THREAD_VARS:
+        os.environ.setdefault(key, "1")
+    try:
+        forkserver.ensure_running()
+    finally:
+        for key, value in saved.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+
+
 class ProcessExecutor:
     """A local process pool with a bounded number of batches in flight."""
 
@@ -63,17 +90,36 @@ class ProcessExecutor:
         self.workers = workers
         ctx = multiprocessing.get_context("forkserver")
         ctx.set_forkserver_preload(["trackfuse.runner"])
+        _start_forkserver_single_threaded()
+        self._ctx = ctx
         self._pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=_ignore_sigint)
 
     def imap_unordered(self, fn: Callable, tasks: Iterable) -> Iterator[Any]:
         tasks = iter(tasks)
-        pending = {self._pool.submit(fn, t) for t in islice(tasks, 2 * self.workers + 1)}
+        pending = {self._pool.submit(fn, t): t for t in islice(tasks, 2 * self.workers + 1)}
+        restarts = 0
         while pending:
-            done, pending = wait(pending, return_when=FIRST_COMPLETED)
+            done, _ = wait(pending, return_when=FIRST_COMPLETED)
             for future in done:
-                for task in islice(tasks, 1):
-                    pending.add(self._pool.submit(fn, task))
-                yield future.result()
+                task = pending.pop(future)
+                try:
+                    result = future.result()
+                except BrokenProcessPool:
+                    restarts += 1
+                    if restarts > MAX_POOL_RESTARTS:
+                        raise
+                    pending = self._restart({future: task, **pending}, fn)
+                    break
+                for new in islice(tasks, 1):
+                    pending[self._pool.submit(fn, new)] = new
+                yield result
+
+    def _restart(self, lost: dict, fn: Callable) -> dict:
+        """A worker died: start a new pool and resubmit every unfinished batch."""
+        self._pool.shutdown(wait=False, cancel_futures=True)
+        self._pool = ProcessPoolExecutor(self.workers, mp_context=self._ctx,
+                                         initializer=_ignore_sigint)
+        return {self._pool.submit(fn, task): task for task in lost.values()}
 
     def close(self) -> None:
         self._pool.shutdown(wait=True, cancel_futures=True)

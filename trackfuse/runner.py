@@ -179,11 +179,12 @@ class Runner:
     def total_trials(self) -> int:
         return len(self.points) * self.config.trials
 
-    def batches(self) -> list[tuple[SweepPoint, int, int, int]]:
-        """All (point, batch index, first trial, stop trial), in output order."""
+    def batches(self) -> Iterator[tuple[SweepPoint, int, int, int]]:
+        """Every (point, batch index, first trial, stop trial), lazily, in output order."""
         size, n = self.config.batch_size, self.config.trials
-        return [(p, b, first, min(first + size, n))
-                for p in self.points for b, first in enumerate(range(0, n, size))]
+        for point in self.points:
+            for batch, first in enumerate(range(0, n, size)):
+                yield point, batch, first, min(first + size, n)
 
     def _tasks(self, todo) -> Iterator[BatchTask]:
         cfg = self.config
@@ -233,14 +234,15 @@ class Runner:
         started = _now()
         per_point = {int(k): v for k, v in ((previous or {}).get("per_point_wall_s") or {}).items()}
         finished = self.folder.finished_batches()
-        plan = self.batches()
-        todo = [b for b in plan if RunFolder.part_name(b[0].index, b[1]) not in finished]
-        done = self.total_trials - sum(stop - first for _, _, first, stop in todo)
+        todo = (b for b in self.batches()
+                if RunFolder.part_name(b[0].index, b[1]) not in finished)
+        size, n = self.config.batch_size, self.config.trials
+        done = sum(min(size, n - int(name.split("-b")[1]) * size) for name in finished)
         computed = 0
         self.folder.write_manifest(self._manifest("running", started, per_point, 0, done,
                                                   previous))
         label = f"{self.config.experiment.name} [{self.run_id}]"
-        if todo:
+        if done < self.total_trials:
             executor = make_executor(self.executor_kind, self.workers, self.scheduler,
                                      self.scheduler_file)
             self.workers = executor.workers
@@ -305,6 +307,8 @@ def draw_reports(folder: Path, experiment: Experiment,
     """
     written: list[Path] = []
     errors: list[str] = []
+    if experiment.tables is None and experiment.figures is None:
+        return written, errors
     trials = pd.read_csv(folder / TRIALS, low_memory=False)
     summary = pd.read_csv(folder / SUMMARY, low_memory=False)
     if experiment.tables is not None:

@@ -59,6 +59,8 @@ def parse_range(text: str) -> list[float | int]:
     if step == 0:
         raise SweepError(f"got {text!r}; the step must not be 0")
     if all(isinstance(p, int) for p in (start, stop, step)):
+        if len(range(start, stop, step)) > MAX_POINTS:
+            raise SweepError(f"got {text!r}; more than {MAX_POINTS} values")
         values: list[float | int] = list(range(start, stop, step))
     else:
         count = math.ceil((stop - start) / step - 1e-9)
@@ -125,6 +127,14 @@ def parse_sweeps(items: list[str]) -> dict[str, Any]:
     return axes
 
 
+def count_points(sweep: Mapping[str, list[Any]], mode: str = "grid") -> int:
+    """Number of sweep points without building them."""
+    if not sweep:
+        return 1
+    lengths = [len(v) for v in sweep.values()]
+    return lengths[0] if mode == "zip" else math.prod(lengths)
+
+
 def expand(sweep: Mapping[str, list[Any]], mode: str = "grid") -> list[SweepPoint]:
     """All sweep points, indexed from 0; one empty point when there are no axes."""
     if not sweep:
@@ -133,7 +143,7 @@ def expand(sweep: Mapping[str, list[Any]], mode: str = "grid") -> list[SweepPoin
     if mode == "zip":
         combos = zip(*(sweep[k] for k in keys), strict=True)
     else:
-        total = math.prod(len(v) for v in sweep.values())
+        total = count_points(sweep, mode)
         if total > MAX_POINTS:
             raise SweepError(f"the grid has {total} points; at most {MAX_POINTS}")
         combos = itertools.product(*(sweep[k] for k in keys))
