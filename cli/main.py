@@ -28,7 +28,8 @@ out = Console()
 
 def fail(message: str, code: int = 2) -> None:
     """Print a one-line error to stderr and exit."""
-    print(f"error: {message}", file=sys.stderr)
+    safe = "".join(c if c.isprintable() else repr(c)[1:-1] for c in message)
+    print(f"error: {safe}", file=sys.stderr)
     raise typer.Exit(code)
 
 

@@ -45,7 +45,8 @@ class ConfigError(ValueError):
 
     def __init__(self, source: str, key: str, message: str):
         self.source, self.key = source, key
-        super().__init__(f"{source}: {key}: {message}" if key else f"{source}: {message}")
+        text = f"{source}: {key}: {message}" if key else f"{source}: {message}"
+        super().__init__("".join(c if c.isprintable() else repr(c)[1:-1] for c in text))
 
 
 @dataclass
