@@ -11,6 +11,7 @@ prints trials/s and peak RSS. Flat memory means the 10^6 peak stays within 2x th
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import subprocess
 import sys
@@ -28,10 +29,8 @@ def tree_rss(proc: psutil.Process) -> int:
     """Resident bytes of ``proc`` and all its descendants."""
     total = 0
     for p in [proc, *proc.children(recursive=True)]:
-        try:
+        with contextlib.suppress(psutil.Error):
             total += p.memory_info().rss
-        except psutil.Error:
-            pass
     return total
 
 
