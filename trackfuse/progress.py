@@ -6,6 +6,7 @@ import sys
 import time
 
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import (
     BarColumn,
     MofNCompleteColumn,
@@ -34,7 +35,7 @@ class RunProgress:
                                  MofNCompleteColumn(), TaskProgressColumn(),
                                  TextColumn("{task.fields[rate]}"), TimeElapsedColumn(),
                                  TextColumn("ETA"), TimeRemainingColumn(), console=console)
-            self._task = self._bar.add_task(label, total=total, completed=done, rate="")
+            self._task = self._bar.add_task(escape(label), total=total, completed=done, rate="")
 
     def __enter__(self) -> RunProgress:
         if self._rich:
