@@ -103,7 +103,7 @@ def run(
     for message in outcome.figure_errors:
         print(f"warning: {message}", file=sys.stderr)
     if outcome.failed_trials:
-        print(f"error: {outcome.failed_trials} trial rows failed (status=failed in trials.csv)",
+        print(f"error: {outcome.failed_trials} trials failed (status=failed in trials.csv)",
               file=sys.stderr)
         raise typer.Exit(3)
     if outcome.figure_errors:

@@ -94,7 +94,7 @@ def test_failed_trials_are_recorded_and_the_run_goes_on(write_config, tmp_path):
     path = write_config(CFG + "  fail_every: [3]\n")
     result = trackfuse("run", path, "--out", tmp_path, "--workers", "2", "--no-plots")
     assert result.returncode == 3, result.stderr
-    assert "trial rows failed" in result.stderr and "Traceback" not in result.stderr
+    assert "trials failed" in result.stderr and "Traceback" not in result.stderr
     folder = next((tmp_path / "cfg").iterdir())
     trials = pd.read_csv(folder / "trials.csv")
     failed = trials[trials["status"] == "failed"]
