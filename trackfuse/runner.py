@@ -47,6 +47,7 @@ from trackfuse.summary import summarize
 from trackfuse.sweep import SweepPoint, expand
 
 MANIFEST_EVERY_S = 5.0
+TIMING_SUMMARY = "timings_summary.csv"
 
 
 class RunInterrupted(Exception):
@@ -284,7 +285,7 @@ class Runner:
         atomic_write(self.folder.path / SUMMARY, summary.to_csv(index=False))
         if (self.folder.path / TIMINGS).exists():
             timing_summary, _ = summarize(self.folder.path / TIMINGS, keys)
-            atomic_write(self.folder.path / "timings_summary.csv",
+            atomic_write(self.folder.path / TIMING_SUMMARY,
                          timing_summary.to_csv(index=False))
         outcome = RunOutcome(self.folder.path, "complete", self.total_trials, 0, failed_rows,
                              rows)
@@ -303,6 +304,7 @@ def draw_reports(folder: Path, experiment: Experiment,
                  resolved: dict[str, Any]) -> tuple[list[Path], list[str]]:
     """Draw figures and tables from the CSVs in ``folder`` (no trial is recomputed).
 
+    The summary handed to the experiment includes the timing metrics (``*_time_s``).
     Returns the written figure paths and one message per figure or table that failed.
     """
     written: list[Path] = []
@@ -311,6 +313,9 @@ def draw_reports(folder: Path, experiment: Experiment,
         return written, errors
     trials = pd.read_csv(folder / TRIALS, low_memory=False)
     summary = pd.read_csv(folder / SUMMARY, low_memory=False)
+    if (folder / TIMING_SUMMARY).exists():
+        timing = pd.read_csv(folder / TIMING_SUMMARY, low_memory=False)
+        summary = pd.concat([summary, timing], ignore_index=True)
     if experiment.tables is not None:
         tables_dir = folder / "tables"
         tables_dir.mkdir(exist_ok=True)

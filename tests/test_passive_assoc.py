@@ -1,0 +1,135 @@
+"""The ``passive_assoc`` experiment: rows, common random numbers, scoring, figures, CLI."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from conftest import trackfuse
+
+from trackfuse.experiments import get
+from trackfuse.experiments.passive_assoc import EXPERIMENT, VARIANTS, score, sigma_of
+from trackfuse.summary import summarize
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def params(**kw):
+    p = EXPERIMENT.defaults()
+    p.update({"pga.ops": 200, "pga.checkpoints": [0, 50, 200]})
+    p.update(kw)
+    return p
+
+
+def strip_times(rows):
+    return [{k: v for k, v in r.items() if not k.endswith("_time_s")} for r in rows]
+
+
+def test_registered_and_defaults_follow_the_spec():
+    assert get("passive_assoc") is EXPERIMENT
+    d = EXPERIMENT.defaults()
+    assert d["noise.sigma"] == 0.005 and d["sensor.p_d"] == 0.95 and d["pga.p_m"] == 0.2
+    assert d["pga.ops"] == 1000 and d["pga.checkpoints"] == [0, 10, 20, 50, 100, 200, 500, 1000]
+    assert d["assoc.tri"] == "unit_normal" and d["assoc.cost"] == "paper"
+    for p in EXPERIMENT.params:
+        assert p.doc
+    assert sigma_of({"noise.sigma": 0.005, "noise.reading": "variance"}) == pytest.approx(
+        math.sqrt(0.005))
+
+
+def test_rows_are_tidy_and_deterministic():
+    p = params(algorithms=["exact", *VARIANTS])
+    rows = EXPERIMENT.run_trial(p, np.random.default_rng([3, 0, 1]))
+    again = EXPERIMENT.run_trial(p, np.random.default_rng([3, 0, 1]))
+    assert strip_times(rows) == strip_times(again)
+    keys = {(r["algorithm"], r["ops"]) for r in rows}
+    assert keys == {("exact", 0)} | {(v, c) for v in VARIANTS for c in (0, 50, 200)}
+    for r in rows:
+        assert 0 <= r["accuracy"] <= 1 and 0 <= r["precision"] <= 1 and 0 <= r["recall"] <= 1
+        assert r["correct"] in (0, 1) and r["at_opt"] in (0, 1) and r["gap"] >= 0
+        assert r["solve_time_s"] >= 0
+    exact = next(r for r in rows if r["algorithm"] == "exact")
+    assert exact["at_opt"] == 1 and exact["gap"] == 0
+
+
+def test_adding_an_algorithm_changes_no_other_number():
+    rng_seed = [7, 2, 99]
+    few = EXPERIMENT.run_trial(params(algorithms=["pga_evict"]), np.random.default_rng(rng_seed))
+    many = EXPERIMENT.run_trial(params(algorithms=["exact", "pga_paper", "pga_repair",
+                                                   "pga_evict", "pga_anneal"]),
+                                np.random.default_rng(rng_seed))
+    assert strip_times(few) == [r for r in strip_times(many) if r["algorithm"] == "pga_evict"]
+
+
+@pytest.mark.parametrize("n", [5, 10])
+def test_noise_free_without_false_alarms_exact_and_improved_pga_find_the_truth(n):
+    p = params(**{"targets.n": n, "noise.sigma": 1e-6, "clutter.p_f": 0.0, "sensor.p_d": 1.0,
+                  "pga.ops": 1000, "pga.checkpoints": [1000],
+                  "algorithms": ["exact", "pga_repair", "pga_evict", "pga_anneal"]})
+    for seed in range(4):
+        for r in EXPERIMENT.run_trial(p, np.random.default_rng(seed)):
+            assert r["correct"] == 1 and r["accuracy"] == 1.0 and r["at_opt"] == 1, r
+
+
+def test_score_counts_partners_and_dummies():
+    truth1, truth2 = np.array([1, -1, 0]), np.array([2, 0])
+    s = score(truth1, truth2, truth1, truth2)
+    assert s == {"accuracy": 1.0, "precision": 1.0, "recall": 1.0, "correct": 1, "pairs": 2}
+    # pair (0, 1) is right, (1, 0) is a false pair, measurement 2 wrongly left unpaired
+    s = score(np.array([1, 0, -1]), np.array([1, 0]), truth1, truth2)
+    assert s["accuracy"] == pytest.approx(2 / 5)  # sensor-1 #0 and sensor-2 #1 right
+    assert s["precision"] == 0.5 and s["recall"] == 0.5 and s["correct"] == 0
+
+
+def small_run(tmp_path, p, sweep_key, values, trials=4):
+    rows = []
+    for point, v in enumerate(values):
+        q = {**p, sweep_key: v}
+        for trial in range(trials):
+            for r in EXPERIMENT.run_trial(q, np.random.default_rng([trial, point, 1])):
+                rows.append({"point": point, "trial": trial, sweep_key: v, **r})
+    trials_df = pd.DataFrame(rows)
+    path = tmp_path / "trials.csv"
+    trials_df.to_csv(path, index=False)
+    summary, _ = summarize(path, ["point", sweep_key, *EXPERIMENT.row_keys],
+                           EXPERIMENT.binary_metrics)
+    config = {"experiment": "passive_assoc", "params": p, "sweep": {sweep_key: values},
+              "trials": trials, "seed": 1}
+    return trials_df, summary, config
+
+
+def axis_labels(fig):
+    return [(ax.get_xlabel(), ax.get_ylabel()) for ax in fig.axes if ax.get_xlabel()]
+
+
+def test_figures_for_the_three_studies(tmp_path):
+    p = params(algorithms=["exact", "pga_paper", "pga_evict"])
+    conv = EXPERIMENT.figures(*small_run(tmp_path, p, "targets.n", [5, 7]))
+    assert set(conv) == {"convergence", "at_optimum"}
+    noise = EXPERIMENT.figures(*small_run(tmp_path, p, "noise.sigma", [0.002, 0.0707]))
+    assert "noise" in noise
+    scale_p = params(**{"scene.mode": "random", "pga.checkpoints": [200]},
+                     algorithms=["exact", "pga_evict"])
+    scale = EXPERIMENT.figures(*small_run(tmp_path, scale_p, "targets.n", [5, 10, 20],
+                                          trials=2))
+    assert set(scale) == {"scale"}
+    for fig in [*conv.values(), *noise.values(), *scale.values()]:
+        assert fig._suptitle is not None and fig._suptitle.get_text()
+        for xlabel, ylabel in axis_labels(fig):
+            assert "(" in xlabel and "(" in ylabel  # every axis names its unit
+    table = EXPERIMENT.tables(*small_run(tmp_path, p, "targets.n", [5]))["final"]
+    assert set(table["algorithm"]) == {"exact", "pga_paper", "pga_evict"}
+    assert (table.loc[table["algorithm"] == "exact", "at_opt"] == 1).all()
+
+
+@pytest.mark.parametrize("name", ["passive_assoc_ci", "passive_scale_ci"])
+def test_ci_config_runs_through_the_cli(tmp_path, name):
+    proc = trackfuse("run", ROOT / "configs" / "ci" / f"{name}.yaml", "--out", tmp_path,
+                     "--workers", "1", "--no-progress")
+    assert proc.returncode == 0, proc.stderr
+    run = next(tmp_path.glob("*/*/"))
+    assert (run / "figures").is_dir() and any((run / "figures").glob("*.png"))
+    trials = pd.read_csv(run / "trials.csv")
+    assert {"algorithm", "ops", "accuracy", "gap", "at_opt"} <= set(trials.columns)
+    assert not any(c.endswith("_time_s") for c in trials.columns)
