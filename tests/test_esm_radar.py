@@ -1,0 +1,247 @@
+"""The esm_radar experiment: science properties, batching, tables and figures."""
+
+import matplotlib
+import numpy as np
+import pandas as pd
+import pytest
+
+from trackfuse.association.track_likelihood import abstaining_decision, ml_track_decision
+from trackfuse.experiments import get
+from trackfuse.experiments.esm_radar import ALGORITHMS, EXPERIMENT, differences, simulate
+from trackfuse.stats import t_interval, wilson_interval
+
+ALL = list(ALGORITHMS)
+
+
+def params(**over):
+    p = EXPERIMENT.defaults()
+    p["algorithms"] = ALL
+    p.update({k.replace("__", "."): v for k, v in over.items()})
+    return p
+
+
+def rngs(n, point=0, seed=11):
+    return [np.random.default_rng([t, point, seed]) for t in range(n)]
+
+
+def frame(rows, point=0, extra=None):
+    out = []
+    for trial, trial_rows in enumerate(rows):
+        for r in trial_rows:
+            out.append({"point": point, "trial": trial, **(extra or {}), **r})
+    return pd.DataFrame(out)
+
+
+def mini_run(base, sweep, trials, seed=5):
+    """Tiny stand-in for the runner: grid over one axis, seeds as DESIGN.md says."""
+    (key, values), = sweep.items()
+    frames = []
+    for point, value in enumerate(values):
+        p = dict(base, **{key: value})
+        rows = EXPERIMENT.run_trials(p, rngs(trials, point, seed))
+        frames.append(frame(rows, point, {key: value}))
+    trials_df = pd.concat(frames, ignore_index=True)
+    summ = []
+    metrics = [c for c in trials_df.columns if c not in ("point", "trial", "algorithm", key)]
+    for (point, value, alg), g in trials_df.groupby(["point", key, "algorithm"], sort=False):
+        for m in metrics:
+            x = g[m].to_numpy(float)
+            if m in EXPERIMENT.binary_metrics:
+                lo, hi = wilson_interval(x.sum(), len(x))
+                kind = "wilson"
+            else:
+                lo, hi = t_interval(x.mean(), x.std(ddof=1), len(x))
+                kind = "t"
+            summ.append({"point": point, key: value, "algorithm": alg, "metric": m,
+                         "n": len(x), "mean": x.mean(), "std": x.std(ddof=1),
+                         "ci_low": float(lo), "ci_high": float(hi), "interval": kind})
+    config = {"experiment": "esm_radar", "title": "t", "trials": trials, "seed": seed,
+              "params": base, "sweep": {key: list(values)}, "sweep_mode": "grid"}
+    return trials_df, pd.DataFrame(summ), config
+
+
+def test_registered_and_schema_valid():
+    assert get("esm_radar") is EXPERIMENT
+    for p in EXPERIMENT.params:
+        assert p.doc
+        if p.kind is list:
+            assert set(p.default) <= set(p.choices)
+        elif p.choices is not None:
+            assert p.default in p.choices
+        elif p.kind in (int, float):
+            assert p.low <= p.default <= p.high
+
+
+@pytest.mark.parametrize("model", ["table", "derived"])
+def test_noise_free_every_algorithm_picks_the_true_track(model):
+    rows = EXPERIMENT.run_trials(params(noise__scale=0.0, radar__factor_model=model), rngs(3))
+    for trial in rows:
+        for r in trial:
+            assert (r["chosen"], r["correct"]) == (2, 1), r
+
+
+def test_noise_free_with_time_alignment_at_different_rates():
+    # ESM at 1 s starting 0.5 s after the radar, radar at 2 s: the interpolated radar track 2
+    # is close to the truth only with alignment; every algorithm still picks track 2.
+    p = params(noise__scale=0.0, esm__offset=0.5, radar__period=2.0, time_align=True)
+    for r in EXPERIMENT.run_trials(p, rngs(1))[0]:
+        assert r["chosen"] == 2
+    sims = {align: simulate(dict(p, time_align=align), rngs(1)) for align in (True, False)}
+    truth = simulate(dict(p, **{"radar.period": 0.5}), rngs(1))  # samples at ESM times
+    err = {a: np.abs(s.x_radar[0, :, 1, 0] - truth.x_radar[0, :, 1, 0]).mean()
+           for a, s in sims.items()}
+    assert err[True] < 0.05 * err[False]
+
+
+def test_chi2_reference_never_worse_than_chance_and_beats_fuzzy_on_hard_setting():
+    p = params(target__separation=50.0, radar__factor_model="derived")
+    df = frame(EXPERIMENT.run_trials(p, rngs(150)))
+    rate = df.groupby("algorithm")["correct"].mean()
+    lo, _ = wilson_interval(rate["chi2"] * 150, 150)
+    assert lo > 1 / 3
+    # Track 3 (crossing, different speed) is never chosen by the reference.
+    assert not (df[(df.algorithm == "chi2")].chosen == 3).any()
+    assert rate["chi2"] >= rate["improved"]
+
+
+def test_trial_without_any_valid_tdoa_df_sample_ignores_range():
+    p = params(**{"esm.min_denominator": 1e5})
+    rows = EXPERIMENT.run_trials(p, rngs(20))
+    df = frame(rows)
+    assert (df["esm_invalid"] == p["scan.count"]).all()
+    assert df["chosen"].isin([1, 2, 3]).all() and np.isfinite(df["margin"]).all()
+    # The reference never uses the ESM range, so it is unaffected by the missing range.
+    ref = frame(EXPERIMENT.run_trials(params(), rngs(20)))
+    np.testing.assert_array_equal(df[df.algorithm == "chi2"]["chosen"],
+                                  ref[ref.algorithm == "chi2"]["chosen"])
+
+
+@pytest.mark.parametrize("model", ["table", "derived"])
+def test_true_track_chi2_distance_is_chi2_distributed(model):
+    """The reference's covariance model is right: D of the true track ~ chi2(K F)."""
+    p = params(radar__factor_model=model)
+    diff = differences(simulate(p, rngs(200)))
+    idx = [1, 2, 3, 4]  # speed, angle, tdoa, phase (the chi2 reference's factors)
+    _, _, D = ml_track_decision(diff.d[..., idx], diff.S[..., idx, :][..., idx])
+    dof = p["scan.count"] * len(idx)
+    D_true = D[:, 1]
+    assert D_true.mean() / dof == pytest.approx(1.0, abs=0.03)
+    assert D_true.var() / (2 * dof) == pytest.approx(1.0, abs=0.3)
+
+
+def test_abstaining_decision():
+    j = np.array([0, 1, 2, 1])
+    log_lr = np.array([5.0, 1.0, 5.0, 5.0])
+    D_best = np.array([100.0, 100.0, 400.0, 100.0])
+    out = abstaining_decision(j, log_lr, D_best, 100, np.log(19), 0.001)
+    np.testing.assert_array_equal(out, [0, -1, -1, 1])  # ambiguous, then gated out
+    np.testing.assert_array_equal(abstaining_decision(j, log_lr, D_best, 100, 0.0, 0.0), j)
+
+
+def test_lrt_reference_abstains_on_identical_tracks():
+    p = params(target__separation=0.0, algorithms=["chi2", "chi2_lrt"])
+    df = frame(EXPERIMENT.run_trials(p, rngs(150)))
+    lrt = df[df.algorithm == "chi2_lrt"]
+    forced = df[df.algorithm == "chi2"]
+    assert forced["decided"].all() and 0.1 < 1 - lrt["decided"].mean() < 0.6
+    # Abstaining only removes decisions: never changes a decided track.
+    both = lrt["chosen"].to_numpy() != 0
+    np.testing.assert_array_equal(lrt["chosen"].to_numpy()[both], forced["chosen"].to_numpy()[both])
+    assert ((lrt["chosen"] != 0) & (lrt["correct"] == 0)).mean() < (forced["correct"] == 0).mean()
+
+
+@pytest.mark.parametrize("over", [{}, {"radar.period": 2.0, "esm.offset": 0.5,
+                                      "time_align": True, "radar.factor_model": "derived"}])
+def test_batch_equals_single_trials_and_algorithms_do_not_change_data(over):
+    p = dict(params(), **over)
+    g1, g2 = rngs(6), rngs(6)
+    batch = EXPERIMENT.run_trials(p, g1)
+    single = [EXPERIMENT.run_trial(p, g) for g in g2]
+    for b, s in zip(batch, single, strict=True):
+        for rb, rs in zip(b, s, strict=True):
+            assert rb.keys() == rs.keys()
+            for k in rb:
+                assert rb[k] == pytest.approx(rs[k], rel=1e-9, abs=1e-12), k
+    only = EXPERIMENT.run_trials(dict(p, algorithms=["improved"]), rngs(6))
+    for full, one in zip(batch, only, strict=True):
+        assert [r for r in full if r["algorithm"] == "improved"] == one
+
+
+def test_rows_are_tidy_and_deterministic():
+    a = EXPERIMENT.run_trials(params(), rngs(4))
+    b = EXPERIMENT.run_trials(params(), rngs(4))
+    assert a == b
+    for trial in a:
+        assert [r["algorithm"] for r in trial] == ALL
+        for r in trial:
+            assert r["correct"] == int(r["chosen"] == 2) and r["chosen"] in (0, 1, 2, 3)
+            assert r["decided"] == int(r["chosen"] != 0)
+            assert r["margin"] >= 0
+            assert not any(k.endswith("_time_s") for k in r)
+            assert 0 <= r["range_weight_min"] <= r["range_weight_mean"] + 1e-12
+            assert r["range_weight_mean"] <= 0.637 + 1e-12  # largest static range weight
+
+
+def test_table_model_tdoa_decides_and_derived_is_harder():
+    """W001-2: the radar-factor model changes the headline result."""
+    out = {}
+    for model in ("table", "derived"):
+        df = frame(EXPERIMENT.run_trials(params(radar__factor_model=model), rngs(120)))
+        out[model] = df.groupby("algorithm")["correct"].mean()
+    assert out["table"]["improved"] > 0.9 and out["table"]["chi2"] > 0.95
+    assert out["derived"]["improved"] < out["table"]["improved"] - 0.1
+    # The 3-factor methods do not use TDOA/phase, so the model does not affect them.
+    assert out["table"]["traditional"] == out["derived"]["traditional"]
+
+
+def test_tables_and_figures_from_saved_frames(tmp_path):
+    base = params(algorithms=["traditional", "improved", "improved_static", "chi2", "chi2_lrt"])
+    trials, summary, config = mini_run(base, {"target.separation": [100.0, 1000.0]}, 12)
+    tabs = EXPERIMENT.tables(trials, summary, config)
+    t3 = tabs["table3"]
+    assert set(t3.columns) >= {"radar_track_1", "radar_track_2", "radar_track_3",
+                               "correct_rate", "ci_low", "ci_high", "n"}
+    np.testing.assert_array_equal(t3[["radar_track_1", "radar_track_2", "radar_track_3",
+                                      "no_decision"]].sum(axis=1), t3["n"])
+    np.testing.assert_allclose(t3["correct_rate"], t3["radar_track_2"] / t3["n"])
+    abl = tabs["ablation"]
+    imp = abl[abl.algorithm == "improved"]
+    assert (imp["gain_vs_improved"] == 0).all() and (imp["mcnemar_p"] == 1).all()
+    assert set(abl["weights"]) == {"static", "dynamic", "-"}
+    figs = EXPERIMENT.figures(trials, summary, config)
+    assert set(figs) == {"correct_rate", "trajectory"}
+    for name, fig in figs.items():
+        assert isinstance(fig, matplotlib.figure.Figure)
+        data_axes = [ax for ax in fig.axes if ax.has_data()]
+        for ax in data_axes:
+            assert ax.get_ylabel(), name
+            # A twin y-axis shares the x label of its host.
+            assert ax.get_xlabel() or ax.get_shared_x_axes().get_siblings(ax) != [ax], name
+        fig.savefig(tmp_path / f"{name}.png")
+    title = figs["trajectory"].axes[1].get_title()
+    assert "matches saved row" in title
+
+
+def test_categorical_sweep_draws_bar_chart():
+    base = params(algorithms=["traditional", "improved", "chi2"])
+    trials, summary, config = mini_run(base, {"radar.factor_model": ["table", "derived"]}, 8)
+    figs = EXPERIMENT.figures(trials, summary, config)
+    assert len([a for a in figs["correct_rate"].axes if a.has_data()]) == 2
+    t3 = EXPERIMENT.tables(trials, summary, config)["table3"]
+    assert set(t3["radar.factor_model"]) == {"table", "derived"}
+
+
+def test_static_weight_methods():
+    from trackfuse.experiments.esm_radar import PAPER_ROUNDED, static_weights
+
+    np.testing.assert_allclose(static_weights(ALGORITHMS["improved"].factors, "root_exact"),
+                               [0.5100, 0.2638, 0.1296, 0.0636, 0.0329], atol=1e-4)
+    np.testing.assert_allclose(static_weights(ALGORITHMS["improved"].factors, "eigen")[0],
+                               0.5128, atol=1e-4)
+    np.testing.assert_array_equal(static_weights(ALGORITHMS["improved"].factors,
+                                                 "paper_rounded"), PAPER_ROUNDED)
+    # Subsets use the AHP sub-matrix (traditional: SPEC 3.3 values), in the given order.
+    np.testing.assert_allclose(static_weights(("range", "speed", "angle"), "paper_rounded"),
+                               [0.637, 0.258, 0.105], atol=1e-3)
+    np.testing.assert_allclose(static_weights(("angle", "range"), "root_exact"),
+                               [1 / 6, 5 / 6])

@@ -1,0 +1,197 @@
+"""TDOA-DF inversion, scenario geometry, time alignment and the manoeuvre index."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from trackfuse.association.esm_scenario import (
+    FACTORS,
+    ESMNoise,
+    RadarNoise,
+    SnakeCross,
+    esm_factors,
+    position_factor_jacobian,
+    position_factors,
+    radar_factors,
+    true_factors,
+)
+from trackfuse.association.manoeuvre import cv_residuals, manoeuvre_index
+from trackfuse.association.tdoa_df import (
+    C,
+    carry_forward,
+    tdoa_df_jacobian,
+    tdoa_df_range,
+    tdoa_df_range_sigma,
+)
+from trackfuse.association.time_align import bracket, interpolate, interpolated_variance_factor
+
+A1 = np.zeros(2)
+A2 = np.array([10_000.0, 0.0])
+coord = st.floats(-50_000, 50_000)
+
+
+@settings(max_examples=100, deadline=None)
+@given(coord, coord, st.floats(-3.0, 3.0), st.floats(1_000, 30_000))
+def test_tdoa_df_exact_without_noise(x, y, phi, blen):
+    p = np.array([x, y])
+    b = blen * np.array([np.cos(phi), np.sin(phi)])
+    r_true = np.linalg.norm(p)
+    dr = r_true - np.linalg.norm(p - b)
+    D = 2 * (p @ b / r_true - dr) if r_true > 0 else 0.0
+    if r_true < 100 or abs(D) < 1e-3 * blen:
+        return  # emitter on a platform or along the ambiguous asymptote
+    r, valid = tdoa_df_range(np.arctan2(y, x), dr, b)
+    assert valid
+    assert r == pytest.approx(r_true, rel=1e-7)
+
+
+def test_tdoa_df_guard_flags_and_carries():
+    b = np.array([1000.0, 0.0])
+    # Bearing along +x with dr = |b| cos(0) = 1000 m: zero denominator.
+    r, valid = tdoa_df_range(np.array([0.3, 0.0, 0.3]), np.array([100.0, 1000.0, 100.0]), b)
+    np.testing.assert_array_equal(valid, [True, False, True])
+    assert np.isnan(r[1])
+    filled = carry_forward(r[None], valid[None])[0]
+    assert filled[1] == r[0]
+    # r <= 0 is invalid too (the emitter would be behind A1).
+    _, v2 = tdoa_df_range(np.array([np.pi]), np.array([0.0]), b)
+    assert not v2[0]
+    # Leading invalid samples take the first valid value; all-invalid rows stay NaN.
+    x = np.array([[np.nan, 2.0, np.nan, 4.0], [np.nan] * 4])
+    v = ~np.isnan(x)
+    np.testing.assert_array_equal(carry_forward(x, v)[0], [2.0, 2.0, 2.0, 4.0])
+    assert np.all(np.isnan(carry_forward(x, v)[1]))
+
+
+def test_tdoa_df_jacobian_matches_central_differences():
+    rng = np.random.default_rng(3)
+    th = rng.uniform(0.6, 1.2, 20)
+    dr = rng.uniform(1000, 5000, 20)
+    h_t, h_d = 1e-6, 1e-3
+    num_t = (tdoa_df_range(th + h_t, dr, A2, 0)[0] - tdoa_df_range(th - h_t, dr, A2, 0)[0]) / (
+        2 * h_t)
+    num_d = (tdoa_df_range(th, dr + h_d, A2, 0)[0] - tdoa_df_range(th, dr - h_d, A2, 0)[0]) / (
+        2 * h_d)
+    j_t, j_d = tdoa_df_jacobian(th, dr, A2)
+    np.testing.assert_allclose(j_t, num_t, rtol=1e-6)
+    np.testing.assert_allclose(j_d, num_d, rtol=1e-6)
+
+
+def test_esm_range_sigma_about_3km_at_24km():
+    f = true_factors(np.array([13200.0, 20000.0]), np.zeros(2), A1, A2, 0.5)
+    assert f[0] == pytest.approx(np.hypot(13200, 20000))
+    s = tdoa_df_range_sigma(f[2], C * f[3], A2, 0.03, C * 3e-8)
+    assert 2500 < s < 4000  # SPEC 3.1: "about 3.3 km"
+
+
+def test_snake_cross_geometry():
+    sc = SnakeCross(separation=200.0)
+    t = np.arange(0.0, 50.0, 0.5)
+    p, v = sc.states(t)
+    np.testing.assert_allclose(p[:, 1] - p[:, 0], np.broadcast_to([200.0, 0.0], (len(t), 2)))
+    np.testing.assert_allclose(p[0, :, :], [[13000, 20000], [13200, 20000], [10200, 15000]])
+    # T3 crosses the T1/T2 centre line at t_c = 30 s.
+    p30, _ = sc.states(np.array([30.0]))
+    np.testing.assert_allclose(p30[0, 2], [13100.0, 14000.0])
+    np.testing.assert_allclose(v[0, 2], [96.6667, -33.3333], atol=1e-3)
+    # Velocity is the derivative of position; peak lateral acceleration ~2.5 g.
+    np.testing.assert_allclose(np.gradient(p[:, 0, 0], t)[2:-2], v[2:-2, 0, 0], rtol=1e-2,
+                               atol=1.0)
+    assert 1000 * (2 * np.pi / 40) ** 2 == pytest.approx(24.67, abs=0.01)
+
+
+def test_true_factors_consistent_with_tdoa_df_and_phase():
+    p, v = SnakeCross().states(np.arange(0, 50.0))
+    f = true_factors(p, v, A1, A2, 0.5)
+    assert f.shape == (50, 3, len(FACTORS))
+    r, valid = tdoa_df_range(f[..., 2], C * f[..., 3], A2)
+    assert valid.all()
+    np.testing.assert_allclose(r, f[..., 0], rtol=1e-9)
+    np.testing.assert_allclose(f[..., 4], np.pi * np.cos(f[..., 2]))
+    np.testing.assert_allclose(f[:, 0, 1], f[:, 1, 1])  # T1 and T2 fly the same manoeuvre
+
+
+def test_position_factor_jacobian():
+    r, th = np.array([20_000.0, 15_000.0]), np.array([0.9, 1.2])
+    h = 1e-3
+    t_r = (position_factors(r + h, th, A1, A2, 0.5)[0]
+           - position_factors(r - h, th, A1, A2, 0.5)[0]) / (2 * h)
+    t_t = (position_factors(r, th + 1e-7, A1, A2, 0.5)[0]
+           - position_factors(r, th - 1e-7, A1, A2, 0.5)[0]) / 2e-7
+    p_t = (position_factors(r, th + 1e-7, A1, A2, 0.5)[1]
+           - position_factors(r, th - 1e-7, A1, A2, 0.5)[1]) / 2e-7
+    g_r, g_t, h_t = position_factor_jacobian(r, th, A1, A2, 0.5)
+    np.testing.assert_allclose([g_r, g_t, h_t], [t_r, t_t, p_t], rtol=1e-5)
+
+
+def test_sensor_factor_covariances_match_monte_carlo():
+    rng = np.random.default_rng(7)
+    p, v = SnakeCross().states(np.array([0.0, 1.0]))
+    f = true_factors(p, v, A1, A2, 0.5)
+    n = 20000
+    x, P, valid = esm_factors(f[:, 1], rng.standard_normal((n, 2, 4)), ESMNoise(), A1, A2)
+    assert valid.all()
+    e = x[:, 0] - f[0, 1]
+    emp = np.cov(e[:, [0, 2, 3]].T)
+    mod = P[:, 0][:, [0, 2, 3]][:, :, [0, 2, 3]].mean(axis=0)
+    np.testing.assert_allclose(np.diag(emp)[1:], np.diag(mod)[1:], rtol=0.05)
+    assert np.sqrt(emp[0, 0]) == pytest.approx(np.sqrt(mod[0, 0]), rel=0.15)
+    for model in ("table", "derived"):
+        xr, Pr = radar_factors(f, rng.standard_normal((n, 2, 3, 5)), RadarNoise(), model, A1,
+                               A2, 0.5)
+        er = xr[:, 0, 1] - f[0, 1]
+        emp_r, mod_r = np.cov(er.T), Pr[:, 0, 1].mean(axis=0)
+        sd_e, sd_m = np.sqrt(np.diag(emp_r)), np.sqrt(np.diag(mod_r))
+        np.testing.assert_allclose(sd_e, sd_m, rtol=0.05)
+        np.testing.assert_allclose(emp_r / np.outer(sd_e, sd_e), mod_r / np.outer(sd_m, sd_m),
+                                   atol=0.03)
+
+
+def test_time_alignment_interpolation_and_variance():
+    t_radar = np.arange(0.0, 12.0)
+    y = 3.0 * t_radar[:, None] + np.array([1.0, -2.0])  # linear in time, 2 tracks
+    t = np.array([0.0, 0.25, 5.5, 10.9])
+    m1, a = bracket(t, 1.0, len(t_radar))
+    np.testing.assert_allclose(interpolate(y, m1, a), 3.0 * t[:, None] + [1.0, -2.0])
+    # Angles across the +-pi cut interpolate along the short arc.
+    ang = np.array([np.pi - 0.1, -np.pi + 0.1, -np.pi + 0.3])
+    out = interpolate(ang, np.array([0]), np.array([0.5]), angular=True)
+    assert abs(abs(out[0]) - np.pi) < 1e-12
+    # Variance of the interpolant of independent unit-variance samples.
+    rng = np.random.default_rng(1)
+    z = rng.standard_normal((200_000, 2))
+    for frac in (0.0, 0.3, 0.5):
+        emp = np.var((1 - frac) * z[:, 0] + frac * z[:, 1])
+        assert emp == pytest.approx(interpolated_variance_factor(frac), rel=0.02)
+    assert np.all(interpolated_variance_factor(np.linspace(0, 1, 11)) <= 1.0)
+    with pytest.raises(ValueError):
+        bracket(np.array([11.5]), 1.0, len(t_radar))
+
+
+def test_cv_residuals_zero_for_constant_velocity_and_alpha_near_one_for_noise():
+    t = np.arange(60.0)
+    z = 20_000.0 - 150.0 * t
+    V = cv_residuals(z[None], np.full((1, 60), 1e4), 1.0, 0.0)
+    assert np.all(np.isnan(V[0, :2]))
+    np.testing.assert_allclose(V[0, 2:], 0.0, atol=1e-8)
+    rng = np.random.default_rng(2)
+    R = np.full((400, 60), 300.0**2)
+    zn = z + 300.0 * rng.standard_normal((400, 60))
+    alpha = manoeuvre_index(cv_residuals(zn, R, 1.0, 1.0), R, 5)
+    np.testing.assert_array_equal(alpha[:, :2], 0.0)
+    assert 0.95 < alpha[:, 30:].mean() < 1.4  # residual variance is R plus prediction variance
+
+
+def test_manoeuvre_index_rises_with_acceleration():
+    t = np.arange(60.0)
+    z = 20_000.0 - 150.0 * t - 0.5 * 40.0 * np.clip(t - 30, 0, None) ** 2
+    R = np.full((1, 60), 10.0**2)
+    alpha = manoeuvre_index(cv_residuals(z[None], R, 1.0, 1.0), R, 5)[0]
+    assert alpha[25] < 1e-6 and alpha[40] > 10
+
+
+def test_manoeuvre_index_window():
+    V = np.array([[np.nan, np.nan, 1.0, 2.0, 3.0, 4.0]])
+    a = manoeuvre_index(V, np.ones_like(V), 2)
+    np.testing.assert_allclose(a[0], [0, 0, 1.0, 2.5, 6.5, 12.5])

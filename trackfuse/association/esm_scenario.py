@@ -1,0 +1,255 @@
+"""Paper 001 world: snake-weaving and crossing targets and the five association factors.
+
+Geometry (SPEC 3.1, 3.5). Own aircraft A1 and A2 sit in a static 2-D frame (the paper ignores
+own motion). Three targets fly toward them:
+
+* T1: ``x = x0 + A sin(2 pi t / P_w)``, ``y = y0 - V t`` (a snake manoeuvre; peak lateral
+  acceleration ``A (2 pi / P_w)^2``, 24.7 m/s^2 for the defaults);
+* T2 = T1 + (sep, 0): the same manoeuvre side by side;
+* T3: a straight line from ``p3`` through the T1/T2 centre-line midpoint
+  ``(x0 + sep/2, y0 - V t_c)`` at ``t_c``, so the crossing is simultaneous in time.
+
+Factors of a target at position ``p`` with velocity ``v`` (order :data:`FACTORS`, the order of
+paper 001's AHP Table 1):
+
+=========  =======  ==============================================================
+range      m        ``|p - A1|``
+speed      m/s      ``|v|``
+angle      rad      ``atan2(p_y - A1_y, p_x - A1_x)``
+tdoa       s        ``(|p - A1| - |p - A2|) / c``
+phase      rad      ``2 pi (d/lambda) cos(angle)`` (interferometer on A1, baseline along x)
+=========  =======  ==============================================================
+
+Sensor factor models (paper 001 Table 2):
+
+* ESM (target 2 only): bearing, TDOA, speed and phase each carry independent Gaussian noise;
+  the range comes from the TDOA-DF inversion (:mod:`trackfuse.association.tdoa_df`), so it is
+  correlated with bearing and TDOA; :func:`esm_factors` returns the full covariance.
+* radar, ``"table"`` model: every factor is truth plus independent Gaussian noise, range sd a
+  fraction of the range (Table 2 read literally).
+* radar, ``"derived"`` model: the radar measures range, bearing and speed; its TDOA and phase
+  are computed from the measured position (a radar cannot observe the emission's time
+  difference), so their errors follow from range and bearing (first order).
+
+References
+----------
+Zhang Xiaoqiang et al., J. Air Force Eng. Univ. (Nat. Sci.) 18(1), 2017, 44-49, sec. 3.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from trackfuse.association.tdoa_df import (
+    C,
+    carry_forward,
+    tdoa_df_jacobian,
+    tdoa_df_range,
+)
+
+FACTORS = ("range", "speed", "angle", "tdoa", "phase")
+ANGULAR = np.array([False, False, True, False, True])  # differences wrapped to (-pi, pi]
+
+
+@dataclass(frozen=True)
+class SnakeCross:
+    """The three-target scenario; all lengths in m, times in s, speeds in m/s."""
+
+    separation: float = 200.0
+    amplitude: float = 1000.0
+    snake_period: float = 40.0
+    speed: float = 200.0
+    t_cross: float = 30.0
+    start: tuple[float, float] = (13000.0, 20000.0)
+    start3: tuple[float, float] = (10200.0, 15000.0)
+
+    def states(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Positions and velocities of T1, T2, T3.
+
+        Parameters
+        ----------
+        t : (T,) times (s).
+
+        Returns
+        -------
+        p : (T, 3, 2) positions (m); v : (T, 3, 2) velocities (m/s).
+        """
+        t = np.asarray(t, dtype=float)
+        w = 2 * np.pi / self.snake_period
+        x0, y0 = self.start
+        p1 = np.stack([x0 + self.amplitude * np.sin(w * t), y0 - self.speed * t], axis=-1)
+        v1 = np.stack([self.amplitude * w * np.cos(w * t), np.full_like(t, -self.speed)],
+                      axis=-1)
+        meet = np.array([x0 + self.separation / 2, y0 - self.speed * self.t_cross])
+        v3 = (meet - np.asarray(self.start3)) / self.t_cross
+        p3 = np.asarray(self.start3) + t[:, None] * v3
+        p = np.stack([p1, p1 + [self.separation, 0.0], p3], axis=1)
+        v = np.stack([v1, v1, np.broadcast_to(v3, v1.shape)], axis=1)
+        return p, v
+
+
+def position_factors(r: np.ndarray, theta: np.ndarray, A1: np.ndarray, A2: np.ndarray,
+                     d_over_lambda: float) -> tuple[np.ndarray, np.ndarray]:
+    """TDOA (s) and interferometer phase (rad) of the point at range ``r``, bearing ``theta``
+    from A1.
+
+    Parameters
+    ----------
+    r : (...,) m; theta : (...,) rad; A1, A2 : (2,) m; d_over_lambda : antenna spacing in
+    wavelengths.
+
+    Returns
+    -------
+    tdoa : (...,) s; phase : (...,) rad.
+    """
+    b = np.asarray(A2, dtype=float) - np.asarray(A1, dtype=float)
+    rho2 = np.hypot(r * np.cos(theta) - b[0], r * np.sin(theta) - b[1])
+    return (r - rho2) / C, 2 * np.pi * d_over_lambda * np.cos(theta)
+
+
+def position_factor_jacobian(r: np.ndarray, theta: np.ndarray, A1: np.ndarray, A2: np.ndarray,
+                             d_over_lambda: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Partial derivatives of :func:`position_factors`.
+
+    Returns
+    -------
+    dtdoa_dr : (...,) s/m; dtdoa_dtheta : (...,) s/rad; dphase_dtheta : (...,) rad/rad.
+    """
+    b = np.asarray(A2, dtype=float) - np.asarray(A1, dtype=float)
+    c, s = np.cos(theta), np.sin(theta)
+    rho2 = np.hypot(r * c - b[0], r * s - b[1])
+    dtdoa_dr = (1.0 - (r - (c * b[0] + s * b[1])) / rho2) / C
+    dtdoa_dtheta = r * (-s * b[0] + c * b[1]) / (rho2 * C)
+    return dtdoa_dr, dtdoa_dtheta, -2 * np.pi * d_over_lambda * s
+
+
+def true_factors(p: np.ndarray, v: np.ndarray, A1: np.ndarray, A2: np.ndarray,
+                 d_over_lambda: float) -> np.ndarray:
+    """The five factors of targets at ``p`` with velocity ``v``.
+
+    Parameters
+    ----------
+    p, v : (..., 2) position (m) and velocity (m/s).
+    A1, A2 : (2,) own-aircraft positions (m).
+
+    Returns
+    -------
+    f : (..., 5) in :data:`FACTORS` order and units.
+    """
+    dp = p - np.asarray(A1, dtype=float)
+    r = np.hypot(dp[..., 0], dp[..., 1])
+    theta = np.arctan2(dp[..., 1], dp[..., 0])
+    tdoa, phase = position_factors(r, theta, A1, A2, d_over_lambda)
+    return np.stack([r, np.hypot(v[..., 0], v[..., 1]), theta, tdoa, phase], axis=-1)
+
+
+@dataclass(frozen=True)
+class ESMNoise:
+    """ESM standard deviations (Table 2): speed m/s, angle rad, tdoa s, phase rad."""
+
+    speed: float = 20.0
+    angle: float = 0.03
+    tdoa: float = 3e-8
+    phase: float = 1.0
+
+
+@dataclass(frozen=True)
+class RadarNoise:
+    """Radar standard deviations (Table 2); ``range_coef`` times the range gives the range sd."""
+
+    range_coef: float = 0.01
+    speed: float = 10.0
+    angle: float = 8e-3
+    tdoa: float = 3e-8
+    phase: float = 0.5
+
+
+def esm_factors(f_true: np.ndarray, z: np.ndarray, noise: ESMNoise, A1: np.ndarray,
+                A2: np.ndarray, min_denominator: float = 1.0):
+    """ESM factor measurements of one target and their covariance.
+
+    Parameters
+    ----------
+    f_true : (K, 5) true factors of the target at the ESM times.
+    z : (N, K, 4) standard-normal draws for (angle, tdoa, speed, phase), already multiplied by
+        any noise scale.
+    noise : ESM standard deviations.
+    A1, A2 : (2,) m. min_denominator : TDOA-DF guard (m).
+
+    Returns
+    -------
+    x : (N, K, 5) measured factors (range from TDOA-DF, invalid samples carried forward).
+    P : (N, K, 5, 5) covariance (range correlated with angle and tdoa).
+    valid : (N, K) bool, False where the TDOA-DF inversion failed.
+    """
+    b = np.asarray(A2, dtype=float) - np.asarray(A1, dtype=float)
+    theta = f_true[:, 2] + noise.angle * z[..., 0]
+    tdoa = f_true[:, 3] + noise.tdoa * z[..., 1]
+    speed = f_true[:, 1] + noise.speed * z[..., 2]
+    phase = f_true[:, 4] + noise.phase * z[..., 3]
+    r, valid = tdoa_df_range(theta, C * tdoa, b, min_denominator)
+    dr_dtheta, dr_ddr = tdoa_df_jacobian(theta, C * tdoa, b)
+    dr_ddt = C * dr_ddr
+    sigma_r = np.sqrt((dr_dtheta * noise.angle) ** 2 + (dr_ddt * noise.tdoa) ** 2)
+    r = carry_forward(r, valid)
+    sigma_r = carry_forward(sigma_r, valid)
+    dr_dtheta = carry_forward(dr_dtheta, valid)
+    dr_ddt = carry_forward(dr_ddt, valid)
+    x = np.stack([r, speed, theta, tdoa, phase], axis=-1)
+    P = np.zeros(x.shape + (5,))
+    P[..., 0, 0] = sigma_r**2
+    P[..., 1, 1] = noise.speed**2
+    P[..., 2, 2] = noise.angle**2
+    P[..., 3, 3] = noise.tdoa**2
+    P[..., 4, 4] = noise.phase**2
+    P[..., 0, 2] = P[..., 2, 0] = dr_dtheta * noise.angle**2
+    P[..., 0, 3] = P[..., 3, 0] = dr_ddt * noise.tdoa**2
+    return x, P, valid
+
+
+def radar_factors(f_true: np.ndarray, z: np.ndarray, noise: RadarNoise, model: str,
+                  A1: np.ndarray, A2: np.ndarray, d_over_lambda: float):
+    """Radar factor measurements of every track and their covariance.
+
+    Parameters
+    ----------
+    f_true : (M, J, 5) true factors at the radar times.
+    z : (N, M, J, 5) standard-normal draws (range, speed, angle, tdoa, phase), already
+        multiplied by any noise scale; the ``"derived"`` model ignores the last two.
+    noise : radar standard deviations. model : ``"table"`` or ``"derived"``.
+    A1, A2 : (2,) m. d_over_lambda : interferometer spacing in wavelengths.
+
+    Returns
+    -------
+    x : (N, M, J, 5) measured factors; P : (N, M, J, 5, 5) covariance, evaluated at the
+    measured range and bearing (what the association algorithm knows).
+    """
+    sig_r_true = noise.range_coef * f_true[..., 0]
+    r = f_true[..., 0] + sig_r_true * z[..., 0]
+    speed = f_true[..., 1] + noise.speed * z[..., 1]
+    theta = f_true[..., 2] + noise.angle * z[..., 2]
+    var_r = (noise.range_coef * r) ** 2
+    P = np.zeros(r.shape + (5, 5))
+    P[..., 0, 0] = var_r
+    P[..., 1, 1] = noise.speed**2
+    P[..., 2, 2] = noise.angle**2
+    if model == "table":
+        tdoa = f_true[..., 3] + noise.tdoa * z[..., 3]
+        phase = f_true[..., 4] + noise.phase * z[..., 4]
+        P[..., 3, 3] = noise.tdoa**2
+        P[..., 4, 4] = noise.phase**2
+    elif model == "derived":
+        tdoa, phase = position_factors(r, theta, A1, A2, d_over_lambda)
+        g_r, g_t, h_t = position_factor_jacobian(r, theta, A1, A2, d_over_lambda)
+        var_t = noise.angle**2
+        P[..., 3, 3] = g_r**2 * var_r + g_t**2 * var_t
+        P[..., 4, 4] = h_t**2 * var_t
+        P[..., 0, 3] = P[..., 3, 0] = g_r * var_r
+        P[..., 2, 3] = P[..., 3, 2] = g_t * var_t
+        P[..., 2, 4] = P[..., 4, 2] = h_t * var_t
+        P[..., 3, 4] = P[..., 4, 3] = g_t * h_t * var_t
+    else:
+        raise ValueError(f"unknown radar factor model {model!r}")
+    return np.stack([r, speed, theta, tdoa, phase], axis=-1), P

@@ -1,0 +1,682 @@
+"""Experiment ``esm_radar``: paper 001, ESM-to-radar track association.
+
+Zhang Xiaoqiang et al., "An ESM-radar track correlation algorithm based on improved fuzzy
+comprehensive evaluation", J. Air Force Eng. Univ. (Nat. Sci.) 18(1), 2017, 44-49, with the
+corrections of SPEC section 3.
+
+One trial simulates the snake/crossing scenario (:mod:`trackfuse.association.esm_scenario`):
+an ESM track of target 2 (TDOA-DF range, bearing, speed, TDOA, phase) and three radar tracks,
+then runs every requested association algorithm on the same data and reports which radar
+track each picked. The truth is radar track 2.
+
+Algorithms (``algorithms`` param, one row each):
+
+=================  ===========================================================================
+traditional        multi-factor fuzzy decision (SPEC 3.3): ``baseline.factors`` (range, speed,
+                   angle), Gaussian grade, static AHP root weights, ``baseline.decision``
+traditional_5f     the same with all five factors (ablation)
+improved           paper 001 (SPEC 3.4): five factors, inverse-distance membership
+                   (``membership_norm``), AHP weights (``weights``) made dynamic by the
+                   manoeuvre index, weighted average, mean-membership decision
+improved_static    improved with the static AHP weights (ablation: dynamic weights)
+improved_3f        improved on range, speed, angle only (ablation: 3 vs 5 factors)
+improved_l2        improved with the L2 inverse-distance membership (ablation)
+improved_gauss     improved with the Gaussian posterior membership (ablation, W001-1)
+chi2               ML track-to-track reference (:mod:`trackfuse.association.track_likelihood`)
+                   on speed, angle, TDOA, phase with the full covariance; the ESM range is
+                   excluded because it is a function of the ESM angle and TDOA (SPEC 3.4)
+chi2_lrt           ``chi2`` that may answer "no decision" (W001-6): a likelihood-ratio
+                   threshold between the two best tracks and a chi-square gate on the best
+                   (:func:`~trackfuse.association.track_likelihood.abstaining_decision`)
+chi2_5f            ``chi2`` on all five factors, the TDOA-DF range entering with its
+                   first-order covariance. Kept as a diagnostic: the range error is skewed
+                   (the inversion divides by a noisy denominator), so the Gaussian model is
+                   wrong for it and this variant falls far below ``chi2``
+=================  ===========================================================================
+
+Row metrics: ``chosen`` (radar track 1..3, or 0 for "no decision"), ``correct`` (0/1, Wilson
+interval), ``decided`` (0/1; always 1 except for ``chi2_lrt``), ``margin`` (the
+decision statistic's lead of the winner over the runner-up: mean membership for ``mean``
+decisions, vote share for ``vote``, log-likelihood ratio for ``chi2*``), and diagnostics shared
+by all algorithms or specific to one: ``range_weight_mean``/``range_weight_min`` (the range
+factor's weight over the scans; 0 if the algorithm does not weight range), ``alpha_mean`` and
+``alpha_peak`` (manoeuvre index from the ESM range), ``esm_invalid`` (TDOA-DF samples carried
+forward) and ``esm_range_sigma_m`` (mean 1-sigma of the TDOA-DF range). Per-scan weights and
+manoeuvre indices are drawn in the ``trajectory`` figure.
+
+Figures: ``correct_rate`` (against a numeric swept axis, one panel per radar-factor model, or
+a bar chart when nothing numeric is swept) and ``trajectory`` (true tracks, the ESM location
+track and the per-scan manoeuvre index and range weight of one trial, the paper's Figs. 1-2).
+The trajectory figure is *recomputed* from the config and seed: it re-runs trial 0 of point 0
+with the runner's generator ``default_rng([0, 0, seed])`` (one trial, milliseconds) and says
+in its title whether the recomputed decision matches the saved row.
+
+Tables: ``table3`` (counts per radar track and correct rate with Wilson interval, per point and
+algorithm: the paper's Table 3 for both radar-factor models when that is swept) and
+``ablation`` (each variant against ``improved`` on the same trials, with the exact McNemar
+test on the discordant pairs).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from scipy.stats import binomtest
+
+from trackfuse.association import ahp
+from trackfuse.association.dynamic_weights import dynamic_weights
+from trackfuse.association.esm_scenario import (
+    ANGULAR,
+    FACTORS,
+    ESMNoise,
+    RadarNoise,
+    SnakeCross,
+    esm_factors,
+    radar_factors,
+    true_factors,
+)
+from trackfuse.association.fuzzy import (
+    compose,
+    decide_mean,
+    decide_vote,
+    gaussian_membership,
+    gaussian_posterior_membership,
+    inverse_distance_membership,
+    wrap,
+)
+from trackfuse.association.manoeuvre import cv_residuals, manoeuvre_index
+from trackfuse.association.time_align import bracket, interpolate
+from trackfuse.association.track_likelihood import abstaining_decision, ml_track_decision
+from trackfuse.experiments.base import Experiment, Param
+from trackfuse.plots.style import band, new_figure, reference_line
+from trackfuse.stats import wilson_interval
+
+TRUE_TRACK = 1  # 0-based index of radar track 2
+N_TRACKS = 3
+#: Paper 001's printed (rounded) weights, by factor name (SPEC 3.4 item 5).
+PAPER_ROUNDED = np.array([0.51, 0.26, 0.13, 0.07, 0.03])
+EPS_FRACTION = 1e-3  # eps_i = 1e-3 sqrt(sigma_E^2 + sigma_R^2), SPEC 3.4 item 3
+UNINFORMATIVE_VAR = 1e24  # m^2: variance given to an ESM range that could not be computed
+
+
+@dataclass(frozen=True)
+class Variant:
+    """How one algorithm evaluates the association.
+
+    ``factors``: a tuple of factor names, or ``"baseline"`` for ``baseline.factors``.
+    ``membership``: ``gaussian``, ``l1``, ``l2``, ``posterior`` or ``"param"`` (the
+    ``membership_norm`` param); ``chi2`` for the ML reference, ``chi2_lrt`` for the ML
+    reference that may abstain. ``dynamic``: manoeuvre-dependent weights. ``decision``:
+    ``mean``, ``vote`` or ``"param"`` (``baseline.decision``). ``summary``: one line for the
+    ablation table.
+    """
+
+    factors: tuple[str, ...] | str
+    membership: str
+    dynamic: bool = False
+    decision: str = "mean"
+    summary: str = ""
+
+
+FIVE = FACTORS
+THREE = ("range", "speed", "angle")
+ALGORITHMS: dict[str, Variant] = {
+    "traditional": Variant("baseline", "gaussian", False, "param",
+                           "baseline factors, Gaussian grade, static AHP weights"),
+    "traditional_5f": Variant(FIVE, "gaussian", False, "param",
+                              "5 factors, Gaussian grade, static AHP weights"),
+    "improved": Variant(FIVE, "param", True, "mean",
+                        "paper 001: 5 factors, 1/d membership, dynamic weights"),
+    "improved_static": Variant(FIVE, "param", False, "mean", "improved, static weights"),
+    "improved_3f": Variant(THREE, "param", True, "mean", "improved, 3 factors"),
+    "improved_l2": Variant(FIVE, "l2", True, "mean", "improved, L2 1/d membership"),
+    "improved_gauss": Variant(FIVE, "posterior", True, "mean",
+                              "improved, Gaussian posterior membership"),
+    "chi2": Variant(("speed", "angle", "tdoa", "phase"), "chi2",
+                    summary="ML track-to-track reference, ESM range excluded"),
+    "chi2_lrt": Variant(("speed", "angle", "tdoa", "phase"), "chi2_lrt",
+                        summary="chi2 with a no-decision outcome (LR threshold, chi2 gate)"),
+    "chi2_5f": Variant(FIVE, "chi2",
+                       summary="ML on all 5 factors, linearized TDOA-DF range covariance"),
+}
+
+PARAMS = (
+    Param("algorithms", ["traditional", "improved", "chi2"],
+          "association algorithms run on every trial (same data)", "", list,
+          choices=tuple(ALGORITHMS)),
+    Param("scan.count", 50, "ESM samples per trial K (SPEC 3.5)", "samples", int, 3, 10_000),
+    Param("esm.period", 1.0, "ESM sampling period", "s", float, 1e-3, 600.0),
+    Param("radar.period", 1.0, "radar sampling period", "s", float, 1e-3, 600.0),
+    Param("esm.offset", 0.0, "time of the first ESM sample after the first radar sample",
+          "s", float, 0.0, 600.0),
+    Param("time_align", False,
+          "interpolate radar factors to ESM times (eq. 1, corrected eq. 2); else hold the "
+          "latest radar sample", "", bool),
+    Param("geometry.baseline", 10_000.0, "A2 - A1 along x (A1 at the origin)", "m", float,
+          1.0, 1e6),
+    Param("target.separation", 200.0, "T2 - T1 along x", "m", float, 0.0, 1e5),
+    Param("snake.amplitude", 1000.0, "snake manoeuvre amplitude A", "m", float, 0.0, 1e5),
+    Param("snake.period", 40.0, "snake manoeuvre period P_w", "s", float, 1.0, 1e4),
+    Param("snake.speed", 200.0, "T1/T2 speed toward the own aircraft V", "m/s", float,
+          0.0, 3000.0),
+    Param("crossing.time", 30.0, "time t_c at which T3 crosses the T1/T2 centre line", "s",
+          float, 1.0, 1e4),
+    Param("phase.d_over_lambda", 0.5, "interferometer spacing over wavelength", "", float,
+          0.01, 100.0),
+    Param("radar.factor_model", "table",
+          "radar TDOA/phase: 'table' = own noise (Table 2), 'derived' = from radar position",
+          "", str, choices=("table", "derived")),
+    Param("radar.sigma_range_coef", 0.01, "radar range sd as a fraction of range", "1/R",
+          float, 0.0, 1.0),
+    Param("radar.sigma_speed", 10.0, "radar speed sd", "m/s", float, 0.0, 1e4),
+    Param("radar.sigma_angle", 8e-3, "radar bearing sd", "rad", float, 0.0, 3.0),
+    Param("radar.sigma_tdoa", 3e-8, "radar TDOA sd ('table' model)", "s", float, 0.0, 1e-3),
+    Param("radar.sigma_phase", 0.5, "radar phase sd ('table' model)", "rad", float, 0.0, 10.0),
+    Param("esm.sigma_speed", 20.0, "ESM speed sd (> 0: memberships divide by the summed "
+          "variance)", "m/s", float, 1e-6, 1e4),
+    Param("esm.sigma_angle", 0.03, "ESM bearing sd", "rad", float, 1e-6, 3.0),
+    Param("esm.sigma_tdoa", 3e-8, "ESM TDOA sd", "s", float, 1e-12, 1e-3),
+    Param("esm.sigma_phase", 1.0, "ESM phase sd (> 0)", "rad", float, 1e-6, 10.0),
+    Param("esm.min_denominator", 1.0,
+          "TDOA-DF guard: |2(u'b - dr)| below this flags the sample invalid", "m", float,
+          0.0, 1e5),
+    Param("noise.scale", 1.0,
+          "multiplies every simulated noise draw (0 = noise-free data); the algorithms keep "
+          "the nominal sigmas", "", float, 0.0, 100.0),
+    Param("weights", "root_exact", "AHP weights: root method, eigenvector, or the paper's "
+          "rounded set (5 factors only; subsets use the root method)", "", str,
+          choices=("root_exact", "eigen", "paper_rounded")),
+    Param("membership_norm", "l1", "normalization of the 1/d membership of 'improved'", "",
+          str, choices=("l1", "l2")),
+    Param("alpha.window", 5, "residuals N averaged in the manoeuvre index", "samples", int,
+          1, 10_000),
+    Param("alpha.max", 10.0, "alpha_max of eq. 14 ('fixed' mode)", "", float, 1e-6, 1e9),
+    Param("alpha.max_mode", "fixed", "alpha_max: fixed constant or running maximum", "", str,
+          choices=("fixed", "running_max")),
+    Param("alpha.q", 1.0, "white acceleration variance of the range CV filter", "m^2/s^4",
+          float, 0.0, 1e6),
+    Param("lrt.threshold", float(np.log(19.0)),
+          "chi2_lrt: least best-vs-second log-likelihood ratio to declare a track "
+          "(log 19: 95 % between the two)", "nat", float, 0.0, 1e6),
+    Param("gate.alpha", 0.001, "chi2_lrt: false-rejection probability of the chi-square "
+          "goodness-of-fit gate on the best track (0 = no gate)", "", float, 0.0, 0.5),
+    Param("baseline.factors", ["range", "speed", "angle"], "factors of 'traditional'", "",
+          list, choices=FACTORS),
+    Param("baseline.tau", 0.5, "Gaussian grade exp(-tau d^2/(s_E^2+s_R^2))", "", float,
+          1e-6, 1e6),
+    Param("baseline.decision", "mean", "'traditional' decision: mean membership or majority "
+          "vote of per-scan decisions", "", str, choices=("mean", "vote")),
+)
+
+
+@dataclass
+class Simulated:
+    """Aligned data of a batch of N trials (K ESM scans, J = 3 radar tracks, 5 factors)."""
+
+    t: np.ndarray          # (K,) ESM times, s
+    truth_p: np.ndarray    # (K, 3, 2) true positions at the ESM times, m
+    x_esm: np.ndarray      # (N, K, 5) ESM factors
+    P_esm: np.ndarray      # (N, K, 5, 5)
+    esm_valid: np.ndarray  # (N, K) bool
+    x_radar: np.ndarray    # (N, K, J, 5) radar factors aligned to the ESM times
+    P_radar: np.ndarray    # (N, K, J, 5, 5)
+    alpha: np.ndarray      # (N, K) manoeuvre index
+
+
+def simulate(params: Mapping[str, Any], rngs: Sequence[np.random.Generator]) -> Simulated:
+    """Draw and align the sensor data of one trial per generator.
+
+    Each generator spawns an ESM-noise and a radar-noise stream; the draws have fixed shapes,
+    so the data never depend on the algorithms run.
+    """
+    scen = SnakeCross(separation=params["target.separation"],
+                      amplitude=params["snake.amplitude"],
+                      snake_period=params["snake.period"], speed=params["snake.speed"],
+                      t_cross=params["crossing.time"])
+    A1 = np.zeros(2)
+    A2 = np.array([params["geometry.baseline"], 0.0])
+    dl = params["phase.d_over_lambda"]
+    K, TE, TR = params["scan.count"], params["esm.period"], params["radar.period"]
+    t = params["esm.offset"] + TE * np.arange(K)
+    M = int(np.floor(t[-1] / TR + 1e-9)) + 2
+    p_k, v_k = scen.states(t)
+    p_m, v_m = scen.states(TR * np.arange(M))
+    f_esm = true_factors(p_k[:, TRUE_TRACK], v_k[:, TRUE_TRACK], A1, A2, dl)
+    f_radar = true_factors(p_m, v_m, A1, A2, dl)
+
+    z_esm, z_radar = [], []
+    for g in rngs:
+        g_esm, g_radar = g.spawn(2)
+        z_esm.append(g_esm.standard_normal((K, 4)))
+        z_radar.append(g_radar.standard_normal((M, N_TRACKS, 5)))
+    scale = params["noise.scale"]
+    esm_noise = ESMNoise(params["esm.sigma_speed"], params["esm.sigma_angle"],
+                         params["esm.sigma_tdoa"], params["esm.sigma_phase"])
+    radar_noise = RadarNoise(params["radar.sigma_range_coef"], params["radar.sigma_speed"],
+                             params["radar.sigma_angle"], params["radar.sigma_tdoa"],
+                             params["radar.sigma_phase"])
+    x_e, P_e, valid = esm_factors(f_esm, scale * np.stack(z_esm), esm_noise, A1, A2,
+                                  params["esm.min_denominator"])
+    x_r, P_r = radar_factors(f_radar, scale * np.stack(z_radar), radar_noise,
+                             params["radar.factor_model"], A1, A2, dl)
+
+    m1, a = bracket(t, TR, M)
+    if params["time_align"] and np.any(a > 0):
+        x_rk = np.stack([interpolate(x_r[..., i], m1, a, angular=bool(ANGULAR[i]), axis=1)
+                         for i in range(5)], axis=-1)
+        w1 = ((1 - a) ** 2)[None, :, None, None, None]
+        w2 = (a**2)[None, :, None, None, None]
+        P_rk = w1 * P_r[:, m1] + w2 * P_r[:, m1 + 1]
+    else:  # synchronous sensors, or no alignment: the latest radar sample
+        x_rk, P_rk = x_r[:, m1], P_r[:, m1]
+
+    R_n = P_e[..., 0, 0]
+    V = cv_residuals(x_e[..., 0], R_n, TE, params["alpha.q"])
+    alpha = manoeuvre_index(V, R_n, params["alpha.window"])
+    alpha = np.where(np.isfinite(alpha), alpha, 0.0)  # no valid ESM range: no evidence
+    return Simulated(t, p_k, x_e, P_e, valid, x_rk, P_rk, alpha)
+
+
+def static_weights(factors: Sequence[str], method: str) -> np.ndarray:
+    """AHP weights of a factor subset (in the given order) from paper 001 Table 1.
+
+    ``method``: ``root_exact`` or ``eigen`` on the sub-matrix, or ``paper_rounded`` (the
+    printed weights; only for the full set, subsets fall back to the root method).
+    """
+    idx = [FACTORS.index(f) for f in factors]
+    if method == "paper_rounded" and len(idx) == len(FACTORS):
+        return PAPER_ROUNDED.copy()
+    sub = ahp.PAPER_001_JUDGEMENT[np.ix_(idx, idx)]
+    return ahp.weights(sub, "eigen" if method == "eigen" else "root")
+
+
+def _factor_names(variant: Variant, params: Mapping[str, Any]) -> tuple[str, ...]:
+    names = params["baseline.factors"] if variant.factors == "baseline" else variant.factors
+    return tuple(f for f in FACTORS if f in set(names))
+
+
+@dataclass
+class Differences:
+    """ESM-minus-radar factor differences of a batch, computed once for every algorithm."""
+
+    d: np.ndarray    # (N, K, J, 5) differences, angle and phase wrapped
+    var: np.ndarray  # (N, K, J, 5) summed ESM + radar variances
+    S: np.ndarray    # (N, K, J, 5, 5) difference covariances
+    ml_cache: dict = field(default_factory=dict)  # ML decisions by factor subset
+
+
+def differences(sim: Simulated) -> Differences:
+    """Factor differences and their (co)variances between the ESM track and each radar track."""
+    d = sim.x_esm[:, :, None, :] - sim.x_radar
+    d[..., ANGULAR] = wrap(d[..., ANGULAR])
+    S = sim.P_esm[:, :, None] + sim.P_radar
+    # A trial whose TDOA-DF inversion never succeeded has no ESM range: make that factor
+    # uninformative (zero difference, huge variance, no correlation) for every track.
+    missing = np.isnan(d[..., 0])
+    if missing.any():
+        d[..., 0] = np.where(missing, 0.0, d[..., 0])
+        S[..., 0, :] = np.where(missing[..., None], 0.0, S[..., 0, :])
+        S[..., :, 0] = np.where(missing[..., None], 0.0, S[..., :, 0])
+        S[..., 0, 0] = np.where(missing, UNINFORMATIVE_VAR, S[..., 0, 0])
+    return Differences(d, np.diagonal(S, axis1=-2, axis2=-1).copy(), S)
+
+
+def evaluate(variant: Variant, diff: Differences, alpha: np.ndarray,
+             params: Mapping[str, Any]) -> dict[str, np.ndarray]:
+    """Run one algorithm on a simulated batch.
+
+    Parameters
+    ----------
+    variant : the algorithm. diff : :func:`differences` of the batch.
+    alpha : (N, K) manoeuvre index. params : resolved experiment params.
+
+    Returns
+    -------
+    dict of (N,) arrays: ``chosen`` (0-based track), ``margin``, ``range_weight_mean``,
+    ``range_weight_min``; and ``weights`` (N, K, F) for fuzzy variants.
+    """
+    names = _factor_names(variant, params)
+    idx = [FACTORS.index(f) for f in names]
+    N, K = alpha.shape
+    d = diff.d[..., idx]
+    if variant.membership in ("chi2", "chi2_lrt"):
+        key = tuple(idx)
+        if key not in diff.ml_cache:
+            diff.ml_cache[key] = ml_track_decision(d, diff.S[..., idx, :][..., idx])
+        j, margin, D = diff.ml_cache[key]
+        if variant.membership == "chi2_lrt":
+            D_best = np.take_along_axis(D, j[..., None], axis=-1)[..., 0]
+            j = abstaining_decision(j, margin, D_best, K * len(idx), params["lrt.threshold"],
+                                    params["gate.alpha"])
+        zero = np.zeros(N)
+        return {"chosen": j, "margin": margin, "range_weight_mean": zero,
+                "range_weight_min": zero}
+    dd = np.swapaxes(np.abs(d), -1, -2)                               # (N, K, F, J)
+    vv = np.swapaxes(diff.var[..., idx], -1, -2)
+    kind = params["membership_norm"] if variant.membership == "param" else variant.membership
+    if kind == "gaussian":
+        R = gaussian_membership(dd, vv, params["baseline.tau"])
+    elif kind == "posterior":
+        R = gaussian_posterior_membership(dd, vv, 0.5)
+    else:
+        R = inverse_distance_membership(dd, EPS_FRACTION * np.sqrt(vv), kind)
+    a0 = static_weights(names, params["weights"])
+    if variant.dynamic and names[0] == "range":
+        a = dynamic_weights(a0, alpha, params["alpha.max"], params["alpha.max_mode"])
+    else:
+        a = np.broadcast_to(a0, (N, K, len(idx)))
+    b = compose(a, R)                                                # (N, K, J)
+    decision = params["baseline.decision"] if variant.decision == "param" else variant.decision
+    j, margin = decide_vote(b) if decision == "vote" else decide_mean(b)
+    a_range = a[..., 0] if names[0] == "range" else np.zeros((N, K))
+    return {"chosen": j, "margin": margin, "range_weight_mean": a_range.mean(axis=-1),
+            "range_weight_min": a_range.min(axis=-1), "weights": a}
+
+
+def run_batch(params: Mapping[str, Any], rngs: Sequence[np.random.Generator]) -> list[list[dict]]:
+    """Vectorized trials: one row list per generator, one row per algorithm."""
+    sim = simulate(params, rngs)
+    shared = {
+        "alpha_mean": sim.alpha.mean(axis=-1),
+        "alpha_peak": sim.alpha.max(axis=-1),
+        "esm_invalid": (~sim.esm_valid).sum(axis=-1),
+        "esm_range_sigma_m": np.sqrt(sim.P_esm[..., 0, 0]).mean(axis=-1),
+    }
+    diff = differences(sim)
+    results = {name: evaluate(ALGORITHMS[name], diff, sim.alpha, params)
+               for name in params["algorithms"]}
+    rows: list[list[dict]] = []
+    for i in range(len(rngs)):
+        trial = []
+        for name, res in results.items():
+            j = int(res["chosen"][i])
+            trial.append({
+                "algorithm": name,
+                "chosen": j + 1,
+                "correct": int(j == TRUE_TRACK),
+                "decided": int(j >= 0),
+                "margin": float(res["margin"][i]),
+                "range_weight_mean": float(res["range_weight_mean"][i]),
+                "range_weight_min": float(res["range_weight_min"][i]),
+                "alpha_mean": float(shared["alpha_mean"][i]),
+                "alpha_peak": float(shared["alpha_peak"][i]),
+                "esm_invalid": int(shared["esm_invalid"][i]),
+                "esm_range_sigma_m": float(shared["esm_range_sigma_m"][i]),
+            })
+        rows.append(trial)
+    return rows
+
+
+def run_trial(params: Mapping[str, Any], rng: np.random.Generator) -> list[dict]:
+    """One trial (the batch form with a single generator)."""
+    return run_batch(params, [rng])[0]
+
+
+# --------------------------------------------------------------------------- tables
+
+def _swept(config: Mapping[str, Any], trials: pd.DataFrame) -> list[str]:
+    return [k for k in config.get("sweep", {}) if k in trials.columns]
+
+
+def table3(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> pd.DataFrame:
+    """Counts per chosen radar track (and "no decision"), correct rate with its Wilson 95 %
+    interval, and the rate of wrong decisions, per point and algorithm."""
+    keys = _swept(config, trials)
+    out = []
+    for group, g in trials.groupby(["point", *keys, "algorithm"], sort=False):
+        n = len(g)
+        k = int(g["correct"].sum())
+        lo, hi = wilson_interval(k, n)
+        row = dict(zip(["point", *keys, "algorithm"], group, strict=True))
+        for track in range(1, N_TRACKS + 1):
+            row[f"radar_track_{track}"] = int((g["chosen"] == track).sum())
+        row["no_decision"] = int((g["chosen"] == 0).sum())
+        wrong = int(((g["chosen"] != 0) & (g["correct"] == 0)).sum())
+        row.update(n=n, correct_rate=k / n, ci_low=float(lo), ci_high=float(hi),
+                   wrong_rate=wrong / n)
+        out.append(row)
+    return pd.DataFrame(out).sort_values(["point"], kind="stable").reset_index(drop=True)
+
+
+def ablation(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> pd.DataFrame:
+    """Each algorithm against ``improved`` on the same trials (paired, exact McNemar test).
+
+    ``gain_vs_improved`` is the variant's correct rate minus improved's; ``n_variant_only``
+    and ``n_improved_only`` count the discordant trials; ``mcnemar_p`` is the two-sided exact
+    binomial test of those counts (Q. McNemar, Psychometrika 12, 1947, 153-157). Empty when
+    ``improved`` was not run.
+    """
+    if "improved" not in set(trials["algorithm"]):
+        return pd.DataFrame()
+    keys = _swept(config, trials)
+    wide = trials.pivot_table(index=["point", *keys, "trial"], columns="algorithm",
+                              values="correct", aggfunc="first")
+    params = config.get("params", {})
+    order = list(dict.fromkeys(trials["algorithm"]))
+    out = []
+    for point_key, g in wide.groupby(level=["point", *keys], sort=True):
+        point_key = point_key if isinstance(point_key, tuple) else (point_key,)
+        ref = g["improved"].to_numpy()
+        for name in order:
+            x = g[name].to_numpy()
+            n = len(x)
+            lo, hi = wilson_interval(x.sum(), n)
+            only_v = int(((x == 1) & (ref == 0)).sum())
+            only_i = int(((x == 0) & (ref == 1)).sum())
+            p = binomtest(only_v, only_v + only_i).pvalue if only_v + only_i else 1.0
+            v = ALGORITHMS[name]
+            factors = _factor_names(v, {"baseline.factors": params.get(
+                "baseline.factors", ["range", "speed", "angle"])})
+            member = (params.get("membership_norm", "l1") if v.membership == "param"
+                      else v.membership)
+            out.append({
+                **dict(zip(["point", *keys], point_key, strict=True)),
+                "algorithm": name, "description": v.summary, "factors": len(factors),
+                "membership": member,
+                "weights": "-" if v.membership.startswith("chi2") else
+                ("dynamic" if v.dynamic else "static"),
+                "correct_rate": x.mean(), "ci_low": float(lo), "ci_high": float(hi),
+                "gain_vs_improved": x.mean() - ref.mean(),
+                "n_variant_only": only_v, "n_improved_only": only_i, "mcnemar_p": float(p),
+            })
+    return pd.DataFrame(out)
+
+
+def ahp_table() -> pd.DataFrame:
+    """Paper 001 Table 1 weights by the root and eigenvector methods, with consistency.
+
+    One row per factor set (all five, and the traditional method's three) and method:
+    weights by factor name, ``lambda_max``, ``CI`` and ``CR`` (SPEC 3.4 item 5), plus the
+    paper's printed rounded weights for comparison.
+    """
+    out = []
+    for names in (FACTORS, THREE):
+        idx = [FACTORS.index(f) for f in names]
+        B = ahp.PAPER_001_JUDGEMENT[np.ix_(idx, idx)]
+        lam = ahp.lambda_max(B)
+        for method in ("root", "eigen"):
+            w = dict(zip(names, ahp.weights(B, method), strict=True))
+            out.append({"factors": len(names), "method": method,
+                        **{f: w.get(f, np.nan) for f in FACTORS}, "lambda_max": lam,
+                        "CI": ahp.consistency_index(lam, len(names)),
+                        "CR": ahp.consistency_ratio(B)})
+    out.append({"factors": 5, "method": "paper_rounded",
+                **dict(zip(FACTORS, PAPER_ROUNDED, strict=True)), "lambda_max": 5.2375,
+                "CI": 0.059375, "CR": np.nan})
+    return pd.DataFrame(out)
+
+
+def tables(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> dict[str, pd.DataFrame]:
+    """The Table 3 analogue, the ablation table and the AHP weights."""
+    out = {"table3": table3(trials, summary, config), "ahp": ahp_table()}
+    abl = ablation(trials, summary, config)
+    if not abl.empty:
+        out["ablation"] = abl
+    return out
+
+
+# --------------------------------------------------------------------------- figures
+
+AXIS_LABELS = {
+    "target.separation": "T1-T2 separation (m)",
+    "radar.sigma_range_coef": "radar range error sd (fraction of range R)",
+    "phase.d_over_lambda": "interferometer spacing d/λ",
+    "snake.amplitude": "snake amplitude (m)",
+    "alpha.max": "α_max",
+}
+
+
+#: One colour per algorithm in every figure; the ML references are dashed (grey/black).
+COLOURS = {
+    "traditional": "tab:blue", "traditional_5f": "tab:cyan", "improved": "tab:orange",
+    "improved_static": "tab:green", "improved_3f": "tab:red", "improved_l2": "tab:olive",
+    "improved_gauss": "tab:purple", "chi2": "black", "chi2_lrt": "tab:brown",
+    "chi2_5f": "tab:gray",
+}
+
+
+def _style(name: str) -> dict[str, Any]:
+    style = {"color": COLOURS[name]}
+    if name.startswith("chi2"):
+        style["linestyle"] = "--"
+    return style
+
+
+def _correct_rate_figure(summary: pd.DataFrame, config: dict):
+    s = summary[summary["metric"] == "correct"]
+    sweep = [k for k in config.get("sweep", {}) if k in s.columns]
+    numeric = [k for k in sweep if pd.api.types.is_numeric_dtype(s[k])]
+    x = numeric[0] if numeric else None
+    panel_keys = [k for k in sweep if k != x]
+    combos = (list(dict.fromkeys(map(tuple, s[panel_keys].to_numpy()))) if panel_keys
+              else [()])
+    algorithms = list(dict.fromkeys(s["algorithm"]))
+    params = config.get("params", {})
+    ncols = min(len(combos), 3)
+    fig, axes = new_figure(ncols=ncols, nrows=-(-len(combos) // ncols), width=5.0, height=3.6)
+    axes = np.atleast_1d(axes)
+    for ax in axes[len(combos):]:
+        ax.set_visible(False)
+    for ax, combo in zip(axes, combos, strict=False):
+        mask = np.ones(len(s), dtype=bool)
+        for key, value in zip(panel_keys, combo, strict=True):
+            mask &= (s[key] == value).to_numpy()
+        sp = s[mask]
+        setting = (", ".join(f"{k} = {v}" for k, v in zip(panel_keys, combo, strict=True))
+                   or f"radar factors: {params.get('radar.factor_model', 'table')}")
+        if x is not None:
+            for name in algorithms:
+                g = sp[sp["algorithm"] == name].sort_values(x)
+                band(ax, g[x], g["mean"], g["ci_low"], g["ci_high"], label=name, **_style(name))
+            ax.set_xlabel(AXIS_LABELS.get(x, x))
+            if x == "target.separation":
+                ax.set_xscale("log")
+        else:
+            g = sp.set_index("algorithm").loc[algorithms]
+            pos = np.arange(len(algorithms))
+            ax.bar(pos, g["mean"], color=[COLOURS[a] for a in algorithms], alpha=0.75,
+                   hatch=["//" if a.startswith("chi2") else "" for a in algorithms])
+            ax.errorbar(pos, g["mean"], yerr=[g["mean"] - g["ci_low"], g["ci_high"] - g["mean"]],
+                        fmt="none", color="k", capsize=3)
+            ax.set_xticks(pos, algorithms, rotation=35, ha="right")
+            ax.set_xlabel("algorithm")
+        reference_line(ax, 1 / N_TRACKS, "chance (1/3)", color="0.5")
+        ax.set_ylim(0, 1.02)
+        ax.set_ylabel("correct association rate (fraction)")
+        ax.set_title(f"{setting}; 95 % Wilson bands", fontsize=8)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=min(len(labels), 5),
+               fontsize=7)
+    n = config.get("trials", "?")
+    sep = params.get("target.separation")
+    timing = ""
+    if params.get("esm.period", 1.0) != params.get("radar.period", 1.0) or params.get(
+            "esm.offset", 0.0):
+        timing = (f", ESM/radar periods {params['esm.period']:g}/{params['radar.period']:g} s"
+                  f" ({'interpolated' if params.get('time_align') else 'latest radar sample'})")
+    fig.suptitle(f"ESM-radar association (paper 001), {n} trials/point"
+                 + (f", separation {sep:g} m" if "target.separation" not in sweep else "")
+                 + timing)
+    return fig
+
+
+def _point0_params(trials: pd.DataFrame, config: dict) -> dict[str, Any]:
+    params = dict(config["params"])
+    row = trials[trials["point"] == 0].iloc[0]
+    schema = {p.key: p for p in PARAMS}
+    for key in config.get("sweep", {}):
+        value = row[key]
+        kind = schema[key].kind
+        params[key] = kind(value) if kind in (int, float, str) else value
+    if isinstance(params.get("time_align"), str):
+        params["time_align"] = params["time_align"].lower() == "true"
+    return params
+
+
+def _trajectory_figure(trials: pd.DataFrame, config: dict):
+    params = _point0_params(trials, config)
+    sim = simulate(params, [np.random.default_rng([0, 0, int(config["seed"])])])
+    fig, (ax, ax2) = new_figure(ncols=2, width=5.0, height=4.0)
+    names = ("T1 (snake)", "T2 (snake, ESM target)", "T3 (crossing)")
+    for j in range(N_TRACKS):
+        ax.plot(sim.truth_p[:, j, 0] / 1e3, sim.truth_p[:, j, 1] / 1e3, label=names[j])
+    r, th = sim.x_esm[0, :, 0], sim.x_esm[0, :, 2]
+    ax.plot(r * np.cos(th) / 1e3, r * np.sin(th) / 1e3, ".", color="tab:red", ms=3,
+            label="ESM TDOA-DF location")
+    ax.plot([0, params["geometry.baseline"] / 1e3], [0, 0], "k^", label="A1, A2")
+    ax.set_xlabel("x (km)")
+    ax.set_ylabel("y (km)")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.legend(fontsize=7, loc="upper left")
+    ax.set_title(f"tracks, separation {params['target.separation']:g} m; mean ESM range sd "
+                 f"{np.sqrt(sim.P_esm[0, :, 0, 0]).mean() / 1e3:.1f} km", fontsize=8)
+
+    res = evaluate(ALGORITHMS["improved"], differences(sim), sim.alpha, params)
+    ax2.plot(sim.t, sim.alpha[0], color="tab:purple", label="manoeuvre index α(k)")
+    ax2.set_xlabel("time (s)")
+    ax2.set_ylabel("manoeuvre index α (dimensionless)")
+    ax3 = ax2.twinx()
+    ax3.plot(sim.t, res["weights"][0, :, 0], color="tab:green", label="range weight a₁(k)")
+    ax3.set_ylabel("range weight a₁ (fraction)")
+    a1 = static_weights(FACTORS, params["weights"])[0]
+    ax3.axhline(a1, color="tab:green", linestyle=":", linewidth=1.0, label="static AHP a₁")
+    ax3.set_ylim(0, 0.6)
+    h1, l1 = ax2.get_legend_handles_labels()
+    h2, l2 = ax3.get_legend_handles_labels()
+    ax2.legend(h1 + h2, l1 + l2, fontsize=7, loc="lower left")
+    saved = trials[(trials["point"] == 0) & (trials["trial"] == 0)
+                   & (trials["algorithm"] == "improved")]
+    chosen = int(res["chosen"][0]) + 1
+    check = ("" if saved.empty else
+             " (matches saved row)" if int(saved["chosen"].iloc[0]) == chosen
+             else " (DIFFERS from saved row)")
+    ax2.set_title(f"improved: chose radar track {chosen}{check}; per-scan diagnostics",
+                  fontsize=8)
+    fig.suptitle("Paper 001 Figs. 1-2 analogue: one trial (point 0, trial 0), recomputed "
+                 "from config and seed")
+    return fig
+
+
+def figures(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> dict[str, Any]:
+    """``correct_rate`` from the summary; ``trajectory`` recomputed for trial 0 of point 0."""
+    return {"correct_rate": _correct_rate_figure(summary, config),
+            "trajectory": _trajectory_figure(trials, config)}
+
+
+EXPERIMENT = Experiment(
+    name="esm_radar",
+    title="Paper 001: ESM-to-radar track association (improved fuzzy evaluation)",
+    params=PARAMS,
+    run_trial=run_trial,
+    run_batch=run_batch,
+    figures=figures,
+    tables=tables,
+    row_keys=("algorithm",),
+    binary_metrics=("correct", "decided"),
+    batch_size=100,
+    description=__doc__.split("\n\n")[0],
+)
