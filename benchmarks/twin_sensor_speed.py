@@ -1,0 +1,144 @@
+"""Trials per second of the twin_sensor experiment, one process (one core).
+
+Measures the batched implementation at clutter mean 10 for
+  (a) one sensor, EKF covariance + single-sensor PDAF, and
+  (b) two sensors, MGEKF + fused (parallel, (m1+1)(m2+1)-hypothesis) PDA,
+for the experiment's default ``in_gate`` clutter and for ``window`` clutter (a fixed box of
++-0.03 rad about the line of sight, roughly the gate size, so about 10 false returns fall in
+the gate; those returns do not depend on the filter, so every tracker sees the same data).
+When Stone Soup is importable (the optional ``bench`` extra) it runs Stone Soup's EKF + PDA on
+the one-sensor window scenario, on exactly the same simulated returns, in this process, and
+prints the ratio.
+
+Usage: ``python benchmarks/twin_sensor_speed.py [--trials 2000] [--batch 500] [--profile]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import io
+import pstats
+import time
+
+import numpy as np
+
+from trackfuse.experiments.twin_sensor import EXPERIMENT, build_scenario, simulate
+
+
+def params(sensors: int, algorithm: str, model: str) -> dict:
+    p = EXPERIMENT.defaults()
+    p.update({"sensors.count": sensors, "algorithms": [algorithm], "clutter.mean": 10.0,
+              "clutter.model": model, "clutter.window": 0.03})
+    return p
+
+
+def ours(p: dict, trials: int, batch: int) -> float:
+    """Trials per second of ``run_batch`` over ``trials`` trials in batches of ``batch``."""
+    EXPERIMENT.run_batch(p, [np.random.default_rng([t, 0, 1]) for t in range(8)])  # warm-up
+    start = time.perf_counter()
+    for first in range(0, trials, batch):
+        rngs = [np.random.default_rng([t, 0, 1]) for t in range(first, min(first + batch,
+                                                                          trials))]
+        EXPERIMENT.run_batch(p, rngs)
+    return trials / (time.perf_counter() - start)
+
+
+def stonesoup_rate(p: dict, trials: int) -> float:
+    """Trials per second of Stone Soup's EKF + PDA on the same one-sensor window data."""
+    from datetime import datetime, timedelta
+
+    from stonesoup.dataassociator.probability import PDA
+    from stonesoup.functions import gm_reduce_single
+    from stonesoup.hypothesiser.probability import PDAHypothesiser
+    from stonesoup.models.measurement.nonlinear import CartesianToElevationBearing
+    from stonesoup.models.transition.linear import (
+        CombinedLinearGaussianTransitionModel,
+        ConstantVelocity,
+    )
+    from stonesoup.predictor.kalman import ExtendedKalmanPredictor
+    from stonesoup.types.array import StateVectors
+    from stonesoup.types.detection import Detection
+    from stonesoup.types.state import GaussianState
+    from stonesoup.types.track import Track
+    from stonesoup.types.update import GaussianStateUpdate
+    from stonesoup.updater.kalman import ExtendedKalmanUpdater
+
+    sc = build_scenario(p)
+    order = [0, 3, 1, 4, 2, 5]  # Stone Soup orders states (x, vx, y, vy, z, vz)
+    transition = CombinedLinearGaussianTransitionModel(
+        [ConstantVelocity(float(p["filter.q"]))] * 3)
+    predictor = ExtendedKalmanPredictor(transition)
+    R = np.diag(np.diag(sc.R[0])[::-1])  # (elevation, bearing)
+    density = sc.clutter_mean / (2.0 * sc.window) ** 2
+    data = [simulate(sc, np.random.default_rng([t, 0, 1])) for t in range(trials)]
+    t0 = datetime(2005, 10, 1)
+    start = time.perf_counter()
+    for d in data:
+        prior = GaussianState(d.x0[order][:, None], sc.P0[np.ix_(order, order)], timestamp=t0)
+        track = Track([prior])
+        offset = 0
+        for k in range(1, sc.K + 1):
+            when = t0 + timedelta(seconds=float(sc.times[k]))
+            model = CartesianToElevationBearing(ndim_state=6, mapping=(0, 2, 4), noise_covar=R,
+                                                translation_offset=sc.sensor_pos[k, 0][:, None])
+            updater = ExtendedKalmanUpdater(model)
+            hyp = PDAHypothesiser(predictor, updater, clutter_spatial_density=density,
+                                  prob_detect=float(sc.P_D[0]), prob_gate=sc.P_G)
+            dets = set()
+            if d.detected[k - 1, 0]:
+                dets.add(Detection(d.z_target[k - 1, 0, ::-1][:, None], timestamp=when,
+                                   measurement_model=model))
+            n = int(d.n_clutter[k - 1, 0])
+            for z in d.clutter[offset:offset + n]:
+                dets.add(Detection(z[::-1][:, None], timestamp=when, measurement_model=model))
+            offset += n
+            hypotheses = PDA(hyp).associate({track}, dets, when)[track]
+            means, covars, weights = [], [], []
+            for h in hypotheses:
+                state = h.prediction if not h else updater.update(h)
+                means.append(state.state_vector)
+                covars.append(state.covar)
+                weights.append(float(h.probability))
+            mean, covar = gm_reduce_single(StateVectors(means), np.stack(covars, axis=2),
+                                           np.asarray(weights))
+            track.append(GaussianStateUpdate(mean, covar, hypotheses, when))
+    return trials / (time.perf_counter() - start)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--trials", type=int, default=2000)
+    parser.add_argument("--batch", type=int, default=500)
+    parser.add_argument("--stonesoup-trials", type=int, default=20)
+    parser.add_argument("--profile", action="store_true", help="cProfile case (b), in_gate")
+    args = parser.parse_args()
+    cases = {"(a) 1 sensor, EKF + PDAF": (1, "mspda_parallel/ekf"),
+             "(b) 2 sensors, MGEKF + fused PDA": (2, "mspda_parallel/mgekf")}
+    print(f"twin_sensor, 20 scans/trial, clutter mean 10, batch {args.batch}, one process")
+    rates = {}
+    for model in ("in_gate", "window"):
+        for name, (sensors, algorithm) in cases.items():
+            rates[name, model] = ours(params(sensors, algorithm, model), args.trials, args.batch)
+            print(f"  trackfuse {name:34s} {model:8s} {rates[name, model]:10.1f} trials/s")
+    try:
+        import stonesoup  # noqa: F401
+    except ImportError:
+        print("  Stone Soup not installed (pip install '.[bench]'): comparison skipped")
+    else:
+        ss = stonesoup_rate(params(1, "mspda_parallel/ekf", "window"), args.stonesoup_trials)
+        mine = rates["(a) 1 sensor, EKF + PDAF", "window"]
+        print(f"  Stone Soup (a) 1 sensor, EKF + PDA           window   {ss:10.1f} trials/s")
+        print(f"  ratio trackfuse / Stone Soup, case (a), window: {mine / ss:.0f}x")
+    if args.profile:
+        p = params(2, "mspda_parallel/mgekf", "in_gate")
+        rngs = [np.random.default_rng([t, 0, 1]) for t in range(args.batch)]
+        prof = cProfile.Profile()
+        prof.runcall(EXPERIMENT.run_batch, p, rngs)
+        out = io.StringIO()
+        pstats.Stats(prof, stream=out).sort_stats("tottime").print_stats(15)
+        print(out.getvalue())
+
+
+if __name__ == "__main__":
+    main()

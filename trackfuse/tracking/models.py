@@ -1,0 +1,39 @@
+"""Nearly-constant-velocity (CV) target model in three dimensions.
+
+State ``x = [x, y, z, vx, vy, vz]`` in metres and metres per second. The discrete white-noise
+acceleration model (Bar-Shalom, Li & Kirubarajan 2001, sec. 6.3.2) is
+
+    x(k+1) = F x(k) + G v(k),   v(k) ~ N(0, q I3),
+    F = [[I3, T I3], [0, I3]],  G = [[T^2/2 I3], [T I3]],
+    Q = G q G' = q [[T^4/4 I3, T^3/2 I3], [T^3/2 I3, T^2 I3]].
+
+The printed lower-left block ``T^3/4`` of paper 000 (eq. 4) is an OCR error: ``G G'`` is
+symmetric, so it equals the upper-right ``T^3/2``. ``Q`` has rank 3 and is never inverted.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def wrap(a: np.ndarray) -> np.ndarray:
+    """Map angles (rad) to [-pi, pi); broadcasts over any shape."""
+    return (np.asarray(a) + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def cv_transition(T: float) -> np.ndarray:
+    """State transition ``F: (6, 6)`` of the CV model for period ``T`` (s)."""
+    F = np.eye(6)
+    F[:3, 3:] = T * np.eye(3)
+    return F
+
+
+def cv_noise_gain(T: float) -> np.ndarray:
+    """Noise gain ``G: (6, 3)`` mapping a constant acceleration over one period (m/s^2)."""
+    return np.vstack([0.5 * T**2 * np.eye(3), T * np.eye(3)])
+
+
+def cv_process_noise(T: float, q: float) -> np.ndarray:
+    """Process noise covariance ``Q = G q G': (6, 6)`` for acceleration variance ``q`` (m^2/s^4)."""
+    G = cv_noise_gain(T)
+    return q * G @ G.T
