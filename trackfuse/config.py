@@ -99,8 +99,10 @@ def _describe(value: Any) -> str:
 
 def allowed_text(p: Param) -> str:
     if p.choices is not None:
-        what = "one of " + ", ".join(str(c) for c in p.choices)
-        return what if p.kind is not list else "a list of " + what
+        options = ", ".join(str(c) for c in p.choices)
+        if p.kind is list:
+            return f"a non-empty list drawn from {options}"
+        return f"one of {options}"
     names = {float: "a number", int: "an integer", bool: "true or false", str: "a string",
              list: "a non-empty list of numbers"}
     text = names.get(p.kind, p.kind.__name__)
