@@ -20,13 +20,14 @@ import multiprocessing
 import os
 import signal
 from collections.abc import Callable, Iterable, Iterator
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from itertools import islice
 from typing import Any
 
 KINDS = ("serial", "process", "dask")
 MAX_POOL_RESTARTS = 3
+_END = object()
 
 
 class ExecutorError(RuntimeError):
@@ -96,30 +97,50 @@ class ProcessExecutor:
 
     def imap_unordered(self, fn: Callable, tasks: Iterable) -> Iterator[Any]:
         tasks = iter(tasks)
-        pending = {self._pool.submit(fn, t): t for t in islice(tasks, 2 * self.workers + 1)}
+        limit = 2 * self.workers + 1
+        pending: dict[Future, Any] = {}
+        retry: list[Any] = []
         restarts = 0
-        while pending:
-            done, _ = wait(pending, return_when=FIRST_COMPLETED)
-            for future in done:
-                task = pending.pop(future)
-                try:
-                    result = future.result()
-                except BrokenProcessPool:
-                    restarts += 1
-                    if restarts > MAX_POOL_RESTARTS:
+        while True:
+            try:
+                while len(pending) < limit:
+                    task = retry.pop() if retry else next(tasks, _END)
+                    if task is _END:
+                        break
+                    try:
+                        pending[self._pool.submit(fn, task)] = task
+                    except BrokenProcessPool:
+                        retry.append(task)
                         raise
-                    pending = self._restart({future: task, **pending}, fn)
-                    break
-                for new in islice(tasks, 1):
-                    pending[self._pool.submit(fn, new)] = new
-                yield result
+                broken = False
+            except BrokenProcessPool:
+                broken = True
+            if not broken:
+                if not pending:
+                    return
+                done, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for future in done:
+                    task = pending.pop(future)
+                    try:
+                        result = future.result()
+                    except BrokenProcessPool:
+                        retry.append(task)
+                        broken = True
+                        continue
+                    yield result
+            if broken:
+                restarts += 1
+                if restarts > MAX_POOL_RESTARTS:
+                    raise BrokenProcessPool(f"workers died {restarts} times; giving up")
+                retry.extend(pending.values())
+                pending.clear()
+                self._restart()
 
-    def _restart(self, lost: dict, fn: Callable) -> dict:
-        """A worker died: start a new pool and resubmit every unfinished batch."""
+    def _restart(self) -> None:
+        """A worker died: replace the pool (unfinished batches are resubmitted by the caller)."""
         self._pool.shutdown(wait=False, cancel_futures=True)
         self._pool = ProcessPoolExecutor(self.workers, mp_context=self._ctx,
                                          initializer=_ignore_sigint)
-        return {self._pool.submit(fn, task): task for task in lost.values()}
 
     def close(self) -> None:
         self._pool.shutdown(wait=True, cancel_futures=True)
