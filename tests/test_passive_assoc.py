@@ -133,3 +133,10 @@ def test_ci_config_runs_through_the_cli(tmp_path, name):
     trials = pd.read_csv(run / "trials.csv")
     assert {"algorithm", "ops", "accuracy", "gap", "at_opt"} <= set(trials.columns)
     assert not any(c.endswith("_time_s") for c in trials.columns)
+
+
+def test_every_algorithm_has_a_legend_label():
+    from trackfuse.experiments.passive_assoc import ALGORITHMS
+    from trackfuse.plots.passive_assoc import LABELS
+
+    assert set(ALGORITHMS) <= set(LABELS)

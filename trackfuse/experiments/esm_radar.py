@@ -44,17 +44,9 @@ factor's weight over the scans; 0 if the algorithm does not weight range), ``alp
 forward) and ``esm_range_sigma_m`` (mean 1-sigma of the TDOA-DF range). Per-scan weights and
 manoeuvre indices are drawn in the ``trajectory`` figure.
 
-Figures: ``correct_rate`` (against a numeric swept axis, one panel per radar-factor model, or
-a bar chart when nothing numeric is swept) and ``trajectory`` (true tracks, the ESM location
-track and the per-scan manoeuvre index and range weight of one trial, the paper's Figs. 1-2).
-The trajectory figure is *recomputed* from the config and seed: it re-runs trial 0 of point 0
-with the runner's generator ``default_rng([0, 0, seed])`` (one trial, milliseconds) and says
-in its title whether the recomputed decision matches the saved row.
-
-Tables: ``table3`` (counts per radar track and correct rate with Wilson interval, per point and
-algorithm: the paper's Table 3 for both radar-factor models when that is swept) and
-``ablation`` (each variant against ``improved`` on the same trials, with the exact McNemar
-test on the discordant pairs).
+Figures (``correct_rate``: the paper's Figs. 3-4; ``trajectory``: its Figs. 1-2) and tables
+(``table3``: its Table 3; ``ahp``: its Table 1; ``ablation``) are built by
+:mod:`trackfuse.plots.esm_radar`, which registers them below.
 """
 
 from __future__ import annotations
@@ -64,8 +56,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import pandas as pd
-from scipy.stats import binomtest
 
 from trackfuse.association import ahp
 from trackfuse.association.dynamic_weights import dynamic_weights
@@ -92,8 +82,7 @@ from trackfuse.association.manoeuvre import cv_residuals, manoeuvre_index
 from trackfuse.association.time_align import bracket, interpolate
 from trackfuse.association.track_likelihood import abstaining_decision, ml_track_decision
 from trackfuse.experiments.base import Experiment, Param
-from trackfuse.plots.style import band, new_figure, reference_line
-from trackfuse.stats import wilson_interval
+from trackfuse.plots import esm_radar as plots
 
 TRUE_TRACK = 1  # 0-based index of radar track 2
 N_TRACKS = 3
@@ -294,7 +283,9 @@ def static_weights(factors: Sequence[str], method: str) -> np.ndarray:
     return ahp.weights(sub, "eigen" if method == "eigen" else "root")
 
 
-def _factor_names(variant: Variant, params: Mapping[str, Any]) -> tuple[str, ...]:
+def factor_names(variant: Variant, params: Mapping[str, Any]) -> tuple[str, ...]:
+    """The factor names ``variant`` uses, in :data:`FACTORS` order (``params`` needs only
+    ``baseline.factors``, read when ``variant.factors == "baseline"``)."""
     names = params["baseline.factors"] if variant.factors == "baseline" else variant.factors
     return tuple(f for f in FACTORS if f in set(names))
 
@@ -339,7 +330,7 @@ def evaluate(variant: Variant, diff: Differences, alpha: np.ndarray,
     dict of (N,) arrays: ``chosen`` (0-based track), ``margin``, ``range_weight_mean``,
     ``range_weight_min``; and ``weights`` (N, K, F) for fuzzy variants.
     """
-    names = _factor_names(variant, params)
+    names = factor_names(variant, params)
     idx = [FACTORS.index(f) for f in names]
     N, K = alpha.shape
     d = diff.d[..., idx]
@@ -416,265 +407,14 @@ def run_trial(params: Mapping[str, Any], rng: np.random.Generator) -> list[dict]
     return run_batch(params, [rng])[0]
 
 
-# --------------------------------------------------------------------------- tables
-
-def _swept(config: Mapping[str, Any], trials: pd.DataFrame) -> list[str]:
-    return [k for k in config.get("sweep", {}) if k in trials.columns]
-
-
-def table3(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> pd.DataFrame:
-    """Counts per chosen radar track (and "no decision"), correct rate with its Wilson 95 %
-    interval, and the rate of wrong decisions, per point and algorithm."""
-    keys = _swept(config, trials)
-    out = []
-    for group, g in trials.groupby(["point", *keys, "algorithm"], sort=False):
-        n = len(g)
-        k = int(g["correct"].sum())
-        lo, hi = wilson_interval(k, n)
-        row = dict(zip(["point", *keys, "algorithm"], group, strict=True))
-        for track in range(1, N_TRACKS + 1):
-            row[f"radar_track_{track}"] = int((g["chosen"] == track).sum())
-        row["no_decision"] = int((g["chosen"] == 0).sum())
-        wrong = int(((g["chosen"] != 0) & (g["correct"] == 0)).sum())
-        row.update(n=n, correct_rate=k / n, ci_low=float(lo), ci_high=float(hi),
-                   wrong_rate=wrong / n)
-        out.append(row)
-    return pd.DataFrame(out).sort_values(["point"], kind="stable").reset_index(drop=True)
-
-
-def ablation(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> pd.DataFrame:
-    """Each algorithm against ``improved`` on the same trials (paired, exact McNemar test).
-
-    ``gain_vs_improved`` is the variant's correct rate minus improved's; ``n_variant_only``
-    and ``n_improved_only`` count the discordant trials; ``mcnemar_p`` is the two-sided exact
-    binomial test of those counts (Q. McNemar, Psychometrika 12, 1947, 153-157). Empty when
-    ``improved`` was not run.
-    """
-    if "improved" not in set(trials["algorithm"]):
-        return pd.DataFrame()
-    keys = _swept(config, trials)
-    wide = trials.pivot_table(index=["point", *keys, "trial"], columns="algorithm",
-                              values="correct", aggfunc="first")
-    params = config.get("params", {})
-    order = list(dict.fromkeys(trials["algorithm"]))
-    out = []
-    for point_key, g in wide.groupby(level=["point", *keys], sort=True):
-        point_key = point_key if isinstance(point_key, tuple) else (point_key,)
-        ref = g["improved"].to_numpy()
-        for name in order:
-            x = g[name].to_numpy()
-            n = len(x)
-            lo, hi = wilson_interval(x.sum(), n)
-            only_v = int(((x == 1) & (ref == 0)).sum())
-            only_i = int(((x == 0) & (ref == 1)).sum())
-            p = binomtest(only_v, only_v + only_i).pvalue if only_v + only_i else 1.0
-            v = ALGORITHMS[name]
-            factors = _factor_names(v, {"baseline.factors": params.get(
-                "baseline.factors", ["range", "speed", "angle"])})
-            member = (params.get("membership_norm", "l1") if v.membership == "param"
-                      else v.membership)
-            out.append({
-                **dict(zip(["point", *keys], point_key, strict=True)),
-                "algorithm": name, "description": v.summary, "factors": len(factors),
-                "membership": member,
-                "weights": "-" if v.membership.startswith("chi2") else
-                ("dynamic" if v.dynamic else "static"),
-                "correct_rate": x.mean(), "ci_low": float(lo), "ci_high": float(hi),
-                "gain_vs_improved": x.mean() - ref.mean(),
-                "n_variant_only": only_v, "n_improved_only": only_i, "mcnemar_p": float(p),
-            })
-    return pd.DataFrame(out)
-
-
-def ahp_table() -> pd.DataFrame:
-    """Paper 001 Table 1 weights by the root and eigenvector methods, with consistency.
-
-    One row per factor set (all five, and the traditional method's three) and method:
-    weights by factor name, ``lambda_max``, ``CI`` and ``CR`` (SPEC 3.4 item 5), plus the
-    paper's printed rounded weights for comparison.
-    """
-    out = []
-    for names in (FACTORS, THREE):
-        idx = [FACTORS.index(f) for f in names]
-        B = ahp.PAPER_001_JUDGEMENT[np.ix_(idx, idx)]
-        lam = ahp.lambda_max(B)
-        for method in ("root", "eigen"):
-            w = dict(zip(names, ahp.weights(B, method), strict=True))
-            out.append({"factors": len(names), "method": method,
-                        **{f: w.get(f, np.nan) for f in FACTORS}, "lambda_max": lam,
-                        "CI": ahp.consistency_index(lam, len(names)),
-                        "CR": ahp.consistency_ratio(B)})
-    out.append({"factors": 5, "method": "paper_rounded",
-                **dict(zip(FACTORS, PAPER_ROUNDED, strict=True)), "lambda_max": 5.2375,
-                "CI": 0.059375, "CR": np.nan})
-    return pd.DataFrame(out)
-
-
-def tables(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> dict[str, pd.DataFrame]:
-    """The Table 3 analogue, the ablation table and the AHP weights."""
-    out = {"table3": table3(trials, summary, config), "ahp": ahp_table()}
-    abl = ablation(trials, summary, config)
-    if not abl.empty:
-        out["ablation"] = abl
-    return out
-
-
-# --------------------------------------------------------------------------- figures
-
-AXIS_LABELS = {
-    "target.separation": "T1-T2 separation (m)",
-    "radar.sigma_range_coef": "radar range error sd (fraction of range R)",
-    "phase.d_over_lambda": "interferometer spacing d/λ",
-    "snake.amplitude": "snake amplitude (m)",
-    "alpha.max": "α_max",
-}
-
-
-#: One colour per algorithm in every figure; the ML references are dashed (grey/black).
-COLOURS = {
-    "traditional": "tab:blue", "traditional_5f": "tab:cyan", "improved": "tab:orange",
-    "improved_static": "tab:green", "improved_3f": "tab:red", "improved_l2": "tab:olive",
-    "improved_gauss": "tab:purple", "chi2": "black", "chi2_lrt": "tab:brown",
-    "chi2_5f": "tab:gray",
-}
-
-
-def _style(name: str) -> dict[str, Any]:
-    style = {"color": COLOURS[name]}
-    if name.startswith("chi2"):
-        style["linestyle"] = "--"
-    return style
-
-
-def _correct_rate_figure(summary: pd.DataFrame, config: dict):
-    s = summary[summary["metric"] == "correct"]
-    sweep = [k for k in config.get("sweep", {}) if k in s.columns]
-    numeric = [k for k in sweep if pd.api.types.is_numeric_dtype(s[k])]
-    x = numeric[0] if numeric else None
-    panel_keys = [k for k in sweep if k != x]
-    combos = (list(dict.fromkeys(map(tuple, s[panel_keys].to_numpy()))) if panel_keys
-              else [()])
-    algorithms = list(dict.fromkeys(s["algorithm"]))
-    params = config.get("params", {})
-    ncols = min(len(combos), 3)
-    fig, axes = new_figure(ncols=ncols, nrows=-(-len(combos) // ncols), width=5.0, height=3.6)
-    axes = np.atleast_1d(axes)
-    for ax in axes[len(combos):]:
-        ax.set_visible(False)
-    for ax, combo in zip(axes, combos, strict=False):
-        mask = np.ones(len(s), dtype=bool)
-        for key, value in zip(panel_keys, combo, strict=True):
-            mask &= (s[key] == value).to_numpy()
-        sp = s[mask]
-        setting = (", ".join(f"{k} = {v}" for k, v in zip(panel_keys, combo, strict=True))
-                   or f"radar factors: {params.get('radar.factor_model', 'table')}")
-        if x is not None:
-            for name in algorithms:
-                g = sp[sp["algorithm"] == name].sort_values(x)
-                band(ax, g[x], g["mean"], g["ci_low"], g["ci_high"], label=name, **_style(name))
-            ax.set_xlabel(AXIS_LABELS.get(x, x))
-            if x == "target.separation":
-                ax.set_xscale("log")
-        else:
-            g = sp.set_index("algorithm").loc[algorithms]
-            pos = np.arange(len(algorithms))
-            ax.bar(pos, g["mean"], color=[COLOURS[a] for a in algorithms], alpha=0.75,
-                   hatch=["//" if a.startswith("chi2") else "" for a in algorithms])
-            ax.errorbar(pos, g["mean"], yerr=[g["mean"] - g["ci_low"], g["ci_high"] - g["mean"]],
-                        fmt="none", color="k", capsize=3)
-            ax.set_xticks(pos, algorithms, rotation=35, ha="right")
-            ax.set_xlabel("algorithm")
-        reference_line(ax, 1 / N_TRACKS, "chance (1/3)", color="0.5")
-        ax.set_ylim(0, 1.02)
-        ax.set_ylabel("correct association rate (fraction)")
-        ax.set_title(f"{setting}; 95 % Wilson bands", fontsize=8)
-    handles, labels = axes[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncols=min(len(labels), 5),
-               fontsize=7)
-    n = config.get("trials", "?")
-    sep = params.get("target.separation")
-    timing = ""
-    if params.get("esm.period", 1.0) != params.get("radar.period", 1.0) or params.get(
-            "esm.offset", 0.0):
-        timing = (f", ESM/radar periods {params['esm.period']:g}/{params['radar.period']:g} s"
-                  f" ({'interpolated' if params.get('time_align') else 'latest radar sample'})")
-    fig.suptitle(f"ESM-radar association (paper 001), {n} trials/point"
-                 + (f", separation {sep:g} m" if "target.separation" not in sweep else "")
-                 + timing)
-    return fig
-
-
-def _point0_params(trials: pd.DataFrame, config: dict) -> dict[str, Any]:
-    params = dict(config["params"])
-    row = trials[trials["point"] == 0].iloc[0]
-    schema = {p.key: p for p in PARAMS}
-    for key in config.get("sweep", {}):
-        value = row[key]
-        kind = schema[key].kind
-        params[key] = kind(value) if kind in (int, float, str) else value
-    if isinstance(params.get("time_align"), str):
-        params["time_align"] = params["time_align"].lower() == "true"
-    return params
-
-
-def _trajectory_figure(trials: pd.DataFrame, config: dict):
-    params = _point0_params(trials, config)
-    sim = simulate(params, [np.random.default_rng([0, 0, int(config["seed"])])])
-    fig, (ax, ax2) = new_figure(ncols=2, width=5.0, height=4.0)
-    names = ("T1 (snake)", "T2 (snake, ESM target)", "T3 (crossing)")
-    for j in range(N_TRACKS):
-        ax.plot(sim.truth_p[:, j, 0] / 1e3, sim.truth_p[:, j, 1] / 1e3, label=names[j])
-    r, th = sim.x_esm[0, :, 0], sim.x_esm[0, :, 2]
-    ax.plot(r * np.cos(th) / 1e3, r * np.sin(th) / 1e3, ".", color="tab:red", ms=3,
-            label="ESM TDOA-DF location")
-    ax.plot([0, params["geometry.baseline"] / 1e3], [0, 0], "k^", label="A1, A2")
-    ax.set_xlabel("x (km)")
-    ax.set_ylabel("y (km)")
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.legend(fontsize=7, loc="upper left")
-    ax.set_title(f"tracks, separation {params['target.separation']:g} m; mean ESM range sd "
-                 f"{np.sqrt(sim.P_esm[0, :, 0, 0]).mean() / 1e3:.1f} km", fontsize=8)
-
-    res = evaluate(ALGORITHMS["improved"], differences(sim), sim.alpha, params)
-    ax2.plot(sim.t, sim.alpha[0], color="tab:purple", label="manoeuvre index α(k)")
-    ax2.set_xlabel("time (s)")
-    ax2.set_ylabel("manoeuvre index α (dimensionless)")
-    ax3 = ax2.twinx()
-    ax3.plot(sim.t, res["weights"][0, :, 0], color="tab:green", label="range weight a₁(k)")
-    ax3.set_ylabel("range weight a₁ (fraction)")
-    a1 = static_weights(FACTORS, params["weights"])[0]
-    ax3.axhline(a1, color="tab:green", linestyle=":", linewidth=1.0, label="static AHP a₁")
-    ax3.set_ylim(0, 0.6)
-    h1, l1 = ax2.get_legend_handles_labels()
-    h2, l2 = ax3.get_legend_handles_labels()
-    ax2.legend(h1 + h2, l1 + l2, fontsize=7, loc="lower left")
-    saved = trials[(trials["point"] == 0) & (trials["trial"] == 0)
-                   & (trials["algorithm"] == "improved")]
-    chosen = int(res["chosen"][0]) + 1
-    check = ("" if saved.empty else
-             " (matches saved row)" if int(saved["chosen"].iloc[0]) == chosen
-             else " (DIFFERS from saved row)")
-    ax2.set_title(f"improved: chose radar track {chosen}{check}; per-scan diagnostics",
-                  fontsize=8)
-    fig.suptitle("Paper 001 Figs. 1-2 analogue: one trial (point 0, trial 0), recomputed "
-                 "from config and seed")
-    return fig
-
-
-def figures(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> dict[str, Any]:
-    """``correct_rate`` from the summary; ``trajectory`` recomputed for trial 0 of point 0."""
-    return {"correct_rate": _correct_rate_figure(summary, config),
-            "trajectory": _trajectory_figure(trials, config)}
-
-
 EXPERIMENT = Experiment(
     name="esm_radar",
     title="Paper 001: ESM-to-radar track association (improved fuzzy evaluation)",
     params=PARAMS,
     run_trial=run_trial,
     run_batch=run_batch,
-    figures=figures,
-    tables=tables,
+    figures=plots.figures,
+    tables=plots.tables,
     row_keys=("algorithm",),
     binary_metrics=("correct", "decided"),
     batch_size=100,

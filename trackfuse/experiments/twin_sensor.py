@@ -41,8 +41,8 @@ Rows
 
 The trial's loss flags (SPEC 1.7) are the values at the last scan. A trial whose filter
 produced non-finite numbers is flagged lost under both rules from then on, with NaN errors.
-The PCRLB overlay of the figures is recomputed from the config (deterministic), not stored
-as rows.
+The PCRLB overlay of the figures is recomputed from the config (deterministic, :func:`bounds`),
+not stored as rows. Figures and the report table live in :mod:`trackfuse.plots.twin_sensor`.
 
 Choices beyond SPEC (and why)
 -----------------------------
@@ -61,7 +61,6 @@ Choices beyond SPEC (and why)
 
 from __future__ import annotations
 
-import textwrap
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -70,12 +69,10 @@ from itertools import product
 from typing import Any
 
 import numpy as np
-import pandas as pd
 from scipy import stats
 
 from trackfuse.experiments.base import Experiment, Param
-from trackfuse.plots.style import band, new_figure
-from trackfuse.stats import nees_band, wilson_interval
+from trackfuse.plots import twin_sensor as plots
 from trackfuse.tracking.initialization import los_prior_covariance
 from trackfuse.tracking.models import cv_process_noise, cv_transition, wrap
 from trackfuse.tracking.pcrlb import (
@@ -99,8 +96,6 @@ from trackfuse.tracking.sensors import (
 
 FILTERS = {"mgekf": "mgekf", "ekf": "ekf_joseph"}
 ALGORITHMS = tuple(f"{a}/{f}" for a, f in product(METHODS, FILTERS))
-LABELS = {"mspda_parallel": "parallel PDA", "mspda_sequential": "sequential PDA",
-          "nn": "nearest neighbour", "paper_approx": "paper approx. (reconstruction)"}
 
 PARAMS = (
     Param("scan.period", 1.0, "Sampling period T", "s", float, 1e-3, 100.0),
@@ -475,243 +470,14 @@ def _bounds_cached(key: tuple, q_model: float | None, truth_samples: int):
     return range_bound(Jinv[1:], x_mean[1:], sc.platform[1:]), position_bound(Jinv[1:])
 
 
-# --------------------------------------------------------------------------------------------
-# Figures and tables (from the saved tables only)
-
-
-def _swept(config: dict) -> list[str]:
-    return list((config.get("sweep") or {}).keys())
-
-
-def _point_params(config: dict, frame: pd.DataFrame) -> dict[str, Any]:
-    params = dict(config["params"])
-    for key in _swept(config):
-        value = frame[key].iloc[0]
-        params[key] = value.item() if hasattr(value, "item") else value
-    return params
-
-
-def _label(name: str) -> str:
-    assoc, filt = name.split("/")
-    return f"{LABELS.get(assoc, assoc)}, {filt.upper()}"
-
-
-def _headline(algorithms: Sequence[str]) -> list[str]:
-    """Algorithms sharing the first listed association (MGEKF beside EKF)."""
-    first = algorithms[0].split("/")[0]
-    return [a for a in algorithms if a.split("/")[0] == first]
-
-
-def _panels(n: int, width: float = 4.4, height: float = 3.3):
-    """``(fig, axes)`` for ``n`` panels: one row up to four, else rows of three."""
-    ncols = n if n <= 4 else 3
-    fig, axes = new_figure(ncols=ncols, nrows=int(np.ceil(n / ncols)), width=width,
-                           height=height)
-    axes = np.atleast_1d(axes)
-    for ax in axes[n:]:
-        ax.set_visible(False)
-    return fig, axes[:n], width * ncols
-
-
-def _point_title(config: dict, frame: pd.DataFrame) -> str:
-    parts = []
-    for key in _swept(config):
-        value = frame[key].iloc[0]
-        text = f"{value:g}" if isinstance(value, (int, float, np.number)) else str(value)
-        parts.append(f"{key.split('.')[-1]}={text}")
-    return ", ".join(parts)
-
-
-def _select_points(trials: pd.DataFrame, limit: int = 9) -> list[int]:
-    points = sorted(trials["point"].unique())
-    if len(points) <= limit:
-        return points
-    idx = np.linspace(0, len(points) - 1, limit).round().astype(int)
-    return [points[i] for i in sorted(set(idx))]
-
-
-def _rmse_band(sq: pd.Series) -> tuple[float, float, float]:
-    """RMSE from squared errors with its 95% chi-square interval (zero-mean Gaussian errors):
-    ``n MSE / RMSE_true^2 ~ chi2(n)``."""
-    n, mse = len(sq), float(sq.mean())
-    lo, hi = stats.chi2.ppf([0.975, 0.025], n)
-    return np.sqrt(mse), np.sqrt(n * mse / lo), np.sqrt(n * mse / hi)
-
-
-def _legend_below(fig, ax) -> None:
-    handles, labels = ax.get_legend_handles_labels()
-    ncols = max(1, min(len(labels), int(fig.get_figwidth() / 2.8)))
-    fig.legend(handles, labels, loc="outside lower center", ncols=ncols)
-
-
-def _suptitle(fig, config: dict, what: str, width_in: float) -> None:
-    chars = max(40, int(width_in * 10))
-    title = textwrap.fill(str(config.get("title", "twin_sensor")), chars)
-    fig.suptitle(f"{title}\n{textwrap.fill(what, chars)}")
-
-
-def _loss_figure(trials: pd.DataFrame, config: dict, rule: str, x_key: str):
-    last = trials[trials["scan"] == trials["scan"].max()]
-    others = [k for k in _swept(config) if k != x_key]
-    groups = list(last.groupby(others, sort=True)) if others else [((), last)]
-    ncols = min(4, len(groups))
-    where = "gate" if config["params"].get("clutter.model", "in_gate") == "in_gate" else "window"
-    nrows = int(np.ceil(len(groups) / ncols))
-    width = 6.4 if ncols == 1 else 4.6
-    fig, axes = new_figure(ncols=ncols, nrows=nrows, width=width, height=3.4)
-    axes = np.atleast_1d(axes)
-    for ax, (values, frame) in zip(axes, groups, strict=False):
-        for name in config["params"]["algorithms"]:
-            g = frame[frame["algorithm"] == name].groupby(x_key)[rule].agg(["sum", "count"])
-            lo, hi = wilson_interval(g["sum"], g["count"])
-            band(ax, g.index, 100 * g["sum"] / g["count"], 100 * lo, 100 * hi, _label(name),
-                 linestyle="-" if name.endswith("mgekf") else "--")
-        values = values if isinstance(values, tuple) else (values,)
-        pairs = zip(others, values, strict=True)
-        ax.set_title(", ".join(f"{k.split('.')[-1]}={v:g}" for k, v in pairs) or "all trials")
-        ax.set_xlabel(f"mean false returns per sensor and scan in the {where} (returns/scan)")
-        ax.set_ylabel("tracks lost (%)")
-        ax.set_ylim(-2, 102)
-    for ax in axes[len(groups):]:
-        ax.set_visible(False)
-    _legend_below(fig, axes[0])
-    what = ("target outside every gate for >= 3 scans" if rule == "lost_gate"
-            else "final position NEES > chi2_3(0.999)")
-    _suptitle(fig, config, f"loss rate ({what}), 95% Wilson bands", width * ncols)
-    return fig
-
-
-def _range_figure(trials: pd.DataFrame, config: dict):
-    points = _select_points(trials)
-    fig, axes, fig_width = _panels(len(points))
-    names = _headline(config["params"]["algorithms"])
-    for ax, pt in zip(axes, points, strict=True):
-        frame = trials[trials["point"] == pt]
-        params = _point_params(config, frame)
-        for name in names:
-            g = frame[frame["algorithm"] == name].groupby("scan")["range_sq_err_m2"]
-            vals = np.array([_rmse_band(s) for _, s in g]) / 1e3
-            band(ax, list(g.groups), vals[:, 0], vals[:, 1], vals[:, 2], _label(name),
-                 linestyle="-" if name.endswith("mgekf") else "--")
-        scans = np.arange(1, int(params["scan.count"]) + 1) * float(params["scan.period"])
-        rb, _ = bounds(params)
-        ax.plot(scans, rb / 1e3, "k--", lw=1.0, label="sqrt PCRLB (truth model)")
-        rf, _ = bounds(params, q_model=float(params["filter.q"]))
-        ax.plot(scans, rf / 1e3, "k:", lw=1.0, label="sqrt PCRLB (filter model q)")
-        ax.set_xlabel("time t (s)")
-        ax.set_ylabel("range RMSE (km)")
-        ax.set_ylim(bottom=0)
-        ax.set_title(_point_title(config, frame) or "all trials")
-    _legend_below(fig, axes[0])
-    _suptitle(fig, config, "range RMSE (95% chi-square bands) vs square-root PCRLB",
-              fig_width)
-    return fig
-
-
-def _nees_figure(trials: pd.DataFrame, config: dict):
-    points = _select_points(trials)
-    fig, axes, fig_width = _panels(len(points))
-    names = _headline(config["params"]["algorithms"])
-    for ax, pt in zip(axes, points, strict=True):
-        frame = trials[trials["point"] == pt]
-        period = float(_point_params(config, frame)["scan.period"])
-        for name in names:
-            anees = frame[frame["algorithm"] == name].groupby("scan")["nees"].mean()
-            ax.plot(anees.index * period, anees, marker="o", label=_label(name),
-                    linestyle="-" if name.endswith("mgekf") else "--")
-        n_runs = int(frame["trial"].nunique())
-        lo, hi = nees_band(6, n_runs)
-        ax.axhspan(lo, hi, color="k", alpha=0.12, label=f"95% chi2 band, {n_runs} runs")
-        ax.axhline(6.0, color="k", lw=0.8)
-        ax.set_ylim(bottom=0)
-        ax.set_xlabel("time t (s)")
-        ax.set_ylabel("ANEES (6-state, dimensionless)")
-        ax.set_title(_point_title(config, frame) or "all trials")
-    _legend_below(fig, axes[0])
-    _suptitle(fig, config, "average NEES vs its 95% chi-square band", fig_width)
-    return fig
-
-
-def _final_figure(trials: pd.DataFrame, config: dict, x_key: str):
-    last = trials[trials["scan"] == trials["scan"].max()]
-    fig, ax = new_figure(width=5.6, height=3.6)
-    scale = 1e3 if x_key == "sensors.baseline" else 1.0
-    for name in _headline(config["params"]["algorithms"]):
-        g = last[last["algorithm"] == name].groupby(x_key)["range_sq_err_m2"]
-        vals = np.array([_rmse_band(s) for _, s in g]) / 1e3
-        band(ax, np.array(list(g.groups), dtype=float) / scale, vals[:, 0], vals[:, 1],
-             vals[:, 2], _label(name), linestyle="-" if name.endswith("mgekf") else "--")
-    base = _point_params(config, last)
-    values = last[x_key].astype(float)
-    grid = np.unique(np.concatenate([np.linspace(values.min(), values.max(), 41), values]))
-    step = next(p for p in PARAMS if p.key == x_key).kind
-    rb = [bounds({**base, x_key: step(v)})[0][-1] / 1e3 for v in grid]
-    ax.plot(grid / scale, rb, "k--", lw=1.0, label="sqrt PCRLB (truth model)")
-    unit = "km" if scale == 1e3 else next(p.unit for p in PARAMS if p.key == x_key)
-    ax.set_xlabel(f"{x_key} ({unit})")
-    ax.set_ylabel("final range RMSE (km)")
-    ax.set_ylim(bottom=0)
-    ax.legend()
-    ax.set_title(textwrap.fill(f"{config.get('title', 'twin_sensor')}: range RMSE at the last "
-                               "scan (95% chi-square bands)", 50))
-    return fig
-
-
-def figures(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> dict[str, Any]:
-    """Loss vs clutter (both rules), range RMSE vs time with sqrt PCRLB, ANEES vs time, and
-    final range RMSE vs the swept axis when there is exactly one."""
-    swept = _swept(config)
-    figs: dict[str, Any] = {}
-    if "clutter.mean" in swept:
-        figs["loss_gate_vs_clutter"] = _loss_figure(trials, config, "lost_gate", "clutter.mean")
-        figs["loss_nees_vs_clutter"] = _loss_figure(trials, config, "lost_nees", "clutter.mean")
-    figs["range_rmse_vs_time"] = _range_figure(trials, config)
-    figs["anees_vs_time"] = _nees_figure(trials, config)
-    if len(swept) == 1 and pd.api.types.is_numeric_dtype(trials[swept[0]]):
-        figs[f"final_range_rmse_vs_{swept[0].replace('.', '_')}"] = _final_figure(
-            trials, config, swept[0])
-    return figs
-
-
-def tables(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> dict[str, pd.DataFrame]:
-    """Per point and algorithm at the last scan: loss rates (95% Wilson), range RMSE over all
-    and over non-lost runs, range bias, position RMSE, ANEES, validated returns, and the
-    range PCRLB."""
-    last = trials[trials["scan"] == trials["scan"].max()]
-    swept = _swept(config)
-    rows = []
-    for (pt, name), g in last.groupby(["point", "algorithm"], sort=True):
-        n = len(g)
-        params = _point_params(config, g)
-        rec: dict[str, Any] = {"point": pt, **{k: g[k].iloc[0] for k in swept},
-                               "algorithm": name, "trials": n}
-        for rule in ("lost_gate", "lost_nees"):
-            k = int(g[rule].sum())
-            lo, hi = wilson_interval(k, n)
-            rec[f"{rule}_pct"] = 100 * k / n
-            rec[f"{rule}_ci95_pct"] = f"[{100 * float(lo):.1f}, {100 * float(hi):.1f}]"
-        kept = g[g["lost_gate"] == 0]
-        rec["range_rmse_km"] = np.sqrt(g["range_sq_err_m2"].mean()) / 1e3
-        rec["range_rmse_not_lost_km"] = (np.sqrt(kept["range_sq_err_m2"].mean()) / 1e3
-                                         if len(kept) else np.nan)
-        rec["range_pcrlb_km"] = bounds(params)[0][-1] / 1e3
-        rec["range_bias_km"] = g["range_err_m"].mean() / 1e3
-        rec["pos_rmse_km"] = np.sqrt(g["pos_sq_err_m2"].mean()) / 1e3
-        rec["anees"] = g["nees"].mean()
-        rec["n_valid"] = trials.loc[(trials["point"] == pt) & (trials["algorithm"] == name),
-                                    "n_valid"].mean()
-        rows.append(rec)
-    return {"final_scan": pd.DataFrame(rows)}
-
-
 EXPERIMENT = Experiment(
     name="twin_sensor",
     title="Paper 000: twin-sensor angle-only tracking (MGEKF, fused-gate PDA) vs PCRLB",
     params=PARAMS,
     run_trial=run_trial,
     run_batch=run_batch,
-    figures=figures,
-    tables=tables,
+    figures=plots.figures,
+    tables=plots.tables,
     row_keys=("algorithm", "scan"),
     binary_metrics=("lost_gate", "lost_nees"),
     batch_size=100,
