@@ -1,4 +1,4 @@
-"""The ``trackfuse`` command line: run, plot, validate, list.
+"""The ``trackfuse`` command line: run, reproduce, plot, validate, list.
 
 Exit status: 0 success; 1 figures or tables could not be drawn; 2 bad input (config,
 override, option, run folder); 3 the run finished but some trials failed; 130 interrupted
@@ -108,6 +108,43 @@ def run(
         raise typer.Exit(3)
     if outcome.figure_errors:
         raise typer.Exit(1)
+
+
+@app.command()
+def reproduce(
+    folder: Annotated[Path, typer.Argument(help="Folder of configs (default: configs/).")]
+    = Path("configs"),
+    workers: Annotated[int, typer.Option(help="Parallel workers (default: all cores).")] = 0,
+    out_dir: Annotated[Path, typer.Option("--out", help="Output root folder.")] = Path("results"),
+    executor: Annotated[str, typer.Option(help="serial, process or dask.")] = "process",
+    no_progress: Annotated[bool, typer.Option("--no-progress", help="No progress output.")]
+    = False,
+) -> None:
+    """Run every config in FOLDER (the shipped paper experiments by default), resuming any
+    finished ones; all configs are validated before the first one runs."""
+    from trackfuse.runner import RunInterrupted, Runner
+
+    paths = sorted(folder.glob("*.yaml"))
+    if not paths:
+        fail(f"{folder}: no *.yaml configs")
+    configs = [_load(path, [], []) for path in paths]
+    failed = 0
+    for config in configs:
+        runner = Runner(config, out_dir, workers=workers or default_workers(),
+                        executor=executor, progress=not no_progress, command=sys.argv)
+        try:
+            outcome = runner.run()
+        except RunInterrupted as err:
+            print(f"interrupted: {err.done}/{err.total} trials of {config.source} saved in "
+                  f"{err.folder}; run the same command again to resume", file=sys.stderr)
+            raise typer.Exit(130) from None
+        except ExecutorError as err:
+            fail(str(err))
+        failed += outcome.failed_trials + len(outcome.figure_errors)
+        print(f"{config.source}: {outcome.folder} ({outcome.computed_trials} of "
+              f"{outcome.total_trials} trials computed now, {outcome.failed_trials} failed)")
+    if failed:
+        raise typer.Exit(3)
 
 
 @app.command()

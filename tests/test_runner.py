@@ -174,3 +174,19 @@ def test_ctrl_c_stops_cleanly_and_the_run_resumes(write_config, tmp_path):
     got = next((tmp_path / "burn").iterdir()) / "trials.csv"
     want = next((tmp_path / "ref" / "burn").iterdir()) / "trials.csv"
     assert got.read_bytes() == want.read_bytes()
+
+
+def test_reproduce_runs_every_config_of_a_folder_and_resumes(tmp_path):
+    configs = tmp_path / "configs"
+    configs.mkdir()
+    (configs / "a.yaml").write_text(CFG)
+    (configs / "b.yaml").write_text(CFG.replace("seed: 11", "seed: 12"))
+    first = trackfuse("reproduce", configs, "--out", tmp_path / "out", "--workers", "2",
+                      "--no-progress")
+    assert first.returncode == 0, first.stderr
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["a", "b"]
+    again = trackfuse("reproduce", configs, "--out", tmp_path / "out", "--no-progress")
+    assert again.returncode == 0 and again.stdout.count("(0 of 92 trials computed now") == 2
+    (configs / "c.yaml").write_text("experiment: toy_gaussian\nparams: {sigma: -1}\n")
+    bad = trackfuse("reproduce", configs, "--out", tmp_path / "out")
+    assert bad.returncode == 2 and "c.yaml: params.sigma" in bad.stderr
