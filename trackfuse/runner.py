@@ -175,6 +175,7 @@ class Runner:
         self.scheduler, self.scheduler_file = scheduler, scheduler_file
         self.plots, self.progress = plots, progress
         self.command = command if command is not None else sys.argv
+        self.git_commit = _git_commit()
 
     @property
     def total_trials(self) -> int:
@@ -204,7 +205,7 @@ class Runner:
             "experiment": self.config.experiment.name,
             "config_file": self.config.source,
             "command": list(self.command),
-            "git_commit": _git_commit(),
+            "git_commit": self.git_commit,
             "versions": versions,
             "platform": platform.platform(),
             "host": platform.node(),
