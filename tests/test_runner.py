@@ -156,8 +156,11 @@ def test_ctrl_c_stops_cleanly_and_the_run_resumes(write_config, tmp_path):
                         "params: {work: 30}\n", "burn")
     command = [sys.executable, "-m", "cli.main", "run", str(path), "--out", str(tmp_path),
                "--workers", "2", "--no-plots"]
+    # A shell that runs the tests in the background ignores SIGINT, and children inherit
+    # that; restore the default so the CLI sees Ctrl-C as a user would.
     proc = subprocess.Popen(command, env=cli_env(), stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and not list(tmp_path.glob("burn/*/parts/*.trials.csv")):
         time.sleep(0.05)
