@@ -94,7 +94,7 @@ def run(
         raise typer.Exit(130) from None
     except ExecutorError as err:
         fail(str(err))
-    if outcome.computed_trials == 0 and outcome.rows == 0:
+    if outcome.status == "already complete":
         print(f"already complete: {outcome.folder}")
     else:
         print(f"wrote {outcome.folder}: {outcome.rows} rows, {outcome.total_trials} trials "

@@ -32,7 +32,7 @@ def test_grid_order_last_axis_fastest_and_zip():
                                                               (2, "x")]
     zipped = expand({"a": [1, 2], "b": ["x", "y"]}, "zip")
     assert [p.values for p in zipped] == [{"a": 1, "b": "x"}, {"a": 2, "b": "y"}]
-    assert expand({}) [0].values == {}
+    assert expand({})[0].values == {}
 
 
 def test_override_parsing():

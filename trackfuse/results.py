@@ -54,18 +54,14 @@ def run_id(resolved: dict[str, Any], version: str) -> str:
 
 def format_value(value: Any) -> str:
     """One CSV cell: shortest round-trip repr for floats, ints as ints, bools as 0/1."""
+    if hasattr(value, "dtype") and hasattr(value, "item"):
+        value = value.item()  # numpy scalar -> Python scalar
     if value is None:
         return ""
     if isinstance(value, bool):
         return "1" if value else "0"
-    if isinstance(value, float) or hasattr(value, "dtype"):
-        if hasattr(value, "item"):
-            value = value.item()
-        if isinstance(value, bool):
-            return "1" if value else "0"
-        if isinstance(value, float):
-            return "nan" if math.isnan(value) else repr(value)
-        return str(value)
+    if isinstance(value, float):
+        return "nan" if math.isnan(value) else repr(value)
     if isinstance(value, (list, tuple)):
         return ";".join(format_value(v) for v in value)
     return str(value)
@@ -103,9 +99,13 @@ class RunFolder:
     def part_name(point: int, batch: int) -> str:
         return f"p{point:06d}-b{batch:07d}"
 
-    def finished_batches(self) -> set[str]:
-        """Names of batches whose trials part is on disk."""
-        return {p.name[:-len(".trials.csv")] for p in self.parts.glob("p*-b*.trials.csv")}
+    def finished_batches(self) -> set[tuple[int, int]]:
+        """(point, batch) of every batch whose trials part is on disk."""
+        found = set()
+        for part in self.parts.glob("p*-b*.trials.csv"):
+            point, batch = part.name.split(".")[0][1:].split("-b")
+            found.add((int(point), int(batch)))
+        return found
 
     def write_part(self, name: str, trials_csv: str, timings_csv: str) -> None:
         """Store one finished batch (timings first, so a trials part implies both)."""

@@ -81,7 +81,6 @@ class BatchResult:
     trials: int
     trials_csv: str
     timings_csv: str
-    failed: int
     wall_s: float
 
 
@@ -90,7 +89,7 @@ class RunOutcome:
     """What a run produced (for the CLI's closing lines)."""
 
     folder: Path
-    status: str
+    status: str  # "complete" (finished now) or "already complete" (nothing to do)
     total_trials: int
     computed_trials: int
     failed_trials: int = 0
@@ -129,17 +128,15 @@ def execute_batch(task: BatchTask) -> BatchResult:
             except Exception as err:  # noqa: BLE001 - recorded in the CSV, the run goes on
                 per_trial.append(err)
     rows: list[dict[str, Any]] = []
-    failed = 0
     for prefix, result in zip(prefixes, per_trial, strict=True):
         if isinstance(result, BaseException):
             rows.append(_failure(prefix, result))
-            failed += 1
         else:
             rows.extend({**prefix, **row} for row in result)
     keys = ["point", "trial", *task.swept, *exp.row_keys]
     trial_rows, timing_rows = split_timings(rows, keys)
     return BatchResult(task.point, task.batch, len(prefixes), rows_to_csv(trial_rows),
-                       rows_to_csv(timing_rows), failed, time.perf_counter() - t0)
+                       rows_to_csv(timing_rows), time.perf_counter() - t0)
 
 
 def _git_commit() -> str | None:
@@ -230,21 +227,19 @@ class Runner:
         t0 = time.perf_counter()
         previous = self.folder.read_manifest()
         if previous and previous.get("status") == "complete":
-            return RunOutcome(self.folder.path, "complete", self.total_trials, 0,
-                              previous.get("trials_failed", 0))
+            return RunOutcome(self.folder.path, "already complete", self.total_trials, 0,
+                              previous.get("trials_failed", 0), previous.get("rows", 0))
         self.folder.prepare(self.resolved)
         started = _now()
         per_point = {int(k): v for k, v in ((previous or {}).get("per_point_wall_s") or {}).items()}
         finished = self.folder.finished_batches()
-        todo = (b for b in self.batches()
-                if RunFolder.part_name(b[0].index, b[1]) not in finished)
-        size, n = self.config.batch_size, self.config.trials
-        done = sum(min(size, n - int(name.split("-b")[1]) * size) for name in finished)
+        todo = [b for b in self.batches() if (b[0].index, b[1]) not in finished]
+        done = self.total_trials - sum(stop - first for _, _, first, stop in todo)
         computed = 0
         self.folder.write_manifest(self._manifest("running", started, per_point, 0, done,
                                                   previous))
         label = f"{self.config.experiment.name} [{self.run_id}]"
-        if done < self.total_trials:
+        if todo:
             executor = make_executor(self.executor_kind, self.workers, self.scheduler,
                                      self.scheduler_file)
             self.workers = executor.workers
