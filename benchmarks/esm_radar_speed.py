@@ -1,6 +1,6 @@
 """Speed of the esm_radar experiment (paper 001); prints numbers, asserts nothing.
 
-1. ``run_batch`` alone, in this process: the 500-trial Table 3 point (all nine algorithms)
+1. ``run_batch`` alone, in this process: the 500-trial Table 3 point (every algorithm)
    for each radar-factor model, with the runner's seeding and batch size.
 2. The real runner (``trackfuse.runner.Runner``, the CLI's engine) on
    ``configs/esm_radar_snake_cross.yaml`` (2 models x 500 trials, with tables and figures) and

@@ -24,7 +24,7 @@ from trackfuse.association.tdoa_df import (
     tdoa_df_range,
     tdoa_df_range_sigma,
 )
-from trackfuse.association.time_align import bracket, interpolate, interpolated_variance_factor
+from trackfuse.association.time_align import bracket, interpolate, interpolate_covariance
 
 A1 = np.zeros(2)
 A2 = np.array([10_000.0, 0.0])
@@ -99,6 +99,9 @@ def test_snake_cross_geometry():
     np.testing.assert_allclose(np.gradient(p[:, 0, 0], t)[2:-2], v[2:-2, 0, 0], rtol=1e-2,
                                atol=1.0)
     assert 1000 * (2 * np.pi / 40) ** 2 == pytest.approx(24.67, abs=0.01)
+    tf = np.arange(0.0, 40.0, 0.01)  # ... and the simulated T1 reaches it
+    accel = np.gradient(sc.states(tf)[1][:, 0, 0], tf)
+    assert np.abs(accel).max() == pytest.approx(24.67, abs=0.01)
 
 
 def test_true_factors_consistent_with_tdoa_df_and_phase():
@@ -161,10 +164,16 @@ def test_time_alignment_interpolation_and_variance():
     # Variance of the interpolant of independent unit-variance samples.
     rng = np.random.default_rng(1)
     z = rng.standard_normal((200_000, 2))
+    unit = np.ones(2)  # two unit-variance radar samples
     for frac in (0.0, 0.3, 0.5):
         emp = np.var((1 - frac) * z[:, 0] + frac * z[:, 1])
-        assert emp == pytest.approx(interpolated_variance_factor(frac), rel=0.02)
-    assert np.all(interpolated_variance_factor(np.linspace(0, 1, 11)) <= 1.0)
+        assert emp == pytest.approx(interpolate_covariance(unit, [0], [frac])[0], rel=0.02)
+    grid = np.linspace(0, 1, 11)
+    assert np.all(interpolate_covariance(unit, np.zeros(11, int), grid) <= 1.0)
+    # Batched covariances along a sample axis: the interpolant of each matrix entry.
+    P = rng.random((4, 12, 3, 2, 2))
+    Pk = interpolate_covariance(P, m1, a, axis=1)
+    np.testing.assert_allclose(Pk[:, 2], (1 - a[2]) ** 2 * P[:, 5] + a[2] ** 2 * P[:, 6])
     with pytest.raises(ValueError):
         bracket(np.array([11.5]), 1.0, len(t_radar))
 

@@ -15,8 +15,8 @@ from trackfuse.association.fuzzy import (
     gaussian_membership,
     gaussian_posterior_membership,
     inverse_distance_membership,
-    wrap,
 )
+from trackfuse.tracking.models import wrap
 
 distances = arrays(float, (4, 3), elements=st.floats(0.0, 1e4))
 A5 = ahp.root_weights(ahp.PAPER_001_JUDGEMENT)

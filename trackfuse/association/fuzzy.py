@@ -38,11 +38,6 @@ from __future__ import annotations
 import numpy as np
 
 
-def wrap(a: np.ndarray) -> np.ndarray:
-    """Map angles (rad) to [-pi, pi)."""
-    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
-
-
 def inverse_distance_membership(d: np.ndarray, eps: np.ndarray, norm: str = "l1") -> np.ndarray:
     """Dynamic inverse-distance membership (paper 001 eq. 4, corrected).
 

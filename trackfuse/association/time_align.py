@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from trackfuse.association.fuzzy import wrap
+from trackfuse.tracking.models import wrap
 
 
 def bracket(t: np.ndarray, period: float, n_samples: int) -> tuple[np.ndarray, np.ndarray]:
@@ -66,7 +66,24 @@ def interpolate(y: np.ndarray, m1: np.ndarray, a: np.ndarray, angular: bool = Fa
     return wrap(out) if angular else out
 
 
-def interpolated_variance_factor(a: np.ndarray) -> np.ndarray:
-    """``var y(t_g) / sigma^2 = (1 - a)^2 + a^2`` for independent equal-variance samples."""
-    a = np.asarray(a, dtype=float)
-    return (1.0 - a) ** 2 + a**2
+def interpolate_covariance(P: np.ndarray, m1: np.ndarray, a: np.ndarray,
+                           axis: int = 0) -> np.ndarray:
+    """Covariance of the interpolant of independent samples (eq. 2, corrected):
+    ``(1 - a)^2 P(m1) + a^2 P(m1 + 1)``, i.e. ``sigma^2 ((1 - a)^2 + a^2)`` for equal
+    variances.
+
+    Parameters
+    ----------
+    P : covariances with the radar-sample axis at ``axis`` (length M), any trailing shape.
+    m1 : (K,) left indices; a : (K,) fractions (:func:`bracket`).
+    axis : sample axis of ``P``.
+
+    Returns
+    -------
+    array like ``P`` with that axis of length K.
+    """
+    m1 = np.asarray(m1)
+    shape = [1] * np.ndim(P)
+    shape[axis] = -1
+    a = np.reshape(a, shape)
+    return (1 - a) ** 2 * np.take(P, m1, axis=axis) + a**2 * np.take(P, m1 + 1, axis=axis)

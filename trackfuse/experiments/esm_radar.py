@@ -76,13 +76,13 @@ from trackfuse.association.fuzzy import (
     gaussian_membership,
     gaussian_posterior_membership,
     inverse_distance_membership,
-    wrap,
 )
 from trackfuse.association.manoeuvre import cv_residuals, manoeuvre_index
-from trackfuse.association.time_align import bracket, interpolate
+from trackfuse.association.time_align import bracket, interpolate, interpolate_covariance
 from trackfuse.association.track_likelihood import abstaining_decision, ml_track_decision
 from trackfuse.experiments.base import Experiment, Param
 from trackfuse.plots import esm_radar as plots
+from trackfuse.tracking.models import wrap
 
 TRUE_TRACK = 1  # 0-based index of radar track 2
 N_TRACKS = 3
@@ -257,9 +257,7 @@ def simulate(params: Mapping[str, Any], rngs: Sequence[np.random.Generator]) -> 
     if params["time_align"] and np.any(a > 0):
         x_rk = np.stack([interpolate(x_r[..., i], m1, a, angular=bool(ANGULAR[i]), axis=1)
                          for i in range(5)], axis=-1)
-        w1 = ((1 - a) ** 2)[None, :, None, None, None]
-        w2 = (a**2)[None, :, None, None, None]
-        P_rk = w1 * P_r[:, m1] + w2 * P_r[:, m1 + 1]
+        P_rk = interpolate_covariance(P_r, m1, a, axis=1)
     else:  # synchronous sensors, or no alignment: the latest radar sample
         x_rk, P_rk = x_r[:, m1], P_r[:, m1]
 

@@ -98,7 +98,7 @@ def ablation(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
     keys = _swept(config, trials)
     wide = trials.pivot_table(index=["point", *keys, "trial"], columns="algorithm",
                               values="correct", aggfunc="first")
-    params = config.get("params", {})
+    params = config["params"]
     order = list(dict.fromkeys(trials["algorithm"]))
     out = []
     for point_key, g in wide.groupby(level=["point", *keys], sort=True):
@@ -112,14 +112,11 @@ def ablation(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
             only_i = int(((x == 0) & (ref == 1)).sum())
             p = binomtest(only_v, only_v + only_i).pvalue if only_v + only_i else 1.0
             v = ALGORITHMS[name]
-            factors = factor_names(v, {"baseline.factors": params.get(
-                "baseline.factors", ["range", "speed", "angle"])})
-            member = (params.get("membership_norm", "l1") if v.membership == "param"
-                      else v.membership)
+            member = params["membership_norm"] if v.membership == "param" else v.membership
             out.append({
                 **dict(zip(["point", *keys], point_key, strict=True)),
-                "algorithm": name, "description": v.summary, "factors": len(factors),
-                "membership": member,
+                "algorithm": name, "description": v.summary,
+                "factors": len(factor_names(v, params)), "membership": member,
                 "weights": "-" if v.membership.startswith("chi2") else
                 ("dynamic" if v.dynamic else "static"),
                 "correct_rate": x.mean(), "ci_low": float(lo), "ci_high": float(hi),
@@ -205,7 +202,7 @@ def _correct_rate_figure(summary: pd.DataFrame, config: Mapping[str, Any]) -> Fi
     combos = (list(dict.fromkeys(map(tuple, s[panel_keys].to_numpy()))) if panel_keys
               else [()])
     algorithms = list(dict.fromkeys(s["algorithm"]))
-    params = config.get("params", {})
+    params = config["params"]
     ncols = min(len(combos), 3)
     fig, axes = new_figure(ncols=ncols, nrows=-(-len(combos) // ncols), width=5.0, height=3.6)
     axes = np.atleast_1d(axes)
@@ -217,7 +214,7 @@ def _correct_rate_figure(summary: pd.DataFrame, config: Mapping[str, Any]) -> Fi
             mask &= (s[key] == value).to_numpy()
         sp = s[mask]
         setting = (", ".join(f"{k} = {v}" for k, v in zip(panel_keys, combo, strict=True))
-                   or f"radar factors: {params.get('radar.factor_model', 'table')}")
+                   or f"radar factors: {params['radar.factor_model']}")
         if x is not None:
             for name in algorithms:
                 g = sp[sp["algorithm"] == name].sort_values(x)
@@ -242,15 +239,13 @@ def _correct_rate_figure(summary: pd.DataFrame, config: Mapping[str, Any]) -> Fi
     handles, labels = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncols=min(len(labels), 5),
                fontsize=7)
-    n = config.get("trials", "?")
-    sep = params.get("target.separation")
     timing = ""
-    if params.get("esm.period", 1.0) != params.get("radar.period", 1.0) or params.get(
-            "esm.offset", 0.0):
+    if params["esm.period"] != params["radar.period"] or params["esm.offset"]:
         timing = (f", ESM/radar periods {params['esm.period']:g}/{params['radar.period']:g} s"
-                  f" ({'interpolated' if params.get('time_align') else 'latest radar sample'})")
-    fig.suptitle(f"ESM-radar association (paper 001), {n} trials/point"
-                 + (f", separation {sep:g} m" if "target.separation" not in sweep else "")
+                  f" ({'interpolated' if params['time_align'] else 'latest radar sample'})")
+    fig.suptitle(f"ESM-radar association (paper 001), {config['trials']} trials/point"
+                 + (f", separation {params['target.separation']:g} m"
+                    if "target.separation" not in sweep else "")
                  + timing)
     return fig
 
@@ -266,9 +261,8 @@ def _point0_params(trials: pd.DataFrame, config: Mapping[str, Any]) -> dict[str,
     for key in config.get("sweep", {}):
         value = row[key]
         kind = schema[key].kind
-        params[key] = kind(value) if kind in (int, float, str) else value
-    if isinstance(params.get("time_align"), str):
-        params["time_align"] = params["time_align"].lower() == "true"
+        # trials.csv stores bools as 0/1: the schema type casts them back.
+        params[key] = kind(value) if kind in (int, float, str, bool) else value
     return params
 
 
