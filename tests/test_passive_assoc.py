@@ -51,6 +51,11 @@ def test_rows_are_tidy_and_deterministic():
         assert r["solve_time_s"] >= 0
     exact = next(r for r in rows if r["algorithm"] == "exact")
     assert exact["at_opt"] == 1 and exact["gap"] == 0
+    # no PGA solution beats the exact optimum, and gap / at_opt are measured against it
+    for r in rows:
+        assert r["objective"] <= exact["objective"] + 1e-9
+        assert r["gap"] == pytest.approx(exact["objective"] - r["objective"], abs=1e-9)
+        assert r["at_opt"] == int(r["gap"] <= 1e-9 * max(1.0, abs(exact["objective"])))
 
 
 def test_adding_an_algorithm_changes_no_other_number():

@@ -51,6 +51,7 @@ Crouse D. F., "On implementing 2D rectangular assignment algorithms", IEEE Trans
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
@@ -78,10 +79,12 @@ class PairWeights:
     a_0j: np.ndarray
     chi2: np.ndarray
 
-    @property
+    @cached_property
     def gain(self) -> np.ndarray:
-        """(m1, m2) pair gains ``w_ij = a_ij - a_i0 - a_0j``."""
-        return self.a - self.a_i0[:, None] - self.a_0j[None, :]
+        """(m1, m2) pair gains ``w_ij = a_ij - a_i0 - a_0j`` (computed once, read-only)."""
+        gain = self.a - self.a_i0[:, None] - self.a_0j[None, :]
+        gain.flags.writeable = False  # shared by every solver of the scan
+        return gain
 
 
 @dataclass(frozen=True)

@@ -28,6 +28,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from trackfuse.tracking.models import wrap
+from trackfuse.tracking.sensors import azel
+
 KM = 1000.0
 
 #: Sensor positions (2, 3) in metres.
@@ -43,11 +46,6 @@ PAPER_TARGETS = np.array([
 PAPER_BOX = np.stack([PAPER_TARGETS.min(axis=0), PAPER_TARGETS.max(axis=0)])
 
 
-def wrap(a):
-    """Map angles (rad) to [-pi, pi)."""
-    return (np.asarray(a) + np.pi) % (2.0 * np.pi) - np.pi
-
-
 def los_angles(p: np.ndarray, s: np.ndarray) -> np.ndarray:
     """Azimuth and elevation of points seen from a sensor.
 
@@ -60,10 +58,7 @@ def los_angles(p: np.ndarray, s: np.ndarray) -> np.ndarray:
     -------
     (..., 2) array of ``[azimuth, elevation]`` in rad.
     """
-    d = np.asarray(p, dtype=float) - s
-    az = np.arctan2(d[..., 1], d[..., 0])
-    el = np.arctan2(d[..., 2], np.hypot(d[..., 0], d[..., 1]))
-    return np.stack([az, el], axis=-1)
+    return azel(np.asarray(p, dtype=float) - s)
 
 
 @dataclass(frozen=True)

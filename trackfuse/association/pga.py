@@ -58,8 +58,10 @@ from __future__ import annotations
 
 import math
 import time
+from bisect import bisect_right
 from collections.abc import Sequence
 from dataclasses import dataclass
+from itertools import accumulate
 
 import numpy as np
 
@@ -191,45 +193,44 @@ def pga(weights: PairWeights, rng: np.random.Generator, ops: int = 1000,
         raise ValueError(f"unknown init {init!r}")
     J = sum(w[r][j] for j, r in enumerate(cur))
     n_paired = m1
-    q = [rank[r][j] for j, r in enumerate(cur)]
-    S = sum(q)
+    q = [rank[r][j] for j, r in enumerate(cur)]  # roulette weight of each column
     best, J_best = cur.copy(), J
 
     marks = sorted({int(c) for c in checkpoints if 0 <= c <= ops})
     mark_set = set(marks)
-    saved: dict[int, tuple[list[int], float, float]] = {}
+    saved: dict[int, tuple[list[int], float]] = {}  # checkpoint -> (best, elapsed s)
     if 0 in mark_set:
-        saved[0] = (best.copy(), J_best, time.perf_counter() - start)
+        saved[0] = (best.copy(), time.perf_counter() - start)
     cool = (t1 / t0) ** (1.0 / max(ops, 1)) if anneal else 1.0
     T = t0
     roulette_second = second == "roulette"
     if second not in ("roulette", "uniform"):
         raise ValueError(f"unknown second-column rule {second!r}")
 
+    # ``child`` is the offspring under construction and equals ``cur`` outside an operation;
+    # moves touch only the columns in ``touched``, so accepting or rejecting an offspring
+    # copies those columns one way or the other instead of the whole list.
+    child, dJ, child_paired, touched = cur.copy(), 0.0, n_paired, []
+    cum = list(accumulate(q))  # cumulative roulette weights, rebuilt after q changes
+    stale = False
     for t in range(1, ops + 1):
         if (t - 1) % _BLOCK == 0:  # uniforms in blocks: bounded memory, same stream
             U = rng.random((min(_BLOCK, ops - t + 1), 8)).tolist()
         u = U[(t - 1) % _BLOCK]
-        child, dJ, child_paired, touched = cur.copy(), 0.0, n_paired, []
         for stage in (0, 1):
             if stage == 0 and m2 >= 2:
                 # crossover: roulette column pair, then swap
-                x = u[0] * S
-                acc = 0
-                for j1 in range(m2):
-                    acc += q[j1]
-                    if x < acc:
-                        break
+                if stale:
+                    cum, stale = list(accumulate(q)), False
+                j1 = min(bisect_right(cum, u[0] * cum[-1]), m2 - 1)
                 if roulette_second:
-                    x = u[1] * (S - q[j1])
-                    acc = 0
-                    j2 = j1
-                    for j in range(m2):
-                        if j != j1:
-                            acc += q[j]
-                            j2 = j
-                            if x < acc:
-                                break
+                    # roulette over the columns other than j1 (their running sum skips q[j1])
+                    x, q1 = u[1] * (cum[-1] - q[j1]), q[j1]
+                    j2 = bisect_right(cum, x, 0, j1)
+                    if j2 == j1:
+                        j2 = bisect_right(cum, x, j1 + 1, m2, key=lambda c: c - q1)
+                        if j2 == m2:
+                            j2 = m2 - 1 if j1 < m2 - 1 else m2 - 2
                 else:
                     j2 = int(u[1] * (m2 - 1))
                     j2 += j2 >= j1
@@ -244,13 +245,13 @@ def pga(weights: PairWeights, rng: np.random.Generator, ops: int = 1000,
                         child_paired += child[c] == 0
                         dJ += exchange(child, w, r, c)
                     else:
-                        empty = [j for j in range(m2) if child[j] == 0]
+                        empty = [j for j, row in enumerate(child) if row == 0]
                         c = empty[int((2.0 * u[5] - 1.0 if evict else u[5]) * len(empty))]
                         dJ += repair(child, w, r, c)
                         child_paired += 1
                     touched.append(c)
                 elif child_paired:
-                    paired = [j for j in range(m2) if child[j]]
+                    paired = [j for j, row in enumerate(child) if row]
                     c = paired[int(u[4] * len(paired))]
                     dJ += unpair(child, w, c)
                     child_paired -= 1
@@ -259,23 +260,26 @@ def pga(weights: PairWeights, rng: np.random.Generator, ops: int = 1000,
                 continue
             # evaluation and acceptance of the offspring
             if dJ >= 0.0 or (anneal and u[6 + stage] < math.exp(dJ / T)):
-                cur, J, n_paired = child, J + dJ, child_paired
+                J, n_paired = J + dJ, child_paired
                 for j in touched:
-                    S -= q[j]
+                    cur[j] = child[j]
                     q[j] = rank[cur[j]][j]
-                    S += q[j]
+                stale = True
                 if J_best < J:
                     best, J_best = cur.copy(), J
-            child, dJ, child_paired, touched = cur.copy(), 0.0, n_paired, []
+            else:
+                for j in touched:
+                    child[j] = cur[j]
+            dJ, child_paired, touched = 0.0, n_paired, []
         T *= cool
         if t in mark_set:
-            saved[t] = (best.copy(), J_best, time.perf_counter() - start)
+            saved[t] = (best.copy(), time.perf_counter() - start)
 
     partner = np.full((len(marks), weights.a.shape[0]), -1)
     objective = np.empty(len(marks))
     elapsed = np.empty(len(marks))
     for k, c in enumerate(marks):
-        sol, _, elapsed[k] = saved[c]
+        sol, elapsed[k] = saved[c]
         objective[k] = sum(w[r][j] for j, r in enumerate(sol))
         for j, r in enumerate(sol):
             if r:

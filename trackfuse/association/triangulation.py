@@ -41,7 +41,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from trackfuse.association.passive_scene import los_angles, wrap
+from trackfuse.association.passive_scene import los_angles
+from trackfuse.tracking.models import wrap
+from trackfuse.tracking.sensors import azel_jacobian
 
 METHODS = ("paper", "unit_normal", "wls", "ml")
 
@@ -103,16 +105,11 @@ def least_squares(z1: np.ndarray, z2: np.ndarray, s1: np.ndarray, s2: np.ndarray
 
 
 def angle_jacobian(p: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """Jacobian of ``[az, el]`` with respect to ``p``: (K, 2, 3) in rad/m for p (K, 3)."""
-    d = p - s
-    rho2 = d[:, 0] ** 2 + d[:, 1] ** 2
-    rho = np.sqrt(rho2)
-    r2 = rho2 + d[:, 2] ** 2
-    zero = np.zeros_like(rho)
-    d_az = np.stack([-d[:, 1] / rho2, d[:, 0] / rho2, zero], -1)
-    d_el = np.stack([-d[:, 0] * d[:, 2] / (r2 * rho), -d[:, 1] * d[:, 2] / (r2 * rho),
-                     rho / r2], -1)
-    return np.stack([d_az, d_el], 1)
+    """Jacobian of ``[az, el]`` with respect to ``p``: (K, 2, 3) in rad/m for p (K, 3).
+
+    The position columns of :func:`trackfuse.tracking.sensors.azel_jacobian`.
+    """
+    return azel_jacobian(p - s)[..., :3]
 
 
 def angle_residuals(p: np.ndarray, z1: np.ndarray, z2: np.ndarray, s1: np.ndarray,

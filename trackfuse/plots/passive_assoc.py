@@ -25,9 +25,8 @@ last checkpoint, including the ablation variants that the figures leave out.
 Everything is drawn from the saved tables; no trial is recomputed. ``summary`` is the long
 format of :mod:`trackfuse.stats` (columns ``point``, the swept keys, ``algorithm``, ``ops``,
 ``metric``, ``n``, ``mean``, ``ci_low``, ``ci_high``), with the timing rows
-(``metric == "solve_time_s"``, seconds) appended by the runner. ``trials`` is used only for
-solve times, and only when it still carries the ``solve_time_s`` column (raw trial rows; the
-runner's trials.csv does not). ``config`` supplies the sweep axes and the fixed parameter
+(``metric == "solve_time_s"``, seconds) appended by the runner; ``trials`` is not needed.
+``config`` supplies the sweep axes and the fixed parameter
 values written into panel titles; its values are read, never simulated.
 """
 
@@ -125,9 +124,7 @@ def _points(summary: pd.DataFrame, config: dict) -> list[tuple[int, dict[str, An
 
 def _metric(summary: pd.DataFrame, point: int, algorithm: str, metric: str) -> pd.DataFrame:
     """Summary rows of one point, algorithm and metric, sorted by operation count."""
-    sel = summary[(summary["point"] == point) & (summary["algorithm"] == algorithm)
-                  & (summary["metric"] == metric)]
-    return sel.sort_values("ops")
+    return _by_x(summary[summary["point"] == point], "ops", algorithm, metric, None)
 
 
 def _convergence_figure(summary: pd.DataFrame, config: dict, metric: str, ylabel: str,
@@ -211,25 +208,16 @@ def _noise_figure(summary: pd.DataFrame, config: dict) -> Figure:
 # scale: solve time, objective gap and accuracy against the number of targets
 
 
-def _time_table(trials: pd.DataFrame, summary: pd.DataFrame) -> pd.DataFrame | None:
-    """Mean solve time (s) per targets.n and algorithm at the final checkpoint, if available.
-
-    From raw trial rows when ``trials`` has ``solve_time_s`` (normal 95 % interval), else
-    from the timing rows of the summary; None when neither holds solve times.
-    """
-    if "solve_time_s" in trials:
-        final = trials[trials["ops"] == trials.groupby("algorithm")["ops"].transform("max")]
-        g = final.groupby(["algorithm", "targets.n"])["solve_time_s"]
-        out = g.agg(["mean", "std", "count"]).reset_index()
-        half = 1.96 * out["std"].fillna(0) / np.sqrt(out["count"])
-        return out.assign(ci_low=out["mean"] - half, ci_high=out["mean"] + half)
+def _time_table(summary: pd.DataFrame) -> pd.DataFrame | None:
+    """Solve-time rows (s) of the summary (the runner appends them from timings.csv; a
+    summary of raw trial rows carries them as an ordinary metric); None when absent."""
     rows = summary[summary["metric"] == "solve_time_s"]
     if rows.empty:
         return None
     return rows[["algorithm", "targets.n", "ops", "mean", "ci_low", "ci_high"]]
 
 
-def _scale_figure(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> Figure:
+def _scale_figure(summary: pd.DataFrame, config: dict) -> Figure:
     """Three panels against the number of targets N (log axis), PGA at its final checkpoint.
 
     Solve time per scan (ms, log axis), objective gap ``J* - J`` (nats, symlog axis; PGA
@@ -237,13 +225,12 @@ def _scale_figure(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> 
     """
     fig, axes = new_figure(ncols=3, width=3.9, height=3.4)
     names = ["exact", *_pga_names(summary)]
-    times = _time_table(trials, summary)
+    times = _time_table(summary)
     ax = axes[0]
     if times is not None:
         for name in names:
             t = times[times["algorithm"] == name].sort_values("targets.n")
-            if "ops" in t:
-                t = t[t["ops"] == t["ops"].max()]
+            t = t[t["ops"] == t["ops"].max()]
             band(ax, t["targets.n"], t["mean"] * 1e3, np.maximum(t["ci_low"], 0) * 1e3,
                  t["ci_high"] * 1e3, LABELS[name])
         ax.set_yscale("log")
@@ -309,7 +296,7 @@ def figures(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> dict[s
     if "noise.sigma" in swept:
         out["noise"] = _noise_figure(summary, config)
     if "targets.n" in swept and len(config["sweep"]["targets.n"]) >= 3:
-        out["scale"] = _scale_figure(trials, summary, config)
+        out["scale"] = _scale_figure(summary, config)
     return out
 
 
