@@ -70,7 +70,7 @@ def stonesoup_rate(p: dict, trials: int) -> float:
         [ConstantVelocity(float(p["filter.q"]))] * 3)
     predictor = ExtendedKalmanPredictor(transition)
     R = np.diag(np.diag(sc.R[0])[::-1])  # (elevation, bearing)
-    density = sc.clutter_mean / (2.0 * sc.window) ** 2
+    density = sc.window_density
     data = [simulate(sc, np.random.default_rng([t, 0, 1])) for t in range(trials)]
     t0 = datetime(2005, 10, 1)
     start = time.perf_counter()

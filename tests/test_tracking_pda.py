@@ -217,7 +217,13 @@ def test_sequential_with_one_sensor_is_the_pdaf_and_two_sensors_regate():
     X2, P2, m = pda_update(X, P, [r1, r2], "mspda_sequential", GAMMA, P_G)
     X1, P1, _ = pda_update(Xs, Ps, [r2], "mspda_parallel", GAMMA, P_G)
     np.testing.assert_allclose(X2, X1)
+    np.testing.assert_allclose(P2, P1)
     assert m.shape == (4, 2)
+    # sensor 2 is gated at the sensor-1 posterior, not at the prediction
+    np.testing.assert_array_equal(m[:, 0], linearize(X, P, r1, GAMMA).m)
+    np.testing.assert_array_equal(m[:, 1], linearize(Xs, Ps, r2, GAMMA).m)
+    _, _, m_par = pda_update(X, P, [r1, r2], "mspda_parallel", GAMMA, P_G)
+    assert not np.array_equal(m[:, 1], m_par[:, 1])
 
 
 def test_unknown_method_rejected():

@@ -1,5 +1,7 @@
 """The twin_sensor experiment: contract, paired data, consistency against the PCRLB, figures."""
 
+import itertools
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -8,6 +10,8 @@ from scipy import stats
 from trackfuse.experiments import get
 from trackfuse.experiments.twin_sensor import EXPERIMENT, bounds, build_scenario, simulate
 from trackfuse.stats import nees_band
+from trackfuse.tracking.models import wrap
+from trackfuse.tracking.sensors import azel
 
 ROW_METRICS = {"range_err_m", "range_sq_err_m2", "pos_sq_err_m2", "nees", "nees_pos",
                "n_valid", "lost_gate", "lost_nees", "cpu_time_s"}
@@ -23,14 +27,12 @@ def frames(base: dict, sweep: dict[str, list], trials: int, seed: int = 1):
     """A tiny stand-in for the runner: grid sweep, trial seeds, trials and summary frames."""
     keys = list(sweep)
     rows = []
-    grid = np.array(np.meshgrid(*sweep.values(), indexing="ij")).reshape(len(keys), -1).T
-    for point, values in enumerate(grid):
-        p = dict(base, **dict(zip(keys, values.tolist(), strict=True)))
+    for point, values in enumerate(itertools.product(*sweep.values())):  # keeps the types
+        swept = dict(zip(keys, values, strict=True))
         rngs = [np.random.default_rng([t, point, seed]) for t in range(trials)]
-        for t, trial_rows in enumerate(EXPERIMENT.run_batch(p, rngs)):
+        for t, trial_rows in enumerate(EXPERIMENT.run_batch(dict(base, **swept), rngs)):
             for r in trial_rows:
-                rows.append({"point": point, "trial": t,
-                             **dict(zip(keys, values.tolist(), strict=True)), **r})
+                rows.append({"point": point, "trial": t, **swept, **r})
     trials_df = pd.DataFrame(rows).drop(columns="cpu_time_s")
     long = trials_df.melt(id_vars=["point", *keys, "algorithm", "scan", "trial"],
                           var_name="metric")
@@ -109,10 +111,12 @@ def test_window_clutter_is_centred_on_the_line_of_sight():
     d = simulate(sc, np.random.default_rng(4))
     assert d.clutter.shape == (int(d.n_clutter.sum()), 2)
     assert abs(d.n_clutter.mean() - 30.0) < 3.0
-    los = d.z_target  # within a few sigma of the true LOS
-    centre = np.repeat(los.reshape(-1, 2), d.n_clutter.ravel(), axis=0)
-    off = np.abs(d.clutter - centre)
-    assert off.max() < 0.1 + 0.1 and abs(off.mean() - 0.05) < 0.01
+    np.testing.assert_allclose(d.los, azel(d.x_true[1:, None, :3] - sc.sensor_pos[1:]))
+    centre = np.repeat(d.los.reshape(-1, 2), d.n_clutter.ravel(), axis=0)
+    off = np.abs(wrap(d.clutter - centre))  # uniform on [0, window] per axis
+    assert off.max() <= 0.1 + 1e-12 and abs(off.mean() - 0.05) < 0.005
+    # the noisy target returns are not the centre: they scatter by sigma about it
+    assert 0 < np.abs(wrap(d.z_target - d.los)).max() < 6 * 0.01
 
 
 def test_clutter_free_filter_is_consistent_and_not_below_the_pcrlb():
@@ -182,3 +186,17 @@ def test_tables_report_loss_and_bound(small_run):
     assert len(table) == 2 * 3
     assert {"lost_gate_pct", "range_rmse_km", "range_pcrlb_km", "range_bias_km"} <= set(table)
     assert (table["range_pcrlb_km"] > 0).all()
+
+
+def test_figures_use_time_axes_and_accept_a_swept_string_key():
+    """Regression: the RMSE curve was drawn against the scan index while its PCRLB was drawn
+    against time, and a swept string key crashed the loss-figure titles."""
+    base = params(algorithms=["mspda_parallel/mgekf", "nn/mgekf"], scan__count=4,
+                  scan__period=2.0)
+    trials, summary, config = frames(
+        base, {"clutter.model": ["in_gate", "window"], "clutter.mean": [0.0, 5.0]}, trials=3)
+    figs = EXPERIMENT.figures(trials, summary, config)
+    titles = [ax.get_title() for ax in figs["loss_gate_vs_clutter"].axes if ax.get_visible()]
+    assert titles == ["model=in_gate", "model=window"]
+    for line in figs["range_rmse_vs_time"].axes[0].get_lines():
+        np.testing.assert_allclose(line.get_xdata(), [2.0, 4.0, 6.0, 8.0])

@@ -64,7 +64,7 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from itertools import product
 from typing import Any
 
@@ -188,6 +188,21 @@ class Scenario:
     clutter_mean: float
     window: float
 
+    @cached_property
+    def P0_chol(self) -> np.ndarray:
+        """Lower Cholesky factor of ``P0: (6, 6)`` (draws ``x0``; computed once, not per trial)."""
+        return np.linalg.cholesky(self.P0)
+
+    @cached_property
+    def noise_sd(self) -> np.ndarray:
+        """Angle noise standard deviations ``(S, 2)`` (rad), the square roots of ``diag R``."""
+        return np.sqrt(np.diagonal(self.R, axis1=1, axis2=2))
+
+    @property
+    def window_density(self) -> float:
+        """True density (1/rad^2) of ``window`` clutter: ``clutter_mean`` over the box area."""
+        return self.clutter_mean / (2.0 * self.window) ** 2
+
 
 def build_scenario(params: dict[str, Any]) -> Scenario:
     """The deterministic part of the experiment for resolved ``params``."""
@@ -251,7 +266,8 @@ class TrialData:
     """Simulated data of one trial (shapes: ``K`` scans, ``S`` sensors, ``C`` clutter points).
 
     ``x_true: (K+1, 6)``; ``x0: (6,)`` filter initialization; ``detected: (K, S)``;
-    ``z_target: (K, S, 2)`` noisy target returns (rad); ``n_clutter: (K, S)``;
+    ``los: (K, S, 2)`` noise-free target returns (rad); ``z_target: (K, S, 2)`` noisy target
+    returns (rad); ``n_clutter: (K, S)``;
     ``clutter: (C, 2)`` unit-disk points (in_gate) or absolute angles (window), in scan-major,
     sensor-minor order.
     """
@@ -259,6 +275,7 @@ class TrialData:
     x_true: np.ndarray
     x0: np.ndarray
     detected: np.ndarray
+    los: np.ndarray
     z_target: np.ndarray
     n_clutter: np.ndarray
     clutter: np.ndarray
@@ -268,12 +285,11 @@ def simulate(sc: Scenario, rng: np.random.Generator) -> TrialData:
     """Draw one trial's truth, initialization, target returns and clutter."""
     g_truth, g_init, g_noise, g_clutter = rng.spawn(4)
     x_true = truth_trajectory(sc, g_truth)
-    x0 = x_true[0] + np.linalg.cholesky(sc.P0) @ g_init.standard_normal(6)
+    x0 = x_true[0] + sc.P0_chol @ g_init.standard_normal(6)
     S = sc.R.shape[0]
     detected = g_noise.random((sc.K, S)) < sc.P_D
-    sd = np.sqrt(np.diagonal(sc.R, axis1=1, axis2=2))
     los = azel(x_true[1:, None, :3] - sc.sensor_pos[1:])
-    z_target = wrap(los + sd * g_noise.standard_normal((sc.K, S, 2)))
+    z_target = wrap(los + sc.noise_sd * g_noise.standard_normal((sc.K, S, 2)))
     n_clutter = g_clutter.poisson(sc.clutter_mean, (sc.K, S))
     total = int(n_clutter.sum())
     if sc.clutter_model == "in_gate":
@@ -282,20 +298,21 @@ def simulate(sc: Scenario, rng: np.random.Generator) -> TrialData:
         centre = np.repeat(los.reshape(-1, 2), n_clutter.ravel(), axis=0)
         clutter = centre + g_clutter.uniform(-sc.window, sc.window, (total, 2))
         clutter[:, 0] = wrap(clutter[:, 0])
-    return TrialData(x_true, x0, detected, z_target, n_clutter, clutter)
+    return TrialData(x_true, x0, detected, los, z_target, n_clutter, clutter)
 
 
 @dataclass(frozen=True)
 class Batch:
     """Trial data stacked over ``N`` trials, clutter padded to ``C`` with a validity mask.
 
-    ``x_true: (N, K+1, 6)``, ``x0: (N, 6)``, ``detected: (N, K, S)``,
-    ``z_target: (N, K, S, 2)``, ``clutter: (N, K, S, C, 2)``, ``clutter_ok: (N, K, S, C)``.
+    ``x_true: (N, K+1, 6)``, ``x0: (N, 6)``, ``detected: (N, K, S)``, ``los, z_target:
+    (N, K, S, 2)``, ``clutter: (N, K, S, C, 2)``, ``clutter_ok: (N, K, S, C)``.
     """
 
     x_true: np.ndarray
     x0: np.ndarray
     detected: np.ndarray
+    los: np.ndarray
     z_target: np.ndarray
     clutter: np.ndarray
     clutter_ok: np.ndarray
@@ -307,16 +324,15 @@ def stack(trials: Sequence[TrialData]) -> Batch:
     C = max(int(counts.max()) if counts.size else 0, 1)
     ok = np.arange(C) < counts[..., None]
     clutter = np.zeros(ok.shape + (2,))
-    for n, t in enumerate(trials):
-        clutter[n][ok[n]] = t.clutter
+    clutter[ok] = np.concatenate([t.clutter for t in trials])  # both trial-, scan-, sensor-major
     return Batch(np.stack([t.x_true for t in trials]), np.stack([t.x0 for t in trials]),
-                 np.stack([t.detected for t in trials]), np.stack([t.z_target for t in trials]),
-                 clutter, ok)
+                 np.stack([t.detected for t in trials]), np.stack([t.los for t in trials]),
+                 np.stack([t.z_target for t in trials]), clutter, ok)
 
 
-def run_filter(sc: Scenario, b: Batch, assoc: str, covariance: str, joint_cov: str = "full",
-               density: str = "parametric", mg_at: str = "hypothesis", loss_window: int = 3,
-               nees_limit: float = float(stats.chi2.ppf(0.999, 3))) -> dict[str, np.ndarray]:
+def run_filter(sc: Scenario, b: Batch, assoc: str, covariance: str, joint_cov: str,
+               density: str, mg_at: str, loss_window: int,
+               nees_limit: float) -> dict[str, np.ndarray]:
     """Run one algorithm over a batch; every metric is returned as ``(N, K)``."""
     N, S = b.x0.shape[0], sc.R.shape[0]
     X = b.x0.copy()
@@ -338,7 +354,7 @@ def run_filter(sc: Scenario, b: Batch, assoc: str, covariance: str, joint_cov: s
             zh = azel(d)
             H = azel_jacobian(d)
             S_s = H @ Pp @ H.transpose(0, 2, 1) + sc.R[s]
-            nu_true = wrap(azel(x_true[:, :3] - pos) - zh)
+            nu_true = wrap(b.los[:, k - 1, s] - zh)
             d2_true = ((nu_true[:, None] @ inv2(S_s)[0])[:, 0] * nu_true).sum(axis=1)
             with np.errstate(invalid="ignore"):
                 inside |= d2_true <= sc.gamma
@@ -347,7 +363,7 @@ def run_filter(sc: Scenario, b: Batch, assoc: str, covariance: str, joint_cov: s
                 lam = sc.clutter_mean / gate_volume(S_s, sc.gamma)
             else:
                 zc = b.clutter[:, k - 1, s]
-                lam = np.full(N, sc.clutter_mean / (2.0 * sc.window) ** 2)
+                lam = np.full(N, sc.window_density)
             z = np.concatenate([b.z_target[:, k - 1, s][:, None], zc], axis=1)
             valid = np.concatenate([b.detected[:, k - 1, s][:, None], b.clutter_ok[:, k - 1, s]],
                                    axis=1)
@@ -405,12 +421,11 @@ def run_batch(params: dict[str, Any], rngs: Sequence[np.random.Generator]) -> li
         res["lost_gate"] = res["lost_gate"].astype(int)
         res["lost_nees"] = res["lost_nees"].astype(int)
         keys = ("algorithm", "scan", *res, "cpu_time_s")
-        table = np.empty((N, sc.K, len(res)), dtype=object)  # keeps the flags as ints
-        for i, values in enumerate(res.values()):
-            table[:, :, i] = values
+        columns = [v.tolist() for v in res.values()]  # Python floats, and ints for the flags
         for n in range(N):
-            rows[n].extend(dict(zip(keys, (name, k + 1, *table[n, k].tolist(), cpu),
-                                    strict=True)) for k in range(sc.K))
+            scans = zip(*(c[n] for c in columns), strict=True)
+            rows[n].extend(dict(zip(keys, (name, k, *values, cpu), strict=True))
+                           for k, values in enumerate(scans, 1))
     return rows
 
 
@@ -451,7 +466,6 @@ def _bounds_cached(key: tuple, q_model: float | None, truth_samples: int):
     Jz = measurement_information(x[..., 1:, :], sc.sensor_pos[1:], sc.R)
     q = sc.q_truth if q_model is None else q_model
     Q = cv_process_noise(sc.times[1] - sc.times[0], q)
-    sd = np.sqrt(np.diagonal(sc.R, axis1=1, axis2=2))
 
     def q2(k: int, Pp: np.ndarray) -> np.ndarray:
         if sc.clutter_mean == 0:
@@ -462,8 +476,8 @@ def _bounds_cached(key: tuple, q_model: float | None, truth_samples: int):
                 H = azel_jacobian(x_mean[k, :3] - sc.sensor_pos[k, s])
                 lam = sc.clutter_mean / gate_volume(H @ Pp @ H.T + sc.R[s], sc.gamma)
             else:
-                lam = sc.clutter_mean / (2.0 * sc.window) ** 2
-            out[s] = irf_q2_interp(lam * sd[s].prod(), float(P_D))
+                lam = sc.window_density
+            out[s] = irf_q2_interp(lam * sc.noise_sd[s].prod(), float(P_D))
         return out
 
     Jinv = information_recursion(np.linalg.inv(sc.P0), sc.F, Q, Jz, q2)

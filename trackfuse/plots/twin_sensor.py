@@ -29,7 +29,7 @@ Table
 -----
 ``final_scan``: per point and algorithm at the last scan, loss rates with 95 % Wilson
 intervals, range RMSE (all runs and runs not lost), range bias, position RMSE, ANEES,
-validated returns and the range PCRLB.
+validated returns (mean over all scans) and the range PCRLB.
 
 Saved data vs recomputed
 ------------------------
@@ -95,10 +95,12 @@ def _headline(algorithms: Sequence[str]) -> list[str]:
     return [a for a in algorithms if a.split("/")[0] == first]
 
 
-def _panels(n: int, width: float = 4.4, height: float = 3.3) -> tuple[Figure, np.ndarray, float]:
-    """``(fig, axes, figure_width_in)`` for ``n`` panels: one row up to four, else rows of
-    three; ``axes: (n,)``, panel ``width`` and ``height`` in inches."""
-    ncols = n if n <= 4 else 3
+def _panels(n: int, width: float = 4.4, height: float = 3.3,
+            ncols: int | None = None) -> tuple[Figure, np.ndarray, float]:
+    """``(fig, axes, figure_width_in)`` for ``n`` panels in ``ncols`` columns (default: one
+    row up to four, else rows of three); ``axes: (n,)``, panel ``width`` and ``height`` in
+    inches. Unused axes are hidden."""
+    ncols = ncols or (n if n <= 4 else 3)
     fig, axes = new_figure(ncols=ncols, nrows=int(np.ceil(n / ncols)), width=width,
                            height=height)
     axes = np.atleast_1d(axes)
@@ -107,14 +109,14 @@ def _panels(n: int, width: float = 4.4, height: float = 3.3) -> tuple[Figure, np
     return fig, axes[:n], width * ncols
 
 
-def _point_title(config: dict, frame: pd.DataFrame) -> str:
-    """Panel title ``"mean=5, count=2"`` from the swept values of ``frame``'s point."""
+def _point_title(keys: Sequence[str], frame: pd.DataFrame) -> str:
+    """Panel title ``"mean=5, count=2"`` from the values of ``keys`` in ``frame``'s first row."""
     parts = []
-    for key in _swept(config):
+    for key in keys:
         value = frame[key].iloc[0]
         text = f"{value:g}" if isinstance(value, (int, float, np.number)) else str(value)
         parts.append(f"{key.split('.')[-1]}={text}")
-    return ", ".join(parts)
+    return ", ".join(parts) or "all trials"
 
 
 def _select_points(trials: pd.DataFrame, limit: int = 9) -> list[int]:
@@ -156,31 +158,32 @@ def _loss_figure(trials: pd.DataFrame, config: dict, rule: str, x_key: str) -> F
     """Paper Fig. 1: loss rate (%) at the last scan under ``rule`` (``"lost_gate"`` or
     ``"lost_nees"``) against ``x_key``, one panel per value of the other swept keys."""
     last = trials[trials["scan"] == trials["scan"].max()]
-    others = [k for k in _swept(config) if k != x_key]
-    groups = list(last.groupby(others, sort=True)) if others else [((), last)]
-    ncols = min(4, len(groups))
-    where = "gate" if config["params"].get("clutter.model", "in_gate") == "in_gate" else "window"
-    nrows = int(np.ceil(len(groups) / ncols))
-    width = 6.4 if ncols == 1 else 4.6
-    fig, axes = new_figure(ncols=ncols, nrows=nrows, width=width, height=3.4)
-    axes = np.atleast_1d(axes)
-    for ax, (values, frame) in zip(axes, groups, strict=False):
+    params = config["params"]
+    swept = _swept(config)
+    others = [k for k in swept if k != x_key]
+    groups = [g for _, g in last.groupby(others, sort=True)] if others else [last]
+    where = ("gate or window" if "clutter.model" in swept
+             else "gate" if params["clutter.model"] == "in_gate" else "window")
+    fig, axes, fig_width = _panels(len(groups), width=6.4 if len(groups) == 1 else 4.6,
+                                   height=3.4, ncols=min(4, len(groups)))
+    for ax, frame in zip(axes, groups, strict=True):
         for name in config["params"]["algorithms"]:
             g = frame[frame["algorithm"] == name].groupby(x_key)[rule].agg(["sum", "count"])
             lo, hi = wilson_interval(g["sum"], g["count"])
             band(ax, g.index, 100 * g["sum"] / g["count"], 100 * lo, 100 * hi, _label(name),
                  linestyle="-" if name.endswith("mgekf") else "--")
-        pairs = zip(others, values, strict=True)
-        ax.set_title(", ".join(f"{k.split('.')[-1]}={v:g}" for k, v in pairs) or "all trials")
+        ax.set_title(_point_title(others, frame))
         ax.set_xlabel(f"mean false returns per sensor and scan in the {where} (returns/scan)")
         ax.set_ylabel("tracks lost (%)")
         ax.set_ylim(-2, 102)
-    for ax in axes[len(groups):]:
-        ax.set_visible(False)
     _legend_below(fig, axes[0])
-    what = ("target outside every gate for >= 3 scans" if rule == "lost_gate"
-            else "final position NEES > chi2_3(0.999)")
-    _suptitle(fig, config, f"loss rate ({what}), 95% Wilson bands", width * ncols)
+    if rule == "lost_gate":
+        n = "loss.window" if "loss.window" in swept else params["loss.window"]
+        what = f"target outside every gate for >= {n} scans"
+    else:
+        q = "loss.nees_quantile" if "loss.nees_quantile" in swept else params["loss.nees_quantile"]
+        what = f"final position NEES > chi2_3({q})"
+    _suptitle(fig, config, f"loss rate ({what}), 95% Wilson bands", fig_width)
     return fig
 
 
@@ -193,20 +196,21 @@ def _range_figure(trials: pd.DataFrame, config: dict, bounds: BoundsFn) -> Figur
     for ax, pt in zip(axes, points, strict=True):
         frame = trials[trials["point"] == pt]
         params = _point_params(config, frame)
+        period = float(params["scan.period"])
         for name in names:
             g = frame[frame["algorithm"] == name].groupby("scan")["range_sq_err_m2"]
             vals = np.array([_rmse_band(s) for _, s in g]) / 1e3
-            band(ax, list(g.groups), vals[:, 0], vals[:, 1], vals[:, 2], _label(name),
-                 linestyle="-" if name.endswith("mgekf") else "--")
-        scans = np.arange(1, int(params["scan.count"]) + 1) * float(params["scan.period"])
+            band(ax, np.array(list(g.groups), dtype=float) * period, vals[:, 0], vals[:, 1],
+                 vals[:, 2], _label(name), linestyle="-" if name.endswith("mgekf") else "--")
+        times = np.arange(1, int(params["scan.count"]) + 1) * period
         rb, _ = bounds(params)
-        ax.plot(scans, rb / 1e3, "k--", lw=1.0, label="sqrt PCRLB (truth model)")
+        ax.plot(times, rb / 1e3, "k--", lw=1.0, label="sqrt PCRLB (truth model)")
         rf, _ = bounds(params, q_model=float(params["filter.q"]))
-        ax.plot(scans, rf / 1e3, "k:", lw=1.0, label="sqrt PCRLB (filter model q)")
+        ax.plot(times, rf / 1e3, "k:", lw=1.0, label="sqrt PCRLB (filter model q)")
         ax.set_xlabel("time t (s)")
         ax.set_ylabel("range RMSE (km)")
         ax.set_ylim(bottom=0)
-        ax.set_title(_point_title(config, frame) or "all trials")
+        ax.set_title(_point_title(_swept(config), frame))
     _legend_below(fig, axes[0])
     _suptitle(fig, config, "range RMSE (95% chi-square bands) vs square-root PCRLB",
               fig_width)
@@ -233,7 +237,7 @@ def _nees_figure(trials: pd.DataFrame, config: dict) -> Figure:
         ax.set_ylim(bottom=0)
         ax.set_xlabel("time t (s)")
         ax.set_ylabel("ANEES (6-state, dimensionless)")
-        ax.set_title(_point_title(config, frame) or "all trials")
+        ax.set_title(_point_title(_swept(config), frame))
     _legend_below(fig, axes[0])
     _suptitle(fig, config, "average NEES vs its 95% chi-square band", fig_width)
     return fig
@@ -292,12 +296,14 @@ def figures(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> dict[s
 
 def tables(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> dict[str, pd.DataFrame]:
     """Per point and algorithm at the last scan: loss rates (95% Wilson), range RMSE over all
-    and over non-lost runs, range bias, position RMSE, ANEES, validated returns, and the
-    range PCRLB (lengths in km, rates in %)."""
+    and over non-lost runs, range bias, position RMSE, ANEES and the range PCRLB; plus the
+    validated returns per sensor and scan averaged over *all* scans (lengths in km, rates in
+    %)."""
     from trackfuse.experiments.twin_sensor import bounds  # imports this module
 
     last = trials[trials["scan"] == trials["scan"].max()]
     swept = _swept(config)
+    n_valid = {key: s.mean() for key, s in trials.groupby(["point", "algorithm"])["n_valid"]}
     rows = []
     for (pt, name), g in last.groupby(["point", "algorithm"], sort=True):
         n = len(g)
@@ -317,7 +323,6 @@ def tables(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> dict[st
         rec["range_bias_km"] = g["range_err_m"].mean() / 1e3
         rec["pos_rmse_km"] = np.sqrt(g["pos_sq_err_m2"].mean()) / 1e3
         rec["anees"] = g["nees"].mean()
-        rec["n_valid"] = trials.loc[(trials["point"] == pt) & (trials["algorithm"] == name),
-                                    "n_valid"].mean()
+        rec["n_valid"] = n_valid[pt, name]
         rows.append(rec)
     return {"final_scan": pd.DataFrame(rows)}
