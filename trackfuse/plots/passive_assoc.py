@@ -38,10 +38,9 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike
 
-from trackfuse.plots.style import band, new_figure, reference_line
+from trackfuse.plots.style import band, legend_below, new_figure, reference_line
 
 if TYPE_CHECKING:
-    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
 #: Legend label of every algorithm of the experiment.
@@ -105,12 +104,6 @@ def _clip(values: ArrayLike, metric: str) -> np.ndarray:
     return np.clip(v, 0.0, 1.0) if metric in BOUNDED else v
 
 
-def _legend_below(fig: Figure, ax: Axes) -> None:
-    """One figure legend below the panels, built from the entries of ``ax``."""
-    handles, labels = ax.get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncols=min(len(labels), 4))
-
-
 # ---------------------------------------------------------------------------------------
 # convergence and at_optimum: metric against genetic operations, one panel per point
 
@@ -159,7 +152,7 @@ def _convergence_figure(summary: pd.DataFrame, config: dict, metric: str, ylabel
         ax.set_xlabel("genetic operations t (count)")
         ax.set_ylabel(ylabel)
         ax.set_title(_point_label(values, config), fontsize=8)
-    _legend_below(fig, axes[0])
+    legend_below(fig, axes[0], max_cols=4)
     fig.suptitle(title)
     return fig
 
@@ -198,7 +191,7 @@ def _noise_figure(summary: pd.DataFrame, config: dict) -> Figure:
             ax.set_ylabel(ylabel)
             ax.set_ylim(-0.02, 1.04)
         axes[0, col].set_title(_point_label(values, config, noise=False), fontsize=8)
-    _legend_below(fig, axes[0, 0])
+    legend_below(fig, axes[0, 0], max_cols=4)
     fig.suptitle("Paper 002 (E002-sigma): exact MAP accuracy (the ceiling) vs angle noise; "
                  "grey: sigma = 0.005 and sqrt(0.005) rad, the two readings")
     return fig
@@ -251,7 +244,7 @@ def _scale_figure(summary: pd.DataFrame, config: dict) -> Figure:
         band(axes[2], s["targets.n"], s["mean"], _clip(s["ci_low"], "accuracy"),
              _clip(s["ci_high"], "accuracy"), LABELS[name])
     axes[2].set_ylabel("measurement-level accuracy (fraction)")
-    _legend_below(fig, axes[2])
+    legend_below(fig, axes[2], max_cols=4)
     for ax in axes:
         ax.set_xscale("log")
         ax.set_xlabel("number of targets N (count)")

@@ -49,12 +49,11 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from scipy import stats
 
 from trackfuse.experiments.base import Param
-from trackfuse.plots.style import band, new_figure
+from trackfuse.plots.style import band, legend_below, new_figure
 from trackfuse.stats import nees_band, wilson_interval
 
 BoundsFn = Callable[..., tuple[np.ndarray, np.ndarray]]
@@ -136,13 +135,6 @@ def _rmse_band(sq: pd.Series) -> tuple[float, float, float]:
     return np.sqrt(mse), np.sqrt(n * mse / lo), np.sqrt(n * mse / hi)
 
 
-def _legend_below(fig: Figure, ax: Axes) -> None:
-    """One figure legend under the panels, with ``ax``'s entries."""
-    handles, labels = ax.get_legend_handles_labels()
-    ncols = max(1, min(len(labels), int(fig.get_figwidth() / 2.8)))
-    fig.legend(handles, labels, loc="outside lower center", ncols=ncols)
-
-
 def _suptitle(fig: Figure, config: dict, what: str, width_in: float) -> None:
     """Config title over ``what``, each wrapped to the figure width (inches)."""
     chars = max(40, int(width_in * 10))
@@ -176,7 +168,7 @@ def _loss_figure(trials: pd.DataFrame, config: dict, rule: str, x_key: str) -> F
         ax.set_xlabel(f"mean false returns per sensor and scan in the {where} (returns/scan)")
         ax.set_ylabel("tracks lost (%)")
         ax.set_ylim(-2, 102)
-    _legend_below(fig, axes[0])
+    legend_below(fig, axes[0])
     if rule == "lost_gate":
         n = "loss.window" if "loss.window" in swept else params["loss.window"]
         what = f"target outside every gate for >= {n} scans"
@@ -211,7 +203,7 @@ def _range_figure(trials: pd.DataFrame, config: dict, bounds: BoundsFn) -> Figur
         ax.set_ylabel("range RMSE (km)")
         ax.set_ylim(bottom=0)
         ax.set_title(_point_title(_swept(config), frame))
-    _legend_below(fig, axes[0])
+    legend_below(fig, axes[0])
     _suptitle(fig, config, "range RMSE (95% chi-square bands) vs square-root PCRLB",
               fig_width)
     return fig
@@ -238,7 +230,7 @@ def _nees_figure(trials: pd.DataFrame, config: dict) -> Figure:
         ax.set_xlabel("time t (s)")
         ax.set_ylabel("ANEES (6-state, dimensionless)")
         ax.set_title(_point_title(_swept(config), frame))
-    _legend_below(fig, axes[0])
+    legend_below(fig, axes[0])
     _suptitle(fig, config, "average NEES vs its 95% chi-square band", fig_width)
     return fig
 
