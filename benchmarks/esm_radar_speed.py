@@ -21,7 +21,8 @@ import numpy as np
 
 from trackfuse.config import load
 from trackfuse.experiments.esm_radar import ALGORITHMS, EXPERIMENT
-from trackfuse.runner import Runner, trial_rng
+from trackfuse.runner import Runner
+from trackfuse.seeding import trial_streams
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -34,7 +35,7 @@ def time_run_batch(model: str, trials: int = 500, repeats: int = 3) -> float:
     for _ in range(repeats):
         t0 = time.perf_counter()
         for first in range(0, trials, size):
-            EXPERIMENT.run_trials(params, [trial_rng(t, 0, 1) for t in
+            EXPERIMENT.run_trials(params, [trial_streams(1, 0, t) for t in
                                            range(first, min(first + size, trials))])
         best = min(best, time.perf_counter() - t0)
     return best

@@ -24,6 +24,7 @@ import time
 import numpy as np
 
 from trackfuse.experiments.twin_sensor import EXPERIMENT, build_scenario, simulate
+from trackfuse.seeding import trial_streams
 
 
 def params(sensors: int, algorithm: str, model: str) -> dict:
@@ -35,10 +36,10 @@ def params(sensors: int, algorithm: str, model: str) -> dict:
 
 def ours(p: dict, trials: int, batch: int) -> float:
     """Trials per second of ``run_batch`` over ``trials`` trials in batches of ``batch``."""
-    EXPERIMENT.run_batch(p, [np.random.default_rng([t, 0, 1]) for t in range(8)])  # warm-up
+    EXPERIMENT.run_batch(p, [trial_streams(1, 0, t) for t in range(8)])  # warm-up
     start = time.perf_counter()
     for first in range(0, trials, batch):
-        rngs = [np.random.default_rng([t, 0, 1]) for t in range(first, min(first + batch,
+        rngs = [trial_streams(1, 0, t) for t in range(first, min(first + batch,
                                                                           trials))]
         EXPERIMENT.run_batch(p, rngs)
     return trials / (time.perf_counter() - start)
@@ -71,7 +72,7 @@ def stonesoup_rate(p: dict, trials: int) -> float:
     predictor = ExtendedKalmanPredictor(transition)
     R = np.diag(np.diag(sc.R[0])[::-1])  # (elevation, bearing)
     density = sc.window_density
-    data = [simulate(sc, np.random.default_rng([t, 0, 1])) for t in range(trials)]
+    data = [simulate(sc, trial_streams(1, 0, t)) for t in range(trials)]
     t0 = datetime(2005, 10, 1)
     start = time.perf_counter()
     for d in data:
@@ -132,7 +133,7 @@ def main() -> None:
         print(f"  ratio trackfuse / Stone Soup, case (a), window: {mine / ss:.0f}x")
     if args.profile:
         p = params(2, "mspda_parallel/mgekf", "in_gate")
-        rngs = [np.random.default_rng([t, 0, 1]) for t in range(args.batch)]
+        rngs = [trial_streams(1, 0, t) for t in range(args.batch)]
         prof = cProfile.Profile()
         prof.runcall(EXPERIMENT.run_batch, p, rngs)
         out = io.StringIO()

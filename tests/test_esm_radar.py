@@ -8,6 +8,7 @@ import pytest
 from trackfuse.association.track_likelihood import abstaining_decision, ml_track_decision
 from trackfuse.experiments import get
 from trackfuse.experiments.esm_radar import ALGORITHMS, EXPERIMENT, differences, simulate
+from trackfuse.seeding import trial_streams
 from trackfuse.stats import t_interval, wilson_interval
 
 ALL = list(ALGORITHMS)
@@ -21,7 +22,7 @@ def params(**over):
 
 
 def rngs(n, point=0, seed=11):
-    return [np.random.default_rng([t, point, seed]) for t in range(n)]
+    return [trial_streams(seed, point, t) for t in range(n)]
 
 
 def frame(rows, point=0, extra=None):

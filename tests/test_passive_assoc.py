@@ -10,6 +10,7 @@ from conftest import trackfuse
 
 from trackfuse.experiments import get
 from trackfuse.experiments.passive_assoc import EXPERIMENT, VARIANTS, score, sigma_of
+from trackfuse.seeding import trial_streams
 from trackfuse.summary import summarize
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -40,8 +41,8 @@ def test_registered_and_defaults_follow_the_spec():
 
 def test_rows_are_tidy_and_deterministic():
     p = params(algorithms=["exact", *VARIANTS])
-    rows = EXPERIMENT.run_trial(p, np.random.default_rng([3, 0, 1]))
-    again = EXPERIMENT.run_trial(p, np.random.default_rng([3, 0, 1]))
+    rows = EXPERIMENT.run_trial(p, trial_streams(1, 0, 3))
+    again = EXPERIMENT.run_trial(p, trial_streams(1, 0, 3))
     assert strip_times(rows) == strip_times(again)
     keys = {(r["algorithm"], r["ops"]) for r in rows}
     assert keys == {("exact", 0)} | {(v, c) for v in VARIANTS for c in (0, 50, 200)}
@@ -59,11 +60,11 @@ def test_rows_are_tidy_and_deterministic():
 
 
 def test_adding_an_algorithm_changes_no_other_number():
-    rng_seed = [7, 2, 99]
-    few = EXPERIMENT.run_trial(params(algorithms=["pga_evict"]), np.random.default_rng(rng_seed))
+    streams = lambda: trial_streams(99, 2, 7)  # noqa: E731
+    few = EXPERIMENT.run_trial(params(algorithms=["pga_evict"]), streams())
     many = EXPERIMENT.run_trial(params(algorithms=["exact", "pga_paper", "pga_repair",
                                                    "pga_evict", "pga_anneal"]),
-                                np.random.default_rng(rng_seed))
+                                streams())
     assert strip_times(few) == [r for r in strip_times(many) if r["algorithm"] == "pga_evict"]
 
 
@@ -73,7 +74,7 @@ def test_noise_free_without_false_alarms_exact_and_improved_pga_find_the_truth(n
                   "pga.ops": 1000, "pga.checkpoints": [1000],
                   "algorithms": ["exact", "pga_repair", "pga_evict", "pga_anneal"]})
     for seed in range(4):
-        for r in EXPERIMENT.run_trial(p, np.random.default_rng(seed)):
+        for r in EXPERIMENT.run_trial(p, trial_streams(seed, 0, 0)):
             assert r["correct"] == 1 and r["accuracy"] == 1.0 and r["at_opt"] == 1, r
 
 
@@ -92,7 +93,7 @@ def small_run(tmp_path, p, sweep_key, values, trials=4):
     for point, v in enumerate(values):
         q = {**p, sweep_key: v}
         for trial in range(trials):
-            for r in EXPERIMENT.run_trial(q, np.random.default_rng([trial, point, 1])):
+            for r in EXPERIMENT.run_trial(q, trial_streams(1, point, trial)):
                 rows.append({"point": point, "trial": trial, sweep_key: v, **r})
     trials_df = pd.DataFrame(rows)
     path = tmp_path / "trials.csv"

@@ -8,13 +8,15 @@ import subprocess
 import sys
 import time
 
+import numpy as np
 import pandas as pd
 import pytest
 from conftest import cli_env, trackfuse
 
 from trackfuse.config import load
 from trackfuse.results import RunFolder
-from trackfuse.runner import Runner, trial_rng
+from trackfuse.runner import Runner
+from trackfuse.seeding import trial_streams
 
 CFG = """
 experiment: toy_experiments:GAUSSIAN
@@ -45,10 +47,45 @@ def test_trials_csv_identical_for_serial_and_two_workers(write_config, tmp_path)
     assert list(trials.columns[:4]) == ["point", "trial", "mu", "sigma"]
 
 
-def test_trial_depends_only_on_trial_point_seed():
-    a = trial_rng(3, 1, 11).random(4)
-    assert (a == trial_rng(3, 1, 11).random(4)).all()
-    assert not (a == trial_rng(3, 2, 11).random(4)).any()
+def test_common_stream_depends_on_trial_and_seed_the_point_stream_also_on_the_point():
+    a, b = trial_streams(11, 1, 3), trial_streams(11, 2, 3)
+    assert (a.common.random(4) == b.common.random(4)).all()  # same at every sweep point
+    assert not (a.point.random(4) == b.point.random(4)).any()
+    again = trial_streams(11, 1, 3)
+    assert (again.point.random(4) == trial_streams(11, 1, 3).point.random(4)).all()
+    # no stream equals another trial's, another seed's, or the other kind's
+    draws = {(s, p, t, kind): getattr(trial_streams(s, p, t), kind).random()
+             for s in (0, 1) for p in (0, 1, 2) for t in (0, 1, 2) for kind in ("point",)}
+    draws |= {(s, -1, t, "common"): trial_streams(s, 0, t).common.random()
+              for s in (0, 1) for t in (0, 1, 2)}
+    assert len(set(draws.values())) == len(draws)
+
+
+def test_points_differing_only_in_a_parameter_that_draws_nothing_give_identical_rows(
+        write_config, tmp_path):
+    path = write_config("""
+experiment: toy_experiments:GAUSSIAN
+trials: 9
+seed: 5
+sweep: {label: [a, b]}
+""")
+    trials = pd.read_csv(run(path, tmp_path, executor="serial").folder / "trials.csv")
+    a, b = (trials[trials["label"] == v].drop(columns=["point", "label"]).reset_index(drop=True)
+            for v in ("a", "b"))
+    pd.testing.assert_frame_equal(a, b)
+
+
+def test_points_compare_on_common_random_numbers(write_config, tmp_path):
+    """Two noise levels see the same standard-normal draws: estimates scale exactly."""
+    path = write_config("""
+experiment: toy_experiments:GAUSSIAN
+trials: 9
+seed: 5
+sweep: {sigma: [1.0, 2.0]}
+""")
+    trials = pd.read_csv(run(path, tmp_path, executor="serial").folder / "trials.csv")
+    est = trials.pivot_table(index=["trial", "algorithm"], columns="sigma", values="estimate")
+    np.testing.assert_allclose(est[2.0], 2 * est[1.0], rtol=1e-12)
 
 
 def test_batch_size_is_part_of_the_run_but_not_the_numbers(write_config, tmp_path):

@@ -9,6 +9,7 @@ from scipy import stats
 
 from trackfuse.experiments import get
 from trackfuse.experiments.twin_sensor import EXPERIMENT, bounds, build_scenario, simulate
+from trackfuse.seeding import trial_streams
 from trackfuse.stats import nees_band
 from trackfuse.tracking.models import wrap
 from trackfuse.tracking.sensors import azel
@@ -29,7 +30,7 @@ def frames(base: dict, sweep: dict[str, list], trials: int, seed: int = 1):
     rows = []
     for point, values in enumerate(itertools.product(*sweep.values())):  # keeps the types
         swept = dict(zip(keys, values, strict=True))
-        rngs = [np.random.default_rng([t, point, seed]) for t in range(trials)]
+        rngs = [trial_streams(seed, point, t) for t in range(trials)]
         for t, trial_rows in enumerate(EXPERIMENT.run_batch(dict(base, **swept), rngs)):
             for r in trial_rows:
                 rows.append({"point": point, "trial": t, **swept, **r})
@@ -57,8 +58,8 @@ def test_registered_schema_is_complete():
 
 def test_rows_are_tidy_and_reproducible():
     p = params(clutter__mean=4.0, algorithms=["mspda_parallel/mgekf", "nn/ekf"])
-    a = EXPERIMENT.run_trial(p, np.random.default_rng([0, 0, 3]))
-    b = EXPERIMENT.run_trial(p, np.random.default_rng([0, 0, 3]))
+    a = EXPERIMENT.run_trial(p, trial_streams(3, 0, 0))
+    b = EXPERIMENT.run_trial(p, trial_streams(3, 0, 0))
     assert len(a) == 2 * 20
     assert {r["algorithm"] for r in a} == {"mspda_parallel/mgekf", "nn/ekf"}
     for ra, rb in zip(a, b, strict=True):
@@ -87,7 +88,7 @@ def test_truth_trajectory_follows_the_cv_recursion():
 def test_batch_equals_per_trial():
     p = params(clutter__mean=6.0, sensors__pd=0.9,
                algorithms=["mspda_parallel/mgekf", "mspda_sequential/ekf", "paper_approx/mgekf"])
-    rngs = lambda: [np.random.default_rng([t, 2, 5]) for t in range(4)]  # noqa: E731
+    rngs = lambda: [trial_streams(5, 2, t) for t in range(4)]  # noqa: E731
     batch = EXPERIMENT.run_batch(p, rngs())
     single = [EXPERIMENT.run_trial(p, g) for g in rngs()]
     for rows_b, rows_s in zip(batch, single, strict=True):
@@ -100,15 +101,15 @@ def test_adding_an_algorithm_does_not_change_the_data_or_other_results():
     one = params(clutter__mean=5.0, algorithms=["mspda_parallel/mgekf"])
     three = params(clutter__mean=5.0, algorithms=["nn/mgekf", "mspda_parallel/mgekf",
                                                   "paper_approx/ekf"])
-    a = pd.DataFrame(EXPERIMENT.run_trial(one, np.random.default_rng(11)))
-    b = pd.DataFrame(EXPERIMENT.run_trial(three, np.random.default_rng(11)))
+    a = pd.DataFrame(EXPERIMENT.run_trial(one, trial_streams(11, 0, 0)))
+    b = pd.DataFrame(EXPERIMENT.run_trial(three, trial_streams(11, 0, 0)))
     b = b[b["algorithm"] == "mspda_parallel/mgekf"].reset_index(drop=True)
     pd.testing.assert_frame_equal(a.drop(columns="cpu_time_s"), b.drop(columns="cpu_time_s"))
 
 
 def test_window_clutter_is_centred_on_the_line_of_sight():
     sc = build_scenario(params(clutter__model="window", clutter__mean=30.0))
-    d = simulate(sc, np.random.default_rng(4))
+    d = simulate(sc, trial_streams(4, 0, 0))
     assert d.clutter.shape == (int(d.n_clutter.sum()), 2)
     assert abs(d.n_clutter.mean() - 30.0) < 3.0
     np.testing.assert_allclose(d.los, azel(d.x_true[1:, None, :3] - sc.sensor_pos[1:]))
@@ -124,7 +125,7 @@ def test_clutter_free_filter_is_consistent_and_not_below_the_pcrlb():
     range RMSE never below sqrt(PCRLB) by more than Monte Carlo noise."""
     n = 400
     p = params(filter__q=0.0, algorithms=["mspda_parallel/mgekf", "mspda_parallel/ekf"])
-    rows = EXPERIMENT.run_batch(p, [np.random.default_rng([t, 0, 2024]) for t in range(n)])
+    rows = EXPERIMENT.run_batch(p, [trial_streams(2024, 0, t) for t in range(n)])
     df = pd.DataFrame([r for trial in rows for r in trial])
     lo, hi = nees_band(6, n)
     rb, pb = bounds(p)
@@ -146,7 +147,7 @@ def test_loss_flags_are_permanent_and_clutter_can_lose_tracks():
                target__position=[140000.0, 15000.0, 4000.0], target__velocity=[0.0, 300.0, 0.0],
                target__q=2500.0, platform__motion="straight", platform__speed=0.0,
                platform__climb=0.0, algorithms=["nn/ekf", "mspda_parallel/mgekf"])
-    rows = EXPERIMENT.run_batch(p, [np.random.default_rng([t, 0, 8]) for t in range(60)])
+    rows = EXPERIMENT.run_batch(p, [trial_streams(8, 0, t) for t in range(60)])
     df = pd.DataFrame([r for trial in rows for r in trial])
     flags = df.pivot_table(index=["algorithm", df.index // 20], columns="scan",
                            values="lost_gate").to_numpy()

@@ -6,12 +6,17 @@ import numpy as np
 
 from trackfuse.experiments import register
 from trackfuse.experiments.base import Experiment, Param
+from trackfuse.seeding import TrialStreams
 
 
-def gaussian_trial(params, rng: np.random.Generator) -> list[dict]:
-    """Sample mean of ``n`` draws from N(mu, sigma^2), two 'algorithms' on the same data."""
-    x = rng.normal(params["mu"], params["sigma"], int(params["n"]))
-    if params["fail_every"] and rng.integers(params["fail_every"]) == 0:
+def gaussian_trial(params, streams: TrialStreams) -> list[dict]:
+    """Sample mean of ``n`` draws from N(mu, sigma^2), two 'algorithms' on the same data.
+
+    The draws are standard normals from the common stream, scaled by the point's parameters
+    (common random numbers); the synthetic failures come from the point-specific stream.
+    """
+    x = params["mu"] + params["sigma"] * streams.common.standard_normal(int(params["n"]))
+    if params["fail_every"] and streams.point.integers(params["fail_every"]) == 0:
         raise FloatingPointError("synthetic divergence")
     return [
         {"algorithm": "mean", "estimate": float(x.mean()), "covered":
@@ -35,18 +40,18 @@ def gaussian_figures(trials, summary, config) -> dict:
     return {"estimate": fig}
 
 
-def gaussian_batch(params, rngs) -> list[list[dict]]:
-    return [gaussian_trial(params, g) for g in rngs]
+def gaussian_batch(params, streams) -> list[list[dict]]:
+    return [gaussian_trial(params, s) for s in streams]
 
 
-def trivial_trial(params, rng: np.random.Generator) -> list[dict]:
+def trivial_trial(params, streams: TrialStreams) -> list[dict]:
     """One uniform draw: measures the runner's per-trial overhead."""
-    return [{"algorithm": "a", "value": float(rng.random())}]
+    return [{"algorithm": "a", "value": float(streams.point.random())}]
 
 
-def burn_trial(params, rng: np.random.Generator) -> list[dict]:
+def burn_trial(params, streams: TrialStreams) -> list[dict]:
     """CPU-bound trial: a fixed amount of dense linear algebra."""
-    a = rng.standard_normal((60, 60))
+    a = streams.point.standard_normal((60, 60))
     total = 0.0
     for _ in range(int(params["work"])):
         total += float(np.linalg.eigvalsh(a @ a.T)[-1])
@@ -88,7 +93,7 @@ BURN = register(Experiment(
 ))
 
 
-def crash_once_trial(params, rng: np.random.Generator) -> list[dict]:
+def crash_once_trial(params, streams: TrialStreams) -> list[dict]:
     """Like the Gaussian trial, but the first trial run in any worker process kills that
     worker (``os._exit``) once per marker file: a worker dying mid-batch."""
     import multiprocessing
@@ -101,7 +106,7 @@ def crash_once_trial(params, rng: np.random.Generator) -> list[dict]:
             pass
         else:
             os._exit(1)
-    return [{"algorithm": "a", "value": float(rng.normal())}]
+    return [{"algorithm": "a", "value": float(streams.point.normal())}]
 
 
 CRASH = register(Experiment(

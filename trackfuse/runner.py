@@ -1,8 +1,9 @@
 """Run a validated config: plan batches, seed trials, execute, resume, write outputs.
 
-Seeding: trial ``t`` of sweep point ``p`` under root seed ``s`` uses
-``numpy.random.default_rng([t, p, s])`` and nothing else, so the numbers do not depend on
-worker count, executor, batch placement or completion order. Trials are cut into batches of
+Seeding: trial ``t`` of sweep point ``p`` under root seed ``s`` draws from the two streams of
+:func:`trackfuse.seeding.trial_streams` (one common to every sweep point, one specific to
+the point) and nothing else, so the numbers do not depend on worker count, executor, batch
+placement or completion order. Trials are cut into batches of
 ``batch_size`` by trial index alone; finished batches are stored as parts and the final CSVs
 are merged in (point, batch) order, so any schedule writes byte-identical files.
 
@@ -43,6 +44,7 @@ from trackfuse.results import (
     run_id,
     split_timings,
 )
+from trackfuse.seeding import batch_streams, trial_streams
 from trackfuse.summary import summarize
 from trackfuse.sweep import SweepPoint, expand
 
@@ -99,11 +101,6 @@ class RunOutcome:
     seconds: float = 0.0
 
 
-def trial_rng(trial: int, point: int, seed: int) -> np.random.Generator:
-    """The generator of one trial: a function of (trial, point, root seed) only."""
-    return np.random.default_rng([trial, point, seed])
-
-
 def _failure(prefix: dict[str, Any], err: BaseException) -> dict[str, Any]:
     text = "".join(traceback.format_exception_only(type(err), err)).strip().replace("\n", " ")
     return {**prefix, "algorithm": "", "status": "failed", "error": text[:500]}
@@ -116,15 +113,15 @@ def execute_batch(task: BatchTask) -> BatchResult:
     trials = range(task.first_trial, task.stop_trial)
     prefixes = [{"point": task.point, "trial": t, **task.swept} for t in trials]
     try:
-        per_trial = exp.run_trials(task.params, [trial_rng(t, task.point, task.seed)
-                                                 for t in trials])
+        per_trial = exp.run_trials(task.params, batch_streams(task.seed, task.point, trials))
         if len(per_trial) != len(prefixes):
             raise ValueError(f"run_batch returned {len(per_trial)} trials for {len(prefixes)}")
     except Exception:  # noqa: BLE001 - isolate the failing trial(s) one by one
         per_trial = []
         for t in trials:
             try:
-                per_trial.append(exp.run_trial(task.params, trial_rng(t, task.point, task.seed)))
+                streams = trial_streams(task.seed, task.point, t)
+                per_trial.append(exp.run_trial(task.params, streams))
             except Exception as err:  # noqa: BLE001 - recorded in the CSV, the run goes on
                 per_trial.append(err)
     rows: list[dict[str, Any]] = []
@@ -369,4 +366,4 @@ def markdown_table(table: pd.DataFrame) -> str:
 
 
 __all__ = ["BatchTask", "RunInterrupted", "RunOutcome", "Runner", "draw_reports",
-           "execute_batch", "markdown_table", "trial_rng"]
+           "execute_batch", "markdown_table"]

@@ -6,14 +6,19 @@ An experiment module is the only place that knows its science. It exposes one mo
 * ``params``: its parameter schema (flat dotted keys such as ``"clutter.mean"``) with
   defaults, units, bounds and choices. The runner validates configs against it and passes the
   resolved values to the trial functions as a flat ``dict[str, Any]``.
-* ``run_trial(params, rng) -> list[dict]``: one Monte Carlo trial. It returns tidy rows, one
-  per algorithm (and per value of any extra key in ``row_keys``, e.g. a scan index). Every
+* ``run_trial(params, streams) -> list[dict]``: one Monte Carlo trial. ``streams`` is a
+  :class:`~trackfuse.seeding.TrialStreams`: ``streams.common`` is the same generator at every
+  sweep point (draw truth, initial estimates, measurement noise and algorithm randomness
+  from it: common random numbers), ``streams.point`` is specific to the sweep point (draw
+  what a swept parameter changes, such as clutter). The trial returns tidy rows, one per
+  algorithm (and per value of any extra key in ``row_keys``, e.g. a scan index). Every
   algorithm in a trial sees the same simulated data (paired comparisons). A trial is a pure
-  function of ``params`` and ``rng``.
-* ``run_batch(params, rngs) -> list[list[dict]]`` (optional): the same for a batch of trials,
-  returning one row list per generator, in order. Each trial must draw its data from its own
-  generator only, so the rows are identical to ``[run_trial(params, g) for g in rngs]`` up to
-  floating-point reassociation inside vectorized algebra.
+  function of ``params`` and ``streams``.
+* ``run_batch(params, streams) -> list[list[dict]]`` (optional): the same for a batch of
+  trials, returning one row list per :class:`~trackfuse.seeding.TrialStreams`, in order.
+  Each trial must draw its data from its own streams only, so the rows are identical to
+  ``[run_trial(params, s) for s in streams]`` up to floating-point reassociation inside
+  vectorized algebra.
 * ``figures(trials, summary, config) -> dict[str, Figure]``: paper-style figures drawn from
   the saved CSV tables alone (no recomputation of trials). ``config`` is the resolved config
   as a plain dict (``params``, ``sweep``, ``trials``, ``seed``, ...).
@@ -34,8 +39,9 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
 import pandas as pd
+
+from trackfuse.seeding import TrialStreams
 
 Row = dict[str, Any]
 Params = Mapping[str, Any]
@@ -68,9 +74,9 @@ class Experiment:
     name: str
     title: str
     params: tuple[Param, ...]
-    run_trial: Callable[[Params, np.random.Generator], list[Row]]
+    run_trial: Callable[[Params, TrialStreams], list[Row]]
     figures: Callable[[pd.DataFrame, pd.DataFrame, dict], dict[str, Any]] | None = None
-    run_batch: Callable[[Params, Sequence[np.random.Generator]], list[list[Row]]] | None = None
+    run_batch: Callable[[Params, Sequence[TrialStreams]], list[list[Row]]] | None = None
     tables: Callable[[pd.DataFrame, pd.DataFrame, dict], dict[str, pd.DataFrame]] | None = None
     row_keys: tuple[str, ...] = ("algorithm",)
     binary_metrics: tuple[str, ...] = ()
@@ -85,8 +91,8 @@ class Experiment:
         """Every parameter at its default value, keyed by dotted name."""
         return {p.key: p.default for p in self.params}
 
-    def run_trials(self, params: Params, rngs: Sequence[np.random.Generator]) -> list[list[Row]]:
+    def run_trials(self, params: Params, streams: Sequence[TrialStreams]) -> list[list[Row]]:
         """Run a batch of trials, vectorized when the experiment offers ``run_batch``."""
         if self.run_batch is not None:
-            return self.run_batch(params, rngs)
-        return [self.run_trial(params, rng) for rng in rngs]
+            return self.run_batch(params, streams)
+        return [self.run_trial(params, s) for s in streams]

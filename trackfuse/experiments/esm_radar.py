@@ -82,6 +82,7 @@ from trackfuse.association.time_align import bracket, interpolate, interpolate_c
 from trackfuse.association.track_likelihood import abstaining_decision, ml_track_decision
 from trackfuse.experiments.base import Experiment, Param
 from trackfuse.plots import esm_radar as plots
+from trackfuse.seeding import TrialStreams
 from trackfuse.tracking.models import wrap
 
 TRUE_TRACK = 1  # 0-based index of radar track 2
@@ -216,11 +217,13 @@ class Simulated:
     alpha: np.ndarray      # (N, K) manoeuvre index
 
 
-def simulate(params: Mapping[str, Any], rngs: Sequence[np.random.Generator]) -> Simulated:
-    """Draw and align the sensor data of one trial per generator.
+def simulate(params: Mapping[str, Any], streams: Sequence[TrialStreams]) -> Simulated:
+    """Draw and align the sensor data of one trial per :class:`TrialStreams`.
 
-    Each generator spawns an ESM-noise and a radar-noise stream; the draws have fixed shapes,
-    so the data never depend on the algorithms run.
+    Each trial's common stream (the same at every sweep point) spawns an ESM-noise and a
+    radar-noise stream of standard normals, scaled by the sensor accuracies afterwards; the
+    draws have fixed shapes, so the data never depend on the algorithms run, and sweep
+    points of separation or sensor accuracy compare on the same noise.
     """
     scen = SnakeCross(separation=params["target.separation"],
                       amplitude=params["snake.amplitude"],
@@ -238,8 +241,8 @@ def simulate(params: Mapping[str, Any], rngs: Sequence[np.random.Generator]) -> 
     f_radar = true_factors(p_m, v_m, A1, A2, dl)
 
     z_esm, z_radar = [], []
-    for g in rngs:
-        g_esm, g_radar = g.spawn(2)
+    for trial in streams:
+        g_esm, g_radar = trial.common.spawn(2)
         z_esm.append(g_esm.standard_normal((K, 4)))
         z_radar.append(g_radar.standard_normal((M, N_TRACKS, 5)))
     scale = params["noise.scale"]
@@ -366,9 +369,10 @@ def evaluate(variant: Variant, diff: Differences, alpha: np.ndarray,
             "range_weight_min": a_range.min(axis=-1), "weights": a}
 
 
-def run_batch(params: Mapping[str, Any], rngs: Sequence[np.random.Generator]) -> list[list[dict]]:
-    """Vectorized trials: one row list per generator, one row per algorithm."""
-    sim = simulate(params, rngs)
+def run_batch(params: Mapping[str, Any],
+              streams: Sequence[TrialStreams]) -> list[list[dict]]:
+    """Vectorized trials: one row list per trial, one row per algorithm."""
+    sim = simulate(params, streams)
     shared = {
         "alpha_mean": sim.alpha.mean(axis=-1),
         "alpha_peak": sim.alpha.max(axis=-1),
@@ -379,7 +383,7 @@ def run_batch(params: Mapping[str, Any], rngs: Sequence[np.random.Generator]) ->
     results = {name: evaluate(ALGORITHMS[name], diff, sim.alpha, params)
                for name in params["algorithms"]}
     rows: list[list[dict]] = []
-    for i in range(len(rngs)):
+    for i in range(len(streams)):
         trial = []
         for name, res in results.items():
             j = int(res["chosen"][i])
@@ -400,9 +404,9 @@ def run_batch(params: Mapping[str, Any], rngs: Sequence[np.random.Generator]) ->
     return rows
 
 
-def run_trial(params: Mapping[str, Any], rng: np.random.Generator) -> list[dict]:
-    """One trial (the batch form with a single generator)."""
-    return run_batch(params, [rng])[0]
+def run_trial(params: Mapping[str, Any], streams: TrialStreams) -> list[dict]:
+    """One trial (the batch form with a single trial)."""
+    return run_batch(params, [streams])[0]
 
 
 EXPERIMENT = Experiment(

@@ -35,9 +35,11 @@ trial, computed even when ``exact`` is not listed):
   (triangulation and weights, shared by all solvers); the runner files these under
   timings.csv.
 
-Random streams: ``truth, noise, clutter, shuffle, algo = rng.spawn(5)``; the PGA variants
-take fixed children of ``algo`` by their position in :data:`VARIANTS` (append new variants
-at the end), so adding or removing an algorithm in a config changes no other number.
+Random streams: ``truth, noise, shuffle, algo`` are spawned from the trial's common stream
+(the same at every sweep point) and the false alarms come from its point-specific stream;
+the PGA variants take fixed children of ``algo`` by their position in :data:`VARIANTS`
+(append new variants at the end), so adding or removing an algorithm in a config changes no
+other number.
 
 Figures and report tables, drawn from the saved CSVs: :mod:`trackfuse.plots.passive_assoc`.
 """
@@ -54,6 +56,7 @@ from trackfuse.association.passive_scene import scene_targets, simulate_scan, tr
 from trackfuse.association.pga import CHECKPOINTS, pga
 from trackfuse.experiments.base import Experiment, Param
 from trackfuse.plots import passive_assoc as plots
+from trackfuse.seeding import TrialStreams
 
 #: PGA variants: name -> options of :func:`trackfuse.association.pga.pga`.
 VARIANTS = {
@@ -151,9 +154,10 @@ def _partner2(partner1: np.ndarray, m2: int) -> np.ndarray:
     return p2
 
 
-def run_trial(params: dict[str, Any], rng: np.random.Generator) -> list[dict[str, Any]]:
+def run_trial(params: dict[str, Any], streams: TrialStreams) -> list[dict[str, Any]]:
     """One scan: simulate, weigh, solve exactly and by each PGA variant; rows per checkpoint."""
-    truth, noise, clutter, shuffle, algo = rng.spawn(5)
+    truth, noise, shuffle, algo = streams.common.spawn(4)
+    clutter = streams.point
     sigma = sigma_of(params)
     targets = scene_targets(int(params["targets.n"]), params["scene.mode"], truth)
     scan = simulate_scan(targets, sigma, sigma, params["sensor.p_d"], params["clutter.p_f"],

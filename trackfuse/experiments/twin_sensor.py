@@ -21,8 +21,10 @@ the target with probability ``P_D`` and reports Poisson clutter:
 * ``clutter.model = "window"``: ``N_c ~ Poisson(clutter.mean)`` points uniform in a fixed
   ``+-clutter.window`` rad box around the true line of sight, identical for every filter.
 
-Each trial spawns independent generators for truth, initialization, sensor noise and clutter,
-so adding an algorithm never changes the simulated data. Every algorithm (association variant
+Each trial spawns independent generators for truth, initialization and sensor noise from its
+common stream (the same at every sweep point) and draws clutter from its point-specific
+stream, so adding an algorithm never changes the simulated data and sweep points compare on
+the same targets and noise. Every algorithm (association variant
 x covariance form, see :mod:`trackfuse.tracking.pda`) starts from the same
 ``x0 ~ N(x_true(0), P0)``.
 
@@ -73,6 +75,7 @@ from scipy import stats
 
 from trackfuse.experiments.base import Experiment, Param
 from trackfuse.plots import twin_sensor as plots
+from trackfuse.seeding import TrialStreams
 from trackfuse.tracking.initialization import los_prior_covariance
 from trackfuse.tracking.models import cv_process_noise, cv_transition, wrap
 from trackfuse.tracking.pcrlb import (
@@ -95,6 +98,7 @@ from trackfuse.tracking.sensors import (
 )
 
 FILTERS = {"mgekf": "mgekf", "ekf": "ekf_joseph"}
+MAX_SENSORS = 2
 ALGORITHMS = tuple(f"{a}/{f}" for a, f in product(METHODS, FILTERS))
 
 PARAMS = (
@@ -281,15 +285,23 @@ class TrialData:
     clutter: np.ndarray
 
 
-def simulate(sc: Scenario, rng: np.random.Generator) -> TrialData:
-    """Draw one trial's truth, initialization, target returns and clutter."""
-    g_truth, g_init, g_noise, g_clutter = rng.spawn(4)
+def simulate(sc: Scenario, streams: TrialStreams) -> TrialData:
+    """Draw one trial's truth, initialization, target returns and clutter.
+
+    Truth, initialization, detections and noise come from the trial's common stream (the
+    same at every sweep point; detections and noise are drawn for :data:`MAX_SENSORS`
+    sensors, so a one-sensor point sees sensor 1's returns of a two-sensor point); clutter
+    comes from the point-specific stream.
+    """
+    g_truth, g_init, g_noise = streams.common.spawn(3)
+    g_clutter = streams.point
     x_true = truth_trajectory(sc, g_truth)
     x0 = x_true[0] + sc.P0_chol @ g_init.standard_normal(6)
     S = sc.R.shape[0]
-    detected = g_noise.random((sc.K, S)) < sc.P_D
+    detected = (g_noise.random((sc.K, MAX_SENSORS)) < _padded(sc.P_D))[:, :S]
     los = azel(x_true[1:, None, :3] - sc.sensor_pos[1:])
-    z_target = wrap(los + sc.noise_sd * g_noise.standard_normal((sc.K, S, 2)))
+    unit_noise = g_noise.standard_normal((sc.K, MAX_SENSORS, 2))[:, :S]
+    z_target = wrap(los + sc.noise_sd * unit_noise)
     n_clutter = g_clutter.poisson(sc.clutter_mean, (sc.K, S))
     total = int(n_clutter.sum())
     if sc.clutter_model == "in_gate":
@@ -299,6 +311,11 @@ def simulate(sc: Scenario, rng: np.random.Generator) -> TrialData:
         clutter = centre + g_clutter.uniform(-sc.window, sc.window, (total, 2))
         clutter[:, 0] = wrap(clutter[:, 0])
     return TrialData(x_true, x0, detected, los, z_target, n_clutter, clutter)
+
+
+def _padded(P_D: np.ndarray) -> np.ndarray:
+    """Detection probabilities ``(MAX_SENSORS,)``: ``P_D: (S,)`` padded with zeros."""
+    return np.concatenate([P_D, np.zeros(MAX_SENSORS - len(P_D))])
 
 
 @dataclass(frozen=True)
@@ -404,11 +421,11 @@ def _nees(e: np.ndarray, P: np.ndarray) -> np.ndarray:
     return out
 
 
-def run_batch(params: dict[str, Any], rngs: Sequence[np.random.Generator]) -> list[list[dict]]:
-    """Run a batch of trials; each trial's data comes from its own generator only."""
+def run_batch(params: dict[str, Any], streams: Sequence[TrialStreams]) -> list[list[dict]]:
+    """Run a batch of trials; each trial's data comes from its own streams only."""
     sc = build_scenario(params)
-    batch = stack([simulate(sc, g) for g in rngs])
-    N = len(rngs)
+    batch = stack([simulate(sc, s) for s in streams])
+    N = len(streams)
     nees_limit = float(stats.chi2.ppf(float(params["loss.nees_quantile"]), 3))
     rows: list[list[dict]] = [[] for _ in range(N)]
     for name in params["algorithms"]:
@@ -429,9 +446,9 @@ def run_batch(params: dict[str, Any], rngs: Sequence[np.random.Generator]) -> li
     return rows
 
 
-def run_trial(params: dict[str, Any], rng: np.random.Generator) -> list[dict]:
+def run_trial(params: dict[str, Any], streams: TrialStreams) -> list[dict]:
     """One trial: the batch form with a batch of one (identical data and algebra)."""
-    return run_batch(params, [rng])[0]
+    return run_batch(params, [streams])[0]
 
 
 # --------------------------------------------------------------------------------------------

@@ -15,7 +15,7 @@ correct_rate   correct-association rate per algorithm with 95 % Wilson bands, ag
 trajectory     paper Figs. 1-2: true tracks and the ESM TDOA-DF location track, and the
                per-scan manoeuvre index and range weight of ``improved``. *Recomputed* from
                the config and seed: trial 0 of point 0 is re-simulated with the runner's
-               generator ``default_rng([0, 0, seed])`` (milliseconds); the title says
+               streams ``trial_streams(seed, 0, 0)`` (milliseconds); the title says
                whether the recomputed decision matches the saved row of ``trials.csv``.
 =============  ============================================================================
 
@@ -48,6 +48,7 @@ from scipy.stats import binomtest
 from trackfuse.association import ahp
 from trackfuse.association.esm_scenario import FACTORS
 from trackfuse.plots.style import band, new_figure, reference_line
+from trackfuse.seeding import trial_streams
 from trackfuse.stats import wilson_interval
 
 if TYPE_CHECKING:
@@ -279,7 +280,7 @@ def _trajectory_figure(trials: pd.DataFrame, config: Mapping[str, Any]) -> Figur
     )
 
     params = _point0_params(trials, config)
-    sim = simulate(params, [np.random.default_rng([0, 0, int(config["seed"])])])
+    sim = simulate(params, [trial_streams(int(config["seed"]), 0, 0)])
     fig, (ax, ax2) = new_figure(ncols=2, width=5.0, height=4.0)
     names = ("T1 (snake)", "T2 (snake, ESM target)", "T3 (crossing)")
     for j in range(N_TRACKS):
