@@ -5,7 +5,14 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
-from trackfuse.stats import nees_band, t_interval, wilson_interval
+from trackfuse.stats import (
+    mcnemar_p,
+    nees_band,
+    proportion_difference_interval,
+    t_interval,
+    welch_interval,
+    wilson_interval,
+)
 
 
 def test_wilson_matches_scipy_binomtest():
@@ -32,3 +39,41 @@ def test_nees_band_brackets_the_dimension_and_narrows():
     assert low < 3 < high
     assert np.isclose(low, stats.chi2.ppf(0.025, 150) / 50)
     assert nees_band(3, 500)[1] - nees_band(3, 500)[0] < high - low
+
+
+def test_newcombe_independent_matches_the_published_example():
+    # Newcombe (1998), Stat. Med. 17, 873-890: 56/70 - 48/80, method 10: 0.0524 to 0.3339
+    low, high = proportion_difference_interval(48, 80, 56, 70)
+    assert np.isclose(low, 0.0524, atol=5e-5) and np.isclose(high, 0.3339, atol=5e-5)
+
+
+def test_newcombe_paired_covers_at_about_the_nominal_level():
+    """Monte Carlo coverage of the paired interval for correlated 0/1 outcomes (n = 40)."""
+    rng = np.random.default_rng(3)
+    reps, n = 4000, 40
+    for p_base, p_new in ((0.7, 0.7), (0.85, 0.7), (0.5, 0.6)):
+        u = rng.random((reps, n))
+        noise = rng.random((reps, n))
+        base = (u < p_base).astype(float)
+        new = np.where(noise < 0.7, u < p_new, rng.random((reps, n)) < p_new).astype(float)
+        truth = p_new - p_base
+        k1, k2, both = base.sum(1), new.sum(1), (base * new).sum(1)
+        low, high = proportion_difference_interval(k1, n, k2, n, both)
+        coverage = np.mean((low <= truth) & (truth <= high))
+        assert 0.93 <= coverage <= 0.985, (p_base, p_new, coverage)
+
+
+def test_newcombe_paired_without_discordant_pairs_contains_zero():
+    low, high = proportion_difference_interval(30, 40, 30, 40, both=30)
+    assert low < 0 < high
+
+
+def test_welch_and_mcnemar_match_scipy():
+    rng = np.random.default_rng(5)
+    x, y = rng.normal(0, 1, 15), rng.normal(0.4, 2, 22)
+    low, high, p = welch_interval(x.mean(), x.std(ddof=1), 15, y.mean(), y.std(ddof=1), 22)
+    ref = stats.ttest_ind(y, x, equal_var=False)
+    ci = ref.confidence_interval(0.95)
+    assert np.isclose(p, ref.pvalue) and np.isclose(low, ci.low) and np.isclose(high, ci.high)
+    assert np.isclose(mcnemar_p(2, 9), stats.binomtest(2, 11).pvalue)
+    assert mcnemar_p(0, 0) == 1.0

@@ -1,0 +1,99 @@
+"""Comparing two runs: intervals, pairing, and the regression gate's error rates."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from trackfuse.compare import compare_trials
+
+KEYS = ["sigma", "algorithm"]
+
+
+def frame(values, correct=None, sigma=1.0, algorithm="a"):
+    """A trials.csv-like frame: one row per trial of one cell (plus a 0/1 metric)."""
+    n = len(values)
+    data = {"point": 0, "trial": np.arange(n), "sigma": sigma, "algorithm": algorithm,
+            "error_m": values}
+    if correct is not None:
+        data["correct"] = correct
+    return pd.DataFrame(data)
+
+
+def gate(base, new, paired=True, **kw):
+    return compare_trials(base, new, KEYS, binary=["correct"],
+                          better={"error_m": "lower", "correct": "higher"}, paired=paired, **kw)
+
+
+def test_identical_runs_show_no_difference_and_no_regression():
+    rng = np.random.default_rng(0)
+    base = frame(rng.normal(10, 2, 50), (rng.random(50) < 0.7).astype(int))
+    result = gate(base, base.copy())
+    assert result.regressions.empty and result.paired and result.gated == 2
+    assert (result.cells["diff"] == 0).all()
+    assert (result.cells["verdict"] == "no significant change").all()
+
+
+def test_a_planted_regression_is_found_in_both_directions_and_not_reversed():
+    rng = np.random.default_rng(1)
+    x = rng.normal(10, 2, 200)
+    ok = (rng.random(200) < 0.8).astype(int)
+    worse_ok = np.where(rng.random(200) < 0.25, 0, ok)  # about 20 points less correct
+    result = gate(frame(x, ok), frame(x + 1.0 + rng.normal(0, 0.5, 200), worse_ok))
+    verdict = result.cells.set_index("metric")["verdict"]
+    assert verdict["error_m"] == "regression" and verdict["correct"] == "regression"
+    mirror = gate(frame(x + 1.0, worse_ok), frame(x, ok)).cells.set_index("metric")
+    assert (mirror["verdict"] == "improvement").all()
+
+
+def test_tolerance_accepts_a_small_worsening():
+    rng = np.random.default_rng(2)
+    x = rng.normal(10, 2, 300)
+    base, new = frame(x), frame(x + 0.2 + rng.normal(0, 0.1, 300))
+    assert gate(base, new).cells["verdict"].iloc[0] == "regression"
+    assert gate(base, new, tolerance={"error_m": 0.5}).cells["verdict"].iloc[0] == \
+        "no significant change"
+
+
+def null_and_shifted(shift: float, cells: int = 300, n: int = 40, seed: int = 7):
+    """``cells`` independent algorithms, paired noise; ``new`` is worse by ``shift`` sd."""
+    rng = np.random.default_rng(seed)
+    x = rng.normal(0, 1, (cells, n))
+    y = x + shift + rng.normal(0, 1, (cells, n))
+    names = [f"a{i}" for i in range(cells)]
+    return (pd.concat([frame(x[i], algorithm=a) for i, a in enumerate(names)]),
+            pd.concat([frame(y[i], algorithm=a) for i, a in enumerate(names)]))
+
+
+def test_per_cell_false_alarm_rate_is_near_the_nominal_level_and_power_is_high():
+    base, new = null_and_shifted(0.0)
+    rate = len(gate(base, new, family_wise=False).regressions) / 300
+    assert 0.02 <= rate <= 0.09
+    base, new = null_and_shifted(0.6)
+    assert len(gate(base, new, family_wise=False).regressions) / 300 >= 0.9
+
+
+def test_family_wise_gate_stays_quiet_over_many_null_cells():
+    """300 null cells: Bonferroni keeps the chance of any alarm below alpha; over ten
+    independent families at most one alarm is expected, and a real shift is still found."""
+    alarms = sum(not gate(*null_and_shifted(0.0, seed=s)).regressions.empty for s in range(10))
+    assert alarms <= 2
+    assert len(gate(*null_and_shifted(1.5)).regressions) >= 250
+
+
+def test_unpaired_comparison_matches_points_by_swept_value_not_index():
+    rng = np.random.default_rng(4)
+    base = pd.concat([frame(rng.normal(0, 1, 30), sigma=s).assign(point=i)
+                      for i, s in enumerate((1.0, 2.0))])
+    new = pd.concat([frame(rng.normal(0, 1, 25) + (3 if s == 2.0 else 0), sigma=s)
+                     .assign(point=i) for i, s in enumerate((2.0, 1.0))])
+    cells = gate(base, new, paired=False).cells.set_index("sigma")
+    assert cells.loc[2.0, "verdict"] == "regression"
+    assert cells.loc[1.0, "verdict"] == "no significant change"
+    assert (cells["test"] == "Welch t").all() and (cells["n_new"] == 25).all()
+
+
+def test_failed_trials_are_left_out():
+    base = frame(np.arange(10.0))
+    new = frame(np.arange(10.0)).assign(status=["ok"] * 9 + ["failed"])
+    assert gate(base, new).cells["n_new"].iloc[0] == 9

@@ -1,0 +1,177 @@
+"""Compare two runs of one experiment cell by cell, and gate regressions for CI.
+
+A *cell* is one sweep point (matched by its swept values, not its index), one value of the
+experiment's row keys (algorithm, scan, ...) and one metric. For every cell present in both
+runs the comparison gives both means, the difference ``new - base`` with its 95 % interval,
+a two-sided p-value and the test used:
+
+* **paired** (both runs share the root seed, so trial ``t`` saw the same simulated data in
+  both): paired t interval and test on the per-trial differences; for 0/1 metrics Newcombe's
+  paired hybrid score interval and the exact McNemar test.
+* **unpaired** (different seeds): Welch interval and test; for 0/1 metrics Newcombe's hybrid
+  score interval and the 'N-1' chi-square test.
+
+Regression gate. A metric with a declared direction (``"lower"`` or ``"higher"`` is better)
+is a *regression* in a cell when the new run is worse by more than the tolerance with
+confidence: the one-sided bound of the difference on the good side lies beyond the
+tolerance. The bounds are Bonferroni-adjusted over the gated cells, so the chance that any
+cell of two runs of the same code is flagged stays below ``alpha`` (family-wise). An
+*improvement* is the mirror image. Metrics without a direction are reported, never gated.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from trackfuse.stats import (
+    mcnemar_p,
+    proportion_difference_interval,
+    t_interval,
+    two_proportion_p,
+    welch_interval,
+)
+
+NON_METRIC = ("point", "trial", "status", "error")
+BETTER = ("lower", "higher")
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Result of :func:`compare_trials`.
+
+    ``cells``: one row per cell with the key columns, ``metric``, ``better``, ``n_base``,
+    ``n_new``, ``base``, ``new``, ``diff``, ``ci_low``, ``ci_high`` (95 %), ``p_value``,
+    ``test`` and ``verdict`` (``regression``, ``improvement``, ``no significant change``,
+    or for ungated metrics ``differs`` / ``no significant difference``).
+    ``paired``: whether trials were paired. ``gated``: number of gated cells.
+    ``alpha``: the family-wise false-alarm level of the gate.
+    """
+
+    cells: pd.DataFrame
+    paired: bool
+    gated: int
+    alpha: float
+
+    @property
+    def regressions(self) -> pd.DataFrame:
+        """The cells whose verdict is ``regression``."""
+        return self.cells[self.cells["verdict"] == "regression"]
+
+
+def metric_columns(frame: pd.DataFrame, keys: Sequence[str]) -> list[str]:
+    """Numeric columns of ``frame`` that are neither keys nor bookkeeping columns."""
+    return [c for c in frame.columns if c not in keys and c not in NON_METRIC
+            and pd.api.types.is_numeric_dtype(frame[c])]
+
+
+def _long(frame: pd.DataFrame, keys: Sequence[str], metrics: Sequence[str]) -> pd.DataFrame:
+    """Rows of finished trials melted to ``[*keys, trial, metric, value]``."""
+    if "status" in frame:
+        frame = frame[frame["status"].astype(str) != "failed"]
+    return frame.melt(id_vars=[*keys, "trial"], value_vars=list(metrics), var_name="metric",
+                      value_name="value").dropna(subset=["value"])
+
+
+def _paired_cells(base: pd.DataFrame, new: pd.DataFrame, keys: list[str],
+                  binary: set[str], level: float) -> pd.DataFrame:
+    merged = base.merge(new, on=[*keys, "trial", "metric"], suffixes=("_base", "_new"))
+    merged["d"] = merged["value_new"] - merged["value_base"]
+    merged["both"] = (merged["value_base"] == 1) & (merged["value_new"] == 1)
+    g = merged.groupby([*keys, "metric"], sort=False, dropna=False).agg(
+        n=("d", "size"), base=("value_base", "mean"), new=("value_new", "mean"),
+        diff=("d", "mean"), sd=("d", "std"), k1=("value_base", "sum"),
+        k2=("value_new", "sum"), both=("both", "sum")).reset_index()
+    is_bin = g["metric"].isin(binary).to_numpy()
+    t_low, t_high = t_interval(g["diff"], g["sd"], g["n"], level)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = g["diff"] / (g["sd"] / np.sqrt(g["n"]))
+        t_p = np.where(g["sd"] > 0, 2 * stats.t.sf(np.abs(t), g["n"] - 1),
+                       np.where(g["diff"] == 0, 1.0, 0.0))
+    b_low, b_high = proportion_difference_interval(g["k1"], g["n"], g["k2"], g["n"], g["both"],
+                                                   level)
+    b_p = mcnemar_p(g["k1"] - g["both"], g["k2"] - g["both"])
+    g["n_base"] = g["n_new"] = g["n"]
+    g["ci_low"] = np.where(is_bin, b_low, t_low)
+    g["ci_high"] = np.where(is_bin, b_high, t_high)
+    g["p_value"] = np.where(is_bin, b_p, t_p)
+    g["test"] = np.where(is_bin, "paired Newcombe / exact McNemar", "paired t")
+    return g
+
+
+def _unpaired_cells(base: pd.DataFrame, new: pd.DataFrame, keys: list[str],
+                    binary: set[str], level: float) -> pd.DataFrame:
+    def agg(frame: pd.DataFrame) -> pd.DataFrame:
+        return frame.groupby([*keys, "metric"], sort=False, dropna=False)["value"].agg(
+            ["size", "mean", "std", "sum"])
+
+    g = agg(base).merge(agg(new), how="inner", left_index=True, right_index=True,
+                        suffixes=("_b", "_n")).reset_index()
+    is_bin = g["metric"].isin(binary).to_numpy()
+    w_low, w_high, w_p = welch_interval(g["mean_b"], g["std_b"], g["size_b"], g["mean_n"],
+                                        g["std_n"], g["size_n"], level)
+    b_low, b_high = proportion_difference_interval(g["sum_b"], g["size_b"], g["sum_n"],
+                                                   g["size_n"], level=level)
+    b_p = two_proportion_p(g["sum_b"], g["size_b"], g["sum_n"], g["size_n"])
+    out = g[[*keys, "metric"]].copy()
+    out["n_base"], out["n_new"] = g["size_b"], g["size_n"]
+    out["base"], out["new"] = g["mean_b"], g["mean_n"]
+    out["diff"] = g["mean_n"] - g["mean_b"]
+    out["ci_low"] = np.where(is_bin, b_low, w_low)
+    out["ci_high"] = np.where(is_bin, b_high, w_high)
+    out["p_value"] = np.where(is_bin, b_p, w_p)
+    out["test"] = np.where(is_bin, "Newcombe / N-1 chi-square", "Welch t")
+    return out
+
+
+def compare_trials(base: pd.DataFrame, new: pd.DataFrame, keys: Sequence[str],
+                   binary: Sequence[str] = (), better: Mapping[str, str] | None = None,
+                   paired: bool = True, tolerance: Mapping[str, float] | None = None,
+                   alpha: float = 0.05, metrics: Sequence[str] | None = None,
+                   family_wise: bool = True) -> Comparison:
+    """Compare the trial rows of two runs (see the module docstring).
+
+    Parameters
+    ----------
+    base, new : ``trials.csv`` frames of the two runs.
+    keys : columns that identify a cell besides the metric: the swept keys and the
+        experiment's row keys (not ``point``: points are matched by their swept values).
+    binary : 0/1 metrics. better : metric -> ``"lower"`` or ``"higher"`` (gated metrics).
+    paired : pair trials by index (same root seed) or treat the runs as independent.
+    tolerance : metric -> the worsening (in the metric's unit) that is accepted; default 0.
+    alpha : family-wise false-alarm level of the regression gate.
+    metrics : compare only these metrics (default: every metric present in both runs).
+    family_wise : Bonferroni-adjust the gate over the gated cells (default); ``False`` gates
+        every cell at ``alpha`` on its own.
+    """
+    keys, binary, better = list(keys), set(binary), dict(better or {})
+    tolerance = dict(tolerance or {})
+    common = [m for m in metric_columns(base, keys) if m in set(metric_columns(new, keys))]
+    if metrics is not None:
+        common = [m for m in common if m in set(metrics)]
+    b_long, n_long = _long(base, keys, common), _long(new, keys, common)
+    cells_at = _paired_cells if paired else _unpaired_cells
+    cells = cells_at(b_long, n_long, keys, binary, 0.95)
+    cells["better"] = cells["metric"].map(better).fillna("")
+    gated = cells["better"].isin(BETTER).to_numpy()
+    m = int(gated.sum())
+    # one-sided bounds at 1 - alpha/m are the ends of the two-sided 1 - 2 alpha/m interval
+    per_cell = alpha / max(m, 1) if family_wise else alpha
+    gate = cells_at(b_long, n_long, keys, binary, 1 - 2 * per_cell)
+    low, high = gate["ci_low"].to_numpy(), gate["ci_high"].to_numpy()
+    tol = cells["metric"].map(tolerance).fillna(0.0).to_numpy(float)
+    higher = (cells["better"] == "higher").to_numpy()
+    worse = np.where(higher, high < -tol, low > tol)
+    improved = np.where(higher, low > 0, high < 0)
+    differs = (cells["ci_low"] > 0) | (cells["ci_high"] < 0)
+    cells["verdict"] = np.select(
+        [gated & worse, gated & improved, gated, differs],
+        ["regression", "improvement", "no significant change", "differs"],
+        "no significant difference")
+    columns = [*keys, "metric", "better", "n_base", "n_new", "base", "new", "diff", "ci_low",
+               "ci_high", "p_value", "test", "verdict"]
+    return Comparison(cells[columns].reset_index(drop=True), paired, m, alpha)
