@@ -1,0 +1,114 @@
+"""End-to-end wall time of the user's commands, today's code beside a baseline commit.
+
+Absolute times differ between machines by 2x or more, so each command is timed for both
+versions in the same run, alternating, and the ratio is what counts. Each version is
+installed non-editable into its own virtual environment under ``.bench/`` (cached by commit),
+exactly as a new user installs it, and runs its own shipped configs:
+
+* ``run``: ``trackfuse run configs/twin_sensor_orbit.yaml --workers 2`` (figures included),
+* ``reproduce``: ``trackfuse reproduce configs --workers 2`` (every paper config, figures
+  included; the two versions may ship different sets of configs, so the config counts and
+  trial totals are printed beside the times),
+* ``startup``: ``trackfuse --help``, ``trackfuse list`` and ``trackfuse validate`` of the
+  orbit config (what a ``--set`` trial-and-error loop pays each time).
+
+    python benchmarks/end_to_end.py [--baseline 6f49e5c] [--repeats 3] [--skip reproduce]
+
+The current version is the working tree's committed ``HEAD`` (uncommitted changes are not
+measured). Prints the minimum and median over the repeats and the ratio baseline/current.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+import venv
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+CACHE = ROOT / ".bench"
+MAIN_CONFIG = "configs/twin_sensor_orbit.yaml"
+
+
+def _git(*args: str) -> str:
+    return subprocess.run(["git", "-C", str(ROOT), *args], check=True, capture_output=True,
+                          text=True).stdout.strip()
+
+
+def install(commit: str) -> Path:
+    """Export ``commit`` and install it into its own venv; return the source folder."""
+    sha = _git("rev-parse", "--short=10", commit)
+    home = CACHE / sha
+    src, env = home / "src", home / "venv"
+    if not (env / "bin" / "trackfuse").exists():
+        src.mkdir(parents=True, exist_ok=True)
+        archive = subprocess.run(["git", "-C", str(ROOT), "archive", sha],
+                                 check=True, capture_output=True).stdout
+        subprocess.run(["tar", "-x", "-C", str(src)], input=archive, check=True)
+        venv.create(env, with_pip=True)
+        subprocess.run([str(env / "bin" / "pip"), "install", "--quiet", str(src)], check=True)
+    return home
+
+
+def timed(home: Path, *args: str, out: Path | None = None) -> float:
+    """Wall seconds of ``trackfuse ARGS`` run in ``home/src`` with that version's venv."""
+    cmd = [str(home / "venv" / "bin" / "trackfuse"), *args]
+    if out is not None:
+        cmd += ["--out", str(out), "--no-progress"]
+    t0 = time.perf_counter()
+    subprocess.run(cmd, cwd=home / "src", check=True, capture_output=True)
+    return time.perf_counter() - t0
+
+
+def measure(homes: dict[str, Path], commands: dict[str, list[str]], repeats: int,
+            writes: set[str]) -> dict[str, dict[str, list[float]]]:
+    """Times per command and version, alternating the versions' order every repeat."""
+    times: dict[str, dict[str, list[float]]] = {c: {v: [] for v in homes} for c in commands}
+    for rep in range(repeats):
+        order = list(homes) if rep % 2 == 0 else list(reversed(homes))
+        for command, args in commands.items():
+            for version in order:
+                with tempfile.TemporaryDirectory() as out:
+                    where = Path(out) if command in writes else None
+                    times[command][version].append(timed(homes[version], *args, out=where))
+    return times
+
+
+def config_count(home: Path) -> int:
+    return len(list((home / "src" / "configs").glob("*.yaml")))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--baseline", default="6f49e5c")
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--skip", nargs="*", default=[], choices=["run", "reproduce",
+                                                                  "startup"])
+    args = parser.parse_args()
+    homes = {"baseline": install(args.baseline), "current": install("HEAD")}
+    commands = {
+        "run": ["run", MAIN_CONFIG, "--workers", "2"],
+        "reproduce": ["reproduce", "configs", "--workers", "2"],
+        "startup --help": ["--help"],
+        "startup list": ["list"],
+        "startup validate": ["validate", MAIN_CONFIG],
+    }
+    commands = {k: v for k, v in commands.items() if k.split()[0] not in args.skip}
+    times = measure(homes, commands, args.repeats, writes={"run", "reproduce"})
+    for name, home in homes.items():
+        print(f"{name}: {home.name}, {config_count(home)} paper configs")
+    print(f"{'command':<18} {'baseline min/median s':>22} {'current min/median s':>21} "
+          f"{'ratio (median)':>15}")
+    for command, per_version in times.items():
+        base, cur = per_version["baseline"], per_version["current"]
+        ratio = statistics.median(base) / statistics.median(cur)
+        print(f"{command:<18} {min(base):>10.2f} / {statistics.median(base):<9.2f} "
+              f"{min(cur):>9.2f} / {statistics.median(cur):<9.2f} {ratio:>14.2f}x")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
