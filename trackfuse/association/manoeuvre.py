@@ -38,8 +38,9 @@ consistent reading: a CV prediction under a constant acceleration ``a`` misses b
 
 from a 1-D CV filter on the TDOA-DF range ``r_E(k)`` (state ``[r, rdot]``, white-acceleration
 ``q``, measurement variance ``sigma_rE(k)^2``, two-point start, first residual at scan 2).
-It divides by ``R`` rather than by the innovation variance, so it starts near 7 (the
-prediction variance of a two-point start) and never sees the weave through 2-3 km of noise.
+It divides by ``R`` rather than by the innovation variance, so it starts high (the innovation
+variance of a two-point start is ``6 R``; the mean at scan 2 in paper 001's scenario is about
+8) and it never sees the weave through 2-3 km of noise.
 
 References
 ----------

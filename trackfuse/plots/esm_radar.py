@@ -395,8 +395,9 @@ def _trajectory_figure(trials: pd.DataFrame, config: Mapping[str, Any]) -> Figur
     res = evaluate(ALGORITHMS["improved"], differences(sim), sim.alpha, params)
     ax2.plot(sim.t, sim.alpha[0], color="tab:purple",
              label=f"manoeuvre index α(k), {params['alpha.index']}")
-    ax2.axhline(alpha_max(params)[0], color="tab:purple", linestyle=":", linewidth=1.0,
-                label="α_max")
+    a_max, mode = alpha_max(params)
+    if mode == "fixed":
+        ax2.axhline(a_max, color="tab:purple", linestyle=":", linewidth=1.0, label="α_max")
     ax2.set_yscale("log")
     ax2.set_xlabel("time (s)")
     ax2.set_ylabel("manoeuvre index α (dimensionless, log)")
