@@ -1,4 +1,4 @@
-"""AHP weights and consistency against SPEC 3.4 item 5 and textbook properties."""
+"""AHP weights and consistency against paper 001 Table 1 and textbook properties."""
 
 import numpy as np
 import pytest
@@ -22,7 +22,7 @@ def test_paper_001_root_and_eigen_weights():
                                atol=1e-4)
     np.testing.assert_allclose(ahp.eigen_weights(B), [0.5128, 0.2615, 0.1290, 0.0634, 0.0333],
                                atol=1e-4)
-    # Row geometric means quoted in SPEC 3.4.
+    # Row geometric means of paper 001 Table 1.
     g = np.exp(np.log(B).mean(axis=1))
     np.testing.assert_allclose(g, [3.9363, 2.0362, 1.0, 0.4911, 0.2540], atol=1e-4)
 

@@ -213,7 +213,7 @@ def test_tables_and_figures_from_saved_frames(tmp_path):
     assert (imp["gain_vs_improved"] == 0).all() and (imp["mcnemar_p"] == 1).all()
     assert set(abl["weights"]) == {"static", "dynamic", "-"}
     figs = EXPERIMENT.figures(trials, summary, config)
-    assert set(figs) == {"correct_rate", "trajectory"}
+    assert set(figs) == {"correct_rate", "trajectory", "manoeuvre"}
     for name, fig in figs.items():
         assert isinstance(fig, matplotlib.figure.Figure)
         data_axes = [ax for ax in fig.axes if ax.has_data()]
@@ -236,15 +236,16 @@ def test_categorical_sweep_draws_bar_chart():
 
 
 def test_static_weight_methods():
-    from trackfuse.experiments.esm_radar import PAPER_ROUNDED, static_weights
+    from trackfuse.experiments.esm_radar import static_weights
+    from trackfuse.reported import ESM_RADAR_WEIGHTS
 
     np.testing.assert_allclose(static_weights(ALGORITHMS["improved"].factors, "root_exact"),
                                [0.5100, 0.2638, 0.1296, 0.0636, 0.0329], atol=1e-4)
     np.testing.assert_allclose(static_weights(ALGORITHMS["improved"].factors, "eigen")[0],
                                0.5128, atol=1e-4)
     np.testing.assert_array_equal(static_weights(ALGORITHMS["improved"].factors,
-                                                 "paper_rounded"), PAPER_ROUNDED)
-    # Subsets use the AHP sub-matrix (traditional: SPEC 3.3 values), in the given order.
+                                                 "paper_rounded"), ESM_RADAR_WEIGHTS)
+    # Subsets use the AHP sub-matrix (traditional: 0.637/0.258/0.105), in the given order.
     np.testing.assert_allclose(static_weights(("range", "speed", "angle"), "paper_rounded"),
                                [0.637, 0.258, 0.105], atol=1e-3)
     np.testing.assert_allclose(static_weights(("angle", "range"), "root_exact"),

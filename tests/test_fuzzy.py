@@ -1,4 +1,4 @@
-"""Memberships, composition, decisions and dynamic weights (SPEC 3.3-3.4, test 6)."""
+"""Memberships, composition, decisions and dynamic weights (docs/papers/esm_radar.md)."""
 
 import numpy as np
 import pytest
@@ -125,7 +125,7 @@ def test_dynamic_weights_lag_and_values():
 
 
 def test_printed_eq16_diverges_but_corrected_does_not():
-    # SPEC 3.4 item 7: with a'_1 = 0.3 held for 20 steps the printed recursion blows up.
+    # W001-3: with a'_1 = 0.3 held for 20 steps the printed recursion blows up.
     a1 = np.array([0.51, 0.26, 0.13, 0.07, 0.03])
     printed = a1.copy()
     for _ in range(20):

@@ -16,7 +16,8 @@ usual acceptance rule.
 Paper 001 (Zhang et al. 2017, Table 1) orders its five factors as (range, speed, angle,
 time difference, phase difference); :data:`PAPER_001_JUDGEMENT` is that matrix. Its root
 weights are (0.5100, 0.2638, 0.1296, 0.0636, 0.0329), ``lambda_max = 5.23748``,
-``CI = 0.0594`` and ``CR = 0.0530`` (SPEC 3.4 item 5).
+``CI = 0.0594`` and ``CR = 0.0530`` (``docs/papers/esm_radar.md``, section
+"W001-5 factor numbering and rounded weights").
 
 References
 ----------

@@ -10,12 +10,13 @@ static AHP weights (``(F,)``, range first, summing to 1) and ``alpha(k)`` the ma
     a_i(k+1)  = a_i(1) / D(k+1),  i >= 2                                    (eq. 16, corrected)
 
 The printed eq. 16 has ``a_i(k)`` in the numerator; since ``D < 1`` whenever ``a'_1 < a_1(1)``
-those weights then grow geometrically (SPEC 3.4 item 7, W001-3). With ``a_i(1)`` the weights
-sum to 1 for every alpha sequence, and the range weight stays in
+those weights then grow geometrically (W001-3 in ``docs/papers/esm_radar.md``). With
+``a_i(1)`` the weights sum to 1 for every alpha sequence, and the range weight stays in
 ``[a_1 e^-1 / (a_1 e^-1 + 1 - a_1), a_1]`` when ``alpha <= alpha_max`` (``[0.277, 0.51]`` for
 the paper's weights), and tends to 0 for alpha much larger than ``alpha_max``.
 
-``alpha_max`` is not defined in the paper. ``mode="fixed"`` uses a constant (SPEC default 10);
+``alpha_max`` is not defined in the paper. ``mode="fixed"`` uses a given constant (the
+experiment's default is the chi-square quantile of its NIS index, W001-4);
 ``mode="running_max"`` uses the running maximum of alpha up to scan k, so the ratio is in
 [0, 1] and every constant factor of alpha cancels.
 """

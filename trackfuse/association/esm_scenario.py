@@ -1,7 +1,7 @@
 """Paper 001 world: snake-weaving and crossing targets and the five association factors.
 
-Geometry (SPEC 3.1, 3.5). Own aircraft A1 and A2 sit in a static 2-D frame (the paper ignores
-own motion). Three targets fly toward them:
+Geometry (``docs/papers/esm_radar.md``, section "Model"). Own aircraft A1 and A2 sit in a
+static 2-D frame (the paper ignores own motion). Three targets fly toward them:
 
 * T1: ``x = x0 + A sin(2 pi t / P_w)``, ``y = y0 - V t`` (a snake manoeuvre; peak lateral
   acceleration ``A (2 pi / P_w)^2``, 24.7 m/s^2 for the defaults);
@@ -253,3 +253,42 @@ def radar_factors(f_true: np.ndarray, z: np.ndarray, noise: RadarNoise, model: s
     else:
         raise ValueError(f"unknown radar factor model {model!r}")
     return np.stack([r, speed, theta, tdoa, phase], axis=-1), P
+
+
+def nominal_sd(f_true: np.ndarray, esm_noise: ESMNoise, radar_noise: RadarNoise, model: str,
+               A1: np.ndarray, A2: np.ndarray, d_over_lambda: float,
+               min_denominator: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Sensor accuracies at the scenario's noise-free geometry, averaged over the scans.
+
+    The first-order standard deviation of every ESM and radar factor is evaluated at the true
+    factors of the ESM target (no noise), then averaged over time: one constant per factor
+    and sensor for a given scenario. It is what a designer would read off the sensor
+    specifications for this engagement (for the ESM range, the TDOA-DF error at the
+    geometry), and it does not depend on any trial's noise.
+
+    Parameters
+    ----------
+    f_true : (K, 5) true factors of the ESM target at the ESM times.
+    esm_noise, radar_noise : sensor standard deviations. model : radar factor model.
+    A1, A2 : (2,) m. d_over_lambda : interferometer spacing. min_denominator : TDOA-DF guard.
+
+    Returns
+    -------
+    sd_esm : (5,) ESM sd per factor; sd_radar : (5,) radar sd per factor (factor units).
+    NaN where the TDOA-DF inversion fails at every scan.
+    """
+    K = f_true.shape[0]
+    _, P_e, _ = esm_factors(f_true, np.zeros((1, K, 4)), esm_noise, A1, A2, min_denominator)
+    _, P_r = radar_factors(f_true[:, None], np.zeros((1, K, 1, 5)), radar_noise, model, A1,
+                           A2, d_over_lambda)
+    sd_e = np.sqrt(np.diagonal(P_e[0], axis1=-2, axis2=-1))
+    sd_r = np.sqrt(np.diagonal(P_r[0, :, 0], axis1=-2, axis2=-1))
+    return _mean_or_nan(sd_e), _mean_or_nan(sd_r)
+
+
+def _mean_or_nan(x: np.ndarray) -> np.ndarray:
+    """Mean over the first axis ignoring NaN; NaN where a column has no finite value."""
+    ok = np.isfinite(x)
+    total = np.where(ok, x, 0.0).sum(axis=0)
+    n = ok.sum(axis=0)
+    return np.divide(total, n, out=np.full(total.shape, np.nan), where=n > 0)

@@ -10,7 +10,8 @@ a radar track from ``b``.
 Memberships, with ``d_ij(k) >= 0`` the (wrapped) absolute difference between the ESM value and
 radar track ``j``'s value of factor ``i`` and ``s_ij^2 = sigma_i,E^2 + sigma_i,R^2``:
 
-* **inverse distance, L1** (paper 001 eq. 4 as corrected in SPEC 3.4 item 3):
+* **inverse distance, L1** (paper 001 eq. 4 as corrected in
+  ``docs/papers/esm_radar.md``, section "Improved fuzzy evaluation"):
   ``r_ij = (1/d_ij) / sum_j' (1/d_ij')`` with ``d`` floored at ``eps_i``. Each row is a
   distribution over radar tracks.
 * **inverse distance, L2** (alternative reading of the OCR'd eq. 4):

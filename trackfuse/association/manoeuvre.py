@@ -1,39 +1,140 @@
-"""Manoeuvre index from the residuals of a 1-D constant-velocity Kalman filter.
+"""Manoeuvre indices of the ESM track: the detector used by default and the paper's form.
 
-Paper 001 (eq. 8-13) scales the range weight by a manoeuvre index built from the Kalata
-tracking index ``(sigma_w T^2 / sigma_n)`` and estimates the manoeuvre noise from the mean
-square of the measurement residual ``V = Z - Zhat(k|k-1)``. That mixes metres with
-accelerations (W001-4). The dimensionally consistent reading (SPEC 3.4 item 6): a CV
-prediction under a constant acceleration ``a`` misses by ``a T^2 / 2``, so
-``sigma_w = 2 sigma_V / T^2`` and
+Paper 001 (eq. 8-13) cuts the range weight when the ESM target manoeuvres, through an index
+``alpha(k)`` and a normalizer ``alpha_max``. Two indices are implemented.
 
-    alpha(k) = sigma_V(k)^2 / sigma_n(k)^2,   sigma_V(k)^2 = (1/N) sum_{last N residuals} V(i)^2.
+**Windowed NIS of the range difference** (default, :func:`ca_innovations` +
+:func:`windowed_nis`). A 1-D Kalman filter with a nearly-constant-acceleration model
+(discrete Wiener process acceleration: state ``[x, xdot, xddot]``,
+``F = [[1, T, T^2/2], [0, 1, T], [0, 0, 1]]``, ``Q = q G G'`` with ``G = [T^2/2, T, 1]'`` and
+``q`` the variance of the acceleration change over one period, m^2/s^4) runs on the ESM range
+difference ``dr_E(k) = c dt_E(k)`` with its measurement variance ``R``. Its normalized
+innovation squared ``eps(k) = nu(k)^2 / S(k)`` is chi-square with one degree of freedom while
+the model holds, so the window mean
 
-``alpha`` is about 1 (slightly above: the residual also carries the prediction uncertainty)
-for a target the CV model follows, and grows when the target manoeuvres.
+    alpha(k) = (1/N) sum_{i = k-N+1}^{k} eps(i)
 
-The residuals come from a CV Kalman filter on the ESM range sequence ``r_E(k)``: state
-``x = [r, rdot]`` (m, m/s), ``F = [[1, T], [0, 1]]``, ``H = [1, 0]``, piecewise-constant white
-acceleration noise ``Q = q [[T^4/4, T^3/2], [T^3/2, T^2]]`` (``q`` in m^2/s^4) and a
-time-varying measurement variance ``R(k) = sigma_rE(k)^2``. It starts by two-point
-differencing, so the first residual is at scan 2; ``alpha`` is 0 (no evidence of a
-manoeuvre) before that.
+has expectation 1 and ``N alpha ~ chi2(N)`` without a manoeuvre (the no-manoeuvre null). It
+is NaN until the window is full: the filter starts from three measurements (three-point
+differencing, exact covariance), the first innovation is at scan 3, so the first ``alpha`` is
+at scan ``N + 2``. :func:`nis_threshold` gives the chi-square quantile used as ``alpha_max``.
+
+Why this observable and this model (see ``docs/papers/esm_radar.md``, section
+"W001-4 manoeuvre index"): at paper 001's geometry the TDOA-DF range has ~2-3 km of noise and
+the bearing 30 mrad, so a 1 km weave is buried in either; the range difference has 9 m of
+noise (30 ns) and swings by ~400 m with the weave. Its second derivative is not constant
+even for a target in straight flight (the hyperbolic geometry gives up to 1.2 m/s^2, changing
+by < 0.02 m/s^2 per second), so a constant-velocity filter sees a false manoeuvre; the
+constant-acceleration model absorbs it, while the weave changes the acceleration by
+~2 m/s^2 per second.
+
+**The paper's literal index** (:func:`cv_residuals` + :func:`manoeuvre_index`). Eq. 12 takes
+the mean square of the measurement residual ``V = Z - Zhat(k|k-1)`` of the ESM range as the
+manoeuvre-noise estimate, which mixes metres with accelerations (W001-4). The dimensionally
+consistent reading: a CV prediction under a constant acceleration ``a`` misses by
+``a T^2 / 2``, so ``sigma_w = 2 sigma_V / T^2`` and
+
+    alpha(k) = sigma_V(k)^2 / sigma_n(k)^2,   sigma_V(k)^2 = (1/N) sum_{last N residuals} V(i)^2,
+
+from a 1-D CV filter on the TDOA-DF range ``r_E(k)`` (state ``[r, rdot]``, white-acceleration
+``q``, measurement variance ``sigma_rE(k)^2``, two-point start, first residual at scan 2).
+It divides by ``R`` rather than by the innovation variance, so it starts high (the innovation
+variance of a two-point start is ``6 R``; the mean at scan 2 in paper 001's scenario is about
+8) and it never sees the weave through 2-3 km of noise.
 
 References
 ----------
+Y. Bar-Shalom, X. R. Li, T. Kirubarajan, *Estimation with Applications to Tracking and
+Navigation*, Wiley, 2001: sec. 5.4.2 (NIS and its chi-square test), 6.3.3 (DWPA model and
+the choice of its noise), 11.2 (manoeuvre detection from the innovations).
 P. R. Kalata, "The tracking index: a generalized parameter for alpha-beta and
 alpha-beta-gamma target trackers", IEEE Trans. AES 20(2), 1984, 174-182.
-Y. Bar-Shalom, X. R. Li, T. Kirubarajan, *Estimation with Applications to Tracking and
-Navigation*, Wiley, 2001, sec. 6.3.2 (DWNA model) and 5.5 (two-point initialization).
 """
 
 from __future__ import annotations
 
 import numpy as np
+from scipy.stats import chi2
+
+#: Scan of the first innovation of the constant-acceleration filter (three-point start).
+FIRST_CA_INNOVATION = 3
+
+
+def _ca_start(z: np.ndarray, R: np.ndarray, T: float) -> tuple[np.ndarray, np.ndarray]:
+    """State ``(..., 3)`` and covariance ``(..., 3, 3)`` at scan 2 from scans 0-2."""
+    M = np.array([[0.0, 0.0, 1.0],
+                  [1.0 / (2 * T), -2.0 / T, 3.0 / (2 * T)],
+                  [1.0 / T**2, -2.0 / T**2, 1.0 / T**2]])   # x(2) = M z(0:3)
+    x = np.einsum("ij,...j->...i", M, z[..., :3])
+    P = np.einsum("ik,...k,jk->...ij", M, R[..., :3], M)
+    return x, P
+
+
+def ca_innovations(z: np.ndarray, R: np.ndarray, T: float,
+                   q: float) -> tuple[np.ndarray, np.ndarray]:
+    """Innovations of a 1-D nearly-constant-acceleration Kalman filter (DWPA model).
+
+    Parameters
+    ----------
+    z : (..., K) measurements (m), K >= 4.
+    R : (..., K) or scalar measurement variances (m^2), > 0.
+    T : sampling period (s).
+    q : variance of the acceleration change over one period (m^2/s^4), >= 0.
+
+    Returns
+    -------
+    nu : (..., K) innovations ``z(k) - H x(k|k-1)`` (m); NaN at scans 0-2.
+    S : (..., K) innovation variances (m^2); NaN at scans 0-2.
+    """
+    z = np.asarray(z, dtype=float)
+    R = np.broadcast_to(np.asarray(R, dtype=float), z.shape)
+    F = np.array([[1.0, T, T * T / 2], [0.0, 1.0, T], [0.0, 0.0, 1.0]])
+    G = np.array([T * T / 2, T, 1.0])
+    Q = q * np.outer(G, G)
+    nu = np.full(z.shape, np.nan)
+    S = np.full(z.shape, np.nan)
+    x, P = _ca_start(z, R, T)
+    for k in range(FIRST_CA_INNOVATION, z.shape[-1]):
+        x = x @ F.T
+        P = F @ P @ F.T + Q
+        S[..., k] = P[..., 0, 0] + R[..., k]
+        nu[..., k] = z[..., k] - x[..., 0]
+        gain = P[..., :, 0] / S[..., k, None]
+        x = x + gain * nu[..., k, None]
+        P = P - gain[..., :, None] * P[..., None, 0, :]
+    return nu, S
+
+
+def windowed_nis(nu: np.ndarray, S: np.ndarray, window: int) -> np.ndarray:
+    """Mean normalized innovation squared over the last ``window`` scans.
+
+    Parameters
+    ----------
+    nu, S : (..., K) innovations and their variances; NaN before the filter starts.
+    window : number N of NIS values averaged (>= 1).
+
+    Returns
+    -------
+    alpha : (..., K) dimensionless; NaN until N innovations exist (start-up excluded).
+    Without a manoeuvre ``N alpha ~ chi2(N)``.
+    """
+    eps = np.square(nu) / S
+    csum = np.cumsum(np.nan_to_num(eps), axis=-1)
+    count = np.cumsum(~np.isnan(eps), axis=-1)
+    pad = [(0, 0)] * (eps.ndim - 1) + [(window, 0)]
+    total = csum - np.pad(csum, pad)[..., :-window]
+    n = count - np.pad(count, pad)[..., :-window]
+    return np.where(n == window, total / window, np.nan)
+
+
+def nis_threshold(window: int, false_alarm: float) -> float:
+    """``alpha_max`` for :func:`windowed_nis`: the ``1 - false_alarm`` quantile of
+    ``chi2(window) / window``, the index's distribution without a manoeuvre."""
+    return float(chi2.ppf(1.0 - false_alarm, window) / window)
 
 
 def cv_residuals(z: np.ndarray, R: np.ndarray, T: float, q: float) -> np.ndarray:
-    """Innovation sequence of a 1-D CV Kalman filter, vectorized over leading axes.
+    """Innovation sequence of a 1-D CV Kalman filter (the paper's literal index).
 
     Parameters
     ----------
@@ -72,7 +173,8 @@ def cv_residuals(z: np.ndarray, R: np.ndarray, T: float, q: float) -> np.ndarray
 
 
 def manoeuvre_index(V: np.ndarray, R: np.ndarray, window: int = 5) -> np.ndarray:
-    """``alpha(k)``: mean square of the last ``window`` residuals over ``R(k)``.
+    """The paper's literal ``alpha(k)``: mean square of the last ``window`` residuals over
+    ``R(k)``.
 
     Parameters
     ----------
@@ -82,7 +184,7 @@ def manoeuvre_index(V: np.ndarray, R: np.ndarray, window: int = 5) -> np.ndarray
 
     Returns
     -------
-    alpha : (..., K) dimensionless, >= 0; 0 where no residual exists yet.
+    alpha : (..., K) dimensionless, >= 0; NaN where no residual exists yet.
     """
     valid = ~np.isnan(V)
     sq = np.where(valid, np.square(np.nan_to_num(V)), 0.0)
@@ -92,5 +194,5 @@ def manoeuvre_index(V: np.ndarray, R: np.ndarray, window: int = 5) -> np.ndarray
     csum_lag = np.pad(csum, pad)[..., :-window]
     ccount_lag = np.pad(ccount, pad)[..., :-window]
     n = ccount - ccount_lag
-    mean_sq = np.divide(csum - csum_lag, n, out=np.zeros_like(csum), where=n > 0)
+    mean_sq = np.divide(csum - csum_lag, n, out=np.full_like(csum, np.nan), where=n > 0)
     return mean_sq / R

@@ -11,14 +11,14 @@ The inversion is exact for noise-free inputs. It fails when the denominator is n
 bearing points along the hyperbola's asymptote) or gives ``r <= 0``: such samples are flagged
 invalid, and :func:`carry_forward` holds the last valid value.
 
-The range error follows from first-order propagation (SPEC 3.1),
+The range error follows from first-order propagation,
 ``sigma_r^2 = J diag(sigma_theta^2, sigma_dr^2) J'`` with ``J = [dr/dtheta, dr/d(dr)]``:
 
     dr/dtheta = -2 r (u_perp'b) / D,     dr/d(dr) = 2 (r - dr) / D,
 
-``D = 2 (u'b - dr)`` and ``u_perp = [-sin theta, cos theta]'``. SPEC 3.1 suggests numerical
-derivatives; the closed form is used here because it is exact and cheaper, and a test checks
-it against central differences.
+``D = 2 (u'b - dr)`` and ``u_perp = [-sin theta, cos theta]'``. The closed form is used rather
+than numerical derivatives because it is exact and cheaper; a test checks it against central
+differences.
 
 References
 ----------

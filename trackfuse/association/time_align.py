@@ -4,10 +4,11 @@ Radar samples ``y(m)`` at ``t_m = m T_R``; the ESM samples at ``t_g``. With
 ``t1 <= t_g < t2`` the neighbouring radar times and ``a = (t_g - t1) / (t2 - t1)``:
 
 * eq. 1 (correct as printed): ``y(t_g) = y(t1) + a (y(t2) - y(t1))``;
-* eq. 2 (corrected, SPEC 3.2 / W001-7): for independent errors of equal variance
-  ``sigma^2``, ``var y(t_g) = sigma^2 ((1 - a)^2 + a^2)``, which is at most ``sigma^2``. The
-  printed ``sigma^2 (1 + 2 (dt/(t2 - t1))^2)`` is not the variance of the interpolant; any
-  motion-model error term it might stand for is unspecified and not modelled here.
+* eq. 2 (corrected, W001-7 in ``docs/papers/esm_radar.md``): for independent errors of equal
+  variance ``sigma^2``, ``var y(t_g) = sigma^2 ((1 - a)^2 + a^2)``, which is at most
+  ``sigma^2``. The printed ``sigma^2 (1 + 2 (dt/(t2 - t1))^2)`` is not the variance of the
+  interpolant; any motion-model error term it might stand for is unspecified and not
+  modelled here.
 
 Without alignment the most recent radar sample (``a = 0``, zero-order hold) is used, which is
 the same thing when the sensors are synchronous.

@@ -8,11 +8,11 @@ priors, the ML decision minimizes the negative log-likelihood
 
     L_j = sum_k [ d_kj' S_kj^-1 d_kj + log |S_kj| ]     (up to a common constant and factor 1/2)
 
-whose first term is the chi-square track-to-track distance ``D_j`` of SPEC 3.4. The
+whose first term is the chi-square track-to-track distance ``D_j``. The
 ``log |S|`` term matters only where ``S`` differs between tracks (the ``derived`` radar model,
 the range factor); where it does not, the rule is ``argmin_j D_j``. Using the full covariance
 keeps the TDOA-DF range, which is a function of ESM bearing and TDOA, from being counted as
-independent evidence (SPEC 3.4, reference method).
+independent evidence (``docs/papers/esm_radar.md``, section "ML reference").
 
 References
 ----------

@@ -2,7 +2,7 @@
 
 Zhang Xiaoqiang et al., "An ESM-radar track correlation algorithm based on improved fuzzy
 comprehensive evaluation", J. Air Force Eng. Univ. (Nat. Sci.) 18(1), 2017, 44-49, with the
-corrections of SPEC section 3.
+corrections written up in ``docs/papers/esm_radar.md``.
 
 One trial simulates the snake/crossing scenario (:mod:`trackfuse.association.esm_scenario`):
 an ESM track of target 2 (TDOA-DF range, bearing, speed, TDOA, phase) and three radar tracks,
@@ -12,19 +12,21 @@ track each picked. The truth is radar track 2.
 Algorithms (``algorithms`` param, one row each):
 
 =================  ===========================================================================
-traditional        multi-factor fuzzy decision (SPEC 3.3): ``baseline.factors`` (range, speed,
-                   angle), Gaussian grade, static AHP root weights, ``baseline.decision``
+traditional        multi-factor fuzzy decision (docs section "Traditional baseline"):
+                   ``baseline.factors`` (range, speed, angle), Gaussian grade with a static
+                   spread (``baseline.spread``), static AHP root weights, ``baseline.decision``
 traditional_5f     the same with all five factors (ablation)
-improved           paper 001 (SPEC 3.4): five factors, inverse-distance membership
-                   (``membership_norm``), AHP weights (``weights``) made dynamic by the
-                   manoeuvre index, weighted average, mean-membership decision
+improved           paper 001 (docs section "Improved fuzzy evaluation"): five factors,
+                   inverse-distance membership (``membership_norm``), AHP weights
+                   (``weights``) made dynamic by the manoeuvre index (``alpha.*``), weighted
+                   average, mean-membership decision
 improved_static    improved with the static AHP weights (ablation: dynamic weights)
 improved_3f        improved on range, speed, angle only (ablation: 3 vs 5 factors)
 improved_l2        improved with the L2 inverse-distance membership (ablation)
 improved_gauss     improved with the Gaussian posterior membership (ablation, W001-1)
 chi2               ML track-to-track reference (:mod:`trackfuse.association.track_likelihood`)
                    on speed, angle, TDOA, phase with the full covariance; the ESM range is
-                   excluded because it is a function of the ESM angle and TDOA (SPEC 3.4)
+                   excluded because it is a function of the ESM angle and TDOA
 chi2_lrt           ``chi2`` that may answer "no decision" (W001-6): a likelihood-ratio
                    threshold between the two best tracks and a chi-square gate on the best
                    (:func:`~trackfuse.association.track_likelihood.abstaining_decision`)
@@ -34,18 +36,27 @@ chi2_5f            ``chi2`` on all five factors, the TDOA-DF range entering with
                    wrong for it and this variant falls far below ``chi2``
 =================  ===========================================================================
 
+The traditional baseline's Gaussian grade uses a *static* spread by default
+(``baseline.spread = nominal``, W001-8): the sensor accuracies at the scenario's noise-free
+geometry. ``per_sample`` keeps the earlier, handicapped variant whose TDOA-DF spread is
+recomputed at each noisy sample. The manoeuvre index defaults to the windowed NIS of a
+constant-acceleration filter on the ESM range difference, with ``alpha_max`` its chi-square
+quantile (W001-4); ``alpha.index = literal`` is the paper's form.
+
 Row metrics: ``chosen`` (radar track 1..3, or 0 for "no decision"), ``correct`` (0/1, Wilson
 interval), ``decided`` (0/1; always 1 except for ``chi2_lrt``), ``margin`` (the
 decision statistic's lead of the winner over the runner-up: mean membership for ``mean``
 decisions, vote share for ``vote``, log-likelihood ratio for ``chi2*``), and diagnostics shared
 by all algorithms or specific to one: ``range_weight_mean``/``range_weight_min`` (the range
 factor's weight over the scans; 0 if the algorithm does not weight range), ``alpha_mean`` and
-``alpha_peak`` (manoeuvre index from the ESM range), ``esm_invalid`` (TDOA-DF samples carried
-forward) and ``esm_range_sigma_m`` (mean 1-sigma of the TDOA-DF range). Per-scan weights and
-manoeuvre indices are drawn in the ``trajectory`` figure.
+``alpha_peak`` (the manoeuvre index over the scans where it is defined), ``esm_invalid``
+(TDOA-DF samples carried forward) and ``esm_range_sigma_m`` (mean 1-sigma of the TDOA-DF
+range). Per-scan weights and manoeuvre indices are drawn in the ``trajectory`` and
+``manoeuvre`` figures.
 
-Figures (``correct_rate``: the paper's Figs. 3-4; ``trajectory``: its Figs. 1-2) and tables
-(``table3``: its Table 3; ``ahp``: its Table 1; ``ablation``) are built by
+Figures (``correct_rate``: the paper's Figs. 3-4; ``trajectory``: its Figs. 1-2;
+``manoeuvre``: the index with and without the snake) and tables (``table3``: its Table 3;
+``ahp``: its Table 1; ``ablation``; ``paper_vs_reproduced``) are built by
 :mod:`trackfuse.plots.esm_radar`, which registers them below.
 """
 
@@ -66,6 +77,7 @@ from trackfuse.association.esm_scenario import (
     RadarNoise,
     SnakeCross,
     esm_factors,
+    nominal_sd,
     radar_factors,
     true_factors,
 )
@@ -77,19 +89,25 @@ from trackfuse.association.fuzzy import (
     gaussian_posterior_membership,
     inverse_distance_membership,
 )
-from trackfuse.association.manoeuvre import cv_residuals, manoeuvre_index
+from trackfuse.association.manoeuvre import (
+    ca_innovations,
+    cv_residuals,
+    manoeuvre_index,
+    nis_threshold,
+    windowed_nis,
+)
+from trackfuse.association.tdoa_df import C
 from trackfuse.association.time_align import bracket, interpolate, interpolate_covariance
 from trackfuse.association.track_likelihood import abstaining_decision, ml_track_decision
 from trackfuse.experiments.base import Experiment, Param
 from trackfuse.plots import esm_radar as plots
+from trackfuse.reported import ESM_RADAR_WEIGHTS
 from trackfuse.seeding import TrialStreams
 from trackfuse.tracking.models import wrap
 
 TRUE_TRACK = 1  # 0-based index of radar track 2
 N_TRACKS = 3
-#: Paper 001's printed (rounded) weights, by factor name (SPEC 3.4 item 5).
-PAPER_ROUNDED = np.array([0.51, 0.26, 0.13, 0.07, 0.03])
-EPS_FRACTION = 1e-3  # eps_i = 1e-3 sqrt(sigma_E^2 + sigma_R^2), SPEC 3.4 item 3
+EPS_FRACTION = 1e-3  # eps_i = 1e-3 sqrt(sigma_E^2 + sigma_R^2), floor of the 1/d membership
 UNINFORMATIVE_VAR = 1e24  # m^2: variance given to an ESM range that could not be computed
 
 
@@ -138,7 +156,7 @@ PARAMS = (
     Param("algorithms", ["traditional", "improved", "chi2"],
           "association algorithms run on every trial (same data)", "", list,
           choices=tuple(ALGORITHMS)),
-    Param("scan.count", 50, "ESM samples per trial K (SPEC 3.5)", "samples", int, 3, 10_000),
+    Param("scan.count", 50, "ESM samples per trial K", "samples", int, 3, 10_000),
     Param("esm.period", 1.0, "ESM sampling period", "s", float, 1e-3, 600.0),
     Param("radar.period", 1.0, "radar sampling period", "s", float, 1e-3, 600.0),
     Param("esm.offset", 0.0, "time of the first ESM sample after the first radar sample",
@@ -182,13 +200,26 @@ PARAMS = (
           choices=("root_exact", "eigen", "paper_rounded")),
     Param("membership_norm", "l1", "normalization of the 1/d membership of 'improved'", "",
           str, choices=("l1", "l2")),
-    Param("alpha.window", 5, "residuals N averaged in the manoeuvre index", "samples", int,
+    Param("alpha.index", "nis_tdoa",
+          "manoeuvre index: 'nis_tdoa' = windowed NIS of a constant-acceleration filter on the "
+          "ESM range difference c*dt (default), 'literal' = paper eq. 8-13, residual of a CV "
+          "filter on the TDOA-DF range over its measurement variance", "", str,
+          choices=("nis_tdoa", "literal")),
+    Param("alpha.window", 5, "scans N averaged in the manoeuvre index", "samples", int,
           1, 10_000),
-    Param("alpha.max", 10.0, "alpha_max of eq. 14 ('fixed' mode)", "", float, 1e-6, 1e9),
-    Param("alpha.max_mode", "fixed", "alpha_max: fixed constant or running maximum", "", str,
-          choices=("fixed", "running_max")),
-    Param("alpha.q", 1.0, "white acceleration variance of the range CV filter", "m^2/s^4",
-          float, 0.0, 1e6),
+    Param("alpha.max_mode", "chi2",
+          "alpha_max of eq. 14: 'chi2' = quantile 1 - alpha.false_alarm of chi2(N)/N, the "
+          "no-manoeuvre distribution of the 'nis_tdoa' index; 'fixed' = alpha.max; "
+          "'running_max' = running maximum of alpha", "", str,
+          choices=("chi2", "fixed", "running_max")),
+    Param("alpha.false_alarm", 0.01, "'chi2' mode: probability that the index of a "
+          "non-manoeuvring target exceeds alpha_max in a window", "", float, 1e-9, 0.5),
+    Param("alpha.max", 10.0, "alpha_max of eq. 14 in 'fixed' mode", "", float, 1e-6, 1e9),
+    Param("alpha.accel_change_sd", 0.05,
+          "'nis_tdoa': sd of the range-difference acceleration change over one period "
+          "(DWPA process noise)", "m/s^2", float, 0.0, 1e4),
+    Param("alpha.q", 1.0, "'literal': white acceleration variance of the range CV filter",
+          "m^2/s^4", float, 0.0, 1e6),
     Param("lrt.threshold", float(np.log(19.0)),
           "chi2_lrt: least best-vs-second log-likelihood ratio to declare a track "
           "(log 19: 95 % between the two)", "nat", float, 0.0, 1e6),
@@ -198,6 +229,13 @@ PARAMS = (
           list, choices=FACTORS),
     Param("baseline.tau", 0.5, "Gaussian grade exp(-tau d^2/(s_E^2+s_R^2))", "", float,
           1e-6, 1e6),
+    Param("baseline.spread", "nominal",
+          "spread of the traditional Gaussian grade: 'nominal' = sensor sd at the scenario's "
+          "noise-free geometry, averaged over the scans (static, default); 'trial_mean' = "
+          "per-trial time mean of the sd from the measured values (static); 'per_sample' = "
+          "sd recomputed at every scan from the measured bearing/TDOA/range (handicapped: "
+          "sharp when the ESM range falls short)", "", str,
+          choices=("nominal", "trial_mean", "per_sample")),
     Param("baseline.decision", "mean", "'traditional' decision: mean membership or majority "
           "vote of per-scan decisions", "", str, choices=("mean", "vote")),
 )
@@ -214,7 +252,56 @@ class Simulated:
     esm_valid: np.ndarray  # (N, K) bool
     x_radar: np.ndarray    # (N, K, J, 5) radar factors aligned to the ESM times
     P_radar: np.ndarray    # (N, K, J, 5, 5)
-    alpha: np.ndarray      # (N, K) manoeuvre index
+    alpha: np.ndarray      # (N, K) manoeuvre index, NaN where not defined yet
+    sd_nominal: np.ndarray  # (2, 5) ESM and radar sd at the noise-free geometry
+
+
+def sensor_noise(params: Mapping[str, Any]) -> tuple[ESMNoise, RadarNoise]:
+    """The ESM and radar accuracies of ``params`` (paper 001 Table 2 by default)."""
+    return (ESMNoise(params["esm.sigma_speed"], params["esm.sigma_angle"],
+                     params["esm.sigma_tdoa"], params["esm.sigma_phase"]),
+            RadarNoise(params["radar.sigma_range_coef"], params["radar.sigma_speed"],
+                       params["radar.sigma_angle"], params["radar.sigma_tdoa"],
+                       params["radar.sigma_phase"]))
+
+
+def manoeuvre_alpha(params: Mapping[str, Any], x_esm: np.ndarray, P_esm: np.ndarray,
+                    index: str) -> np.ndarray:
+    """Manoeuvre index ``alpha(k)`` of the ESM track (:mod:`trackfuse.association.manoeuvre`).
+
+    Parameters
+    ----------
+    params : resolved params (``esm.period``, ``alpha.*``). x_esm : (N, K, 5) ESM factors.
+    P_esm : (N, K, 5, 5) their covariance. index : ``"nis_tdoa"`` or ``"literal"``.
+
+    Returns
+    -------
+    alpha : (N, K), NaN where the index is not defined (start-up, or no ESM range).
+    """
+    T, window = params["esm.period"], params["alpha.window"]
+    if index == "nis_tdoa":
+        nu, S = ca_innovations(C * x_esm[..., 3], C**2 * P_esm[..., 3, 3], T,
+                               params["alpha.accel_change_sd"] ** 2)
+        return windowed_nis(nu, S, window)
+    if index == "literal":
+        R_n = P_esm[..., 0, 0]
+        return manoeuvre_index(cv_residuals(x_esm[..., 0], R_n, T, params["alpha.q"]), R_n,
+                               window)
+    raise ValueError(f"unknown manoeuvre index {index!r}")
+
+
+def alpha_max(params: Mapping[str, Any]) -> tuple[float, str]:
+    """``alpha_max`` and the :func:`dynamic_weights` mode for ``params``.
+
+    ``chi2`` mode needs the ``nis_tdoa`` index, whose no-manoeuvre distribution it uses.
+    """
+    mode = params["alpha.max_mode"]
+    if mode == "chi2":
+        if params["alpha.index"] != "nis_tdoa":
+            raise ValueError("alpha.max_mode 'chi2' needs alpha.index 'nis_tdoa'; with the "
+                             "'literal' index use 'fixed' (alpha.max) or 'running_max'")
+        return nis_threshold(params["alpha.window"], params["alpha.false_alarm"]), "fixed"
+    return params["alpha.max"], mode
 
 
 def simulate(params: Mapping[str, Any], streams: Sequence[TrialStreams]) -> Simulated:
@@ -231,7 +318,7 @@ def simulate(params: Mapping[str, Any], streams: Sequence[TrialStreams]) -> Simu
                       t_cross=params["crossing.time"])
     A1 = np.zeros(2)
     A2 = np.array([params["geometry.baseline"], 0.0])
-    dl = params["phase.d_over_lambda"]
+    dl, model = params["phase.d_over_lambda"], params["radar.factor_model"]
     K, TE, TR = params["scan.count"], params["esm.period"], params["radar.period"]
     t = params["esm.offset"] + TE * np.arange(K)
     M = int(np.floor(t[-1] / TR + 1e-9)) + 2
@@ -246,15 +333,13 @@ def simulate(params: Mapping[str, Any], streams: Sequence[TrialStreams]) -> Simu
         z_esm.append(g_esm.standard_normal((K, 4)))
         z_radar.append(g_radar.standard_normal((M, N_TRACKS, 5)))
     scale = params["noise.scale"]
-    esm_noise = ESMNoise(params["esm.sigma_speed"], params["esm.sigma_angle"],
-                         params["esm.sigma_tdoa"], params["esm.sigma_phase"])
-    radar_noise = RadarNoise(params["radar.sigma_range_coef"], params["radar.sigma_speed"],
-                             params["radar.sigma_angle"], params["radar.sigma_tdoa"],
-                             params["radar.sigma_phase"])
+    esm_noise, radar_noise = sensor_noise(params)
     x_e, P_e, valid = esm_factors(f_esm, scale * np.stack(z_esm), esm_noise, A1, A2,
                                   params["esm.min_denominator"])
-    x_r, P_r = radar_factors(f_radar, scale * np.stack(z_radar), radar_noise,
-                             params["radar.factor_model"], A1, A2, dl)
+    x_r, P_r = radar_factors(f_radar, scale * np.stack(z_radar), radar_noise, model, A1, A2,
+                             dl)
+    sd_nominal = np.stack(nominal_sd(f_esm, esm_noise, radar_noise, model, A1, A2, dl,
+                                     params["esm.min_denominator"]))
 
     m1, a = bracket(t, TR, M)
     if params["time_align"] and np.any(a > 0):
@@ -263,12 +348,8 @@ def simulate(params: Mapping[str, Any], streams: Sequence[TrialStreams]) -> Simu
         P_rk = interpolate_covariance(P_r, m1, a, axis=1)
     else:  # synchronous sensors, or no alignment: the latest radar sample
         x_rk, P_rk = x_r[:, m1], P_r[:, m1]
-
-    R_n = P_e[..., 0, 0]
-    V = cv_residuals(x_e[..., 0], R_n, TE, params["alpha.q"])
-    alpha = manoeuvre_index(V, R_n, params["alpha.window"])
-    alpha = np.where(np.isfinite(alpha), alpha, 0.0)  # no valid ESM range: no evidence
-    return Simulated(t, p_k, x_e, P_e, valid, x_rk, P_rk, alpha)
+    alpha = manoeuvre_alpha(params, x_e, P_e, params["alpha.index"])
+    return Simulated(t, p_k, x_e, P_e, valid, x_rk, P_rk, alpha, sd_nominal)
 
 
 def static_weights(factors: Sequence[str], method: str) -> np.ndarray:
@@ -279,7 +360,7 @@ def static_weights(factors: Sequence[str], method: str) -> np.ndarray:
     """
     idx = [FACTORS.index(f) for f in factors]
     if method == "paper_rounded" and len(idx) == len(FACTORS):
-        return PAPER_ROUNDED.copy()
+        return np.array(ESM_RADAR_WEIGHTS)
     sub = ahp.PAPER_001_JUDGEMENT[np.ix_(idx, idx)]
     return ahp.weights(sub, "eigen" if method == "eigen" else "root")
 
@@ -293,12 +374,46 @@ def factor_names(variant: Variant, params: Mapping[str, Any]) -> tuple[str, ...]
 
 @dataclass
 class Differences:
-    """ESM-minus-radar factor differences of a batch, computed once for every algorithm."""
+    """ESM-minus-radar factor differences of a batch, computed once for every algorithm.
 
-    d: np.ndarray    # (N, K, J, 5) differences, angle and phase wrapped
-    var: np.ndarray  # (N, K, J, 5) summed ESM + radar variances
-    S: np.ndarray    # (N, K, J, 5, 5) difference covariances
+    ``var`` holds the per-scan summed variances (from the measured values); the two static
+    spreads of the traditional Gaussian grade are ``var_nominal`` and ``var_trial_mean``
+    (see :func:`baseline_variance`).
+    """
+
+    d: np.ndarray               # (N, K, J, 5) differences, angle and phase wrapped
+    var: np.ndarray             # (N, K, J, 5) summed ESM + radar variances, per scan
+    S: np.ndarray               # (N, K, J, 5, 5) difference covariances
+    var_nominal: np.ndarray     # (5,) summed variances at the noise-free geometry
+    var_trial_mean: np.ndarray  # (N, 1, 1, 5) summed per-trial time-mean variances
     ml_cache: dict = field(default_factory=dict)  # ML decisions by factor subset
+
+
+def _summed_variance(sd_esm: np.ndarray, sd_radar: np.ndarray) -> np.ndarray:
+    """``sd_esm^2 + sd_radar^2``; an undefined ESM range gets an uninformative variance."""
+    var = np.square(sd_esm) + np.square(sd_radar)
+    return np.where(np.isfinite(var), var, UNINFORMATIVE_VAR)
+
+
+def static_spreads(sim: Simulated) -> tuple[np.ndarray, np.ndarray]:
+    """The two static spreads of the traditional Gaussian grade, as summed variances.
+
+    ``nominal``: ESM and radar sd at the scenario's noise-free geometry, averaged over the
+    scans (one constant per factor for the whole run). ``trial_mean``: the time mean over
+    the trial (and the radar tracks) of the sd computed from the measured values, one
+    constant per factor and trial; it uses no truth.
+
+    Returns
+    -------
+    var_nominal : (5,); var_trial_mean : (N, 1, 1, 5).
+    """
+    var_nominal = _summed_variance(sim.sd_nominal[0], sim.sd_nominal[1])
+    # Invalid TDOA-DF samples are carried forward, so a trial's ESM range sd is NaN at
+    # every scan or at none: its time mean is NaN exactly when the trial has no ESM range.
+    sd_e = np.sqrt(np.diagonal(sim.P_esm, axis1=-2, axis2=-1))          # (N, K, 5)
+    sd_r = np.sqrt(np.diagonal(sim.P_radar, axis1=-2, axis2=-1))        # (N, K, J, 5)
+    var_trial = _summed_variance(sd_e.mean(axis=1), sd_r.mean(axis=(1, 2)))
+    return var_nominal, var_trial[:, None, None, :]
 
 
 def differences(sim: Simulated) -> Differences:
@@ -314,7 +429,55 @@ def differences(sim: Simulated) -> Differences:
         S[..., 0, :] = np.where(missing[..., None], 0.0, S[..., 0, :])
         S[..., :, 0] = np.where(missing[..., None], 0.0, S[..., :, 0])
         S[..., 0, 0] = np.where(missing, UNINFORMATIVE_VAR, S[..., 0, 0])
-    return Differences(d, np.diagonal(S, axis1=-2, axis2=-1).copy(), S)
+    var_nominal, var_trial_mean = static_spreads(sim)
+    return Differences(d, np.diagonal(S, axis1=-2, axis2=-1).copy(), S, var_nominal,
+                       var_trial_mean)
+
+
+def baseline_variance(diff: Differences, rule: str) -> np.ndarray:
+    """Summed variance ``sigma_E^2 + sigma_R^2`` of the traditional Gaussian grade.
+
+    ``rule``: ``nominal`` or ``trial_mean`` (static spreads, :func:`static_spreads`), or
+    ``per_sample`` (recomputed at every scan from the measured values: the TDOA-DF range sd
+    then shrinks exactly when the measured range falls short, which pulls the decision
+    toward the nearer radar track).
+
+    Returns
+    -------
+    var : broadcastable to (N, K, J, 5).
+    """
+    if rule == "nominal":
+        return diff.var_nominal
+    if rule == "trial_mean":
+        return diff.var_trial_mean
+    if rule == "per_sample":
+        return diff.var
+    raise ValueError(f"unknown baseline spread {rule!r}")
+
+
+def membership(kind: str, d: np.ndarray, diff: Differences, idx: Sequence[int],
+               params: Mapping[str, Any]) -> np.ndarray:
+    """Evaluation matrices of one fuzzy algorithm.
+
+    Parameters
+    ----------
+    kind : ``gaussian`` (traditional grade, spread by ``baseline.spread``), ``posterior``,
+        ``l1`` or ``l2`` (inverse distance). d : (N, K, J, F) absolute differences of the
+        factors ``idx``. diff : the batch's differences (variances). params : resolved params.
+
+    Returns
+    -------
+    R : (N, K, F, J) memberships.
+    """
+    dd = np.swapaxes(d, -1, -2)
+    if kind == "gaussian":
+        var = baseline_variance(diff, params["baseline.spread"])[..., idx]
+        return gaussian_membership(dd, np.swapaxes(np.broadcast_to(var, d.shape), -1, -2),
+                                   params["baseline.tau"])
+    vv = np.swapaxes(diff.var[..., idx], -1, -2)
+    if kind == "posterior":
+        return gaussian_posterior_membership(dd, vv, 0.5)
+    return inverse_distance_membership(dd, EPS_FRACTION * np.sqrt(vv), kind)
 
 
 def evaluate(variant: Variant, diff: Differences, alpha: np.ndarray,
@@ -347,18 +510,12 @@ def evaluate(variant: Variant, diff: Differences, alpha: np.ndarray,
         zero = np.zeros(N)
         return {"chosen": j, "margin": margin, "range_weight_mean": zero,
                 "range_weight_min": zero}
-    dd = np.swapaxes(np.abs(d), -1, -2)                               # (N, K, F, J)
-    vv = np.swapaxes(diff.var[..., idx], -1, -2)
     kind = params["membership_norm"] if variant.membership == "param" else variant.membership
-    if kind == "gaussian":
-        R = gaussian_membership(dd, vv, params["baseline.tau"])
-    elif kind == "posterior":
-        R = gaussian_posterior_membership(dd, vv, 0.5)
-    else:
-        R = inverse_distance_membership(dd, EPS_FRACTION * np.sqrt(vv), kind)
+    R = membership(kind, np.abs(d), diff, idx, params)
     a0 = static_weights(names, params["weights"])
     if variant.dynamic and names[0] == "range":
-        a = dynamic_weights(a0, alpha, params["alpha.max"], params["alpha.max_mode"])
+        a_max, mode = alpha_max(params)
+        a = dynamic_weights(a0, np.nan_to_num(alpha, nan=0.0), a_max, mode)
     else:
         a = np.broadcast_to(a0, (N, K, len(idx)))
     b = compose(a, R)                                                # (N, K, J)
@@ -373,9 +530,12 @@ def run_batch(params: Mapping[str, Any],
               streams: Sequence[TrialStreams]) -> list[list[dict]]:
     """Vectorized trials: one row list per trial, one row per algorithm."""
     sim = simulate(params, streams)
+    alpha = np.nan_to_num(sim.alpha, nan=0.0)
+    defined = np.isfinite(sim.alpha).sum(axis=-1)
     shared = {
-        "alpha_mean": sim.alpha.mean(axis=-1),
-        "alpha_peak": sim.alpha.max(axis=-1),
+        "alpha_mean": np.divide(alpha.sum(axis=-1), defined, out=np.zeros(len(streams)),
+                                where=defined > 0),
+        "alpha_peak": alpha.max(axis=-1),
         "esm_invalid": (~sim.esm_valid).sum(axis=-1),
         "esm_range_sigma_m": np.sqrt(sim.P_esm[..., 0, 0]).mean(axis=-1),
     }

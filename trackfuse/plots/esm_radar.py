@@ -17,19 +17,26 @@ trajectory     paper Figs. 1-2: true tracks and the ESM TDOA-DF location track, 
                the config and seed: trial 0 of point 0 is re-simulated with the runner's
                streams ``trial_streams(seed, 0, 0)`` (milliseconds); the title says
                whether the recomputed decision matches the saved row of ``trials.csv``.
+manoeuvre      mean manoeuvre index against time with 95 % t bands, with the snake and
+               without it (same noise), for the default detector and the paper's literal
+               index. *Recomputed* for the first 200 trials of point 0 (W001-4).
 =============  ============================================================================
 
 Tables, returned by :func:`tables`:
 
-=============  ============================================================================
-table3         paper Table 3: counts per chosen radar track (and "no decision"), correct
-               rate with its Wilson interval and wrong-decision rate, per point and
-               algorithm. From ``trials.csv``.
-ablation       every algorithm against ``improved`` on the same trials (paired, exact
-               McNemar test); only when ``improved`` was run. From ``trials.csv``.
-ahp            paper Table 1 AHP weights and consistency, computed from the judgement
-               matrix (no run data).
-=============  ============================================================================
+===================  ======================================================================
+table3               paper Table 3: counts per chosen radar track (and "no decision"),
+                     correct rate with its Wilson interval and wrong-decision rate, per
+                     point and algorithm. From ``trials.csv``.
+ablation             every algorithm against ``improved`` on the same trials (paired, exact
+                     McNemar test); only when ``improved`` was run. From ``trials.csv``.
+ahp                  paper Table 1 AHP weights and consistency, computed from the judgement
+                     matrix (no run data), beside the paper's printed numbers.
+paper_vs_reproduced  what paper 001 reports (:data:`trackfuse.reported.ESM_RADAR`) against
+                     this run: Table 3 at the paper's setting with our Wilson intervals, and
+                     the AHP numbers; a verdict per number (paper value inside our interval
+                     or not).
+===================  ======================================================================
 
 The science (simulation, algorithms, AHP weight subsets) stays in the experiment module,
 which imports this one to register :func:`figures` and :func:`tables`; functions here that
@@ -48,8 +55,9 @@ from scipy.stats import binomtest
 from trackfuse.association import ahp
 from trackfuse.association.esm_scenario import FACTORS
 from trackfuse.plots.style import band, new_figure, reference_line
+from trackfuse.reported import ESM_RADAR, ESM_RADAR_WEIGHTS
 from trackfuse.seeding import trial_streams
-from trackfuse.stats import wilson_interval
+from trackfuse.stats import t_interval, wilson_interval
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -131,10 +139,10 @@ def ahp_table() -> pd.DataFrame:
     """Paper 001 Table 1 weights by the root and eigenvector methods, with consistency.
 
     One row per factor set (all five, and the traditional method's three) and method:
-    weights by factor name, ``lambda_max``, ``CI`` and ``CR`` (SPEC 3.4 item 5), plus the
-    paper's printed rounded weights for comparison.
+    weights by factor name, ``lambda_max``, ``CI`` and ``CR``, plus the paper's printed
+    rounded weights and consistency numbers for comparison.
     """
-    from trackfuse.experiments.esm_radar import PAPER_ROUNDED, THREE
+    from trackfuse.experiments.esm_radar import THREE
 
     out = []
     for names in (FACTORS, THREE):
@@ -147,16 +155,103 @@ def ahp_table() -> pd.DataFrame:
                         **{f: w.get(f, np.nan) for f in FACTORS}, "lambda_max": lam,
                         "CI": ahp.consistency_index(lam, len(names)),
                         "CR": ahp.consistency_ratio(B)})
-    out.append({"factors": 5, "method": "paper_rounded",
-                **dict(zip(FACTORS, PAPER_ROUNDED, strict=True)), "lambda_max": 5.2375,
-                "CI": 0.059375, "CR": np.nan})
+    paper = {q: ESM_RADAR.result(f"AHP {q}").value for q in ("lambda_max", "CI", "CR")}
+    out.append({"factors": 5, "method": "paper_printed",
+                **dict(zip(FACTORS, ESM_RADAR_WEIGHTS, strict=True)), **paper})
+    return pd.DataFrame(out)
+
+
+#: Paper 001's Table 3 setting, by param key: T1-T2 separation (m) and the radar range sd
+#: coefficient of its Table 2. Points of a run at other values are not compared with it.
+PAPER_TABLE3_SETTING = {"target.separation": 200.0, "radar.sigma_range_coef": 0.01}
+
+
+def printed_half_unit(value: float) -> float:
+    """Half a unit in the last printed digit of ``value`` (0.053 -> 0.0005; 130 -> 0.5)."""
+    text = repr(float(value)).rstrip("0").rstrip(".")
+    decimals = len(text.split(".")[1]) if "." in text else 0
+    return 0.5 * 10.0 ** -decimals
+
+
+def verdict(paper: float, low: float, high: float, tolerance: float = 0.0) -> str:
+    """``inside`` if the paper's value lies in ``[low - tolerance, high + tolerance]``."""
+    return "inside" if low - tolerance <= paper <= high + tolerance else "outside"
+
+
+def _comparison(quantity: str, where: str, paper: float, ours: float, low: float,
+                high: float, tolerance: float, note: str = "") -> dict[str, Any]:
+    return {"where": where, "quantity": quantity, "paper": paper, "ours": ours,
+            "ci_low": low, "ci_high": high, "tolerance": tolerance,
+            "verdict": verdict(paper, low, high, tolerance), "note": note}
+
+
+def _table3_comparisons(row: pd.Series) -> list[dict[str, Any]]:
+    """Paper Table 3 against one ``table3`` row (one algorithm at one point)."""
+    method, n = row["algorithm"], int(row["n"])
+    rep = ESM_RADAR.result(f"{method}: correct rate")
+    out = [_comparison(rep.quantity, rep.where, rep.value, row["correct_rate"],
+                       row["ci_low"], row["ci_high"], 0.0,
+                       "ours: 95 % Wilson interval")]
+    for track in (1, 2, 3):
+        rep = ESM_RADAR.result(f"{method}: runs to radar track {track}")
+        count = int(row[f"radar_track_{track}"])
+        lo, hi = wilson_interval(count, n)
+        # The Wilson bounds at 0 and n are exact; round off floating-point residue there.
+        lo, hi = (0.0 if count == 0 else n * float(lo)), (n if count == n else n * float(hi))
+        out.append(_comparison(rep.quantity, rep.where, rep.value, count, lo, hi, 0.0,
+                               f"ours: n x 95 % Wilson interval, n = {n}"))
+    return out
+
+
+def _ahp_comparisons() -> list[dict[str, Any]]:
+    """Paper Table 1 numbers against the exact root-method computation (no interval)."""
+    B = ahp.PAPER_001_JUDGEMENT
+    lam = ahp.lambda_max(B)
+    ours = {"AHP lambda_max": lam, "AHP CI": ahp.consistency_index(lam, len(FACTORS)),
+            "AHP CR": ahp.consistency_ratio(B)}
+    out = []
+    for quantity, value in ours.items():
+        rep = ESM_RADAR.result(quantity)
+        note = ("exact; tolerance = half a unit of the paper's last printed digit"
+                + ("; the paper's CI is (5.2375 - 5)/4 from its rounded lambda_max"
+                   if quantity == "AHP CI" else ""))
+        out.append(_comparison(quantity, rep.where, rep.value, value, value, value,
+                               printed_half_unit(rep.value), note))
+    for f, w, printed in zip(FACTORS, ahp.weights(B, "root"), ESM_RADAR_WEIGHTS, strict=True):
+        out.append(_comparison(f"AHP weight: {f}", "Table 1", printed, w, w, w,
+                               printed_half_unit(printed), "root method, exact"))
+    return out
+
+
+def paper_vs_reproduced(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
+    """What paper 001 reports against what this run reproduces, with a verdict per number.
+
+    Rows: Table 3 (correct rate and runs per radar track, improved and traditional) for
+    every point of the run at the paper's setting (:data:`PAPER_TABLE3_SETTING`), with our
+    95 % Wilson interval; and the AHP numbers of Table 1, computed exactly, with a
+    tolerance of half a unit in the paper's last printed digit. ``verdict`` says whether the
+    paper's value lies inside our interval (widened by the tolerance). Values come from
+    :data:`trackfuse.reported.ESM_RADAR`.
+    """
+    keys = _swept(config, trials)
+    t3 = table3(trials, config)
+    out = []
+    for _, row in t3[t3["algorithm"].isin(["improved", "traditional"])].iterrows():
+        setting = {k: (row[k] if k in keys else config["params"][k])
+                   for k in PAPER_TABLE3_SETTING}
+        if not all(np.isclose(float(setting[k]), v) for k, v in PAPER_TABLE3_SETTING.items()):
+            continue
+        point = {k: row[k] for k in ["point", *keys, "algorithm"]}
+        out += [{**point, **c} for c in _table3_comparisons(row)]
+    out += _ahp_comparisons()
     return pd.DataFrame(out)
 
 
 def tables(trials: pd.DataFrame, summary: pd.DataFrame,
            config: dict[str, Any]) -> dict[str, pd.DataFrame]:
     """The Table 3 analogue, the ablation table and the AHP weights (``summary`` unused)."""
-    out = {"table3": table3(trials, config), "ahp": ahp_table()}
+    out = {"table3": table3(trials, config), "ahp": ahp_table(),
+           "paper_vs_reproduced": paper_vs_reproduced(trials, config)}
     abl = ablation(trials, config)
     if not abl.empty:
         out["ablation"] = abl
@@ -273,6 +368,7 @@ def _trajectory_figure(trials: pd.DataFrame, config: Mapping[str, Any]) -> Figur
     from trackfuse.experiments.esm_radar import (
         ALGORITHMS,
         N_TRACKS,
+        alpha_max,
         differences,
         evaluate,
         simulate,
@@ -297,9 +393,14 @@ def _trajectory_figure(trials: pd.DataFrame, config: Mapping[str, Any]) -> Figur
                  f"{np.sqrt(sim.P_esm[0, :, 0, 0]).mean() / 1e3:.1f} km", fontsize=8)
 
     res = evaluate(ALGORITHMS["improved"], differences(sim), sim.alpha, params)
-    ax2.plot(sim.t, sim.alpha[0], color="tab:purple", label="manoeuvre index α(k)")
+    ax2.plot(sim.t, sim.alpha[0], color="tab:purple",
+             label=f"manoeuvre index α(k), {params['alpha.index']}")
+    a_max, mode = alpha_max(params)
+    if mode == "fixed":
+        ax2.axhline(a_max, color="tab:purple", linestyle=":", linewidth=1.0, label="α_max")
+    ax2.set_yscale("log")
     ax2.set_xlabel("time (s)")
-    ax2.set_ylabel("manoeuvre index α (dimensionless)")
+    ax2.set_ylabel("manoeuvre index α (dimensionless, log)")
     ax3 = ax2.twinx()
     ax3.plot(sim.t, res["weights"][0, :, 0], color="tab:green", label="range weight a₁(k)")
     ax3.set_ylabel("range weight a₁ (fraction)")
@@ -322,8 +423,62 @@ def _trajectory_figure(trials: pd.DataFrame, config: Mapping[str, Any]) -> Figur
     return fig
 
 
+#: Trials re-simulated for the manoeuvre-index figure.
+MANOEUVRE_TRIALS = 200
+
+
+def _index_band(ax, t: np.ndarray, alpha: np.ndarray, label: str, **kw) -> None:
+    """Mean of ``alpha`` (N, K) over trials against ``t`` with its 95 % t band, where
+    defined (NaN marks start-up scans)."""
+    ok = np.isfinite(alpha).all(axis=0)
+    a = alpha[:, ok]
+    n = a.shape[0]
+    lo, hi = t_interval(a.mean(axis=0), a.std(axis=0, ddof=1), n)
+    band(ax, t[ok], a.mean(axis=0), lo, hi, label=label, marker="", **kw)
+
+
+def _manoeuvre_figure(trials: pd.DataFrame, config: Mapping[str, Any]) -> Figure:
+    """Mean manoeuvre index against time (s), with and without the snake, for the default
+    detector and the paper's literal index. *Recomputed*: the first
+    :data:`MANOEUVRE_TRIALS` trials of point 0 are re-simulated with the runner's streams at
+    the point's snake amplitude (1000 m if it is 0) and at amplitude 0 (same noise)."""
+    from trackfuse.experiments.esm_radar import alpha_max, manoeuvre_alpha, simulate
+
+    params = _point0_params(trials, config)
+    amplitude = params["snake.amplitude"] or 1000.0
+    n = min(int(config["trials"]), MANOEUVRE_TRIALS)
+    streams = [trial_streams(int(config["seed"]), 0, t) for t in range(n)]
+    sims = {a: simulate(dict(params, **{"snake.amplitude": a}), streams)
+            for a in (amplitude, 0.0)}
+    nis_params = dict(params, **{"alpha.index": "nis_tdoa", "alpha.max_mode": "chi2"})
+    panels = (("nis_tdoa", "windowed NIS of the range difference c·Δt (default)",
+               alpha_max(nis_params)[0],
+               f"α_max (χ² quantile, 1 - {params['alpha.false_alarm']:g})"),
+              ("literal", "paper eq. 8-13: V²/R on the TDOA-DF range", params["alpha.max"],
+               "α_max ('fixed' mode value)"))
+    fig, axes = new_figure(ncols=2, width=5.0, height=3.8)
+    for ax, (index, title, a_max, a_label) in zip(axes, panels, strict=True):
+        for a, colour in zip(sims, ("tab:red", "tab:blue"), strict=True):
+            sim = sims[a]
+            _index_band(ax, sim.t, manoeuvre_alpha(params, sim.x_esm, sim.P_esm, index),
+                        f"snake amplitude {a:g} m", color=colour)
+        if index == "nis_tdoa":
+            reference_line(ax, 1.0, "no-manoeuvre expectation E[α] = 1", color="0.5")
+        ax.axhline(a_max, color="k", linestyle=":", linewidth=1.0, label=a_label)
+        ax.set_yscale("log")
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel("manoeuvre index α (dimensionless)")
+        ax.set_title(title, fontsize=8)
+        ax.legend(fontsize=7, loc="upper left")
+    fig.suptitle(f"Manoeuvre index, mean over {n} trials with 95 % t bands (seed "
+                 f"{config['seed']}, point 0, separation {params['target.separation']:g} m), "
+                 "recomputed")
+    return fig
+
+
 def figures(trials: pd.DataFrame, summary: pd.DataFrame,
             config: dict[str, Any]) -> dict[str, Figure]:
-    """``correct_rate`` from the summary; ``trajectory`` recomputed for trial 0 of point 0."""
+    """``correct_rate`` from the summary; ``trajectory`` and ``manoeuvre`` recomputed."""
     return {"correct_rate": _correct_rate_figure(summary, config),
-            "trajectory": _trajectory_figure(trials, config)}
+            "trajectory": _trajectory_figure(trials, config),
+            "manoeuvre": _manoeuvre_figure(trials, config)}
