@@ -22,6 +22,11 @@ def test_wilson_matches_scipy_binomtest():
         assert np.isclose(low, ref.low, atol=1e-12) and np.isclose(high, ref.high, atol=1e-12)
 
 
+def test_wilson_bounds_at_zero_and_all_successes_are_exact():
+    low, high = wilson_interval(np.array([0, 500]), np.array([500, 500]))
+    assert low[0] == 0.0 and high[1] == 1.0
+
+
 def test_wilson_empty_is_nan_and_bounds_ordered():
     low, high = wilson_interval(np.array([0, 2]), np.array([0, 4]))
     assert np.isnan(low[0]) and np.isnan(high[0]) and 0 < low[1] < 0.5 < high[1] < 1

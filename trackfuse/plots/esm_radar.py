@@ -195,9 +195,7 @@ def _table3_comparisons(row: pd.Series) -> list[dict[str, Any]]:
     for track in (1, 2, 3):
         rep = ESM_RADAR.result(f"{method}: runs to radar track {track}")
         count = int(row[f"radar_track_{track}"])
-        lo, hi = wilson_interval(count, n)
-        # The Wilson bounds at 0 and n are exact; round off floating-point residue there.
-        lo, hi = (0.0 if count == 0 else n * float(lo)), (n if count == n else n * float(hi))
+        lo, hi = (n * float(v) for v in wilson_interval(count, n))
         out.append(_comparison(rep.quantity, rep.where, rep.value, count, lo, hi, 0.0,
                                f"ours: n x 95 % Wilson interval, n = {n}"))
     return out
