@@ -12,6 +12,7 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.text import Text  # noqa: E402
 
 RC = {
     "figure.dpi": 110,
@@ -64,3 +65,37 @@ def legend_below(fig, ax, max_cols: int | None = None) -> None:
     cap = max_cols if max_cols is not None else int(fig.get_figwidth() / 2.8)
     fig.legend(handles, labels, loc="outside lower center",
                ncols=max(1, min(len(labels), cap)))
+
+
+
+def text_overlaps(fig, tolerance_px: float = 1.0) -> list[tuple[str, str]]:
+    """Pairs of text elements drawn in ``fig`` whose boxes overlap.
+
+    The figure is drawn once while every :class:`~matplotlib.text.Text` that actually
+    renders (visible, non-empty, inside its axes' view) is recorded; boxes are in display
+    pixels and overlap when they share more than ``tolerance_px`` in both directions.
+    Returns ``[(text_a, text_b), ...]``; empty for a clean figure.
+    """
+    drawn: list[Text] = []
+    original = Text.draw
+
+    def recording(self: Text, renderer) -> None:
+        original(self, renderer)
+        if self.get_visible() and self.get_text().strip():
+            drawn.append(self)
+
+    Text.draw = recording
+    try:
+        fig.canvas.draw()
+    finally:
+        Text.draw = original
+    renderer = fig.canvas.get_renderer()
+    boxes = [(t.get_text(), t.get_window_extent(renderer)) for t in drawn]
+    found = []
+    for i, (text_a, a) in enumerate(boxes):
+        for text_b, b in boxes[i + 1:]:
+            dx = min(a.x1, b.x1) - max(a.x0, b.x0)
+            dy = min(a.y1, b.y1) - max(a.y0, b.y0)
+            if dx > tolerance_px and dy > tolerance_px:
+                found.append((text_a, text_b))
+    return found

@@ -1,0 +1,94 @@
+"""One look per algorithm, the same in every figure of every experiment.
+
+Each algorithm name (unique across the experiments) has a legend label, a colour, a marker
+and a *role* that sets its emphasis:
+
+* ``paper``: the paper's own method, as the paper describes it (thick, vermillion);
+* ``paper_baseline``: the baseline the paper compares against (thick);
+* ``ours``: this project's improvement (thick);
+* ``reference``: a bound or exact optimum (black, dashed, no band);
+* ``variant``: other variants and ablations (thin, no band, drawn behind).
+
+Colours follow the Okabe-Ito palette, which stays distinct under colour-vision deficiency.
+The two filters of ``twin_sensor`` share an association's colour and marker and differ by
+line style (MGEKF solid, EKF dashed, with open markers).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+VERMILLION, BLUE, GREEN, PURPLE = "#D55E00", "#0072B2", "#009E73", "#CC79A7"
+ORANGE, SKY, BLACK = "#E69F00", "#56B4E9", "#000000"
+GREYS = ("#555555", "#888888", "#AAAAAA")
+ROLES = ("paper", "paper_baseline", "ours", "reference", "variant")
+EMPHASISED = ("paper", "paper_baseline", "ours")
+
+
+@dataclass(frozen=True)
+class Look:
+    """How one algorithm is drawn. ``label``: legend text; ``role``: one of :data:`ROLES`."""
+
+    label: str
+    colour: str
+    marker: str
+    role: str
+
+    @property
+    def emphasised(self) -> bool:
+        """Paper, paper-baseline and our methods get thick lines and interval bands."""
+        return self.role in EMPHASISED
+
+
+LOOKS: dict[str, Look] = {
+    # paper 000 (twin_sensor): association variants
+    "paper_approx": Look("paper's fused-gate PDA (reconstruction)", VERMILLION, "s", "paper"),
+    "mspda_parallel": Look("two-sensor parallel PDA (corrected)", GREEN, "o", "ours"),
+    "mspda_sequential": Look("sequential PDA", BLUE, "^", "variant"),
+    "nn": Look("nearest neighbour", PURPLE, "x", "variant"),
+    # paper 001 (esm_radar)
+    "improved": Look("improved fuzzy evaluation (paper)", VERMILLION, "s", "paper"),
+    "traditional": Look("traditional fuzzy decision (paper's baseline)", BLUE, "o",
+                        "paper_baseline"),
+    "improved_gauss": Look("improved, Gaussian membership (ours)", GREEN, "D", "ours"),
+    "traditional_5f": Look("traditional, 5 factors", ORANGE, "v", "variant"),
+    "improved_static": Look("improved, static weights", GREYS[0], "^", "variant"),
+    "improved_3f": Look("improved, 3 factors", GREYS[1], "<", "variant"),
+    "improved_l2": Look("improved, L2 membership", GREYS[2], ">", "variant"),
+    "chi2": Look("chi-square ML reference", BLACK, "", "reference"),
+    "chi2_lrt": Look("chi-square reference, may abstain", GREYS[0], "", "reference"),
+    "chi2_5f": Look("chi-square, 5 factors (diagnostic)", GREYS[1], "", "reference"),
+    # paper 002 (passive_assoc)
+    "pga_paper": Look("partheno-genetic algorithm (paper)", VERMILLION, "s", "paper"),
+    "pga_evict": Look("PGA + evicting re-pair (ours)", GREEN, "o", "ours"),
+    "pga_anneal": Look("ours + annealing", PURPLE, "D", "ours"),
+    "pga_repair": Look("PGA + re-pair", BLUE, "^", "variant"),
+    "pga_repair_joint": Look("PGA + re-pair, joint evaluation", GREYS[1], "<", "variant"),
+    "pga_staged": Look("PGA, staged, no re-pair", GREYS[2], ">", "variant"),
+    "exact": Look("exact optimum (assignment)", BLACK, "", "reference"),
+}
+
+FILTER_LABELS = {"mgekf": "MGEKF", "ekf": "EKF"}
+
+
+def look(name: str) -> Look:
+    """The look of ``name``; ``association/filter`` names take the association's look."""
+    base, _, filt = name.partition("/")
+    found = LOOKS.get(base, Look(base, GREYS[1], ".", "variant"))
+    if filt:
+        found = Look(f"{found.label}, {FILTER_LABELS.get(filt, filt)}", found.colour,
+                     found.marker, found.role)
+    return found
+
+
+def line_kwargs(name: str) -> dict:
+    """Matplotlib keyword arguments for a curve of ``name`` (colour, marker, width, style)."""
+    lk = look(name)
+    open_marker = name.endswith("/ekf")
+    kwargs = {"color": lk.colour, "marker": lk.marker or None, "label": lk.label,
+              "linewidth": 2.0 if lk.emphasised else 1.0,
+              "zorder": 3 if lk.emphasised else 2,
+              "linestyle": "--" if lk.role == "reference" or open_marker else "-"}
+    if open_marker:
+        kwargs["markerfacecolor"] = "none"
+    return kwargs
