@@ -1,0 +1,233 @@
+"""A finished run's report: tables, figures, ``index.md`` and ``index.html``.
+
+The report layer reads only the run folder (through :mod:`trackfuse.rundata`) and the
+experiment's report module (``Experiment.report``, a module path), which provides::
+
+    figures(run: RunData, wanted: Collection[str]) -> dict[str, matplotlib.figure.Figure]
+    tables(run: RunData) -> dict[str, pandas.DataFrame]
+
+Nothing is recomputed except what a report module derives from the config alone (bounds,
+noise-free geometry). Every file is written under a temporary name and renamed into place;
+PNG files at :data:`PNG_DPI` dpi, PDF files as vectors, both without timestamps so that
+redrawing gives the same bytes. ``index.html`` needs no network and no JavaScript: its images
+sit beside it in ``figures/``.
+"""
+
+from __future__ import annotations
+
+import html
+import importlib
+import os
+from collections.abc import Collection, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+import pandas as pd
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+
+from trackfuse.results import atomic_write  # noqa: E402
+from trackfuse.rundata import RunData  # noqa: E402
+
+PNG_DPI = 200
+HEADLINE_TABLE = "paper_vs_reproduced"
+#: What each file of a run folder holds (figures and tables add their own captions).
+FILES = {
+    "config.yaml": "the resolved config: every parameter, defaults included",
+    "manifest.json": "status, versions, git commit, command, times, trial counts",
+    "trials.csv": "one row per sweep point, trial and row key: swept values and metrics",
+    "timings.csv": "wall and CPU time columns, kept out of trials.csv",
+    "summary.csv": "per point, row key and metric: n, mean, std, 95 % interval",
+    "timings_summary.csv": "the summary of the timing columns",
+    "index.md": "this report as Markdown",
+    "index.html": "this report as a web page",
+}
+
+
+@dataclass
+class Report:
+    """What :func:`write_report` wrote: figure and table files, the index, and one message
+    per figure or table that could not be drawn (the data stay complete)."""
+
+    figures: list[Path] = field(default_factory=list)
+    tables: list[Path] = field(default_factory=list)
+    index: Path | None = None
+    errors: list[str] = field(default_factory=list)
+
+
+def markdown_table(table: pd.DataFrame, digits: int = 4) -> str:
+    """A GitHub-style Markdown table; floats with ``digits`` significant digits."""
+    def cell(v: Any) -> str:
+        if isinstance(v, float):
+            return "" if pd.isna(v) else f"{v:.{digits}g}"
+        return str(v).replace("|", "\\|")
+
+    lines = ["| " + " | ".join(map(str, table.columns)) + " |",
+             "|" + "|".join("---" for _ in table.columns) + "|"]
+    lines += ["| " + " | ".join(cell(v) for v in row) + " |"
+              for row in table.itertuples(index=False)]
+    return "\n".join(lines) + "\n"
+
+
+def save_figure(fig, folder: Path, name: str, formats: Sequence[str]) -> list[Path]:
+    """Save ``fig`` as ``folder/name.<fmt>`` for each format, reproducibly and atomically."""
+    written = []
+    for fmt in formats:
+        path = folder / f"{name}.{fmt}"
+        tmp = folder / f".{name}.{os.getpid()}.tmp.{fmt}"
+        metadata = {"pdf": {"CreationDate": None, "ModDate": None},
+                    "svg": {"Date": None}}.get(fmt)
+        fig.savefig(tmp, format=fmt, dpi=PNG_DPI, metadata=metadata)
+        tmp.replace(path)
+        written.append(path)
+    return written
+
+
+def _module(run: RunData):
+    return importlib.import_module(run.experiment.report)
+
+
+def _write_tables(run: RunData, module, report: Report) -> dict[str, pd.DataFrame]:
+    folder = run.path / "tables"
+    folder.mkdir(exist_ok=True)
+    try:
+        made = module.tables(run)
+    except Exception as err:  # noqa: BLE001 - a report bug must not lose the run
+        report.errors.append(f"tables: {type(err).__name__}: {err}")
+        return {}
+    for name, table in made.items():
+        for suffix, text in ((".csv", table.to_csv(index=False)), (".md", markdown_table(table))):
+            atomic_write(folder / f"{name}{suffix}", text)
+            report.tables.append(folder / f"{name}{suffix}")
+    return made
+
+
+def _write_figures(run: RunData, module, wanted: Collection[str], formats: Sequence[str],
+                   report: Report) -> None:
+    folder = run.path / "figures"
+    folder.mkdir(exist_ok=True)
+    try:
+        made = module.figures(run, wanted)
+    except Exception as err:  # noqa: BLE001
+        report.errors.append(f"figures: {type(err).__name__}: {err}")
+        return
+    for name, fig in made.items():
+        try:
+            report.figures += save_figure(fig, folder, name, formats)
+        finally:
+            plt.close(fig)
+
+
+def write_report(run: RunData, wanted: Collection[str] | None = None,
+                 formats: Sequence[str] | None = None) -> Report:
+    """Draw the tables and figures of ``run`` and write ``index.md`` and ``index.html``.
+
+    ``wanted``: figure names (default: the config's ``outputs.figures``, ``"all"`` meaning
+    every figure the experiment declares); ``formats``: default the config's.
+    """
+    outputs = run.config.get("outputs") or {}
+    declared = list(run.experiment.figures)
+    if wanted is None:
+        choice = outputs.get("figures", "all")
+        wanted = declared if choice == "all" else list(choice)
+    formats = list(formats or outputs.get("formats") or ["png", "pdf"])
+    report = Report()
+    module = _module(run)
+    tables = _write_tables(run, module, report)
+    _write_figures(run, module, wanted, formats, report)
+    md = index_markdown(run, tables, report)
+    atomic_write(run.path / "index.md", md)
+    atomic_write(run.path / "index.html", index_html(run, tables, report))
+    report.index = run.path / "index.html"
+    return report
+
+
+def _run_facts(run: RunData) -> list[tuple[str, str]]:
+    m, c = run.manifest, run.config
+    versions = ", ".join(f"{k} {v}" for k, v in (m.get("versions") or {}).items())
+    sweep = "; ".join(f"{k} = {', '.join(map(str, v))}" for k, v in run.sweep.items())
+    return [
+        ("experiment", f"{c['experiment']}: {c.get('title', '')}"),
+        ("config", str(m.get("config_file", ""))),
+        ("command", " ".join(m.get("command") or [])),
+        ("sweep", sweep or "none (one point)"),
+        ("trials", f"{c.get('trials')} per point, {m.get('trials_total')} in all, "
+                   f"{m.get('trials_failed', 0)} failed"),
+        ("root seed", str(c.get("seed"))),
+        ("run id", str(m.get("run_id", run.path.name))),
+        ("code", str(m.get("git_commit") or "not a git checkout")),
+        ("versions", versions),
+        ("finished", str(m.get("finished", ""))),
+    ]
+
+
+def _captions(run: RunData) -> dict[str, str]:
+    return {name: spec.caption for name, spec in run.experiment.figures.items()}
+
+
+def _figure_names(report: Report) -> list[str]:
+    return list(dict.fromkeys(p.stem for p in report.figures))
+
+
+def index_markdown(run: RunData, tables: dict[str, pd.DataFrame], report: Report) -> str:
+    """The run's report as Markdown (what was run, headline table, figures, files)."""
+    lines = [f"# {run.config.get('title') or run.config['experiment']}", ""]
+    lines += [f"- **{k}**: {v}" for k, v in _run_facts(run)] + [""]
+    for name in _ordered_tables(tables):
+        lines += [f"## Table: {name}", "", markdown_table(tables[name])]
+    captions = _captions(run)
+    for name in _figure_names(report):
+        lines += [f"## Figure: {name}", "", f"![{name}](figures/{name}.png)", "",
+                  captions.get(name, ""), ""]
+    if report.errors:
+        lines += ["## Problems", ""] + [f"- {e}" for e in report.errors] + [""]
+    lines += ["## Files", ""] + [f"- `{f}`: {d}" for f, d in _file_list(run, report)]
+    return "\n".join(lines) + "\n"
+
+
+def _ordered_tables(tables: dict[str, pd.DataFrame]) -> list[str]:
+    return sorted(tables, key=lambda n: (n != HEADLINE_TABLE, list(tables).index(n)))
+
+
+def _file_list(run: RunData, report: Report) -> list[tuple[str, str]]:
+    captions = _captions(run)
+    files = [(f, d) for f, d in FILES.items() if (run.path / f).exists() or f.startswith("index")]
+    files += [(f"tables/{p.name}", "report table") for p in report.tables]
+    files += [(f"figures/{p.name}", captions.get(p.stem, "figure")) for p in report.figures]
+    return files
+
+
+_CSS = ("body{font-family:sans-serif;max-width:70em;margin:2em auto;padding:0 1em;"
+        "line-height:1.4}table{border-collapse:collapse;font-size:90%;margin:1em 0}"
+        "td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}"
+        "th{background:#f3f3f3}img{max-width:100%}figure{margin:2em 0}"
+        "dt{font-weight:bold;float:left;width:8em}dd{margin-left:9em}")
+
+
+def index_html(run: RunData, tables: dict[str, pd.DataFrame], report: Report) -> str:
+    """The run's report as one HTML page (no JavaScript; images beside it)."""
+    esc = html.escape
+    title = esc(str(run.config.get("title") or run.config["experiment"]))
+    parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>{title}"
+             f"</title><style>{_CSS}</style></head><body><h1>{title}</h1><dl>"]
+    parts += [f"<dt>{esc(k)}</dt><dd>{esc(v)}</dd>" for k, v in _run_facts(run)]
+    parts.append("</dl>")
+    for name in _ordered_tables(tables):
+        parts.append(f"<h2>Table: {esc(name)}</h2>")
+        parts.append(tables[name].to_html(index=False, na_rep="", float_format="{:.4g}".format))
+    captions = _captions(run)
+    for name in _figure_names(report):
+        parts.append(f"<figure><img src='figures/{esc(name)}.png' alt='{esc(name)}'>"
+                     f"<figcaption><b>{esc(name)}</b>: {esc(captions.get(name, ''))}"
+                     "</figcaption></figure>")
+    if report.errors:
+        parts.append("<h2>Problems</h2><ul>"
+                     + "".join(f"<li>{esc(e)}</li>" for e in report.errors) + "</ul>")
+    parts.append("<h2>Files</h2><ul>" + "".join(
+        f"<li><code>{esc(f)}</code>: {esc(d)}</li>" for f, d in _file_list(run, report))
+        + "</ul></body></html>")
+    return "\n".join(parts) + "\n"
