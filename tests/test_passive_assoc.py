@@ -146,3 +146,14 @@ def test_every_algorithm_has_a_legend_label():
     from trackfuse.plots.passive_assoc import LABELS
 
     assert set(ALGORITHMS) <= set(LABELS)
+
+
+def test_set_ops_beyond_the_default_checkpoints_scores_the_budget():
+    # issue 9 item 10: `--set pga.ops=5000` with the default checkpoints (last one 1000)
+    # must produce rows at 5000 operations, the count the user asked for
+    p = EXPERIMENT.defaults()
+    p.update({"pga.ops": 5000, "algorithms": ["pga_paper", "pga_evict"]})
+    rows = EXPERIMENT.run_trial(p, trial_streams(4, 0, 1))
+    for name in ("pga_paper", "pga_evict"):
+        ops = [r["ops"] for r in rows if r["algorithm"] == name]
+        assert ops == [*EXPERIMENT.defaults()["pga.checkpoints"], 5000]

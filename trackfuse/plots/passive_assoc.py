@@ -1,7 +1,7 @@
 """Figures and report tables of the ``passive_assoc`` experiment (paper 002).
 
 Paper 002 associates the measurements of two passive infrared sensors by an improved
-parallel genetic algorithm (PGA). Its only results figure, Fig. 2, plots association
+partheno-genetic algorithm (PGA). Its only results figure, Fig. 2, plots association
 accuracy against the number of genetic operations; the other figures here are this
 project's studies of the same experiment.
 
