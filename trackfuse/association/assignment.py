@@ -1,6 +1,7 @@
 """Measurement-to-measurement assignment for two passive sensors: weights and exact solvers.
 
-Weights (``docs/papers/passive_assoc.md``, "Weights"). For a candidate pair (measurement ``i`` of sensor 1, ``j`` of sensor 2)
+Weights (``docs/papers/passive_assoc.md``, "Weights"). For a candidate pair (measurement
+``i`` of sensor 1, ``j`` of sensor 2)
 triangulate ``p_hat`` (see :mod:`trackfuse.association.triangulation`), predict the four
 angles and form ``chi2_ij``, the sum of the four squared noise-normalised residuals. Two
 weight models are offered; both are *gains* to be maximised:
@@ -22,7 +23,8 @@ pair gain ``w_ij = a_ij - a_i0 - a_0j`` gives ``J = const + sum_{pairs} w_ij``; 
 reports ``J = sum_{pairs} w_ij`` (the log-likelihood ratio of the partition against the
 all-false partition).
 
-Exact solvers (``docs/papers/passive_assoc.md``, "Exact optimum"): the paper claims the Hungarian method cannot handle a variable
+Exact solvers (``docs/papers/passive_assoc.md``, "Exact optimum"): the paper claims the
+Hungarian method cannot handle a variable
 number of pairs (weakness W002-1); it can, in two equivalent ways:
 
 ``"lsa_clip"`` (default)

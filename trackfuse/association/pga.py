@@ -1,6 +1,7 @@
 """Improved partheno-genetic algorithm (PGA) of paper 002 for the two-sensor assignment.
 
-Representation (docs/papers/passive_assoc.md, "Partheno-genetic algorithm"). The solution is the 0/1 matrix ``X`` of size (m1+1) x (m2+1) with
+Representation (docs/papers/passive_assoc.md, "Partheno-genetic algorithm"). The solution
+is the 0/1 matrix ``X`` of size (m1+1) x (m2+1) with
 dummy row and column 0; the smaller measurement set is put on the rows (m1 <= m2, the
 problem is transposed if needed and mapped back). It is stored as ``col_row``, a list of
 length m2 with ``col_row[j]`` in ``{0 (dummy), 1..m1}``, each real row at most once; a row
@@ -23,7 +24,8 @@ then evaluation:
 * re-pair (our improvement, ``repair=True``): with probability 1/2 the mutation instead
   pairs a random unpaired row with a random empty column. Without it no operator maps a
   solution with unpaired rows back towards more pairs, so under monotone acceptance the
-  search cannot undo an unpairing and the chain is not irreducible (W002-2 in docs/papers/passive_assoc.md).
+  search cannot undo an unpairing and the chain is not irreducible (W002-2 in
+  docs/papers/passive_assoc.md).
 * evicting re-pair (ours, ``evict=True``): half of the re-pair moves put the unpaired row
   into any column, sending its occupant (if any) to the dummy column (:func:`exchange`).
   This is the single step from "row r' paired with c, row r unpaired" to the reverse, which
