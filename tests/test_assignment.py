@@ -1,4 +1,4 @@
-"""Weights and exact solvers of paper 002 (SPEC 4.3-4.4, test 9)."""
+"""Weights and exact solvers of paper 002 (docs/papers/passive_assoc.md)."""
 
 import numpy as np
 import pytest
@@ -88,7 +88,8 @@ def test_noise_free_scene_without_false_alarms_gives_the_truth(method, cost):
 
 
 def test_paper_weights_sign_and_implied_gate():
-    # SPEC 4.3: a pair beats two unpaired measurements iff chi2 < 46.8 (sigma 0.005, P_D 0.95,
+    # docs/papers/passive_assoc.md (W002-4): a pair beats two unpaired measurements iff
+    # chi2 < 46.8 (sigma 0.005, P_D 0.95,
     # p_f 0.05), and the weight decreases with chi2 (the sign of eq. 17 corrected).
     sigma, p_d, p_f = 0.005, 0.95, 0.05
     threshold = 4 * np.log(p_d / (2 * np.pi * sigma**2 * p_f))

@@ -129,7 +129,7 @@ def test_figures_for_the_three_studies(tmp_path):
     assert (table.loc[table["algorithm"] == "exact", "at_opt"] == 1).all()
 
 
-@pytest.mark.parametrize("name", ["passive_assoc_ci", "passive_scale_ci"])
+@pytest.mark.parametrize("name", ["passive_assoc_ci", "passive_scale_ci", "passive_mutation_ci"])
 def test_ci_config_runs_through_the_cli(tmp_path, name):
     proc = trackfuse("run", ROOT / "configs" / "ci" / f"{name}.yaml", "--out", tmp_path,
                      "--workers", "1", "--no-progress")
@@ -146,3 +146,59 @@ def test_every_algorithm_has_a_legend_label():
     from trackfuse.plots.passive_assoc import LABELS
 
     assert set(ALGORITHMS) <= set(LABELS)
+
+
+def test_set_ops_beyond_the_default_checkpoints_scores_the_budget():
+    # issue 9 item 10: `--set pga.ops=5000` with the default checkpoints (last one 1000)
+    # must produce rows at 5000 operations, the count the user asked for
+    p = EXPERIMENT.defaults()
+    p.update({"pga.ops": 5000, "algorithms": ["pga_paper", "pga_evict"]})
+    rows = EXPERIMENT.run_trial(p, trial_streams(4, 0, 1))
+    for name in ("pga_paper", "pga_evict"):
+        ops = [r["ops"] for r in rows if r["algorithm"] == name]
+        assert ops == [*EXPERIMENT.defaults()["pga.checkpoints"], 5000]
+
+
+def test_gap_interval_is_a_bootstrap_interval_that_cannot_go_below_zero():
+    from trackfuse.plots.passive_assoc import gap_interval
+    from trackfuse.stats import t_interval
+
+    # 47 runs at the optimum, 3 far from it: the t interval dips below zero, ours cannot
+    gaps = np.r_[np.zeros(47), 30.0, 45.0, 60.0]
+    t_low, _ = t_interval(gaps.mean(), gaps.std(ddof=1), len(gaps))
+    assert t_low < 0
+    low, high = gap_interval(gaps)
+    assert 0.0 <= low < gaps.mean() < high <= gaps.max()
+    assert gap_interval(gaps) == (low, high)  # fixed resampling seed: same table on redraw
+    assert gap_interval(np.zeros(20)) == (0.0, 0.0)
+    # a wider spread gives a wider interval
+    assert np.diff(gap_interval(2 * gaps)) == pytest.approx(2 * np.diff(gap_interval(gaps)))
+
+
+def test_tables_report_recall_whole_solution_and_the_paper_claims(tmp_path):
+    from trackfuse.reported import PASSIVE_ASSOC
+
+    p = params(algorithms=["exact", "pga_paper", "pga_evict"])
+    out = EXPERIMENT.tables(*small_run(tmp_path, p, "targets.n", [5, 7], trials=6))
+    assert set(out) == {"checkpoints", "final", "paper_vs_reproduced"}
+    cp = out["checkpoints"]
+    assert set(cp["ops"]) == {0, 50, 200}
+    for metric in ("accuracy", "recall", "correct", "at_opt", "gap"):
+        assert (cp[f"{metric}_lo"] <= cp[metric] + 1e-9).all()
+        assert (cp[metric] <= cp[f"{metric}_hi"] + 1e-9).all()
+    assert (cp["gap_lo"] >= 0).all()
+    assert (out["final"].loc[out["final"]["algorithm"] != "exact", "ops"] == 200).all()
+    pvr = out["paper_vs_reproduced"]
+    fig2 = pvr[pvr["where"] == "Fig. 2"]
+    # 2 points x 2 variants x (accuracy, recall, whole solution, at J*, gap)
+    assert len(fig2) == 20 and set(fig2["algorithm"]) == {"pga_paper", "pga_evict"}
+    assert set(fig2["claim"]) <= set(PASSIVE_ASSOC.results[0].claim.split("; "))
+    at_opt = fig2[fig2["quantity"] == "runs at the exact optimum J*"]
+    for _, r in at_opt.iterrows():
+        assert r["verdict"].startswith("holds") == (r["ours"] == 1.0)
+    assert pvr["verdict"].str.len().gt(0).all()
+    assert pvr.iloc[-1]["verdict"].startswith("refuted")
+    # a scene that is not the paper's is not compared with its Fig. 2
+    q = params(**{"scene.mode": "random"}, algorithms=["exact", "pga_paper"])
+    other = EXPERIMENT.tables(*small_run(tmp_path, q, "targets.n", [5], trials=3))
+    assert list(other["paper_vs_reproduced"]["where"]) == ["Sec. 1"]

@@ -1,4 +1,4 @@
-"""Partheno-genetic algorithm of paper 002 (SPEC 4.5, test 10)."""
+"""Partheno-genetic algorithm of paper 002 (docs/papers/passive_assoc.md)."""
 
 import numpy as np
 import pytest
@@ -181,3 +181,31 @@ def test_uniforms_drawn_in_blocks_give_the_same_run(monkeypatch):
     blocks = pga(w, np.random.default_rng(9), **options)
     np.testing.assert_array_equal(whole.partner1, blocks.partner1)
     np.testing.assert_array_equal(whole.objective, blocks.objective)
+
+
+@pytest.mark.parametrize("ops, checkpoints, expected", [
+    (5000, [0, 10, 100, 1000], [0, 10, 100, 1000, 5000]),  # the budget beyond the list
+    (300, [0, 10, 100, 1000], [0, 10, 100, 300]),           # counts above ops dropped
+    (50, [], [50]),
+    (0, [0, 10], [0]),
+])
+def test_the_budget_is_always_a_checkpoint(ops, checkpoints, expected):
+    w = random_weights(np.random.default_rng(3), 5, 6)
+    res = pga(w, np.random.default_rng(4), ops=ops, checkpoints=checkpoints)
+    np.testing.assert_array_equal(res.checkpoints, expected)
+
+
+def test_the_budget_checkpoint_scores_the_whole_run():
+    # a 5000-operation run scored at 5000 equals the same run with 5000 listed explicitly,
+    # and it can differ from its own 1000-operation checkpoint (no silent truncation)
+    w, _ = noise_free_problem(10, 3)
+    implicit = pga(w, np.random.default_rng(8), ops=5000, checkpoints=[1000],
+                   repair_moves=True, staged=True, evict=True)
+    explicit = pga(w, np.random.default_rng(8), ops=5000, checkpoints=[1000, 5000],
+                   repair_moves=True, staged=True, evict=True)
+    np.testing.assert_array_equal(implicit.partner1, explicit.partner1)
+    np.testing.assert_array_equal(implicit.objective, explicit.objective)
+    short = pga(w, np.random.default_rng(8), ops=1000, checkpoints=[1000],
+                repair_moves=True, staged=True, evict=True)
+    np.testing.assert_array_equal(implicit.partner1[0], short.partner1[0])
+    assert implicit.objective[1] >= implicit.objective[0]

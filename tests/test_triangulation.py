@@ -1,4 +1,4 @@
-"""Triangulation of paper 002 (SPEC 4.2, test 8) and the scenario geometry (SPEC 4.6)."""
+"""Triangulation and scenario geometry of paper 002 (docs/papers/passive_assoc.md)."""
 
 import numpy as np
 import pytest
@@ -56,7 +56,7 @@ def test_noise_free_random_geometry_is_exact_for_both_linear_forms(p, s2):
 
 
 def test_ocr_literal_row_is_wrong_without_noise():
-    # OCR row 2 of A: [sin a, 0, -cos a cos b] (sin alpha instead of sin beta); SPEC: ~5.4 km
+    # OCR row 2 of A: [sin a, 0, -cos a cos b] (sin alpha instead of sin beta): ~5.4 km
     z1, z2 = los_angles(PAPER_TARGETS, S1), los_angles(PAPER_TARGETS, S2)
     rows, rhs = [], []
     for z, s in ((z1, S1), (z2, S2)):
@@ -96,7 +96,7 @@ def test_angle_jacobian_matches_central_differences():
 
 def test_ml_and_wls_lower_the_angle_chi_square():
     # ML minimises the normalised angle residuals, so it can only improve on the LS points;
-    # WLS weights by range and must be at least close to ML (chi^2 of LS is ~1.3, SPEC 4.2).
+    # WLS weights by range and must be at least close to ML (chi^2 of LS is ~1.3).
     rng = np.random.default_rng(11)
     sigma = 0.005
     z1 = np.tile(los_angles(PAPER_TARGETS, S1), (40, 1))

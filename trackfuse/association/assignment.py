@@ -1,6 +1,7 @@
 """Measurement-to-measurement assignment for two passive sensors: weights and exact solvers.
 
-Weights (SPEC 4.3). For a candidate pair (measurement ``i`` of sensor 1, ``j`` of sensor 2)
+Weights (``docs/papers/passive_assoc.md``, "Weights"). For a candidate pair (measurement
+``i`` of sensor 1, ``j`` of sensor 2)
 triangulate ``p_hat`` (see :mod:`trackfuse.association.triangulation`), predict the four
 angles and form ``chi2_ij``, the sum of the four squared noise-normalised residuals. Two
 weight models are offered; both are *gains* to be maximised:
@@ -20,9 +21,10 @@ Objective. With 0/1 variables ``x_ij`` on the dummy-augmented matrix (row 0 and 
 the dummies, each real row and column used exactly once), ``J = sum a_ij x_ij``. Writing the
 pair gain ``w_ij = a_ij - a_i0 - a_0j`` gives ``J = const + sum_{pairs} w_ij``; this module
 reports ``J = sum_{pairs} w_ij`` (the log-likelihood ratio of the partition against the
-all-false partition, SPEC 4.3).
+all-false partition).
 
-Exact solvers (SPEC 4.4): the paper claims the Hungarian method cannot handle a variable
+Exact solvers (``docs/papers/passive_assoc.md``, "Exact optimum"): the paper claims the
+Hungarian method cannot handle a variable
 number of pairs (weakness W002-1); it can, in two equivalent ways:
 
 ``"lsa_clip"`` (default)

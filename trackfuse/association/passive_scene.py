@@ -2,7 +2,7 @@
 
 Each sensor ``s`` reports azimuth ``a = atan2(dy, dx)`` and elevation
 ``b = atan2(dz, sqrt(dx^2 + dy^2))`` of every target it detects, where ``(dx, dy, dz)`` is
-target minus sensor (SPEC section 0). A target is detected by sensor ``s`` with probability
+target minus sensor. A target is detected by sensor ``s`` with probability
 ``P_D``; a detected target's angles carry independent Gaussian errors ``N(0, sigma^2)`` on
 azimuth and elevation. False alarms are uniform over the sensor's field-of-view box
 
@@ -10,7 +10,7 @@ azimuth and elevation. False alarms are uniform over the sensor's field-of-view 
 
 built around the true target angles, and their number is Poisson with mean ``P_F * N`` (or
 Binomial(N, P_F)). Each sensor's list is shuffled; the target labels (``-1`` for a false
-alarm) are kept for scoring only (SPEC 4.1, 4.6).
+alarm) are kept for scoring only (``docs/papers/passive_assoc.md``, "Model").
 
 Geometry (paper 002, sec. 4): S1 = (0, 0, 0) km, S2 = (0, 20, 7) km and ten targets M1-M10;
 the ``"paper"`` scene uses the first ``n`` of them, the ``"random"`` scene draws ``n``

@@ -1,6 +1,7 @@
 """Improved partheno-genetic algorithm (PGA) of paper 002 for the two-sensor assignment.
 
-Representation (SPEC 4.5). The solution is the 0/1 matrix ``X`` of size (m1+1) x (m2+1) with
+Representation (docs/papers/passive_assoc.md, "Partheno-genetic algorithm"). The solution
+is the 0/1 matrix ``X`` of size (m1+1) x (m2+1) with
 dummy row and column 0; the smaller measurement set is put on the rows (m1 <= m2, the
 problem is transposed if needed and mapped back). It is stored as ``col_row``, a list of
 length m2 with ``col_row[j]`` in ``{0 (dummy), 1..m1}``, each real row at most once; a row
@@ -23,7 +24,8 @@ then evaluation:
 * re-pair (our improvement, ``repair=True``): with probability 1/2 the mutation instead
   pairs a random unpaired row with a random empty column. Without it no operator maps a
   solution with unpaired rows back towards more pairs, so under monotone acceptance the
-  search cannot undo an unpairing and the chain is not irreducible (SPEC 4.5, W002-2).
+  search cannot undo an unpairing and the chain is not irreducible (W002-2 in
+  docs/papers/passive_assoc.md).
 * evicting re-pair (ours, ``evict=True``): half of the re-pair moves put the unpaired row
   into any column, sending its occupant (if any) to the dummy column (:func:`exchange`).
   This is the single step from "row r' paired with c, row r unpaired" to the reverse, which
@@ -41,7 +43,8 @@ offspring iff ``J_new >= J``) or ``"anneal"`` (Metropolis acceptance
 ``exp(dJ / T_t)`` with geometric cooling from ``t0`` to ``t1``, the best solution kept).
 
 The best solution so far is recorded at each checkpoint of the operation count, which is the
-x-axis of the paper's Fig. 2.
+x-axis of the paper's Fig. 2. The budget ``ops`` itself is always a checkpoint, so a run is
+scored at the operation count it was given, whatever checkpoint list accompanies it.
 
 References
 ----------
@@ -154,7 +157,8 @@ def pga(weights: PairWeights, rng: np.random.Generator, ops: int = 1000,
     weights : the scan's :class:`PairWeights` (m1 x m2, either orientation).
     rng : the algorithm's own random stream.
     ops : number of genetic operations.
-    checkpoints : operation counts (<= ops) at which the best solution is recorded.
+    checkpoints : operation counts at which the best solution is recorded; counts above
+        ``ops`` are ignored and ``ops`` itself is always added.
     p_m : mutation probability per operation.
     init : ``"random_B"`` (random injection of the rows into distinct columns) or
         ``"standard"`` (row i in column i, paper eq. 31).
@@ -196,7 +200,7 @@ def pga(weights: PairWeights, rng: np.random.Generator, ops: int = 1000,
     q = [rank[r][j] for j, r in enumerate(cur)]  # roulette weight of each column
     best, J_best = cur.copy(), J
 
-    marks = sorted({int(c) for c in checkpoints if 0 <= c <= ops})
+    marks = sorted({int(c) for c in checkpoints if 0 <= c <= ops} | {ops})
     mark_set = set(marks)
     saved: dict[int, tuple[list[int], float]] = {}  # checkpoint -> (best, elapsed s)
     if 0 in mark_set:

@@ -3,7 +3,8 @@
 Each LOS from sensor ``s`` at ``p_s`` with azimuth ``a`` and elevation ``b`` (rad) gives two
 linear equations ``A_s p = B_s`` in the target position ``p = [x, y, z]'`` (m); stacking both
 sensors gives the over-determined 4 x 3 system that paper 002 (eq. 4-7) solves by least
-squares, ``p_hat = (A'A)^-1 A'B``. Four forms are offered (SPEC 4.2):
+squares, ``p_hat = (A'A)^-1 A'B``. Four forms are offered (``docs/papers/passive_assoc.md``,
+"Triangulation"):
 
 ``"paper"``
     The paper's elimination rows, with the OCR errors corrected (row 2 needs ``sin b``):
@@ -20,8 +21,8 @@ squares, ``p_hat = (A'A)^-1 A'B``. Four forms are offered (SPEC 4.2):
     error ``da`` moves the point ``rho_s da`` off the azimuth plane (``rho_s``: horizontal
     range) and an elevation error ``db`` moves it ``r_s db`` off the elevation plane
     (``r_s``: slant range). The weights are ``1/(rho_s sigma_a)`` and ``1/(r_s sigma_b)``
-    with the ranges from a first unit-normal pass. SPEC 4.2 writes ``1/(r_s sigma)`` for
-    both rows; the horizontal range is the exact first-order factor for the azimuth row.
+    with the ranges from a first unit-normal pass. A simpler reading weights both rows by
+    ``1/(r_s sigma)``; the horizontal range is the exact first-order factor for the azimuth row.
 ``"ml"``
     Gauss-Newton on the four noise-normalised angle residuals, started at the unit-normal
     point (3 iterations by default): the maximum-likelihood point for Gaussian angle noise.

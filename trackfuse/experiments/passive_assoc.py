@@ -4,7 +4,8 @@ One trial simulates one scan of the two infrared sensors of paper 002 (targets M
 ``n`` random targets in the same box), computes the assignment weights, solves the
 dummy-augmented 2-D assignment exactly (the reference the paper says cannot be computed,
 weakness W002-1) and runs each requested PGA variant on the same weights, scoring the best
-solution at every checkpoint of the operation count (SPEC 4, E002-conv, E002-sigma).
+solution at every checkpoint of the operation count. The model, the corrected equations and
+the defaults where the paper is silent are in docs/papers/passive_assoc.md.
 
 Algorithms (``algorithms`` parameter):
 
@@ -12,7 +13,7 @@ Algorithms (``algorithms`` parameter):
   exact solver has no operation count).
 * ``pga_paper``: the paper-like improved PGA (roulette column-swap crossover, unpairing
   mutation, monotone acceptance), one row per checkpoint.
-* ``pga_repair``: the same plus the re-pair move of SPEC 4.5, which makes the search chain
+* ``pga_repair``: the same plus a re-pair move, which makes the search chain
   irreducible (W002-2), and staged evaluation (crossover and mutation offspring accepted
   separately, see :mod:`trackfuse.association.pga`).
 * ``pga_evict``: ours: ``pga_repair`` whose re-pair move may also evict the occupant of a
@@ -25,7 +26,7 @@ Row metrics (``gap`` and ``at_opt`` are relative to the exact optimum ``J*`` of 
 trial, computed even when ``exact`` is not listed):
 
 * ``accuracy``: measurement-level accuracy, the fraction of all measurements of both sensors
-  whose assigned partner (other-sensor index or dummy) is the true one (SPEC 4.6).
+  whose assigned partner (other-sensor index or dummy) is the true one.
 * ``precision`` / ``recall``: correct pairs over declared pairs / over true pairs (1 when
   the denominator is 0: no false pair declared / no pair to find).
 * ``correct``: 1 iff the whole partition equals the truth; ``at_opt``: 1 iff
@@ -103,7 +104,8 @@ PARAMS = (
     Param("pga.ops", 1000, "genetic operations per PGA run", "count", kind=int, low=0,
           high=10**7),
     Param("pga.checkpoints", list(CHECKPOINTS), "operation counts at which the best "
-          "solution is scored (values above pga.ops are ignored)", "count", kind=list,
+          "solution is scored (values above pga.ops are ignored; pga.ops itself is always "
+          "scored)", "count", kind=list,
           low=0, high=10**7),
     Param("pga.p_m", 0.2, "mutation probability per genetic operation", "probability",
           low=0.0, high=1.0),
