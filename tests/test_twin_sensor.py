@@ -15,7 +15,7 @@ from trackfuse.tracking.models import wrap
 from trackfuse.tracking.sensors import azel
 
 ROW_METRICS = {"range_err_m", "range_sq_err_m2", "pos_sq_err_m2", "nees", "nees_pos",
-               "n_valid", "lost_gate", "lost_nees", "cpu_time_s"}
+               "n_valid", "lost_gate", "lost_angle", "inconsistent_nees", "cpu_time_s"}
 
 
 def params(**kw):
@@ -51,7 +51,7 @@ def test_registered_schema_is_complete():
         assert p.doc, p.key
         if p.kind in (int, float) and p.choices is None:
             assert p.low is not None and p.high is not None and p.low <= p.default <= p.high
-    assert set(EXPERIMENT.binary_metrics) == {"lost_gate", "lost_nees"}
+    assert set(EXPERIMENT.binary_metrics) == {"lost_gate", "lost_angle", "inconsistent_nees"}
     with pytest.raises(ValueError, match="3 components"):
         build_scenario(params(target__position=[1.0, 2.0]))
 
@@ -138,7 +138,8 @@ def test_clutter_free_filter_is_consistent_and_not_below_the_pcrlb():
         assert np.all(mse >= floor * rb**2), name
         pos = g.groupby("scan")["pos_sq_err_m2"].mean().to_numpy()
         assert np.all(pos >= floor * pb**2), name
-        assert g["lost_gate"].sum() == 0 and g["lost_nees"].mean() < 0.01
+        assert g["lost_gate"].sum() == 0 and g["lost_angle"].sum() == 0
+        assert g["inconsistent_nees"].mean() < 0.01
 
 
 def test_loss_flags_are_permanent_and_clutter_can_lose_tracks():
@@ -171,7 +172,8 @@ def small_run():
 def test_figures_from_tables(small_run):
     trials, summary, config = small_run
     figs = EXPERIMENT.figures(trials, summary, config)
-    assert {"loss_gate_vs_clutter", "loss_nees_vs_clutter", "range_rmse_vs_time",
+    assert {"loss_gate_vs_clutter", "loss_angle_vs_clutter", "inconsistent_nees_vs_clutter",
+            "range_rmse_vs_time",
             "anees_vs_time", "final_range_rmse_vs_clutter_mean"} <= set(figs)
     for fig in figs.values():
         for ax in fig.axes:
@@ -185,7 +187,9 @@ def test_tables_report_loss_and_bound(small_run):
     trials, summary, config = small_run
     table = EXPERIMENT.tables(trials, summary, config)["final_scan"]
     assert len(table) == 2 * 3
-    assert {"lost_gate_pct", "range_rmse_km", "range_pcrlb_km", "range_bias_km"} <= set(table)
+    assert {"lost_gate_pct", "lost_angle_pct", "inconsistent_nees_pct", "range_rmse_km",
+            "range_rmse_ci95_km", "range_pcrlb_km", "range_bias_scan1_km",
+            "range_bias_final_km"} <= set(table)
     assert (table["range_pcrlb_km"] > 0).all()
 
 
