@@ -1,4 +1,4 @@
-"""CV model (SPEC 1.1) and platform geometry (SPEC 1.7)."""
+"""CV model and platform geometry (docs/papers/twin_sensor.md, Model)."""
 
 import numpy as np
 

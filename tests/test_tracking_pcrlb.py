@@ -1,4 +1,4 @@
-"""PCRLB of SPEC section 2: the reference table within 1 %, and the IRF sanity values."""
+"""PCRLB (docs/papers/twin_sensor.md): the reference table within 1 %, and the IRF sanity values."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Two-sensor PDA (SPEC 1.6): weights, reductions, and the closed-form mixture collapse."""
+"""Two-sensor PDA (docs/papers/twin_sensor.md): weights, reductions, closed-form collapse."""
 
 import itertools
 
@@ -44,7 +44,7 @@ def returns_for(rng, X, P, pos, M, P_D=0.9, lam=300.0, spread=2.0):
 
 
 def brute_force(X, P, rets, betas, covariance, zbar=None):
-    """SPEC 1.6 literally: an MGEKF/EKF update per hypothesis, then the mixture moments.
+    """The documented update literally: an MGEKF/EKF update per hypothesis, then moments.
 
     ``zbar`` (one ``(N, 2)`` array per sensor) evaluates the modified rows there instead of at
     each hypothesis's own returns (``mg_at = "combined"``)."""

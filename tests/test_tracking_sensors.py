@@ -1,4 +1,4 @@
-"""Az/el measurement model, Jacobian (SPEC 1.3), MGEKF identities (SPEC 1.4), gates."""
+"""Az/el measurement model, Jacobian, MGEKF identities and gates (docs/papers/twin_sensor.md)."""
 
 import numpy as np
 from hypothesis import given, settings

@@ -1,14 +1,37 @@
-"""Track initialization from a coarse range cue (SPEC 1.7, ``s000.init``).
+"""Track initialization from a coarse range cue (``docs/papers/twin_sensor.md``, Defaults).
 
 The prior covariance is built in the line-of-sight frame of the sensor: standard deviation
 ``sigma_range`` along the line of sight, ``r * sigma_angle`` across it in azimuth and in
 elevation, and ``sigma_velocity`` per velocity axis. The same ``P0`` initializes the filters
 (``x0 ~ N(x_true(0), P0)``) and the PCRLB (``J0 = P0^-1``), which keeps the bound consistent.
+
+The range cue is given either in metres (``"absolute"``, the paper's scenario: 20 km at
+200 km) or as a fraction of the initial range (``"relative"``), so that a scenario whose
+target is close does not inherit a cue as wide as the range itself.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+RANGE_CUES = ("absolute", "relative")
+
+
+def range_cue_sd(cue: str, d: np.ndarray, sigma_range: float, fraction: float) -> float:
+    """Range standard deviation (m) of the radar cue for target-minus-sensor ``d: (3,)`` (m).
+
+    Parameters
+    ----------
+    cue : ``"absolute"`` (return ``sigma_range``) or ``"relative"`` (return
+        ``fraction * |d|``).
+    sigma_range : absolute standard deviation (m).
+    fraction : standard deviation as a fraction of the range ``|d|`` (dimensionless).
+    """
+    if cue == "absolute":
+        return float(sigma_range)
+    if cue == "relative":
+        return float(fraction * np.linalg.norm(d))
+    raise ValueError(f"range cue must be one of {RANGE_CUES}, got {cue!r}")
 
 
 def los_prior_covariance(d: np.ndarray, sigma_range: float, sigma_angle: float,

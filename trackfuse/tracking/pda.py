@@ -2,7 +2,8 @@
 
 One call updates ``N`` independent filters (one per Monte Carlo trial) with the validated
 returns of one scan. Hypotheses ``theta_ij`` (``i = 0..m_1``, ``j = 0..m_2``; index 0 means
-"no target return from that sensor") are weighted in log space (SPEC 1.6):
+"no target return from that sensor") are weighted in log space
+(``docs/papers/twin_sensor.md``, Algorithms):
 
     w_00 = f_1(0) f_2(0)
     w_i0 = P_D1 N(nu_1i; 0, S_1) f_2(0),     w_0j = f_1(0) P_D2 N(nu_2j; 0, S_2)

@@ -3,7 +3,7 @@
 * :func:`orbit_positions`: a horizontal circle about a centre with a constant climb rate. The
   radius and initial phase follow from the start point, so the paper's scenario (start
   ``(153 209, 0, 2 000)`` m, centre ``(0, 128 558)`` m, 500 m/s, climb 50 m/s) gives
-  ``R = 200 km`` and ``psi0 = -40 deg`` (SPEC 1.7).
+  ``R = 200 km`` and ``psi0 = -40 deg`` (docs/papers/twin_sensor.md, Scenario).
 * :func:`straight_positions`: constant-velocity flight.
 * :func:`baseline_offset`: the fixed formation offset of a second platform, horizontal, at a
   given angle from the initial line of sight, so two sensors can be co-located (baseline 0,

@@ -7,9 +7,9 @@ Fixed Cartesian frame, z up. For the target-minus-sensor vector ``d = (dx, dy, d
     H    = [[-dy/rh^2,          dx/rh^2,          0,       0, 0, 0],
             [-dx dz/(rh r^2),   -dy dz/(rh r^2),  rh/r^2,  0, 0, 0]]
 
-(the corrected form of paper 000 eq. 7, SPEC 1.3).
+(the corrected form of paper 000 eq. 7, docs/papers/twin_sensor.md).
 
-Modified-gain rows (Song & Speyer 1985; SPEC 1.4). With the *measured* angles
+Modified-gain rows (Song & Speyer 1985; docs/papers/twin_sensor.md). With the *measured* angles
 ``(th, ph)`` and the predicted relative position ``db = xbar[:3] - p``:
 
     rho  = db_x cos th + db_y sin th
