@@ -243,12 +243,9 @@ class RunFolder:
         self.parts = self.path / "parts"
 
     # -- state ------------------------------------------------------------------------------
-    def prepare(self, resolved: dict[str, Any]) -> dict[str, Any]:
-        """Check the layout, remove temporaries of killed runs, write ``config.yaml``.
-
-        Returns ``{"bytes", "sha256"}`` of ``config.yaml``. Raises :class:`RunFolderError` if
-        a file of the run is not a regular file or a folder of it is not a folder.
-        """
+    def check_layout(self) -> None:
+        """Raise :class:`RunFolderError` if a file of the run is not a regular file or a
+        folder of it is not a folder (nothing this class would overwrite or delete)."""
         for folder in (self.parts, *(self.path / d for d in REPORT_DIRS)):
             if folder.exists() and not folder.is_dir():
                 raise RunFolderError(f"{folder}: exists but is not a folder; move it away and "
@@ -258,6 +255,14 @@ class RunFolder:
             if path.exists() and not path.is_file():
                 raise RunFolderError(f"{path}: exists but is not a regular file; move it away "
                                      "and run again")
+
+    def prepare(self, resolved: dict[str, Any]) -> dict[str, Any]:
+        """Check the layout, remove temporaries of killed runs, write ``config.yaml``.
+
+        Returns ``{"bytes", "sha256"}`` of ``config.yaml``; raises :class:`RunFolderError`
+        where :meth:`check_layout` does.
+        """
+        self.check_layout()
         try:
             self.parts.mkdir(parents=True, exist_ok=True)
         except OSError as err:

@@ -341,10 +341,12 @@ class Runner:
         return outcome
 
     def _run_locked(self) -> RunOutcome:
+        self.folder.check_layout()
         previous = self._previous_manifest()
         if previous is not None and previous.get("status") == "complete":
             problem = self.folder.check_final_files(previous)
             if problem is None:
+                self.folder.remove_temporaries()
                 return RunOutcome(self.folder.path, "already complete", self.total_trials, 0,
                                   _int_or(previous.get("trials_failed"), 0),
                                   _int_or(previous.get("rows"), 0))
