@@ -14,7 +14,9 @@ import numpy as np
 import pandas as pd
 import pytest
 from conftest import cli_env, trackfuse
+from typer.testing import CliRunner
 
+from cli.main import app
 from trackfuse.config import load
 from trackfuse.results import RunFolder
 from trackfuse.runner import Runner
@@ -270,13 +272,17 @@ def test_a_trial_that_exits_or_returns_garbage_becomes_a_failed_row(how, write_c
     assert manifest["status"] == "complete" and manifest["trials_failed"] == len(failed)
 
 
+def cli(*args):
+    return CliRunner().invoke(app, [str(a) for a in args], catch_exceptions=True)
+
+
 def test_cli_run_with_a_trial_calling_sys_exit_exits_3(write_config, tmp_path):
     path = write_config("experiment: toy_experiments:UNRULY\ntrials: 20\nseed: 3\n")
-    result = trackfuse("run", path, "--out", tmp_path, "--workers", "2", "--no-progress")
-    assert result.returncode == 3, result.stderr
-    assert "trials failed" in result.stderr and "Traceback" not in result.stderr
-    again = trackfuse("run", path, "--out", tmp_path, "--no-progress")
-    assert again.returncode == 3 and "already complete" in again.stdout
+    result = cli("run", path, "--out", tmp_path, "--executor", "serial", "--no-progress")
+    assert result.exit_code == 3, result.stderr
+    assert result.stderr.startswith("error: ") and "trials failed" in result.stderr
+    again = cli("run", path, "--out", tmp_path, "--no-progress")
+    assert again.exit_code == 3 and "already complete" in again.stdout
 
 
 def test_a_config_called_dot_dot_dot_yaml_writes_under_the_output_root(tmp_path):
@@ -297,8 +303,8 @@ def test_out_that_is_a_file_or_not_writable_is_one_line(write_config, tmp_path):
     afile.write_text("x")
     unwritable = Path("/proc/trackfuse-out")  # not creatable, even by root
     for out in (afile, afile / "below", unwritable):
-        result = trackfuse("run", path, "--out", out, "--no-plots")
-        assert result.returncode == 2, result.stderr
+        result = cli("run", path, "--out", out, "--no-plots")
+        assert result.exit_code == 2, result.stderr
         lines = result.stderr.strip().splitlines()
         assert len(lines) == 1 and lines[0].startswith("error: "), result.stderr
         assert str(out) in lines[0]

@@ -22,6 +22,7 @@ import json
 import multiprocessing
 import os
 import signal
+import socket
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -31,6 +32,7 @@ from typing import Any
 KINDS = ("serial", "process", "dask")
 MAX_POOL_RESTARTS = 3
 MAX_SCHEDULER_FILE_BYTES = 1_000_000
+PROBE_TIMEOUT_S = 5.0
 _END = object()
 
 
@@ -163,6 +165,8 @@ class DaskExecutor:
         self._cluster = None
         if scheduler_file:
             address = scheduler_address(scheduler_file)
+        if address:
+            _probe(address)
         try:
             if address:
                 self._client = Client(address=address, timeout="20s")
@@ -194,6 +198,19 @@ class DaskExecutor:
         self._client.close()
         if self._cluster is not None:
             self._cluster.close()
+
+
+def _probe(address: str) -> None:
+    """Fail at once if a ``tcp://host:port`` scheduler refuses connections (dask itself
+    retries for its whole timeout); other protocols are left to dask."""
+    scheme, _, rest = address.partition("://")
+    host, _, port = rest.rpartition(":")
+    if scheme != "tcp" or not port.isdigit():
+        return
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), PROBE_TIMEOUT_S).close()
+    except OSError as err:
+        raise ExecutorError(f"cannot connect to {address}: {err.strerror or err}") from None
 
 
 def scheduler_address(path: str) -> str:
