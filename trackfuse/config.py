@@ -221,21 +221,7 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
         raw[key] = sets.pop(key)
 
     name = raw.get("experiment")
-    if name is None:
-        raise ConfigError(source, "experiment", "missing; allowed: " + ", ".join(
-            experiments.names()))
-    if not isinstance(name, str):
-        raise ConfigError(source, "experiment", f"got {_describe(name)}; allowed: "
-                          + ", ".join(experiments.names()))
-    try:
-        exp = experiments.get(name)
-    except experiments.UnknownExperiment:
-        raise ConfigError(source, "experiment", f"unknown experiment {_describe(name)}"
-                          f"{did_you_mean(name, experiments.names())}; allowed: "
-                          + ", ".join(experiments.names()) + ", or package.module:ATTRIBUTE"
-                          ) from None
-    except experiments.PluginError as err:
-        raise ConfigError(source, "experiment", str(err)) from None
+    exp = _experiment(source, name)
 
     title = raw.get("title", exp.title)
     if not isinstance(title, str):
@@ -285,6 +271,23 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
     figures, formats = _outputs(source, exp, raw.get("outputs") or {})
     return Config(source, exp, title, trials, seed, batch_size, params, sweep, mode,
                   figures, formats, name)
+
+
+def _experiment(source: str, name: Any) -> Experiment:
+    """The experiment a config names (a registered name or ``package.module:ATTR``)."""
+    allowed = ", ".join(experiments.names()) + ", or package.module:ATTRIBUTE"
+    if name is None:
+        raise ConfigError(source, "experiment", f"missing; allowed: {allowed}")
+    if not isinstance(name, str):
+        raise ConfigError(source, "experiment", f"got {_describe(name)}; allowed: {allowed}")
+    try:
+        return experiments.get(name)
+    except experiments.UnknownExperiment:
+        raise ConfigError(source, "experiment", f"unknown experiment {_describe(name)}"
+                          f"{did_you_mean(name, experiments.names())}; allowed: {allowed}"
+                          ) from None
+    except experiments.PluginError as err:
+        raise ConfigError(source, "experiment", str(err)) from None
 
 
 def _outputs(source: str, exp: Experiment, outputs: Any) -> tuple[list[str] | str, list[str]]:
