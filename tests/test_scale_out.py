@@ -109,7 +109,7 @@ def test_kill_9_at_random_moments_then_resume_equals_uninterrupted(write_config,
                "--workers", "2", "--no-plots", "--no-progress"]
     rng = random.Random(1234)
     kills, parts = 0, 0
-    for _ in range(5):
+    for _ in range(4):
         proc = subprocess.Popen(command, env=cli_env(), stdout=subprocess.DEVNULL,
                                 stderr=subprocess.DEVNULL, start_new_session=True)
         _wait_for_more_parts(out, proc, parts)
