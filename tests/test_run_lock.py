@@ -64,22 +64,25 @@ def test_four_runs_of_one_folder_at_once_compute_each_trial_once(write_config, t
 
 
 def test_a_refused_run_leaves_the_writer_and_its_temporaries_alone(write_config, tmp_path):
-    path = write_config(BURN, "burn")
+    path = write_config(BURN.replace("trials: 300", "trials: 5000"), "burn")
     out = tmp_path / "out"
+    # restore Ctrl-C for the writer (a shell running tests in the background ignores it)
     writer = subprocess.Popen(command(path, out), env=cli_env(), stdout=subprocess.PIPE,
-                              stderr=subprocess.PIPE, text=True)
+                              stderr=subprocess.PIPE, text=True,
+                              preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     wait_for_parts(out, writer)
     folder = next(out.glob("burn/*"))
-    planted = folder / "parts" / f".p000000-b0000099.trials.csv.{writer.pid}.tmp"
+    planted = folder / "parts" / f".p000000-b0000999.trials.csv.{writer.pid}.tmp"
     planted.write_text("being written")
     second = subprocess.run(command(path, out), env=cli_env(), capture_output=True, text=True,
                             timeout=120)
     assert second.returncode == 2 and BUSY.match(second.stderr.strip()), second.stderr
     assert planted.exists()
-    planted.unlink()
-    _, err = writer.communicate(timeout=300)
-    assert writer.returncode == 0, err
-    assert "Traceback" not in err
+    assert writer.poll() is None, "the writer finished before the second run started"
+    writer.send_signal(signal.SIGINT)
+    _, err = writer.communicate(timeout=120)
+    assert writer.returncode == 130, err
+    assert "run the same command again to resume" in err and "Traceback" not in err
 
 
 def test_a_lock_left_by_a_killed_run_is_taken_over(write_config, tmp_path):

@@ -19,6 +19,7 @@ import json
 import os
 import platform
 import sys
+import time
 from collections.abc import Callable
 from contextlib import suppress
 from datetime import UTC, datetime
@@ -31,6 +32,7 @@ from trackfuse.results import RunFolderError, atomic_write
 
 LOCK_FILE = ".lock"
 HOLDER_FILE = ".lock.holder.json"
+HOLDER_WAIT_S = 2.0
 
 
 class RunFolderBusy(RunFolderError):
@@ -66,8 +68,8 @@ class RunLock:
         try:
             lock.acquire(timeout=0)
         except Timeout:
-            raise RunFolderBusy(f"{self.path}: in use by {_describe(self.holder())}; wait for "
-                                "it to finish (or stop it) and run again") from None
+            raise RunFolderBusy(f"{self.path}: in use by {_describe(self._current_holder())}; "
+                                "wait for it to finish (or stop it) and run again") from None
         except OSError as err:
             raise RunFolderError(f"{self.path / LOCK_FILE}: cannot lock "
                                  f"({err.strerror or type(err).__name__})") from None
@@ -89,6 +91,14 @@ class RunLock:
             self._release()
             raise
         return self
+
+    def _current_holder(self) -> dict[str, Any] | None:
+        """The holder, waiting up to :data:`HOLDER_WAIT_S` for a new holder to say who it is
+        (it writes the holder file just after taking the lock)."""
+        deadline = time.monotonic() + HOLDER_WAIT_S
+        while (holder := self.holder()) is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+        return holder
 
     def holder(self) -> dict[str, Any] | None:
         """Who holds (or last held without releasing) the lock, if recorded."""
