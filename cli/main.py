@@ -1,8 +1,10 @@
 """The ``trackfuse`` command line: run, reproduce, plot, validate, list.
 
 Exit status: 0 success; 1 figures or tables could not be drawn; 2 bad input (config,
-override, option, run folder); 3 the run finished but some trials failed; 130 interrupted
-(re-run the same command to resume).
+override, option, run folder, output root) or a run folder in use by another process; 3 the
+run finished but some trials failed; 130 interrupted (re-run the same command to resume).
+Every error is one line on stderr starting with ``error:``; repairs are announced with one
+line starting with ``warning:``.
 """
 
 from __future__ import annotations
@@ -18,8 +20,9 @@ from rich.table import Table
 
 from trackfuse import experiments
 from trackfuse.config import ConfigError, allowed_text, load
-from trackfuse.executors import KINDS, ExecutorError, default_workers
-from trackfuse.sweep import SweepError, parse_sets, parse_sweeps
+from trackfuse.executors import KINDS, ExecutorError, default_workers, scheduler_address
+from trackfuse.results import RunFolderError
+from trackfuse.sweep import SweepError, count_points, parse_sets, parse_sweeps
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
                   help="Monte Carlo experiment runner for passive multi-sensor tracking.")
@@ -31,6 +34,33 @@ def fail(message: str, code: int = 2) -> None:
     safe = "".join(c if c.isprintable() else repr(c)[1:-1] for c in message)
     print(f"error: {safe}", file=sys.stderr)
     raise typer.Exit(code)
+
+
+def warn(message: str) -> None:
+    """Print a one-line warning to stderr."""
+    safe = "".join(c if c.isprintable() else repr(c)[1:-1] for c in message)
+    print(f"warning: {safe}", file=sys.stderr, flush=True)
+
+
+def _interrupted(err) -> None:
+    print(f"interrupted: {err.done}/{err.total} trials saved in {err.folder}; run the same "
+          "command again to resume", file=sys.stderr)
+    raise typer.Exit(130)
+
+
+def _execute(runner):
+    """``runner.run()`` with every expected failure turned into one line and its exit code."""
+    from trackfuse.runner import RunInterrupted
+
+    try:
+        return runner.run()
+    except RunInterrupted as err:
+        _interrupted(err)
+    except (ExecutorError, RunFolderError) as err:
+        fail(str(err))
+    except OSError as err:
+        where = f"{err.filename}: " if err.filename else ""
+        fail(f"{where}{err.strerror or type(err).__name__} (while writing {runner.folder.path})")
 
 
 def _load(cfg: Path, sets: list[str], sweeps: list[str], **top):
@@ -70,30 +100,28 @@ def run(
     = False,
 ) -> None:
     """Run CFG: every sweep point x trial, then trials.csv, summary.csv and figures."""
-    from trackfuse.runner import RunInterrupted, Runner
+    from trackfuse.runner import Runner
 
     config = _load(cfg, sets, sweeps, trials=trials, seed=seed)
     if executor not in KINDS:
         fail(f"--executor: got {executor!r}; allowed: {', '.join(KINDS)}")
     if workers < 0:
         fail(f"--workers: got {workers}; allowed: an integer >= 0 (0 = all cores)")
+    if scheduler_file:
+        try:
+            scheduler_address(scheduler_file)
+        except ExecutorError as err:
+            fail(str(err))
     runner = Runner(config, out_dir, workers=workers or default_workers(), executor=executor,
                     scheduler=scheduler, scheduler_file=scheduler_file, plots=not no_plots,
-                    progress=not no_progress, command=sys.argv)
+                    progress=not no_progress, command=sys.argv, warn=warn)
     if dry_run:
         print(yaml.safe_dump(config.to_dict(), sort_keys=False), end="")
         print(f"# {len(runner.points)} points x {config.trials} trials = "
-                  f"{runner.total_trials} trials in batches of {config.batch_size}; "
-                  f"output: {runner.folder.path}")
+              f"{runner.total_trials} trials in batches of {config.batch_size}; "
+              f"output: {runner.folder.path}")
         return
-    try:
-        outcome = runner.run()
-    except RunInterrupted as err:
-        print(f"interrupted: {err.done}/{err.total} trials saved in {err.folder}; run the same "
-              "command again to resume", file=sys.stderr)
-        raise typer.Exit(130) from None
-    except ExecutorError as err:
-        fail(str(err))
+    outcome = _execute(runner)
     if outcome.status == "already complete":
         print(f"already complete: {outcome.folder}")
     else:
@@ -122,8 +150,10 @@ def reproduce(
 ) -> None:
     """Run every config in FOLDER (the shipped paper experiments by default), resuming any
     finished ones; all configs are validated before the first one runs."""
-    from trackfuse.runner import RunInterrupted, Runner
+    from trackfuse.runner import Runner
 
+    if not folder.is_dir():
+        fail(f"{folder}: not a folder of configs")
     paths = sorted(folder.glob("*.yaml"))
     if not paths:
         fail(f"{folder}: no *.yaml configs")
@@ -131,15 +161,9 @@ def reproduce(
     failed = 0
     for config in configs:
         runner = Runner(config, out_dir, workers=workers or default_workers(),
-                        executor=executor, progress=not no_progress, command=sys.argv)
-        try:
-            outcome = runner.run()
-        except RunInterrupted as err:
-            print(f"interrupted: {err.done}/{err.total} trials of {config.source} saved in "
-                  f"{err.folder}; run the same command again to resume", file=sys.stderr)
-            raise typer.Exit(130) from None
-        except ExecutorError as err:
-            fail(str(err))
+                        executor=executor, progress=not no_progress, command=sys.argv,
+                        warn=warn)
+        outcome = _execute(runner)
         failed += outcome.failed_trials + len(outcome.figure_errors)
         print(f"{config.source}: {outcome.folder} ({outcome.computed_trials} of "
               f"{outcome.total_trials} trials computed now, {outcome.failed_trials} failed)")
@@ -149,23 +173,26 @@ def reproduce(
 
 @app.command()
 def plot(run_dir: Annotated[Path, typer.Argument(help="A finished run folder.")]) -> None:
-    """Redraw every figure and table of RUN_DIR from its CSVs (nothing is recomputed)."""
-    from trackfuse.results import CONFIG, RunFolder
+    """Redraw every figure and table of RUN_DIR from its CSVs (nothing is recomputed).
+
+    The final files are checked against the checksums in the run's manifest first. Plotting
+    a run of a plugin experiment imports the plugin's module (a config is code)."""
+    from trackfuse.rundata import load as load_run
+    from trackfuse.runlock import RunLock
     from trackfuse.runner import draw_reports
 
-    folder = RunFolder(run_dir)
-    manifest = folder.read_manifest()
-    if manifest is None:
-        fail(f"{run_dir}: not a trackfuse run folder (no readable manifest.json)")
-    if manifest.get("status") != "complete":
-        fail(f"{run_dir}: run is {manifest.get('status')}, not complete; run the same "
-             "`trackfuse run` command again to finish it")
-    resolved = yaml.safe_load((run_dir / CONFIG).read_text())
     try:
-        experiment = experiments.get(resolved["experiment"])
-    except experiments.UnknownExperiment:
-        fail(f"{run_dir}: unknown experiment {resolved['experiment']!r}")
-    figures, errors = draw_reports(run_dir, experiment, resolved)
+        run = load_run(run_dir)
+        experiment = run.experiment
+        with RunLock(run.path, warn):
+            figures, errors = draw_reports(run.path, experiment, run.config)
+    except RunFolderError as err:
+        fail(str(err))
+    except OSError as err:
+        fail(f"{err.filename or run_dir}: {err.strerror or type(err).__name__}")
+    except KeyboardInterrupt:
+        print("interrupted: run `trackfuse plot` again to redraw", file=sys.stderr)
+        raise typer.Exit(130) from None
     print(f"drew {len(figures)} figure files in {run_dir / 'figures'}")
     for message in errors:
         print(f"warning: {message}", file=sys.stderr)
@@ -179,11 +206,10 @@ def validate(
     sets: Sets = [],  # noqa: B006
     sweeps: Sweeps = [],  # noqa: B006
 ) -> None:
-    """Check CFG (and overrides) without running anything."""
-    from trackfuse.sweep import expand
-
+    """Check CFG (and overrides) without running anything. A config naming a plugin
+    (package.module:ATTR) imports that module: a config is trusted like a script."""
     config = _load(cfg, sets, sweeps)
-    points = len(expand(config.sweep, config.sweep_mode))
+    points = count_points(config.sweep, config.sweep_mode)
     print(f"ok: {cfg}: {config.experiment.name}, {points} points x {config.trials} trials")
 
 
@@ -199,14 +225,16 @@ def list_experiments(
             try:
                 exp = experiments.get(exp_name)
                 table.add_row(exp_name, exp.title, str(len(exp.params)))
-            except ImportError as err:
-                table.add_row(exp_name, f"(unavailable: {err})", "")
+            except Exception as err:  # noqa: BLE001 - one broken experiment, listed as such
+                table.add_row(exp_name, f"(unavailable: {type(err).__name__}: {err})", "")
         out.print(table)
         return
     try:
         exp = experiments.get(name)
     except experiments.UnknownExperiment:
-        fail(f"unknown experiment {name!r}; allowed: {', '.join(experiments.names())}")
+        fail(f"unknown experiment {name[:80]!r}; allowed: {', '.join(experiments.names())}")
+    except experiments.PluginError as err:
+        fail(str(err))
     table = Table("parameter", "default", "unit", "allowed", "meaning", title=exp.title)
     for p in exp.params:
         table.add_row(p.key, str(p.default), p.unit, allowed_text(p), p.doc)

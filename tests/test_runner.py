@@ -7,12 +7,16 @@ import signal
 import subprocess
 import sys
 import time
+import tracemalloc
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 from conftest import cli_env, trackfuse
+from typer.testing import CliRunner
 
+from cli.main import app
 from trackfuse.config import load
 from trackfuse.results import RunFolder
 from trackfuse.runner import Runner
@@ -88,14 +92,27 @@ sweep: {sigma: [1.0, 2.0]}
     np.testing.assert_allclose(est[2.0], 2 * est[1.0], rtol=1e-12)
 
 
-def test_batch_size_is_part_of_the_run_but_not_the_numbers(write_config, tmp_path):
-    path = write_config(CFG)
-    small = Runner(load(path, sets={"batch_size": 3}), tmp_path, progress=False,
+def test_batch_size_is_part_of_the_run_id_and_fixes_the_bytes(write_config, tmp_path):
+    """What is promised about ``batch_size`` (docs/runner.md, Batches).
+
+    A vectorized ``run_batch`` (here one matrix product over the batch, as in twin_sensor)
+    may round the last bits differently when a batch holds other trials, so the batch size is
+    part of the run id: changing it starts a new run folder, never mixing parts of two batch
+    sizes. For one batch size the bytes are identical across executors and worker counts.
+    Across batch sizes the numbers agree to floating-point reassociation (relative 1e-12),
+    not to the byte.
+    """
+    path = write_config("experiment: toy_experiments:PROJECTED\ntrials: 60\nseed: 4\n"
+                        "sweep: {scale: [1.0, 2.0]}\n")
+    small = Runner(load(path, sets={"batch_size": 7}), tmp_path / "a", progress=False,
                    executor="serial")
-    default = Runner(load(path), tmp_path, progress=False, executor="serial")
+    default = Runner(load(path), tmp_path / "a", progress=False, executor="serial")
     assert small.folder.path != default.folder.path
     a, b = small.run(), default.run()
-    assert (a.folder / "trials.csv").read_bytes() == (b.folder / "trials.csv").read_bytes()
+    pooled = run(path, tmp_path / "b", executor="process", workers=2)
+    assert (b.folder / "trials.csv").read_bytes() == (pooled.folder / "trials.csv").read_bytes()
+    x, y = (pd.read_csv(o.folder / "trials.csv") for o in (a, b))
+    np.testing.assert_allclose(x[["y0", "y1", "y2"]], y[["y0", "y1", "y2"]], rtol=1e-12)
 
 
 def test_resume_after_interrupt_equals_uninterrupted(write_config, tmp_path, monkeypatch):
@@ -230,3 +247,95 @@ def test_reproduce_runs_every_config_of_a_folder_and_resumes(tmp_path):
     (configs / "c.yaml").write_text("experiment: toy_gaussian\nparams: {sigma: -1}\n")
     bad = trackfuse("reproduce", configs, "--out", tmp_path / "out")
     assert bad.returncode == 2 and "c.yaml: params.sigma" in bad.stderr
+
+
+@pytest.mark.parametrize("how", ["exit", "interrupt", "none", "empty", "not_rows", "raise"])
+def test_a_trial_that_exits_or_returns_garbage_becomes_a_failed_row(how, write_config,
+                                                                    tmp_path):
+    """sys.exit(0), KeyboardInterrupt raised by the trial itself, None, [] or non-dict rows:
+    each becomes one failed row with its error text; the run completes."""
+    path = write_config(f"experiment: toy_experiments:UNRULY\ntrials: 40\nseed: 3\n"
+                        f"params: {{how: {how}}}\n")
+    serial = run(path, tmp_path / "s", executor="serial")
+    pooled = run(path, tmp_path / "p", executor="process", workers=2)
+    trials = pd.read_csv(serial.folder / "trials.csv", keep_default_na=False)
+    failed = trials[trials["status"] == "failed"]
+    assert 0 < len(failed) < 40 and sorted(trials["trial"]) == list(range(40))
+    expected = {"exit": "SystemExit: 0", "interrupt": "KeyboardInterrupt",
+                "none": "run_trial returned NoneType", "empty": "run_trial returned an empty",
+                "not_rows": "run_trial returned list", "raise": "RuntimeError: synthetic"}[how]
+    assert failed["error"].str.contains(expected, regex=False).all(), failed["error"].iloc[0]
+    assert serial.failed_trials == len(failed)
+    assert (serial.folder / "trials.csv").read_bytes() == (pooled.folder /
+                                                           "trials.csv").read_bytes()
+    manifest = json.loads((serial.folder / "manifest.json").read_text())
+    assert manifest["status"] == "complete" and manifest["trials_failed"] == len(failed)
+
+
+def cli(*args):
+    return CliRunner().invoke(app, [str(a) for a in args], catch_exceptions=True)
+
+
+def test_cli_run_with_a_trial_calling_sys_exit_exits_3(write_config, tmp_path):
+    path = write_config("experiment: toy_experiments:UNRULY\ntrials: 20\nseed: 3\n")
+    result = cli("run", path, "--out", tmp_path, "--executor", "serial", "--no-progress")
+    assert result.exit_code == 3, result.stderr
+    assert result.stderr.startswith("error: ") and "trials failed" in result.stderr
+    again = cli("run", path, "--out", tmp_path, "--no-progress")
+    assert again.exit_code == 3 and "already complete" in again.stdout
+
+
+def test_a_config_called_dot_dot_dot_yaml_writes_under_the_output_root(tmp_path):
+    root = tmp_path / "inner"
+    path = root / "...yaml"
+    root.mkdir()
+    path.write_text(CFG)
+    out = root / "out"
+    result = trackfuse("run", path, "--out", out, "--no-plots", "--executor", "serial")
+    assert result.returncode == 0, result.stderr
+    assert sorted(p.name for p in root.iterdir()) == ["...yaml", "out"]
+    assert [p.name for p in out.iterdir()] == ["config"]
+
+
+def test_out_that_is_a_file_or_not_writable_is_one_line(write_config, tmp_path):
+    path = write_config(CFG)
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    unwritable = Path("/proc/trackfuse-out")  # not creatable, even by root
+    for out in (afile, afile / "below", unwritable):
+        result = cli("run", path, "--out", out, "--no-plots")
+        assert result.exit_code == 2, result.stderr
+        lines = result.stderr.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("error: "), result.stderr
+        assert str(out) in lines[0]
+
+
+def test_a_billion_trials_in_batches_of_one_start_at_once_in_flat_memory(write_config,
+                                                                         tmp_path, monkeypatch):
+    """The plan is lazy: no list of 10^9 batches is built, on the first run or on resume."""
+    path = write_config("experiment: toy_experiments:TRIVIAL\ntrials: 1000000000\n"
+                        "batch_size: 1\nseed: 1\n")
+    original = RunFolder.write_part
+    written = []
+
+    def stop_after_20(self, span, *args):
+        original(self, span, *args)
+        written.append(span)
+        if len(written) % 20 == 0:
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(RunFolder, "write_part", stop_after_20)
+    from trackfuse.runner import RunInterrupted
+
+    tracemalloc.start()
+    t0 = time.perf_counter()
+    for expected_done in (20, 40):
+        with pytest.raises(RunInterrupted) as err:
+            run(path, tmp_path, executor="serial", plots=False)
+        # the part of the interrupted batch is on disk, but was not yet counted
+        assert err.value.done == expected_done - 1 and err.value.total == 10**9
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert time.perf_counter() - t0 < 30
+    assert peak < 20e6, f"{peak / 1e6:.0f} MB"
+    assert [s.first for s in written] == list(range(40))  # resume recomputed nothing

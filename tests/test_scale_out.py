@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import csv
 import os
 import random
 import signal
@@ -16,6 +15,7 @@ from conftest import cli_env, trackfuse
 
 from trackfuse.config import build, load
 from trackfuse.executors import ExecutorError, make_executor
+from trackfuse.results import BatchSpan, read_part
 from trackfuse.runner import Runner
 
 CFG = """
@@ -81,41 +81,83 @@ def test_unreachable_scheduler_is_a_one_line_error(write_config, tmp_path):
     assert "Traceback" not in result.stderr
 
 
-def _parts_are_whole(folder: Path, trials_per_batch: dict[str, int]) -> None:
-    for part in folder.glob("parts/*.trials.csv"):
-        with open(part, newline="") as fh:
-            rows = list(csv.reader(fh))
-        header, body = rows[0], rows[1:]
-        assert all(len(r) == len(header) for r in body), part
-        name = part.name.split(".")[0]
-        assert len(body) == trials_per_batch[name], part
+def _parts_are_whole(folder: Path, trials: int, batch_size: int) -> int:
+    """Every part on disk passes the full verification of the merge; returns their count."""
+    parts = sorted(folder.glob("parts/p*.trials.csv"))
+    for part in parts:
+        batch = int(part.name.split("-b")[1].split(".")[0])
+        span = BatchSpan(0, batch, batch * batch_size, min((batch + 1) * batch_size, trials))
+        for kind in ("trials", "timings"):
+            read_part(folder / "parts" / f"{span.name}.{kind}.csv", span, kind)
+    return len(parts)
+
+
+def _wait_for_more_parts(out: Path, proc, before: int, timeout: float = 60) -> None:
+    deadline = time.monotonic() + timeout
+    while proc.poll() is None and time.monotonic() < deadline and \
+            len(list(out.glob("burn/*/parts/*.trials.csv"))) <= before:
+        time.sleep(0.02)
 
 
 def test_kill_9_at_random_moments_then_resume_equals_uninterrupted(write_config, tmp_path):
-    path = write_config("experiment: toy_experiments:BURN\ntrials: 240\nseed: 9\n"
-                        "batch_size: 4\nparams: {work: 12}\n", "burn")
+    """Each run is killed at a random moment after it wrote its first new part (while the
+    workers compute and the parent writes parts); every part left is whole."""
+    path = write_config("experiment: toy_experiments:BURN\ntrials: 320\nseed: 9\n"
+                        "batch_size: 4\nparams: {work: 15}\n", "burn")
     out = tmp_path / "out"
     command = [sys.executable, "-m", "cli.main", "run", str(path), "--out", str(out),
                "--workers", "2", "--no-plots", "--no-progress"]
     rng = random.Random(1234)
-    kills = 0
-    for _ in range(8):
+    kills, parts = 0, 0
+    for _ in range(4):
         proc = subprocess.Popen(command, env=cli_env(), stdout=subprocess.DEVNULL,
                                 stderr=subprocess.DEVNULL, start_new_session=True)
-        time.sleep(rng.uniform(0.3, 2.5))
+        _wait_for_more_parts(out, proc, parts)
+        time.sleep(rng.uniform(0.0, 0.3))
         if proc.poll() is None:
-            os.kill(proc.pid, signal.SIGKILL)
+            os.killpg(proc.pid, signal.SIGKILL)
             kills += 1
         proc.wait(timeout=30)
         folder = next(out.glob("burn/*"), None)
         if folder is not None:
-            _parts_are_whole(folder, {f"p000000-b{b:07d}": 4 for b in range(60)})
-    assert kills >= 4, "the runs finished before they could be killed"
+            parts = _parts_are_whole(folder, 320, 4)
+    assert kills >= 3, "the runs finished before they could be killed"
+    assert parts > 0, "no run was killed after it wrote parts"
     final = subprocess.run(command, env=cli_env(), capture_output=True, text=True, timeout=300)
     assert final.returncode == 0, final.stderr
-    reference = trackfuse("run", path, "--out", tmp_path / "ref", "--executor", "serial",
-                          "--no-plots", "--no-progress", timeout=300)
-    assert reference.returncode == 0, reference.stderr
+    reference = run(load(path), tmp_path / "ref", executor="serial")
     got = next(out.glob("burn/*/trials.csv")).read_bytes()
-    assert got == next((tmp_path / "ref").glob("burn/*/trials.csv")).read_bytes()
+    assert got == (reference.folder / "trials.csv").read_bytes()
     assert not list(out.glob("burn/*/.*.tmp")) and not list(out.glob("burn/*/parts/.*.tmp"))
+
+
+@pytest.mark.parametrize("how", ["exit", "interrupt", "none"])
+def test_dask_contains_trials_that_exit_or_return_garbage(how, tmp_path, dask_address):
+    """sys.exit(0) or KeyboardInterrupt inside a dask worker used to kill it (KilledWorker);
+    now each is a failed row, as on the other executors, and the CSVs are identical."""
+    config = build({"experiment": "toy_experiments:UNRULY", "trials": 30, "seed": 5,
+                    "params": {"how": how}}, "unruly.yaml")
+    serial = run(config, tmp_path / "s", executor="serial")
+    dasked = run(config, tmp_path / "d", executor="dask", scheduler=dask_address)
+    assert 0 < dasked.failed_trials == serial.failed_trials < 30
+    assert (dasked.folder / "trials.csv").read_bytes() == (serial.folder /
+                                                           "trials.csv").read_bytes()
+
+
+def test_scheduler_file_missing_or_garbage_is_one_line_without_waiting(write_config,
+                                                                      tmp_path):
+    garbage = tmp_path / "scheduler.json"
+    garbage.write_bytes(b"\x00\xffnot json")
+    listish = tmp_path / "list.json"
+    listish.write_text("[1, 2]")
+    for path, expected in ((tmp_path / "missing.json", "no such file"),
+                           (garbage, "not a dask scheduler file"),
+                           (listish, "not a dask scheduler file")):
+        t0 = time.monotonic()
+        result = trackfuse("run", write_config(CFG), "--scheduler-file", path, "--out",
+                           tmp_path / "out", timeout=60)
+        assert time.monotonic() - t0 < 30
+        assert result.returncode == 2
+        assert result.stderr == f"error: --scheduler-file {path}: {expected}" + \
+            result.stderr.split(expected, 1)[1]
+        assert result.stderr.count("\n") == 1

@@ -117,3 +117,83 @@ CRASH = register(Experiment(
     run_trial=crash_once_trial,
     batch_size=5,
 ))
+
+
+UNRULY_WAYS = ("exit", "interrupt", "none", "empty", "not_rows", "raise")
+
+
+def unruly_trial(params, streams: TrialStreams) -> list[dict]:
+    """About one trial in ``every`` misbehaves the way ``how`` names: ``sys.exit(0)``, raise
+    ``KeyboardInterrupt``, return ``None``, ``[]`` or a list of non-dicts, or raise an error.
+    Which trials misbehave depends on the point stream only (the same on every executor)."""
+    import sys
+
+    value = float(streams.common.normal())
+    if streams.point.integers(params["every"]) == 0:
+        how = params["how"]
+        if how == "exit":
+            sys.exit(0)
+        if how == "interrupt":
+            raise KeyboardInterrupt
+        if how == "raise":
+            raise RuntimeError("synthetic failure")
+        return {"none": None, "empty": [], "not_rows": ["a", "b"]}[how]
+    return [{"algorithm": "a", "value": value}]
+
+
+UNRULY = register(Experiment(
+    name="toy_unruly",
+    title="Trials that exit, interrupt or return garbage",
+    params=(Param("how", "exit", "how the bad trials misbehave", "", kind=str,
+                  choices=UNRULY_WAYS),
+            Param("every", 4, "about one trial in this many misbehaves", "", kind=int, low=1)),
+    run_trial=unruly_trial,
+    batch_size=5,
+))
+
+MIX = np.linspace(-1.0, 1.0, 24).reshape(8, 3)
+
+
+def projected_trial(params, streams: TrialStreams) -> list[dict]:
+    """Eight standard normals projected on three fixed directions (one matrix-vector product)."""
+    y = streams.common.standard_normal(8) @ MIX
+    return [{"algorithm": "project", "y0": float(y[0]), "y1": float(y[1]), "y2": float(y[2])}]
+
+
+def projected_batch(params, streams) -> list[list[dict]]:
+    """The same as a single matrix product over the batch: BLAS may sum in another order, so
+    the last bits may depend on how many trials share the batch (as in twin_sensor)."""
+    x = np.stack([s.common.standard_normal(8) for s in streams])
+    y = x @ MIX
+    return [[{"algorithm": "project", "y0": float(r[0]), "y1": float(r[1]), "y2": float(r[2])}]
+            for r in y]
+
+
+PROJECTED = register(Experiment(
+    name="toy_projected",
+    title="A vectorized batch form (batched algebra)",
+    params=(Param("scale", 1.0, "unused", ""),),
+    run_trial=projected_trial,
+    run_batch=projected_batch,
+    batch_size=16,
+))
+
+
+def timed_trial(params, streams: TrialStreams) -> list[dict]:
+    """The Gaussian trial plus a wall-time column (kept out of trials.csv by the runner)."""
+    import time
+
+    t0 = time.perf_counter()
+    rows = gaussian_trial(params, streams)
+    return [{**row, "estimate_time_s": time.perf_counter() - t0} for row in rows]
+
+
+TIMED = register(Experiment(
+    name="toy_timed",
+    title="The Gaussian toy with timings",
+    params=GAUSSIAN.params,
+    run_trial=timed_trial,
+    figures=gaussian_figures,
+    binary_metrics=("covered",),
+    batch_size=5,
+))

@@ -22,15 +22,15 @@ from __future__ import annotations
 
 import difflib
 import math
+import reprlib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from trackfuse import experiments
 from trackfuse.experiments.base import Experiment, Param
+from trackfuse.safe_yaml import MAX_BYTES, YamlInputError, load_yaml
 from trackfuse.sweep import MAX_POINTS, SweepError, count_points, parse_axis_values
 
 TOP_LEVEL = ("experiment", "title", "trials", "seed", "batch_size", "params", "sweep",
@@ -92,8 +92,18 @@ def did_you_mean(word: str, options) -> str:
     return f"; did you mean '{close[0]}'?" if close else ""
 
 
+_SHORT = reprlib.Repr()
+for _limit, _value in (("maxlevel", 3), ("maxtuple", 4), ("maxlist", 4), ("maxdict", 4),
+                       ("maxset", 4), ("maxstring", 58), ("maxlong", 40), ("maxother", 58)):
+    setattr(_SHORT, _limit, _value)
+
+
 def _describe(value: Any) -> str:
-    text = repr(value)
+    """A repr of ``value`` cut to 60 characters, never rendering more than it prints."""
+    try:
+        text = _SHORT.repr(value)
+    except (ValueError, RecursionError):  # e.g. an int too long to convert to text
+        text = f"<{type(value).__name__}>"
     return text if len(text) <= 60 else text[:57] + "..."
 
 
@@ -211,18 +221,7 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
         raw[key] = sets.pop(key)
 
     name = raw.get("experiment")
-    if name is None:
-        raise ConfigError(source, "experiment", "missing; allowed: " + ", ".join(
-            experiments.names()))
-    if not isinstance(name, str):
-        raise ConfigError(source, "experiment", f"got {_describe(name)}; allowed: "
-                          + ", ".join(experiments.names()))
-    try:
-        exp = experiments.get(name)
-    except experiments.UnknownExperiment:
-        raise ConfigError(source, "experiment", f"unknown experiment {name!r}"
-                          f"{did_you_mean(name, experiments.names())}; allowed: "
-                          + ", ".join(experiments.names())) from None
+    exp = _experiment(source, name)
 
     title = raw.get("title", exp.title)
     if not isinstance(title, str):
@@ -274,6 +273,23 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
                   figures, formats, name)
 
 
+def _experiment(source: str, name: Any) -> Experiment:
+    """The experiment a config names (a registered name or ``package.module:ATTR``)."""
+    allowed = ", ".join(experiments.names()) + ", or package.module:ATTRIBUTE"
+    if name is None:
+        raise ConfigError(source, "experiment", f"missing; allowed: {allowed}")
+    if not isinstance(name, str):
+        raise ConfigError(source, "experiment", f"got {_describe(name)}; allowed: {allowed}")
+    try:
+        return experiments.get(name)
+    except experiments.UnknownExperiment:
+        raise ConfigError(source, "experiment", f"unknown experiment {_describe(name)}"
+                          f"{did_you_mean(name, experiments.names())}; allowed: {allowed}"
+                          ) from None
+    except experiments.PluginError as err:
+        raise ConfigError(source, "experiment", str(err)) from None
+
+
 def _outputs(source: str, exp: Experiment, outputs: Any) -> tuple[list[str] | str, list[str]]:
     if not isinstance(outputs, Mapping):
         raise ConfigError(source, "outputs", f"got {_describe(outputs)}; allowed: a mapping "
@@ -297,23 +313,26 @@ def _outputs(source: str, exp: Experiment, outputs: Any) -> tuple[list[str] | st
 
 
 def read_yaml(path: str | Path) -> Any:
-    """Parse a YAML file, turning I/O and syntax errors into :class:`ConfigError`."""
+    """Parse a YAML config file (at most :data:`~trackfuse.safe_yaml.MAX_BYTES`, no duplicate
+    keys, bounded aliases), turning every problem into :class:`ConfigError`."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        with open(path, "rb") as fh:
+            data = fh.read(MAX_BYTES + 1)
     except FileNotFoundError:
         raise ConfigError(str(path), "", "no such file") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise ConfigError(str(path), "", f"cannot read: {err.__class__.__name__}") from None
+    except OSError as err:
+        raise ConfigError(str(path), "", f"cannot read: {err.strerror or type(err).__name__}"
+                          ) from None
+    if len(data) > MAX_BYTES:
+        raise ConfigError(str(path), "", f"larger than {MAX_BYTES} bytes; a config is a short "
+                                         "text file")
     try:
-        return yaml.safe_load(text)
-    except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""
-        problem = getattr(err, "problem", None) or "invalid YAML"
-        raise ConfigError(str(path), "", f"invalid YAML: {where}{problem}") from None
-    except (ValueError, TypeError, RecursionError) as err:
-        raise ConfigError(str(path), "", f"invalid YAML: {err.__class__.__name__}") from None
+        return load_yaml(data.decode("utf-8"))
+    except UnicodeDecodeError:
+        raise ConfigError(str(path), "", "cannot read: not UTF-8 text") from None
+    except YamlInputError as err:
+        raise ConfigError(str(path), "", str(err)) from None
 
 
 def load(path: str | Path, sets: Mapping[str, Any] | None = None,

@@ -11,14 +11,18 @@ so completion order never reaches the output files.
   worker dies, the pool is restarted and the unfinished batches are resubmitted.
 * ``dask``: a ``dask.distributed`` client to a running scheduler (``tcp://host:8786`` or a
   scheduler file, the HPC way) or a LocalCluster started here. The scheduler retries a batch
-  whose worker died (``distributed.scheduler.allowed-failures``).
+  whose worker died (``distributed.scheduler.allowed-failures``). A scheduler file is read
+  here first (it must exist and hold the scheduler's address): dask itself would wait forever
+  for a missing file to appear.
 """
 
 from __future__ import annotations
 
+import json
 import multiprocessing
 import os
 import signal
+import socket
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -27,6 +31,8 @@ from typing import Any
 
 KINDS = ("serial", "process", "dask")
 MAX_POOL_RESTARTS = 3
+MAX_SCHEDULER_FILE_BYTES = 1_000_000
+PROBE_TIMEOUT_S = 5.0
 _END = object()
 
 
@@ -157,18 +163,22 @@ class DaskExecutor:
             raise ExecutorError("the dask executor needs the dask extra: "
                                 "pip install 'trackfuse[dask]'") from None
         self._cluster = None
+        if scheduler_file:
+            address = scheduler_address(scheduler_file)
+        if address:
+            _probe(address)
         try:
-            if address or scheduler_file:
-                self._client = Client(address=address, scheduler_file=scheduler_file,
-                                      timeout="20s")
+            if address:
+                self._client = Client(address=address, timeout="20s")
             else:
                 self._cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
                                              processes=True, dashboard_address=None)
                 self._client = Client(self._cluster)
-        except (OSError, TimeoutError, ValueError) as err:
-            target = address or scheduler_file or "a LocalCluster"
-            raise ExecutorError(f"cannot connect to {target}: {err}") from None
-        info = self._client.scheduler_info()
+            info = self._client.scheduler_info()
+        except Exception as err:  # noqa: BLE001 - dask raises many kinds; one line for all
+            target = address or "a LocalCluster"
+            text = " ".join(str(err).split())[:200] or type(err).__name__
+            raise ExecutorError(f"cannot connect to {target}: {text}") from None
         self.workers = max(1, sum(w.get("nthreads", 1) for w in info["workers"].values()))
 
     def imap_unordered(self, fn: Callable, tasks: Iterable) -> Iterator[Any]:
@@ -188,6 +198,40 @@ class DaskExecutor:
         self._client.close()
         if self._cluster is not None:
             self._cluster.close()
+
+
+def _probe(address: str) -> None:
+    """Fail at once if a ``tcp://host:port`` scheduler refuses connections (dask itself
+    retries for its whole timeout); other protocols are left to dask."""
+    scheme, _, rest = address.partition("://")
+    host, _, port = rest.rpartition(":")
+    if scheme != "tcp" or not port.isdigit():
+        return
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), PROBE_TIMEOUT_S).close()
+    except OSError as err:
+        raise ExecutorError(f"cannot connect to {address}: {err.strerror or err}") from None
+
+
+def scheduler_address(path: str) -> str:
+    """The address in a dask scheduler file, or :class:`ExecutorError` in one line."""
+    where = f"--scheduler-file {path}"
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read(MAX_SCHEDULER_FILE_BYTES + 1)
+    except FileNotFoundError:
+        raise ExecutorError(f"{where}: no such file (start the scheduler with "
+                            "`dask scheduler --scheduler-file ...` first)") from None
+    except OSError as err:
+        raise ExecutorError(f"{where}: cannot read ({err.strerror})") from None
+    try:
+        info = json.loads(data.decode("utf-8"))
+    except (UnicodeDecodeError, ValueError, RecursionError):
+        info = None
+    if not isinstance(info, dict) or not isinstance(info.get("address"), str) \
+            or "://" not in info["address"]:
+        raise ExecutorError(f"{where}: not a dask scheduler file (no scheduler address)")
+    return info["address"]
 
 
 def make_executor(kind: str, workers: int, address: str | None = None,

@@ -1,18 +1,30 @@
-"""The run folder on disk: atomic files, per-batch parts, the merged CSVs and the manifest.
+"""The run folder on disk: atomic files, verified per-batch parts, the merged CSVs, the manifest.
 
 Layout of ``<out>/<config-stem>/<run-id>/``::
 
     config.yaml        resolved config (what produced the numbers)
-    manifest.json      provenance and status: "running", "interrupted" or "complete"
+    manifest.json      provenance, status ("running", "interrupted" or "complete") and, once
+                       complete, the size and SHA-256 of every final file
     parts/             one trials part and one timings part per finished batch (resume state)
     trials.csv         tidy rows, merged from the parts in (point, batch) order
     timings.csv        wall/CPU-time columns (``*_time_s``), kept out of trials.csv
     summary.csv        per point x row keys x metric: n, mean, std, 95 % CI
     tables/, figures/  experiment reports
+    .lock, .lock.holder.json   the writer's lock (see :mod:`trackfuse.runlock`)
 
 Every file is written to a temporary name in the same folder and renamed into place, so a
-killed process leaves either the old file or the new one, never half of one. A batch exists
-iff its trials part exists; the run is complete iff the manifest says so.
+killed process leaves either the old file or the new one, never half of one.
+
+A part starts with one header line recording what it holds and a checksum taken when it was
+written::
+
+    #trackfuse-part 1 point=0 batch=3 first=21 stop=28 rows=14 bytes=812 sha256=<64 hex>
+
+followed by the CSV text. Resume trusts a part only if its header names its own batch and its
+size matches (:meth:`RunFolder.scan_parts`); the merge reads every part in full and checks the
+checksum, that every row has every column, belongs to the part's point and that the trial
+indices are exactly those of the batch (:func:`read_part`). A part that fails either check
+raises :class:`PartDamaged` and is recomputed, never merged.
 """
 
 from __future__ import annotations
@@ -23,7 +35,9 @@ import io
 import json
 import math
 import os
-from collections.abc import Iterable, Sequence
+import re
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -31,7 +45,21 @@ import yaml
 
 TRIALS, TIMINGS, SUMMARY, MANIFEST, CONFIG = (
     "trials.csv", "timings.csv", "summary.csv", "manifest.json", "config.yaml")
+TIMING_SUMMARY = "timings_summary.csv"
+FINAL_FILES = (CONFIG, TRIALS, TIMINGS, SUMMARY, TIMING_SUMMARY)
+REPORT_DIRS = ("figures", "tables")
 TIME_SUFFIX = "_time_s"
+PART_KINDS = ("trials", "timings")
+PART_MAGIC = "#trackfuse-part 1"
+MAX_MANIFEST_BYTES = 10_000_000
+_PART_NAME = re.compile(r"^p(\d{6})-b(\d{7})\.(trials|timings)\.csv$")
+_PART_HEADER = re.compile(r"^#trackfuse-part 1 point=(\d+) batch=(\d+) first=(\d+) "
+                          r"stop=(\d+) rows=(\d+) bytes=(\d+) sha256=([0-9a-f]{64})\n$")
+_TEMPORARY = re.compile(r"^\..+\.tmp(\.\w+)?$")
+
+
+class RunFolderError(ValueError):
+    """A run folder or output root that cannot be used as it is; ``str(err)`` is one line."""
 
 
 def atomic_write(path: Path, data: str | bytes) -> None:
@@ -80,83 +108,348 @@ def rows_to_csv(rows: Sequence[dict[str, Any]]) -> str:
     return buf.getvalue()
 
 
+@dataclass(frozen=True, order=True)
+class BatchSpan:
+    """One batch: trials ``first .. stop-1`` of sweep point ``point``, batch number ``batch``."""
+
+    point: int
+    batch: int
+    first: int
+    stop: int
+
+    @property
+    def name(self) -> str:
+        return f"p{self.point:06d}-b{self.batch:07d}"
+
+    @property
+    def trials(self) -> int:
+        return self.stop - self.first
+
+
+class PartDamaged(Exception):
+    """A part that does not hold what its batch must hold; it is recomputed, never merged."""
+
+    def __init__(self, span: BatchSpan, kind: str, reason: str):
+        self.span, self.kind = span, kind
+        super().__init__(f"parts/{span.name}.{kind}.csv: {reason}")
+
+
+def sha256_file(path: Path) -> str:
+    """SHA-256 of a file's bytes, read in 1 MiB blocks."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def part_bytes(span: BatchSpan, csv_text: str, rows: int) -> bytes:
+    """A part: the header line (identity, row count, size, checksum) and the CSV text."""
+    body = csv_text.encode()
+    header = (f"{PART_MAGIC} point={span.point} batch={span.batch} first={span.first} "
+              f"stop={span.stop} rows={rows} bytes={len(body)} "
+              f"sha256={hashlib.sha256(body).hexdigest()}\n")
+    return header.encode() + body
+
+
+def _part_header(line: bytes, span: BatchSpan, kind: str) -> tuple[int, int, str]:
+    """``(rows, bytes, sha256)`` from a part's first line, checked against ``span``."""
+    match = _PART_HEADER.match(line.decode("ascii", errors="replace"))
+    if not match:
+        raise PartDamaged(span, kind, "no valid part header (empty, cut, overwritten, or not "
+                                      "written by this version)")
+    point, batch, first, stop = (int(g) for g in match.groups()[:4])
+    if (point, batch, first, stop) != (span.point, span.batch, span.first, span.stop):
+        raise PartDamaged(span, kind, f"holds batch {batch} of point {point} (trials {first} to "
+                                      f"{stop - 1}), not this batch")
+    return int(match.group(5)), int(match.group(6)), match.group(7)
+
+
+def read_part(path: Path, span: BatchSpan, kind: str) -> tuple[list[str], list[list[str]]]:
+    """Read a part in full and verify it; return ``(columns, rows)`` of its CSV.
+
+    Raises :class:`PartDamaged` unless the header names ``span``, the checksum and size match,
+    every row has every column and belongs to ``span.point``, and the trial indices are within
+    the batch (for a trials part: every trial of the batch is present).
+    """
+    try:
+        with open(path, "rb") as fh:
+            rows, size, digest = _part_header(fh.readline(512), span, kind)
+            body = fh.read(size + 1)
+    except OSError as err:
+        raise PartDamaged(span, kind, f"unreadable ({err.strerror or type(err).__name__})") \
+            from None
+    if len(body) != size:
+        raise PartDamaged(span, kind, f"{len(body)} bytes of CSV where {size} were written")
+    if hashlib.sha256(body).hexdigest() != digest:
+        raise PartDamaged(span, kind, "checksum differs from the one recorded when it was "
+                                      "written")
+    try:
+        records = list(csv.reader(io.StringIO(body.decode("utf-8"), newline="")))
+    except (UnicodeDecodeError, csv.Error) as err:
+        raise PartDamaged(span, kind, f"not CSV text ({type(err).__name__})") from None
+    columns, data = (records[0], records[1:]) if records else ([], [])
+    _check_rows(span, kind, columns, data, rows)
+    return columns, data
+
+
+def _check_rows(span: BatchSpan, kind: str, columns: list[str], data: list[list[str]],
+                rows: int) -> None:
+    if len(data) != rows:
+        raise PartDamaged(span, kind, f"{len(data)} rows where {rows} were written")
+    if not data:
+        if kind == "trials":
+            raise PartDamaged(span, kind, "no rows")
+        return
+    if "point" not in columns or "trial" not in columns:
+        raise PartDamaged(span, kind, "no point or trial column")
+    at_point, at_trial = columns.index("point"), columns.index("trial")
+    seen: set[int] = set()
+    for row in data:
+        if len(row) != len(columns):
+            raise PartDamaged(span, kind, f"a row has {len(row)} cells for {len(columns)} "
+                                          "columns")
+        if row[at_point] != str(span.point):
+            raise PartDamaged(span, kind, f"a row of point {row[at_point][:20]!r}")
+        trial = int(row[at_trial]) if row[at_trial].isdigit() else -1
+        if not span.first <= trial < span.stop:
+            raise PartDamaged(span, kind, f"trial {row[at_trial][:20]!r} is not one of trials "
+                                          f"{span.first} to {span.stop - 1}")
+        seen.add(trial)
+    if kind == "trials" and len(seen) != span.trials:
+        missing = sorted(set(range(span.first, span.stop)) - seen)
+        raise PartDamaged(span, kind, f"trials missing: {', '.join(map(str, missing[:5]))}"
+                                      + (" ..." if len(missing) > 5 else ""))
+
+
+@dataclass
+class PartScan:
+    """What :meth:`RunFolder.scan_parts` found: whole batches, damaged parts (removed), strays."""
+
+    finished: set[BatchSpan]
+    damaged: list[str]
+    stray: list[str]
+
+
 class RunFolder:
-    """One run's folder: parts for resume, merge into final CSVs, manifest."""
+    """One run's folder: verified parts for resume, merge into final CSVs, manifest.
+
+    Every method that writes expects the caller to hold the folder's lock
+    (:class:`trackfuse.runlock.RunLock`).
+    """
 
     def __init__(self, path: Path):
         self.path = Path(path)
         self.parts = self.path / "parts"
 
     # -- state ------------------------------------------------------------------------------
-    def prepare(self, resolved: dict[str, Any]) -> None:
-        """Create the folder, write config.yaml, and remove temporaries left by a crash."""
-        self.parts.mkdir(parents=True, exist_ok=True)
-        for stale in list(self.path.glob(".*.tmp")) + list(self.parts.glob(".*.tmp")):
-            stale.unlink(missing_ok=True)
-        atomic_write(self.path / CONFIG, yaml.safe_dump(resolved, sort_keys=False))
+    def check_layout(self) -> None:
+        """Raise :class:`RunFolderError` if a file of the run is not a regular file or a
+        folder of it is not a folder (nothing this class would overwrite or delete)."""
+        for folder in (self.parts, *(self.path / d for d in REPORT_DIRS)):
+            if folder.exists() and not folder.is_dir():
+                raise RunFolderError(f"{folder}: exists but is not a folder; move it away and "
+                                     "run again")
+        for name in (MANIFEST, *FINAL_FILES):
+            path = self.path / name
+            if path.exists() and not path.is_file():
+                raise RunFolderError(f"{path}: exists but is not a regular file; move it away "
+                                     "and run again")
 
-    @staticmethod
-    def part_name(point: int, batch: int) -> str:
-        return f"p{point:06d}-b{batch:07d}"
+    def prepare(self, resolved: dict[str, Any]) -> dict[str, Any]:
+        """Check the layout, remove temporaries of killed runs, write ``config.yaml``.
 
-    def finished_batches(self) -> set[tuple[int, int]]:
-        """(point, batch) of every batch whose trials part is on disk."""
-        found = set()
-        for part in self.parts.glob("p*-b*.trials.csv"):
-            point, batch = part.name.split(".")[0][1:].split("-b")
-            found.add((int(point), int(batch)))
-        return found
+        Returns ``{"bytes", "sha256"}`` of ``config.yaml``; raises :class:`RunFolderError`
+        where :meth:`check_layout` does.
+        """
+        self.check_layout()
+        try:
+            self.parts.mkdir(parents=True, exist_ok=True)
+        except OSError as err:
+            raise RunFolderError(f"{self.parts}: cannot create ({err.strerror})") from None
+        self.remove_temporaries()
+        data = yaml.safe_dump(resolved, sort_keys=False).encode()
+        atomic_write(self.path / CONFIG, data)
+        return {"bytes": len(data), "sha256": hashlib.sha256(data).hexdigest()}
 
-    def write_part(self, name: str, trials_csv: str, timings_csv: str) -> None:
+    def remove_temporaries(self) -> list[Path]:
+        """Delete temporary files left by killed runs (call only with the lock held)."""
+        removed = []
+        for folder in (self.path, self.parts, *(self.path / d for d in REPORT_DIRS)):
+            if not folder.is_dir():
+                continue
+            for entry in os.scandir(folder):
+                if _TEMPORARY.match(entry.name) and entry.is_file(follow_symlinks=False):
+                    Path(entry.path).unlink(missing_ok=True)
+                    removed.append(Path(entry.path))
+        return removed
+
+    def part_path(self, span: BatchSpan, kind: str) -> Path:
+        return self.parts / f"{span.name}.{kind}.csv"
+
+    def scan_parts(self, span_of: Callable[[int, int], BatchSpan | None]) -> PartScan:
+        """Find the finished batches in ``parts/`` without reading them in full.
+
+        ``span_of(point, batch)`` gives the batch a part name must stand for, or ``None`` if the
+        plan has no such batch. A batch is finished if both its parts have a header naming it
+        and the size the header records; parts that fail are removed (their batch is
+        recomputed). Files that are not parts of this plan are reported as stray and left alone.
+        """
+        candidates: set[BatchSpan] = set()
+        stray: list[str] = []
+        for entry in os.scandir(self.parts):
+            match = _PART_NAME.match(entry.name)
+            span = span_of(int(match.group(1)), int(match.group(2))) if match else None
+            if span is None:
+                if not _TEMPORARY.match(entry.name):
+                    stray.append(entry.name)
+            elif match.group(3) == "trials":
+                candidates.add(span)
+        scan = PartScan(set(), [], sorted(stray))
+        for span in sorted(candidates):
+            try:
+                for kind in PART_KINDS:
+                    self._check_part_size(span, kind)
+            except PartDamaged as err:
+                scan.damaged.append(str(err))
+                self.drop_part(span)
+            else:
+                scan.finished.add(span)
+        return scan
+
+    def _check_part_size(self, span: BatchSpan, kind: str) -> None:
+        path = self.part_path(span, kind)
+        try:
+            with open(path, "rb") as fh:
+                line = fh.readline(512)
+                size = os.fstat(fh.fileno()).st_size
+        except OSError as err:
+            raise PartDamaged(span, kind, f"unreadable ({err.strerror or type(err).__name__})") \
+                from None
+        _, body, _ = _part_header(line, span, kind)
+        if size != len(line) + body:
+            raise PartDamaged(span, kind, f"{size - len(line)} bytes of CSV where {body} were "
+                                          "written")
+
+    def write_part(self, span: BatchSpan, trials_csv: str, trial_rows: int, timings_csv: str,
+                   timing_rows: int) -> None:
         """Store one finished batch (timings first, so a trials part implies both)."""
-        atomic_write(self.parts / f"{name}.timings.csv", timings_csv)
-        atomic_write(self.parts / f"{name}.trials.csv", trials_csv)
+        atomic_write(self.part_path(span, "timings"), part_bytes(span, timings_csv, timing_rows))
+        atomic_write(self.part_path(span, "trials"), part_bytes(span, trials_csv, trial_rows))
+
+    def drop_part(self, span: BatchSpan) -> None:
+        """Remove both parts of a batch (so it is recomputed)."""
+        for kind in PART_KINDS:
+            path = self.part_path(span, kind)
+            try:
+                path.unlink(missing_ok=True)
+            except OSError as err:
+                raise RunFolderError(f"{path}: damaged and cannot be removed ({err.strerror}); "
+                                     "move it away and run again") from None
 
     def read_manifest(self) -> dict[str, Any] | None:
+        """The manifest, or ``None`` if there is none; :class:`RunFolderError` if unreadable."""
+        path = self.path / MANIFEST
         try:
-            return json.loads((self.path / MANIFEST).read_text())
-        except (FileNotFoundError, json.JSONDecodeError):
+            with open(path, "rb") as fh:
+                data = fh.read(MAX_MANIFEST_BYTES + 1)
+        except FileNotFoundError:
             return None
+        except OSError as err:
+            raise RunFolderError(f"{path}: unreadable ({err.strerror or type(err).__name__})") \
+                from None
+        try:
+            manifest = json.loads(data.decode("utf-8")) if len(data) <= MAX_MANIFEST_BYTES \
+                else None
+        except (UnicodeDecodeError, ValueError, RecursionError):
+            manifest = None
+        if not isinstance(manifest, dict):
+            raise RunFolderError(f"{path}: not a trackfuse manifest (not a JSON object)")
+        return manifest
 
     def write_manifest(self, manifest: dict[str, Any]) -> None:
         atomic_write(self.path / MANIFEST, json.dumps(manifest, indent=2, sort_keys=False) + "\n")
 
-    # -- merge ------------------------------------------------------------------------------
-    def merge(self, names: Iterable[str], kind: str, target: str) -> int:
-        """Concatenate the ``kind`` parts of ``names`` (in the given order) into ``target``.
+    def check_final_files(self, manifest: dict[str, Any]) -> str | None:
+        """``None`` if every final file matches the size and checksum the manifest records,
+        else one line saying what does not."""
+        files = manifest.get("files")
+        if not isinstance(files, dict) or TRIALS not in files:
+            return f"{self.path / MANIFEST}: no checksums of the final files"
+        for name, record in files.items():
+            path = self.path / str(name)
+            if name not in FINAL_FILES or not isinstance(record, dict):
+                return f"{self.path / MANIFEST}: unexpected files entry {str(name)[:40]!r}"
+            if not path.is_file():
+                return f"{path}: missing"
+            if path.stat().st_size != record.get("bytes") or sha256_file(path) != \
+                    record.get("sha256"):
+                return f"{path}: does not match the size and checksum in manifest.json"
+        return None
 
-        Parts may have different columns; the merged header is their union in order of
-        first appearance and missing cells are empty. Streams part by part, so memory stays
-        flat. Returns the number of data rows written.
+    # -- merge ------------------------------------------------------------------------------
+    def merge(self, spans: Callable[[], Iterable[BatchSpan]], kind: str,
+              target: str) -> dict[str, Any]:
+        """Concatenate the verified ``kind`` parts of ``spans()`` (in order) into ``target``.
+
+        ``spans`` is called twice (a header pass, then a data pass), so the batch list is never
+        held whole. Parts may have different columns; the merged header is their union in
+        order of first appearance and missing cells are empty. Memory stays at one part.
+        Returns ``{"rows", "bytes", "sha256"}`` of the written file; raises :class:`PartDamaged`
+        (writing nothing) if a part fails :func:`read_part`.
         """
-        names = list(names)
         header: dict[str, None] = {}
-        for name in names:
-            with open(self.parts / f"{name}.{kind}.csv", newline="") as fh:
-                header.update(dict.fromkeys(next(csv.reader(fh), [])))
+        for span in spans():
+            header.update(dict.fromkeys(self._part_columns(span, kind)))
         columns = list(header)
         tmp = self.path / f".{target}.{os.getpid()}.tmp"
-        rows = 0
-        with open(tmp, "w", newline="") as out:
-            writer = csv.writer(out, lineterminator="\n")
-            writer.writerow(columns)
-            for name in names:
-                with open(self.parts / f"{name}.{kind}.csv", newline="") as fh:
-                    reader = csv.reader(fh)
-                    own = next(reader, [])
-                    if own == columns:
-                        for row in reader:
-                            writer.writerow(row)
-                            rows += 1
-                        continue
-                    index = [own.index(c) if c in own else -1 for c in columns]
-                    for row in reader:
-                        writer.writerow([row[i] if i >= 0 else "" for i in index])
-                        rows += 1
-            out.flush()
-            os.fsync(out.fileno())
-        os.replace(tmp, self.path / target)
-        return rows
+        digest, rows, size = hashlib.sha256(), 0, 0
+        try:
+            with open(tmp, "wb") as out:
+                for block, count in self._merged_blocks(spans(), kind, columns):
+                    out.write(block)
+                    digest.update(block)
+                    size += len(block)
+                    rows += count
+                out.flush()
+                os.fsync(out.fileno())
+            os.replace(tmp, self.path / target)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
+        return {"rows": rows, "bytes": size, "sha256": digest.hexdigest()}
+
+    def _part_columns(self, span: BatchSpan, kind: str) -> list[str]:
+        """The CSV header of a part, from its first two lines (the part is checked later)."""
+        try:
+            with open(self.part_path(span, kind), "rb") as fh:
+                _part_header(fh.readline(512), span, kind)
+                line = fh.readline(1 << 20).decode("utf-8")
+        except OSError as err:
+            raise PartDamaged(span, kind, f"unreadable ({err.strerror or type(err).__name__})") \
+                from None
+        except UnicodeDecodeError:
+            raise PartDamaged(span, kind, "not CSV text") from None
+        return next(csv.reader([line]), [])
+
+    def _merged_blocks(self, spans: Iterable[BatchSpan], kind: str,
+                       columns: list[str]) -> Iterable[tuple[bytes, int]]:
+        """``(CSV bytes, rows)`` per part, the header line with the first."""
+        buf = io.StringIO()
+        writer = csv.writer(buf, lineterminator="\n")
+        writer.writerow(columns)
+        for span in spans:
+            own, data = read_part(self.part_path(span, kind), span, kind)
+            if own == columns:
+                writer.writerows(data)
+            else:
+                index = [own.index(c) if c in own else -1 for c in columns]
+                writer.writerows([row[i] if i >= 0 else "" for i in index] for row in data)
+            yield buf.getvalue().encode(), len(data)
+            buf.seek(0)
+            buf.truncate()
+        if buf.tell():
+            yield buf.getvalue().encode(), 0
 
 
 def split_timings(rows: list[dict[str, Any]], keys: Sequence[str]) -> tuple[list[dict], list[dict]]:

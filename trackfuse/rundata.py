@@ -11,29 +11,35 @@ reports and users' own notebooks all go through :func:`load`::
 
 Column names of swept parameters keep their dots (``clutter.mean``); in pandas ``query``
 write them in backticks: ``run.trials.query("`clutter.mean` == 5")``.
+
+:func:`load` of a complete run first checks every final file against the size and SHA-256
+that ``manifest.json`` recorded when the run finished, so a truncated or edited
+``trials.csv`` is refused (one line) rather than plotted. Plotting a run of a plugin
+experiment (``package.module:ATTR``) imports that module, as running it did.
 """
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
-import yaml
 
 from trackfuse import experiments
 from trackfuse.experiments.base import Experiment
-from trackfuse.results import CONFIG, MANIFEST, SUMMARY, TRIALS
+from trackfuse.results import (
+    CONFIG,
+    MANIFEST,
+    SUMMARY,
+    TIMING_SUMMARY,
+    TRIALS,
+    RunFolder,
+    RunFolderError,
+)
+from trackfuse.safe_yaml import MAX_BYTES, YamlInputError, load_yaml
 from trackfuse.sweep import expand
-
-TIMING_SUMMARY = "timings_summary.csv"
-
-
-class RunFolderError(ValueError):
-    """A folder that is not a complete, readable run; ``str(err)`` is one line."""
 
 
 @dataclass
@@ -47,11 +53,14 @@ class RunData:
     @cached_property
     def experiment(self) -> Experiment:
         """The experiment that produced the run (imported on first use)."""
+        name = str(self.config["experiment"])
         try:
-            return experiments.get(str(self.config["experiment"]))
-        except experiments.UnknownExperiment as err:
-            raise RunFolderError(f"{self.path}: unknown experiment "
-                                 f"{self.config['experiment']!r}: {err}") from None
+            return experiments.get(name)
+        except experiments.UnknownExperiment:
+            raise RunFolderError(f"{self.path}: unknown experiment {name[:80]!r}; allowed: "
+                                 + ", ".join(experiments.names())) from None
+        except experiments.PluginError as err:
+            raise RunFolderError(f"{self.path}: {err}") from None
 
     @cached_property
     def trials(self) -> pd.DataFrame:
@@ -96,22 +105,44 @@ def _read_csv(path: Path) -> pd.DataFrame:
 
 
 def load(path: str | Path, require_complete: bool = True) -> RunData:
-    """Open the run folder ``path`` (raise :class:`RunFolderError` with one line if not)."""
+    """Open the run folder ``path`` (raise :class:`RunFolderError` with one line if not).
+
+    With ``require_complete`` the run must be complete and its final files must match the
+    sizes and checksums in its manifest.
+    """
     path = Path(path)
     if not path.is_dir():
         raise RunFolderError(f"{path}: not a run folder (not a directory)")
-    try:
-        manifest = json.loads((path / MANIFEST).read_text(encoding="utf-8"))
-        config = yaml.safe_load((path / CONFIG).read_text(encoding="utf-8"))
-    except FileNotFoundError as err:
-        raise RunFolderError(f"{path}: not a run folder (no {Path(err.filename).name})") \
-            from None
-    except (OSError, UnicodeDecodeError, ValueError, yaml.YAMLError) as err:
-        raise RunFolderError(f"{path}: unreadable run folder ({type(err).__name__})") from None
-    if not isinstance(manifest, dict) or not isinstance(config, dict) \
-            or "experiment" not in config or not isinstance(config.get("params"), dict):
-        raise RunFolderError(f"{path}: manifest.json or config.yaml is not a trackfuse run's")
-    if require_complete and manifest.get("status") != "complete":
-        raise RunFolderError(f"{path}: run is {manifest.get('status')}, not complete; run the "
-                             "same `trackfuse run` command again to finish it")
+    folder = RunFolder(path)
+    manifest = folder.read_manifest()
+    if manifest is None:
+        raise RunFolderError(f"{path}: not a run folder (no {MANIFEST})")
+    if require_complete:
+        status = str(manifest.get("status"))[:40]
+        if status != "complete":
+            raise RunFolderError(f"{path}: run is {status}, not complete; run the same "
+                                 "`trackfuse run` command again to finish it")
+        problem = folder.check_final_files(manifest)
+        if problem is not None:
+            raise RunFolderError(f"{problem}; run the same `trackfuse run` command again to "
+                                 "rebuild the final files from parts/")
+    config = _read_config(path / CONFIG)
+    if not isinstance(config, dict) or not isinstance(config.get("experiment"), str) \
+            or not isinstance(config.get("params"), dict):
+        raise RunFolderError(f"{path / CONFIG}: not a trackfuse run's config (no experiment "
+                             "or params)")
     return RunData(path, config, manifest)
+
+
+def _read_config(path: Path) -> Any:
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read(MAX_BYTES + 1)
+        return load_yaml(data.decode("utf-8"))
+    except FileNotFoundError:
+        raise RunFolderError(f"{path}: missing") from None
+    except OSError as err:
+        raise RunFolderError(f"{path}: unreadable ({err.strerror or type(err).__name__})") \
+            from None
+    except (UnicodeDecodeError, YamlInputError) as err:
+        raise RunFolderError(f"{path}: unreadable ({err})"[:300]) from None

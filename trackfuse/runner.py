@@ -3,28 +3,40 @@
 Seeding: trial ``t`` of sweep point ``p`` under root seed ``s`` draws from the two streams of
 :func:`trackfuse.seeding.trial_streams` (one common to every sweep point, one specific to
 the point) and nothing else, so the numbers do not depend on worker count, executor, batch
-placement or completion order. Trials are cut into batches of
-``batch_size`` by trial index alone; finished batches are stored as parts and the final CSVs
-are merged in (point, batch) order, so any schedule writes byte-identical files.
+placement or completion order. Trials are cut into batches of ``batch_size`` by trial index
+alone; finished batches are stored as parts and the final CSVs are merged in (point, batch)
+order, so for a given ``batch_size`` any schedule writes byte-identical files. The batch
+size itself is part of the run id: an experiment's vectorized ``run_batch`` may round the
+last bits differently for different batch compositions.
+
+Containment: whatever a trial raises (``SystemExit`` and, inside a worker,
+``KeyboardInterrupt`` included) or returns instead of a non-empty list of row dicts becomes
+one ``failed`` row carrying the error text; the run goes on.
 
 Resume: the run folder's name is a hash of everything that determines the numbers. Running
-the same config again finds the finished parts and computes only the missing batches.
+the same config again takes the folder's lock (:mod:`trackfuse.runlock`), keeps the parts
+that pass verification (:mod:`trackfuse.results`), recomputes the rest, and merges. The
+plan is lazy: batches are generated as they are submitted, never listed whole.
 """
 
 from __future__ import annotations
 
+import math
+import multiprocessing
 import platform
+import signal
 import subprocess
 import sys
+import threading
 import time
 import traceback
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 import scipy
@@ -35,21 +47,32 @@ from trackfuse.executors import make_executor
 from trackfuse.experiments.base import Experiment
 from trackfuse.progress import RunProgress
 from trackfuse.results import (
+    CONFIG,
     SUMMARY,
+    TIMING_SUMMARY,
     TIMINGS,
     TRIALS,
+    BatchSpan,
+    PartDamaged,
+    PartScan,
     RunFolder,
+    RunFolderError,
     atomic_write,
     rows_to_csv,
     run_id,
+    sha256_file,
     split_timings,
 )
+from trackfuse.runlock import RunLock
 from trackfuse.seeding import batch_streams, trial_streams
 from trackfuse.summary import summarize
-from trackfuse.sweep import SweepPoint, expand
+from trackfuse.sweep import expand
 
 MANIFEST_EVERY_S = 5.0
-TIMING_SUMMARY = "timings_summary.csv"
+MAX_REPAIRS = 3
+RESERVED_COLUMNS = ("point", "trial")
+_user_interrupt = threading.Event()
+_sigint_watched = threading.Event()
 
 
 class RunInterrupted(Exception):
@@ -66,23 +89,20 @@ class BatchTask:
 
     experiment: Experiment
     params: dict[str, Any]
-    point: int
     swept: dict[str, Any]
     seed: int
-    batch: int
-    first_trial: int
-    stop_trial: int
+    span: BatchSpan
 
 
 @dataclass(frozen=True)
 class BatchResult:
     """A finished batch as CSV text, ready to store."""
 
-    point: int
-    batch: int
-    trials: int
+    span: BatchSpan
     trials_csv: str
+    trial_rows: int
     timings_csv: str
+    timing_rows: int
     wall_s: float
 
 
@@ -101,41 +121,93 @@ class RunOutcome:
     seconds: float = 0.0
 
 
+# -- one batch, in a worker ------------------------------------------------------------------
+def _on_sigint(signum: int, frame: object) -> None:
+    _user_interrupt.set()
+    raise KeyboardInterrupt
+
+
+@contextmanager
+def _watch_sigint() -> Iterator[None]:
+    """Mark Ctrl-C as the user's, so a trial's own ``KeyboardInterrupt`` can be contained."""
+    if threading.current_thread() is not threading.main_thread() or \
+            signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield
+        return
+    _user_interrupt.clear()
+    _sigint_watched.set()
+    signal.signal(signal.SIGINT, _on_sigint)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        _sigint_watched.clear()
+
+
+def _is_user_interrupt(err: BaseException) -> bool:
+    """A ``KeyboardInterrupt`` that must stop the run rather than fail a trial."""
+    if not isinstance(err, KeyboardInterrupt):
+        return False
+    if _user_interrupt.is_set():
+        return True
+    in_main = threading.current_thread() is threading.main_thread() and \
+        multiprocessing.parent_process() is None
+    return in_main and not _sigint_watched.is_set()
+
+
 def _failure(prefix: dict[str, Any], err: BaseException) -> dict[str, Any]:
     text = "".join(traceback.format_exception_only(type(err), err)).strip().replace("\n", " ")
     return {**prefix, "algorithm": "", "status": "failed", "error": text[:500]}
 
 
-def execute_batch(task: BatchTask) -> BatchResult:
-    """Run one batch (in a worker). A trial that raises becomes a ``failed`` row."""
-    t0 = time.perf_counter()
-    exp = task.experiment
-    trials = range(task.first_trial, task.stop_trial)
-    prefixes = [{"point": task.point, "trial": t, **task.swept} for t in trials]
+def _rows(result: Any, producer: str) -> list[dict[str, Any]]:
+    """``result`` if it is a non-empty list of dicts, else a ``TypeError`` saying what it is."""
+    if isinstance(result, list) and result and all(isinstance(r, dict) for r in result):
+        return result
+    got = f"an empty {type(result).__name__}" if result == [] else type(result).__name__
+    raise TypeError(f"{producer} returned {got}; expected a non-empty list of row dicts")
+
+
+def _one_trial(task: BatchTask, trial: int) -> list[dict[str, Any]] | BaseException:
     try:
-        per_trial = exp.run_trials(task.params, batch_streams(task.seed, task.point, trials))
-        if len(per_trial) != len(prefixes):
-            raise ValueError(f"run_batch returned {len(per_trial)} trials for {len(prefixes)}")
-    except Exception:  # noqa: BLE001 - isolate the failing trial(s) one by one
-        per_trial = []
-        for t in trials:
-            try:
-                streams = trial_streams(task.seed, task.point, t)
-                per_trial.append(exp.run_trial(task.params, streams))
-            except Exception as err:  # noqa: BLE001 - recorded in the CSV, the run goes on
-                per_trial.append(err)
+        streams = trial_streams(task.seed, task.span.point, trial)
+        return _rows(task.experiment.run_trial(task.params, streams), "run_trial")
+    except BaseException as err:  # noqa: BLE001 - recorded in the CSV, the run goes on
+        if _is_user_interrupt(err):
+            raise
+        return err
+
+
+def execute_batch(task: BatchTask) -> BatchResult:
+    """Run one batch (in a worker). A trial that fails becomes a ``failed`` row."""
+    t0 = time.perf_counter()
+    span = task.span
+    trials = range(span.first, span.stop)
+    try:
+        batch = task.experiment.run_trials(task.params,
+                                           batch_streams(task.seed, span.point, trials))
+        if not isinstance(batch, list) or len(batch) != len(trials):
+            raise TypeError("run_batch returned the wrong number of trials")
+        per_trial: list[Any] = [_rows(r, "run_batch") for r in batch]
+    except BaseException as err:  # noqa: BLE001 - isolate the failing trial(s) one by one
+        if _is_user_interrupt(err):
+            raise
+        per_trial = [_one_trial(task, t) for t in trials]
     rows: list[dict[str, Any]] = []
-    for prefix, result in zip(prefixes, per_trial, strict=True):
+    for trial, result in zip(trials, per_trial, strict=True):
+        prefix = {"point": span.point, "trial": trial, **task.swept}
         if isinstance(result, BaseException):
             rows.append(_failure(prefix, result))
         else:
-            rows.extend({**prefix, **row} for row in result)
-    keys = ["point", "trial", *task.swept, *exp.row_keys]
+            rows.extend({**prefix, **{k: v for k, v in row.items()
+                                      if k not in RESERVED_COLUMNS}} for row in result)
+    keys = ["point", "trial", *task.swept, *task.experiment.row_keys]
     trial_rows, timing_rows = split_timings(rows, keys)
-    return BatchResult(task.point, task.batch, len(prefixes), rows_to_csv(trial_rows),
-                       rows_to_csv(timing_rows), time.perf_counter() - t0)
+    return BatchResult(span, rows_to_csv(trial_rows), len(trial_rows), rows_to_csv(timing_rows),
+                       len(timing_rows), time.perf_counter() - t0)
 
 
+# -- the run, in the client ------------------------------------------------------------------
 def _git_commit() -> str | None:
     here = Path(trackfuse.__file__).resolve().parent
     try:
@@ -153,46 +225,79 @@ def _now() -> str:
     return datetime.now(UTC).isoformat(timespec="seconds")
 
 
+def _print_warning(message: str) -> None:
+    print(f"warning: {message}", file=sys.stderr, flush=True)
+
+
+def folder_name(source: str) -> str:
+    """The run's folder under the output root: the config file's stem without leading dots,
+    so that a config called ``...yaml`` (stem ``..``) cannot name the root's parent."""
+    return Path(source).stem.lstrip(".") or "config"
+
+
+@dataclass
+class _Session:
+    """State of one ``run()`` call, for the manifest."""
+
+    previous: dict[str, Any] | None
+    started: str
+    config_file: dict[str, Any]
+    per_point: dict[int, float]
+    done: int = 0
+    computed: int = 0
+
+
 class Runner:
     """Run one config into ``<out>/<config-stem>/<run-id>/``."""
 
     def __init__(self, config: Config, out: Path = Path("results"), *, workers: int = 1,
                  executor: str = "process", scheduler: str | None = None,
                  scheduler_file: str | None = None, plots: bool = True,
-                 progress: bool = True, command: list[str] | None = None):
+                 progress: bool = True, command: list[str] | None = None,
+                 warn: Callable[[str], None] = _print_warning):
         self.config = config
         self.resolved = config.to_dict()
         self.run_id = run_id(self.resolved, trackfuse.__version__)
-        self.folder = RunFolder(Path(out) / Path(config.source).stem / self.run_id)
+        self.out = Path(out)
+        self.folder = RunFolder(self.out / folder_name(config.source) / self.run_id)
         self.points = expand(config.sweep, config.sweep_mode)
+        self.batches_per_point = math.ceil(config.trials / config.batch_size)
         self.workers, self.executor_kind = workers, executor
         self.scheduler, self.scheduler_file = scheduler, scheduler_file
         self.plots, self.progress = plots, progress
         self.command = command if command is not None else sys.argv
+        self.warn = warn
         self.git_commit = _git_commit()
 
     @property
     def total_trials(self) -> int:
         return len(self.points) * self.config.trials
 
-    def batches(self) -> Iterator[tuple[SweepPoint, int, int, int]]:
-        """Every (point, batch index, first trial, stop trial), lazily, in output order."""
-        size, n = self.config.batch_size, self.config.trials
-        for point in self.points:
-            for batch, first in enumerate(range(0, n, size)):
-                yield point, batch, first, min(first + size, n)
+    def span(self, point: int, batch: int) -> BatchSpan | None:
+        """Batch ``batch`` of sweep point ``point``, or ``None`` if the plan has no such batch."""
+        if not (0 <= point < len(self.points) and 0 <= batch < self.batches_per_point):
+            return None
+        first = batch * self.config.batch_size
+        return BatchSpan(point, batch, first, min(first + self.config.batch_size,
+                                                  self.config.trials))
 
-    def _tasks(self, todo) -> Iterator[BatchTask]:
+    def spans(self) -> Iterator[BatchSpan]:
+        """Every batch of the run, lazily, in output order."""
+        for point in range(len(self.points)):
+            for batch in range(self.batches_per_point):
+                yield self.span(point, batch)
+
+    def _tasks(self, todo: Iterator[BatchSpan]) -> Iterator[BatchTask]:
         cfg = self.config
-        for point, batch, first, stop in todo:
-            yield BatchTask(cfg.experiment, {**cfg.params, **point.values}, point.index,
-                            point.values, cfg.seed, batch, first, stop)
+        for span in todo:
+            swept = self.points[span.point].values
+            yield BatchTask(cfg.experiment, {**cfg.params, **swept}, swept, cfg.seed, span)
 
-    def _manifest(self, status: str, started: str, per_point: dict[int, float],
-                  failed: int, done: int, previous: dict | None) -> dict[str, Any]:
+    def _manifest(self, status: str, session: _Session, failed: int = 0) -> dict[str, Any]:
         versions = {"trackfuse": trackfuse.__version__, "python": platform.python_version(),
                     "numpy": np.__version__, "scipy": scipy.__version__,
                     "pandas": pd.__version__}
+        previous = session.previous or {}
         return {
             "status": status,
             "run_id": self.run_id,
@@ -210,87 +315,157 @@ class Runner:
             "trials_per_point": self.config.trials,
             "batch_size": self.config.batch_size,
             "trials_total": self.total_trials,
-            "trials_done": done,
+            "trials_done": session.done,
             "trials_failed": failed,
-            "first_started": (previous or {}).get("first_started", started),
-            "started": started,
+            "first_started": previous.get("first_started", session.started),
+            "started": session.started,
             "finished": _now() if status == "complete" else None,
-            "sessions": (previous or {}).get("sessions", 0) + 1,
-            "per_point_wall_s": {str(k): round(v, 6) for k, v in sorted(per_point.items())},
+            "sessions": _int_or(previous.get("sessions"), 0) + 1,
+            "per_point_wall_s": {str(k): round(v, 6)
+                                 for k, v in sorted(session.per_point.items())},
         }
 
     def run(self) -> RunOutcome:
-        """Compute the missing batches, then merge, summarize and draw."""
+        """Compute the missing batches, then merge, summarize and draw.
+
+        Raises :class:`RunInterrupted` on Ctrl-C (the manifest says ``interrupted``),
+        :class:`~trackfuse.results.RunFolderError` if the folder cannot be used (another
+        process holds it, a file of it is not a file...).
+        """
         t0 = time.perf_counter()
-        previous = self.folder.read_manifest()
-        if previous and previous.get("status") == "complete":
-            return RunOutcome(self.folder.path, "already complete", self.total_trials, 0,
-                              previous.get("trials_failed", 0), previous.get("rows", 0))
-        self.folder.prepare(self.resolved)
-        started = _now()
-        per_point = {int(k): v for k, v in ((previous or {}).get("per_point_wall_s") or {}).items()}
-        finished = self.folder.finished_batches()
-        todo = [b for b in self.batches() if (b[0].index, b[1]) not in finished]
-        done = self.total_trials - sum(stop - first for _, _, first, stop in todo)
-        computed = 0
-        self.folder.write_manifest(self._manifest("running", started, per_point, 0, done,
-                                                  previous))
-        label = f"{self.config.experiment.name} [{self.run_id}]"
-        if todo:
-            executor = make_executor(self.executor_kind, self.workers, self.scheduler,
-                                     self.scheduler_file)
-            self.workers = executor.workers
-            last = time.monotonic()
-            try:
-                with RunProgress(self.total_trials, done, label, self.progress) as bar:
-                    for res in executor.imap_unordered(execute_batch, self._tasks(todo)):
-                        self.folder.write_part(RunFolder.part_name(res.point, res.batch),
-                                               res.trials_csv, res.timings_csv)
-                        per_point[res.point] = per_point.get(res.point, 0.0) + res.wall_s
-                        done += res.trials
-                        computed += res.trials
-                        bar.advance(res.trials)
-                        if time.monotonic() - last > MANIFEST_EVERY_S:
-                            last = time.monotonic()
-                            self.folder.write_manifest(self._manifest(
-                                "running", started, per_point, 0, done, previous))
-            except KeyboardInterrupt:
-                executor.close()
-                self.folder.write_manifest(self._manifest("interrupted", started, per_point,
-                                                          0, done, previous))
-                raise RunInterrupted(self.folder.path, done, self.total_trials) from None
-            executor.close()
-        outcome = self.finish(started, per_point, previous)
-        outcome.computed_trials = computed
+        if self.out.exists() and not self.out.is_dir():
+            raise RunFolderError(f"{self.out}: the output root is not a folder")
+        with RunLock(self.folder.path, self.warn), _watch_sigint():
+            outcome = self._run_locked()
         outcome.seconds = time.perf_counter() - t0
         return outcome
 
-    def finish(self, started: str, per_point: dict[int, float],
-               previous: dict | None) -> RunOutcome:
-        """Merge parts into the final CSVs, summarize, draw, and mark the run complete."""
-        names = [RunFolder.part_name(p.index, b) for p, b, _, _ in self.batches()]
-        rows = self.folder.merge(names, "trials", TRIALS)
-        if self.folder.merge(names, "timings", TIMINGS) == 0:
-            (self.folder.path / TIMINGS).unlink()
+    def _run_locked(self) -> RunOutcome:
+        self.folder.check_layout()
+        previous = self._previous_manifest()
+        if previous is not None and previous.get("status") == "complete":
+            problem = self.folder.check_final_files(previous)
+            if problem is None:
+                self.folder.remove_temporaries()
+                return RunOutcome(self.folder.path, "already complete", self.total_trials, 0,
+                                  _int_or(previous.get("trials_failed"), 0),
+                                  _int_or(previous.get("rows"), 0))
+            self.warn(f"{problem}; rebuilding the final files from parts/")
+        session = _Session(previous, _now(), self.folder.prepare(self.resolved),
+                           _per_point(previous))
+        try:
+            for _ in range(MAX_REPAIRS):
+                self._compute_missing(session)
+                try:
+                    return self._finish(session)
+                except PartDamaged as err:
+                    self.warn(f"{self.folder.path}/{err}; recomputing its batch")
+                    self.folder.drop_part(err.span)
+            raise RunFolderError(f"{self.folder.parts}: parts fail verification right after "
+                                 "being written; is the disk failing?")
+        except KeyboardInterrupt:
+            self.folder.write_manifest(self._manifest("interrupted", session))
+            raise RunInterrupted(self.folder.path, session.done, self.total_trials) from None
+
+    def _previous_manifest(self) -> dict[str, Any] | None:
+        try:
+            return self.folder.read_manifest()
+        except RunFolderError as err:
+            self.warn(f"{err}; writing a new one")
+            return None
+
+    def _report(self, scan: PartScan) -> None:
+        if scan.stray:
+            more = f" and {len(scan.stray) - 3} more" if len(scan.stray) > 3 else ""
+            self.warn(f"{self.folder.parts}: ignoring files that are not parts of this run: "
+                      f"{', '.join(scan.stray[:3])}{more}")
+        for message in scan.damaged[:5]:
+            self.warn(f"{self.folder.path}/{message}; recomputing its batch")
+        if len(scan.damaged) > 5:
+            self.warn(f"{self.folder.parts}: {len(scan.damaged) - 5} more damaged parts, "
+                      "recomputed too")
+
+    def _compute_missing(self, session: _Session) -> None:
+        """Verify the parts on disk, then compute every batch that has no whole part."""
+        scan = self.folder.scan_parts(self.span)
+        self._report(scan)
+        session.done = sum(span.trials for span in scan.finished)
+        if session.done == self.total_trials:
+            return
+        todo = (span for span in self.spans() if span not in scan.finished)
+        executor = make_executor(self.executor_kind, self.workers, self.scheduler,
+                                 self.scheduler_file)
+        self.workers = executor.workers
+        self.folder.write_manifest(self._manifest("running", session))
+        last = time.monotonic()
+        label = f"{self.config.experiment.name} [{self.run_id}]"
+        try:
+            with RunProgress(self.total_trials, session.done, label, self.progress) as bar:
+                for res in executor.imap_unordered(execute_batch, self._tasks(todo)):
+                    self.folder.write_part(res.span, res.trials_csv, res.trial_rows,
+                                           res.timings_csv, res.timing_rows)
+                    point = res.span.point
+                    session.per_point[point] = session.per_point.get(point, 0.0) + res.wall_s
+                    session.done += res.span.trials
+                    session.computed += res.span.trials
+                    bar.advance(res.span.trials)
+                    if time.monotonic() - last > MANIFEST_EVERY_S:
+                        last = time.monotonic()
+                        self.folder.write_manifest(self._manifest("running", session))
+        finally:
+            executor.close()
+
+    def _finish(self, session: _Session) -> RunOutcome:
+        """Merge verified parts into the final CSVs, summarize, draw, mark the run complete."""
+        path = self.folder.path
+        files = {CONFIG: session.config_file,
+                 TRIALS: self.folder.merge(self.spans, "trials", TRIALS)}
+        timings = self.folder.merge(self.spans, "timings", TIMINGS)
+        if timings["rows"]:
+            files[TIMINGS] = timings
+        else:
+            (path / TIMINGS).unlink()
         keys = ["point", *self.config.sweep, *self.config.experiment.row_keys]
-        summary, failed_rows = summarize(self.folder.path / TRIALS, keys,
+        summary, failed_rows = summarize(path / TRIALS, keys,
                                          self.config.experiment.binary_metrics)
-        atomic_write(self.folder.path / SUMMARY, summary.to_csv(index=False))
-        if (self.folder.path / TIMINGS).exists():
-            timing_summary, _ = summarize(self.folder.path / TIMINGS, keys)
-            atomic_write(self.folder.path / TIMING_SUMMARY,
-                         timing_summary.to_csv(index=False))
-        outcome = RunOutcome(self.folder.path, "complete", self.total_trials, 0, failed_rows,
-                             rows)
+        files[SUMMARY] = _write_record(path / SUMMARY, summary.to_csv(index=False))
+        if timings["rows"]:
+            timing_summary, _ = summarize(path / TIMINGS, keys)
+            files[TIMING_SUMMARY] = _write_record(path / TIMING_SUMMARY,
+                                                  timing_summary.to_csv(index=False))
+        else:
+            (path / TIMING_SUMMARY).unlink(missing_ok=True)
+        outcome = RunOutcome(path, "complete", self.total_trials, session.computed,
+                             failed_rows, files[TRIALS]["rows"])
         if self.plots:
             outcome.figures, outcome.figure_errors = draw_reports(
-                self.folder.path, self.config.experiment, self.resolved)
-        manifest = self._manifest("complete", started, per_point, failed_rows,
-                                  self.total_trials, previous)
-        manifest["rows"] = rows
+                path, self.config.experiment, self.resolved)
+        session.done = self.total_trials
+        manifest = self._manifest("complete", session, failed_rows)
+        manifest["rows"] = outcome.rows
         manifest["figure_errors"] = outcome.figure_errors
+        manifest["files"] = files
         self.folder.write_manifest(manifest)
         return outcome
+
+
+def _write_record(path: Path, text: str) -> dict[str, Any]:
+    """Write ``text`` atomically; return its size and checksum for the manifest."""
+    atomic_write(path, text)
+    return {"bytes": path.stat().st_size, "sha256": sha256_file(path)}
+
+
+def _int_or(value: Any, default: int) -> int:
+    return value if isinstance(value, int) and not isinstance(value, bool) else default
+
+
+def _per_point(previous: dict[str, Any] | None) -> dict[int, float]:
+    """Wall time per point from an earlier session's manifest (ignoring anything malformed)."""
+    recorded = (previous or {}).get("per_point_wall_s")
+    if not isinstance(recorded, dict):
+        return {}
+    return {int(k): float(v) for k, v in recorded.items()
+            if str(k).isdigit() and isinstance(v, (int, float)) and math.isfinite(v)}
 
 
 def draw_reports(folder: Path, experiment: Experiment,
@@ -300,15 +475,20 @@ def draw_reports(folder: Path, experiment: Experiment,
     The summary handed to the experiment includes the timing metrics (``*_time_s``).
     Returns the written figure paths and one message per figure or table that failed.
     """
+    import matplotlib.pyplot as plt  # only drawing needs it; workers never import it
+
     written: list[Path] = []
     errors: list[str] = []
     if experiment.tables is None and experiment.figures is None:
         return written, errors
-    trials = pd.read_csv(folder / TRIALS, low_memory=False)
-    summary = pd.read_csv(folder / SUMMARY, low_memory=False)
-    if (folder / TIMING_SUMMARY).exists():
-        timing = pd.read_csv(folder / TIMING_SUMMARY, low_memory=False)
-        summary = pd.concat([summary, timing], ignore_index=True)
+    try:
+        trials = pd.read_csv(folder / TRIALS, low_memory=False)
+        summary = pd.read_csv(folder / SUMMARY, low_memory=False)
+        if (folder / TIMING_SUMMARY).exists():
+            timing = pd.read_csv(folder / TIMING_SUMMARY, low_memory=False)
+            summary = pd.concat([summary, timing], ignore_index=True)
+    except (OSError, ValueError, pd.errors.ParserError) as err:
+        return written, [f"reading the CSV files: {type(err).__name__}: {err}"]
     if experiment.tables is not None:
         tables_dir = folder / "tables"
         tables_dir.mkdir(exist_ok=True)
@@ -326,19 +506,33 @@ def draw_reports(folder: Path, experiment: Experiment,
     fig_dir.mkdir(exist_ok=True)
     try:
         figures = experiment.figures(trials, summary, resolved)
+        if not isinstance(figures, dict):
+            raise TypeError(f"figures() returned {type(figures).__name__}, not a dict")
     except Exception as err:  # noqa: BLE001
         return written, [*errors, f"figures: {type(err).__name__}: {err}"]
+    written, failed = _save_figures(figures, fig_dir, wanted, formats, plt.close)
+    return written, errors + failed
+
+
+def _save_figures(figures: dict[str, Any], fig_dir: Path, wanted: Any, formats: list[str],
+                  close: Callable[[Any], None]) -> tuple[list[Path], list[str]]:
+    """Save the wanted figures in every format (atomically), closing each; return the
+    written paths and one message per figure that could not be saved."""
+    written: list[Path] = []
+    errors: list[str] = []
     for name, fig in figures.items():
-        if wanted != "all" and name not in wanted:
-            plt.close(fig)
-            continue
-        for fmt in formats:
-            path = fig_dir / f"{name}.{fmt}"
-            tmp = fig_dir / f".{name}.tmp.{fmt}"
-            fig.savefig(tmp, format=fmt, metadata=_metadata(fmt))
-            tmp.replace(path)
-            written.append(path)
-        plt.close(fig)
+        try:
+            if wanted == "all" or name in wanted:
+                for fmt in formats:
+                    path = fig_dir / f"{name}.{fmt}"
+                    tmp = fig_dir / f".{name}.tmp.{fmt}"
+                    fig.savefig(tmp, format=fmt, metadata=_metadata(fmt))
+                    tmp.replace(path)
+                    written.append(path)
+        except Exception as err:  # noqa: BLE001 - a report bug must not lose the run
+            errors.append(f"figure {name}: {type(err).__name__}: {err}")
+        finally:
+            close(fig)
     return written, errors
 
 

@@ -19,7 +19,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-import yaml
+from trackfuse.safe_yaml import YamlInputError, load_yaml
 
 _RANGE = re.compile(r"^\s*range\s*\((.*)\)\s*$")
 MAX_POINTS = 1_000_000
@@ -38,7 +38,7 @@ class SweepPoint:
 
 
 def _number(text: str) -> float | int:
-    value = yaml.safe_load(text)
+    value = load_yaml(text)
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         value = float(text)
     return value
@@ -51,27 +51,31 @@ def parse_range(text: str) -> list[float | int]:
         raise SweepError(f"got {text!r}; allowed: a list or 'range(start, stop, step)'")
     try:
         parts = [_number(p.strip()) for p in match.group(1).split(",")]
-    except (ValueError, yaml.YAMLError):
+    except ValueError:  # YamlInputError included
         raise SweepError(f"got {text!r}; range() takes numbers") from None
     if not 1 <= len(parts) <= 3 or any(not math.isfinite(p) for p in parts):
         raise SweepError(f"got {text!r}; allowed: range(stop), range(start, stop[, step])")
     start, stop, step = ([0] + parts + [1])[-3:] if len(parts) == 1 else (parts + [1])[:3]
     if step == 0:
         raise SweepError(f"got {text!r}; the step must not be 0")
-    if all(isinstance(p, int) for p in (start, stop, step)):
-        if len(range(start, stop, step)) > MAX_POINTS:
-            raise SweepError(f"got {text!r}; more than {MAX_POINTS} values")
-        values: list[float | int] = list(range(start, stop, step))
-    else:
-        count = math.ceil((stop - start) / step - 1e-9)
-        if count > MAX_POINTS:
-            raise SweepError(f"got {text!r}; more than {MAX_POINTS} values")
-        values = [round(start + i * step, 12) for i in range(max(count, 0))]
-    if not values:
-        raise SweepError(f"got {text!r}; the range is empty")
-    if len(values) > MAX_POINTS:
+    count = _range_length(start, stop, step)
+    if count is None or count > MAX_POINTS:
         raise SweepError(f"got {text!r}; more than {MAX_POINTS} values")
-    return values
+    if count == 0:
+        raise SweepError(f"got {text!r}; the range is empty")
+    if all(isinstance(p, int) for p in (start, stop, step)):
+        return list(range(start, stop, step))
+    return [round(start + i * step, 12) for i in range(count)]
+
+
+def _range_length(start: float, stop: float, step: float) -> int | None:
+    """Number of values of the range, computed without building it (``None`` if infinite)."""
+    if all(isinstance(p, int) for p in (start, stop, step)):
+        return max(0, -((start - stop) // step))  # exact for any size of int
+    span = (float(stop) - float(start)) / float(step)
+    if not math.isfinite(span):
+        return None
+    return max(0, math.ceil(span - 1e-9))
 
 
 def parse_axis_values(spec: Any) -> list[Any]:
@@ -91,8 +95,8 @@ def parse_scalar(text: str) -> Any:
     """Parse an override value as a YAML scalar or flow list (``"1e-3"`` becomes a float)."""
     text = text.strip()
     try:
-        value = yaml.safe_load(text) if text else ""
-    except yaml.YAMLError:
+        value = load_yaml(text) if text else ""
+    except YamlInputError:
         return text
     if isinstance(value, str):
         try:

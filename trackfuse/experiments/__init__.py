@@ -1,12 +1,32 @@
 """Registry of experiment kinds, looked up by name.
 
 Built-in experiments live in modules of this package; each exposes ``EXPERIMENT``. A config
-may also name any importable experiment as ``"package.module:ATTRIBUTE"``.
+may also name an experiment of its own as ``"package.module:ATTRIBUTE"`` (a plugin).
+
+A config is code: naming a plugin runs its module. The module is imported only when a config
+naming it is validated or run, or when a run folder made from it is plotted, never while
+listing experiments or handling other configs. Before importing, :func:`get` reads the
+module's source without running it and refuses the import unless
+
+* the reference is an absolute dotted module path and an identifier (``pkg.mod:NAME``);
+* no part of the path is ``__main__`` (a program's entry point, not a library);
+* the module is a Python source file that binds ``NAME`` at its top level (an assignment,
+  ``def``, ``class`` or import), so a typo never runs an unrelated module;
+* its top level only imports, defines and assigns: a bare call statement outside
+  ``if __name__ == "__main__":`` (``main()``, ``app.run()``) means the module does work when
+  imported, like ``idlelib.idle`` opening a window, and is refused.
+
+Locating the module imports its parent packages (``pkg`` for ``pkg.mod``), as Python must.
+Any error while importing is reported in one line (:class:`PluginError`).
 """
 
 from __future__ import annotations
 
+import ast
 import importlib
+import importlib.util
+import re
+import traceback
 
 from trackfuse.experiments.base import Experiment, Param
 
@@ -15,12 +35,18 @@ BUILTIN: dict[str, str] = {
     "esm_radar": "trackfuse.experiments.esm_radar",
     "passive_assoc": "trackfuse.experiments.passive_assoc",
 }
+MAX_SOURCE_BYTES = 5_000_000
+_MODULE_PATH = re.compile(r"^[A-Za-z_]\w*(\.[A-Za-z_]\w*)*$", re.ASCII)
 
 _registered: dict[str, Experiment] = {}
 
 
 class UnknownExperiment(KeyError):
     """Raised for a name that is neither built in, registered, nor ``module:attr``."""
+
+
+class PluginError(ValueError):
+    """A ``package.module:ATTRIBUTE`` reference that cannot be used; ``str(err)`` is one line."""
 
 
 def register(experiment: Experiment) -> Experiment:
@@ -35,20 +61,115 @@ def names() -> list[str]:
 
 
 def get(name: str) -> Experiment:
-    """Return the experiment called ``name``."""
+    """Return the experiment called ``name`` (a registered name or ``module:ATTRIBUTE``).
+
+    Raises :class:`UnknownExperiment` for an unknown plain name and :class:`PluginError` for
+    a plugin reference that is refused or fails to import.
+    """
     if name in _registered:
         return _registered[name]
     if name in BUILTIN:
         return importlib.import_module(BUILTIN[name]).EXPERIMENT
     if ":" in name:
-        module, _, attr = name.partition(":")
-        try:
-            found = getattr(importlib.import_module(module), attr)
-        except (ImportError, AttributeError) as err:
-            raise UnknownExperiment(name) from err
-        if isinstance(found, Experiment):
-            return found
+        return _plugin(name)
     raise UnknownExperiment(name)
 
 
-__all__ = ["Experiment", "Param", "UnknownExperiment", "get", "names", "register"]
+def _one_line(err: BaseException) -> str:
+    text = "".join(traceback.format_exception_only(type(err), err)).strip()
+    text = " ".join(text.split())
+    return text if len(text) <= 200 else text[:197] + "..."
+
+
+def _plugin(ref: str) -> Experiment:
+    module, _, attr = ref.partition(":")
+    where = f"cannot use {ref[:80]!r}"
+    if not _MODULE_PATH.match(module) or not attr.isidentifier():
+        raise PluginError(f"{where}: expected package.module:ATTRIBUTE with an absolute "
+                          "module path and an attribute name")
+    if "__main__" in module.split("."):
+        raise PluginError(f"{where}: a __main__ module is a program's entry point; name the "
+                          "module that defines the experiment")
+    _check_source(module, attr, where)
+    try:
+        found = getattr(importlib.import_module(module), attr)
+    except KeyboardInterrupt:
+        raise
+    except BaseException as err:  # noqa: BLE001 - SystemExit included: a config is code
+        raise PluginError(f"{where}: importing {module} failed: {_one_line(err)}") from None
+    if not isinstance(found, Experiment):
+        raise PluginError(f"{where}: {attr} is a {type(found).__name__}, not a "
+                          "trackfuse Experiment")
+    return found
+
+
+def _check_source(module: str, attr: str, where: str) -> None:
+    """Refuse ``module`` unless its source binds ``attr`` and does no work at import."""
+    try:
+        spec = importlib.util.find_spec(module)
+    except KeyboardInterrupt:
+        raise
+    except BaseException as err:  # noqa: BLE001 - a parent package failed to import
+        raise PluginError(f"{where}: cannot locate {module}: {_one_line(err)}") from None
+    if spec is None:
+        raise PluginError(f"{where}: no module named {module!r} (is its folder on PYTHONPATH?)")
+    origin = spec.origin if spec.has_location else None
+    if origin is None or not origin.endswith(".py"):
+        raise PluginError(f"{where}: {module} is not a Python source module")
+    try:
+        with open(origin, "rb") as fh:
+            tree = ast.parse(fh.read(MAX_SOURCE_BYTES + 1), filename=origin)
+    except (OSError, SyntaxError, ValueError) as err:
+        raise PluginError(f"{where}: cannot read {module}: {_one_line(err)}") from None
+    if attr not in _top_level_names(tree.body):
+        raise PluginError(f"{where}: {module} does not define {attr} at its top level")
+    line = _first_bare_call(tree.body)
+    if line is not None:
+        raise PluginError(f"{where}: {module} runs code when imported (a call statement at "
+                          f"line {line}); a plugin module may only import, define and assign")
+
+
+def _top_level_names(body: list[ast.stmt]) -> set[str]:
+    """Names bound by the statements of ``body`` (descending into if/try/with blocks)."""
+    found: set[str] = set()
+    for stmt in body:
+        if isinstance(stmt, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            found.add(stmt.name)
+        elif isinstance(stmt, (ast.Assign, ast.AnnAssign, ast.AugAssign)):
+            targets = stmt.targets if isinstance(stmt, ast.Assign) else [stmt.target]
+            for target in targets:
+                found.update(n.id for n in ast.walk(target) if isinstance(n, ast.Name))
+        elif isinstance(stmt, (ast.Import, ast.ImportFrom)):
+            found.update((a.asname or a.name).split(".")[0] for a in stmt.names)
+        for block in _blocks(stmt):
+            found |= _top_level_names(block)
+    return found
+
+
+def _first_bare_call(body: list[ast.stmt]) -> int | None:
+    """Line of the first call statement run at import, outside ``if __name__ == ...``."""
+    for stmt in body:
+        if isinstance(stmt, ast.Expr) and isinstance(stmt.value, (ast.Call, ast.Await)):
+            return stmt.lineno
+        if isinstance(stmt, ast.If) and "__name__" in ast.unparse(stmt.test):
+            continue
+        for block in _blocks(stmt):
+            line = _first_bare_call(block)
+            if line is not None:
+                return line
+    return None
+
+
+def _blocks(stmt: ast.stmt) -> list[list[ast.stmt]]:
+    """Statement lists run as part of ``stmt`` at module level (not function bodies)."""
+    if isinstance(stmt, (ast.If, ast.For, ast.While)):
+        return [stmt.body, stmt.orelse]
+    if isinstance(stmt, ast.With):
+        return [stmt.body]
+    if isinstance(stmt, ast.Try):
+        return [stmt.body, stmt.orelse, stmt.finalbody, *(h.body for h in stmt.handlers)]
+    return []
+
+
+__all__ = ["Experiment", "Param", "PluginError", "UnknownExperiment", "get", "names",
+           "register"]

@@ -1,0 +1,124 @@
+"""One writer per run folder: an advisory lock held while a process writes the folder.
+
+``trackfuse run`` (from the client process for dask runs) and ``trackfuse plot`` hold
+:class:`RunLock` while they write. A second process that finds the folder locked stops with
+one line naming the holder (pid, host, start time) instead of computing the same batches or
+deleting the first one's temporary files.
+
+The lock is ``<run>/.lock``, taken with the ``filelock`` library (``flock`` on POSIX, so the
+operating system releases it when the holder dies, ``kill -9`` included). The holder writes
+who it is to ``<run>/.lock.holder.json`` and removes that file when it releases the lock, so
+finding the file while the lock is free means the previous holder was killed: the new
+process takes over with a one-line warning. On a network file system the lock is as good as
+that file system's ``flock``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import sys
+import time
+from collections.abc import Callable
+from contextlib import suppress
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+from filelock import FileLock, Timeout
+
+from trackfuse.results import RunFolderError, atomic_write
+
+LOCK_FILE = ".lock"
+HOLDER_FILE = ".lock.holder.json"
+HOLDER_WAIT_S = 2.0
+
+
+class RunFolderBusy(RunFolderError):
+    """Another process holds the run folder's lock; ``str(err)`` names it in one line."""
+
+
+def _describe(holder: dict[str, Any] | None) -> str:
+    if not holder:
+        return "another trackfuse process"
+    return (f"trackfuse pid {holder.get('pid', '?')} on {holder.get('host', '?')} "
+            f"(since {holder.get('since', '?')})")
+
+
+class RunLock:
+    """Hold the lock of run folder ``path`` (created if needed) inside a ``with`` block.
+
+    ``warn`` receives a one-line message when a lock left by a killed process is taken over.
+    Raises :class:`RunFolderBusy` if another process holds it, :class:`RunFolderError` if the
+    folder cannot be created or locked.
+    """
+
+    def __init__(self, path: Path, warn: Callable[[str], None]):
+        self.path, self.warn = Path(path), warn
+        self._lock: FileLock | None = None
+
+    def __enter__(self) -> RunLock:
+        try:
+            self.path.mkdir(parents=True, exist_ok=True)
+        except OSError as err:
+            raise RunFolderError(f"{self.path}: cannot create the run folder "
+                                 f"({err.strerror or type(err).__name__})") from None
+        lock = FileLock(str(self.path / LOCK_FILE))
+        try:
+            lock.acquire(timeout=0)
+        except Timeout:
+            raise RunFolderBusy(f"{self.path}: in use by {_describe(self._current_holder())}; "
+                                "wait for it to finish (or stop it) and run again") from None
+        except OSError as err:
+            raise RunFolderError(f"{self.path / LOCK_FILE}: cannot lock "
+                                 f"({err.strerror or type(err).__name__})") from None
+        self._lock = lock
+        try:
+            previous = self.holder()
+            if previous is not None:
+                self.warn(f"{self.path}: taking over from {_describe(previous)}, which stopped "
+                          "without releasing the run folder")
+            atomic_write(self.path / HOLDER_FILE, json.dumps({
+                "pid": os.getpid(), "host": platform.node(),
+                "since": datetime.now(UTC).isoformat(timespec="seconds"),
+                "command": sys.argv[:20]}) + "\n")
+        except OSError as err:
+            self._release()
+            raise RunFolderError(f"{self.path / HOLDER_FILE}: cannot write "
+                                 f"({err.strerror or type(err).__name__})") from None
+        except BaseException:
+            self._release()
+            raise
+        return self
+
+    def _current_holder(self) -> dict[str, Any] | None:
+        """The holder, waiting up to :data:`HOLDER_WAIT_S` for a new holder to say who it is
+        (it writes the holder file just after taking the lock)."""
+        deadline = time.monotonic() + HOLDER_WAIT_S
+        while (holder := self.holder()) is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+        return holder
+
+    def holder(self) -> dict[str, Any] | None:
+        """Who holds (or last held without releasing) the lock, if recorded."""
+        path = self.path / HOLDER_FILE
+        try:
+            with open(path, "rb") as fh:
+                holder = json.loads(fh.read(100_000).decode("utf-8"))
+        except FileNotFoundError:
+            return None
+        except (OSError, UnicodeDecodeError, ValueError):
+            return {"pid": "?", "host": "? (unreadable holder file)"}
+        return holder if isinstance(holder, dict) else {"pid": "?", "host": "?"}
+
+    def __exit__(self, *exc: object) -> None:
+        self._release()
+
+    def _release(self) -> None:
+        if self._lock is None:
+            return
+        with suppress(OSError):  # the next holder reports a take-over; the lock is released
+            (self.path / HOLDER_FILE).unlink(missing_ok=True)
+        self._lock.release()
+        self._lock = None
