@@ -98,6 +98,9 @@ def run(
     no_plots: Annotated[bool, typer.Option("--no-plots", help="Skip figures.")] = False,
     no_progress: Annotated[bool, typer.Option("--no-progress", help="No progress output.")]
     = False,
+    force: Annotated[bool, typer.Option("--force", help="Recompute from scratch into the "
+                                                        "same folder (drops its old results).")]
+    = False,
 ) -> None:
     """Run CFG: every sweep point x trial, then trials.csv, summary.csv and figures."""
     from trackfuse.runner import Runner
@@ -114,7 +117,7 @@ def run(
             fail(str(err))
     runner = Runner(config, out_dir, workers=workers or default_workers(), executor=executor,
                     scheduler=scheduler, scheduler_file=scheduler_file, plots=not no_plots,
-                    progress=not no_progress, command=sys.argv, warn=warn)
+                    progress=not no_progress, command=sys.argv, warn=warn, force=force)
     if dry_run:
         print(yaml.safe_dump(config.to_dict(), sort_keys=False), end="")
         print(f"# {len(runner.points)} points x {config.trials} trials = "

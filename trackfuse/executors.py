@@ -51,6 +51,7 @@ def default_workers() -> int:
 class SerialExecutor:
     """Run every batch in this process, in order."""
 
+    kind = "serial"
     workers = 1
 
     def imap_unordered(self, fn: Callable, tasks: Iterable) -> Iterator[Any]:
@@ -92,6 +93,8 @@ def _start_forkserver_single_threaded() -> None:
 
 class ProcessExecutor:
     """A local process pool with a bounded number of batches in flight."""
+
+    kind = "process"
 
     def __init__(self, workers: int):
         self.workers = workers
@@ -154,6 +157,8 @@ class ProcessExecutor:
 
 class DaskExecutor:
     """Batches on a dask.distributed cluster (existing scheduler or a LocalCluster)."""
+
+    kind = "dask"
 
     def __init__(self, workers: int, address: str | None = None,
                  scheduler_file: str | None = None):

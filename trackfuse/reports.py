@@ -159,10 +159,19 @@ def _run_facts(run: RunData) -> list[tuple[str, str]]:
                    f"{m.get('trials_failed', 0)} failed"),
         ("root seed", str(c.get("seed"))),
         ("run id", str(m.get("run_id", run.path.name))),
-        ("code", str(m.get("git_commit") or "not a git checkout")),
+        ("code", _code_text(m)),
         ("versions", versions),
         ("finished", str(m.get("finished", ""))),
     ]
+
+
+def _code_text(manifest: dict[str, Any]) -> str:
+    git = manifest.get("git") if isinstance(manifest.get("git"), dict) else {}
+    where = (f"{git.get('repository')} at {git.get('commit')}"
+             + (" with uncommitted changes" if git.get("dirty") else "")) if git \
+        else "not run from a git checkout"
+    code = manifest.get("code_fingerprint") or {}
+    return f"{where}; code fingerprint {str(code.get('sha256', ''))[:12]}"
 
 
 def _captions(run: RunData) -> dict[str, str]:

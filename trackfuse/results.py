@@ -36,6 +36,7 @@ import json
 import math
 import os
 import re
+import shutil
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -48,6 +49,7 @@ TRIALS, TIMINGS, SUMMARY, MANIFEST, CONFIG = (
 TIMING_SUMMARY = "timings_summary.csv"
 FINAL_FILES = (CONFIG, TRIALS, TIMINGS, SUMMARY, TIMING_SUMMARY)
 REPORT_DIRS = ("figures", "tables")
+INDEX_FILES = ("index.md", "index.html")
 TIME_SUFFIX = "_time_s"
 PART_KINDS = ("trials", "timings")
 PART_MAGIC = "#trackfuse-part 1"
@@ -72,11 +74,19 @@ def atomic_write(path: Path, data: str | bytes) -> None:
     os.replace(tmp, path)
 
 
-def run_id(resolved: dict[str, Any], version: str) -> str:
-    """Stable id of everything that determines the numbers: config, seed, package version."""
+def config_hash(resolved: dict[str, Any]) -> str:
+    """sha256 (hex) of the parts of a resolved config that determine the numbers."""
     science = {k: resolved[k] for k in ("experiment", "trials", "seed", "batch_size", "params",
                                         "sweep", "sweep_mode")}
-    blob = json.dumps({"config": science, "version": version}, sort_keys=True, default=str)
+    return hashlib.sha256(json.dumps(science, sort_keys=True, default=str).encode()).hexdigest()
+
+
+def run_id(resolved: dict[str, Any], version: str, code: str) -> str:
+    """Stable id of everything that determines the numbers: the config's science, the
+    package version and ``code``, the fingerprint of the code that computes them
+    (:func:`trackfuse.fingerprint.code_fingerprint`)."""
+    blob = json.dumps({"config": config_hash(resolved), "version": version, "code": code},
+                      sort_keys=True)
     return f"seed{resolved['seed']}-{hashlib.sha256(blob.encode()).hexdigest()[:10]}"
 
 
@@ -272,6 +282,15 @@ class RunFolder:
         atomic_write(self.path / CONFIG, data)
         return {"bytes": len(data), "sha256": hashlib.sha256(data).hexdigest()}
 
+    def clear(self) -> None:
+        """Delete the run's state, final files and reports, for a fresh start in the same
+        folder (``--force``; call only with the lock held). Other files are left alone."""
+        self.check_layout()
+        for folder in (self.parts, *(self.path / d for d in REPORT_DIRS)):
+            shutil.rmtree(folder, ignore_errors=True)
+        for name in (MANIFEST, *FINAL_FILES, *INDEX_FILES):
+            (self.path / name).unlink(missing_ok=True)
+
     def remove_temporaries(self) -> list[Path]:
         """Delete temporary files left by killed runs (call only with the lock held)."""
         removed = []
@@ -461,3 +480,22 @@ def split_timings(rows: list[dict[str, Any]], keys: Sequence[str]) -> tuple[list
         if times:
             timing_rows.append({**{k: row[k] for k in keys if k in row}, **times})
     return trial_rows, timing_rows
+
+
+def sibling_manifests(folder: Path) -> list[dict[str, Any]]:
+    """The readable manifests of the other run folders beside ``folder`` (same config stem),
+    skipping anything that is not a run's manifest."""
+    found = []
+    parent = Path(folder).parent
+    if not parent.is_dir():
+        return found
+    for entry in sorted(parent.iterdir()):
+        if entry == Path(folder) or not entry.is_dir():
+            continue
+        try:
+            manifest = RunFolder(entry).read_manifest()
+        except RunFolderError:
+            continue
+        if manifest is not None:
+            found.append(manifest)
+    return found

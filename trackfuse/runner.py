@@ -21,6 +21,7 @@ plan is lazy: batches are generated as they are submitted, never listed whole.
 
 from __future__ import annotations
 
+import importlib.metadata
 import math
 import multiprocessing
 import platform
@@ -45,6 +46,7 @@ import trackfuse
 from trackfuse.config import Config
 from trackfuse.executors import make_executor
 from trackfuse.experiments.base import Experiment
+from trackfuse.fingerprint import code_fingerprint
 from trackfuse.progress import RunProgress
 from trackfuse.results import (
     CONFIG,
@@ -58,9 +60,11 @@ from trackfuse.results import (
     RunFolder,
     RunFolderError,
     atomic_write,
+    config_hash,
     rows_to_csv,
     run_id,
     sha256_file,
+    sibling_manifests,
     split_timings,
 )
 from trackfuse.runlock import RunLock
@@ -208,17 +212,26 @@ def execute_batch(task: BatchTask) -> BatchResult:
 
 
 # -- the run, in the client ------------------------------------------------------------------
-def _git_commit() -> str | None:
-    here = Path(trackfuse.__file__).resolve().parent
+def _git_state(where: Path) -> dict[str, Any] | None:
+    """Commit and dirty flag of the git repository containing ``where`` (the folder the
+    user runs from), or ``None`` outside a repository or without git."""
+    def git(*args: str) -> str:
+        return subprocess.run(["git", "-C", str(where), *args], capture_output=True, text=True,
+                              timeout=5, check=True).stdout.strip()
     try:
-        head = subprocess.run(["git", "-C", str(here), "rev-parse", "HEAD"], capture_output=True,
-                              text=True, timeout=5, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "-C", str(here), "status", "--porcelain", "--", "."],
-                               capture_output=True, text=True, timeout=5, check=False)
-        dirty = dirty.stdout.strip()
+        return {"repository": git("rev-parse", "--show-toplevel"),
+                "commit": git("rev-parse", "HEAD"),
+                "dirty": bool(git("status", "--porcelain", "--untracked-files=no"))}
     except (OSError, subprocess.SubprocessError):
         return None
-    return head + ("-dirty" if dirty else "")
+
+
+def _version(distribution: str) -> str | None:
+    """Installed version of ``distribution`` without importing it."""
+    try:
+        return importlib.metadata.version(distribution)
+    except importlib.metadata.PackageNotFoundError:
+        return None
 
 
 def _now() -> str:
@@ -254,20 +267,23 @@ class Runner:
                  executor: str = "process", scheduler: str | None = None,
                  scheduler_file: str | None = None, plots: bool = True,
                  progress: bool = True, command: list[str] | None = None,
-                 warn: Callable[[str], None] = _print_warning):
+                 warn: Callable[[str], None] = _print_warning, force: bool = False):
         self.config = config
         self.resolved = config.to_dict()
-        self.run_id = run_id(self.resolved, trackfuse.__version__)
+        self.code = code_fingerprint(config.experiment)
+        self.run_id = run_id(self.resolved, trackfuse.__version__, self.code.digest)
         self.out = Path(out)
         self.folder = RunFolder(self.out / folder_name(config.source) / self.run_id)
         self.points = expand(config.sweep, config.sweep_mode)
         self.batches_per_point = math.ceil(config.trials / config.batch_size)
         self.workers, self.executor_kind = workers, executor
+        self.executor_used: str | None = None
         self.scheduler, self.scheduler_file = scheduler, scheduler_file
         self.plots, self.progress = plots, progress
         self.command = command if command is not None else sys.argv
         self.warn = warn
-        self.git_commit = _git_commit()
+        self.force = force
+        self.git = _git_state(Path.cwd())
 
     @property
     def total_trials(self) -> int:
@@ -296,7 +312,7 @@ class Runner:
     def _manifest(self, status: str, session: _Session, failed: int = 0) -> dict[str, Any]:
         versions = {"trackfuse": trackfuse.__version__, "python": platform.python_version(),
                     "numpy": np.__version__, "scipy": scipy.__version__,
-                    "pandas": pd.__version__}
+                    "pandas": pd.__version__, "matplotlib": _version("matplotlib")}
         previous = session.previous or {}
         return {
             "status": status,
@@ -304,12 +320,16 @@ class Runner:
             "experiment": self.config.experiment.name,
             "config_file": self.config.source,
             "command": list(self.command),
-            "git_commit": self.git_commit,
+            "git": self.git,
+            "config_sha256": config_hash(self.resolved),
+            "code_fingerprint": {"sha256": self.code.digest, "modules": list(self.code.modules)},
+            "trackfuse_path": str(Path(trackfuse.__file__).resolve().parent),
             "versions": versions,
             "platform": platform.platform(),
             "host": platform.node(),
             "root_seed": self.config.seed,
-            "executor": self.executor_kind,
+            "executor": self.executor_used or previous.get("executor") or self.executor_kind,
+            "executor_requested": self.executor_kind,
             "workers": self.workers,
             "points": len(self.points),
             "trials_per_point": self.config.trials,
@@ -342,7 +362,11 @@ class Runner:
 
     def _run_locked(self) -> RunOutcome:
         self.folder.check_layout()
+        if self.force:
+            self.folder.clear()
         previous = self._previous_manifest()
+        if previous is None:
+            self._note_other_code()
         if previous is not None and previous.get("status") == "complete":
             problem = self.folder.check_final_files(previous)
             if problem is None:
@@ -366,6 +390,17 @@ class Runner:
         except KeyboardInterrupt:
             self.folder.write_manifest(self._manifest("interrupted", session))
             raise RunInterrupted(self.folder.path, session.done, self.total_trials) from None
+
+    def _note_other_code(self) -> None:
+        """Say in one line when a run of the same config from other code exists."""
+        mine = config_hash(self.resolved)
+        others = [m for m in sibling_manifests(self.folder.path)
+                  if m.get("config_sha256") == mine and m.get("run_id") != self.run_id]
+        if others:
+            latest = max(others, key=lambda m: str(m.get("started")))
+            self.warn(f"{self.folder.path.parent / str(latest.get('run_id'))} holds this config "
+                      f"from other code ({len(others)} such run(s)); computing anew in "
+                      f"{self.folder.path.name}")
 
     def _previous_manifest(self) -> dict[str, Any] | None:
         try:
@@ -395,7 +430,7 @@ class Runner:
         todo = (span for span in self.spans() if span not in scan.finished)
         executor = make_executor(self.executor_kind, self.workers, self.scheduler,
                                  self.scheduler_file)
-        self.workers = executor.workers
+        self.workers, self.executor_used = executor.workers, executor.kind
         self.folder.write_manifest(self._manifest("running", session))
         last = time.monotonic()
         label = f"{self.config.experiment.name} [{self.run_id}]"

@@ -1,0 +1,116 @@
+"""The run id covers the code that computes the numbers; the manifest says what ran."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+from conftest import ROOT, TESTS
+from toy_experiments import GAUSSIAN
+
+from trackfuse.config import load
+from trackfuse.experiments import get
+from trackfuse.fingerprint import NUMBERS_PATH, code_fingerprint
+from trackfuse.runner import Runner
+
+PLUGIN = '''
+from trackfuse.experiments.base import Experiment, Param
+
+SHIFT = {shift}
+
+
+def trial(params, streams):
+    return [{{"algorithm": "a", "value": float(streams.common.normal()) + SHIFT}}]
+
+
+EXPERIMENT = Experiment(name="shifty", title="toy plugin", run_trial=trial,
+                        params=(Param("unused", 0.0, "no effect"),))
+'''
+
+CONFIG = """experiment: shifty_plugin:EXPERIMENT
+trials: 4
+seed: 3
+"""
+
+
+def _cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(cwd), str(TESTS), str(ROOT)])
+    return subprocess.run([sys.executable, "-m", "cli.main", *args], cwd=cwd, env=env,
+                          capture_output=True, text=True, timeout=120)
+
+
+def _runs(out: Path) -> list[Path]:
+    return sorted(p for p in (out / "shifty").iterdir() if p.is_dir())
+
+
+def test_editing_the_experiment_code_gives_new_numbers_in_a_new_folder(tmp_path):
+    (tmp_path / "shifty.yaml").write_text(CONFIG)
+    plugin = tmp_path / "shifty_plugin.py"
+    plugin.write_text(PLUGIN.format(shift=0.0))
+    args = ("run", "shifty.yaml", "--out", "out", "--workers", "1", "--no-progress",
+            "--no-plots")
+    first = _cli(*args, cwd=tmp_path)
+    assert first.returncode == 0, first.stderr
+    plugin.write_text(PLUGIN.format(shift=100.0))
+    second = _cli(*args, cwd=tmp_path)
+    assert second.returncode == 0, second.stderr
+    assert "already complete" not in second.stdout
+    assert "holds this config from other code" in second.stderr
+    old, new = _runs(tmp_path / "out")
+    values = [json.loads((p / "manifest.json").read_text())["rows"] for p in (old, new)]
+    assert values == [4, 4]
+    means = sorted(float((p / "trials.csv").read_text().splitlines()[1].split(",")[-1])
+                   for p in (old, new))
+    assert means[1] - means[0] == 100.0
+    third = _cli(*args, cwd=tmp_path)  # unchanged code: the new folder is reused
+    assert "already complete" in third.stdout and len(_runs(tmp_path / "out")) == 2
+
+
+def test_force_recomputes_into_the_same_folder(write_config, tmp_path):
+    cfg = write_config("experiment: toy_gaussian\ntrials: 6\nseed: 1\nbatch_size: 3\n")
+    config = load(cfg)
+    first = Runner(config, tmp_path / "out", progress=False, plots=False).run()
+    reference = (first.folder / "trials.csv").read_bytes()
+    stale = first.folder / "parts" / "stale-note.txt"
+    stale.write_text("left by an old run")
+    again = Runner(config, tmp_path / "out", progress=False, plots=False).run()
+    assert again.status == "already complete"
+    forced = Runner(config, tmp_path / "out", progress=False, plots=False, force=True).run()
+    assert forced.folder == first.folder and forced.status == "complete"
+    assert forced.computed_trials == 6 and not stale.exists()
+    assert (forced.folder / "trials.csv").read_bytes() == reference
+
+
+def test_manifest_records_the_repository_run_from_and_the_executor_used(write_config,
+                                                                         tmp_path, monkeypatch):
+    repo = tmp_path / "repo"
+    repo.mkdir()
+    for cmd in (["init", "-q"], ["-c", "user.email=a@b", "-c", "user.name=a", "commit", "-q",
+                                 "--allow-empty", "-m", "x"]):
+        subprocess.run(["git", "-C", str(repo), *cmd], check=True)
+    (repo / "tracked.txt").write_text("v1")
+    subprocess.run(["git", "-C", str(repo), "add", "tracked.txt"], check=True)
+    monkeypatch.chdir(repo)
+    cfg = write_config("experiment: toy_gaussian\ntrials: 2\nseed: 1\n")
+    outcome = Runner(load(cfg), tmp_path / "out", workers=1, executor="process",
+                     progress=False, plots=False).run()
+    manifest = json.loads((outcome.folder / "manifest.json").read_text())
+    head = subprocess.run(["git", "-C", str(repo), "rev-parse", "HEAD"], capture_output=True,
+                          text=True, check=True).stdout.strip()
+    assert manifest["git"] == {"repository": str(repo.resolve()), "commit": head,
+                               "dirty": True}
+    assert manifest["executor"] == "serial" and manifest["executor_requested"] == "process"
+    assert manifest["versions"]["matplotlib"]
+    assert manifest["code_fingerprint"]["sha256"] == code_fingerprint(GAUSSIAN).digest
+
+
+def test_fingerprint_covers_the_experiment_its_imports_and_the_numbers_path():
+    modules = code_fingerprint(get("passive_assoc")).modules
+    assert "trackfuse.experiments.passive_assoc" in modules
+    assert "trackfuse.association.pga" in modules  # imported by the experiment
+    assert set(NUMBERS_PATH) <= set(modules)
+    assert "toy_experiments" in code_fingerprint(GAUSSIAN).modules

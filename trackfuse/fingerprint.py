@@ -1,0 +1,108 @@
+"""The code that produced a run's numbers, as one digest for the run id.
+
+A run folder is reused ("already complete", or resumed) only if the run id matches, so the
+run id must change whenever the code that computes the numbers changes; otherwise an edited
+experiment, a plugin, or a package installed in editable mode would silently return the old
+numbers. :func:`code_fingerprint` hashes the source of:
+
+* the experiment's own modules: the modules defining ``run_trial`` and ``run_batch``, and
+  every module they import, transitively, that belongs to the same top-level package
+  (a plugin's own package) or to ``trackfuse``;
+* the trackfuse modules on the path from trial to CSV whatever the experiment:
+  :data:`NUMBERS_PATH` (seeding, batch execution, CSV formatting, summary statistics),
+  each on its own (not what they import).
+
+Imports are found by reading the source (:mod:`ast`), so nothing is executed. A module
+without Python source (a compiled extension) contributes its file's bytes. Figures and
+report modules do not change numbers and are left out, so redrawing code can change without
+recomputing. Third-party libraries (numpy, scipy) are not hashed; their versions are in the
+manifest. See ``docs/runner.md`` (run id).
+"""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+import importlib.util
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+from trackfuse.experiments.base import Experiment
+
+#: trackfuse modules every run's numbers pass through (trial seeding, batch execution,
+#: CSV cells, summary statistics).
+NUMBERS_PATH = ("trackfuse.seeding", "trackfuse.runner", "trackfuse.results",
+                "trackfuse.summary", "trackfuse.stats")
+
+
+@dataclass(frozen=True)
+class CodeFingerprint:
+    """``digest``: sha256 (hex) over ``modules``, the sorted module names that were hashed."""
+
+    digest: str
+    modules: tuple[str, ...]
+
+
+def _source_file(module: str) -> Path | None:
+    try:
+        spec = importlib.util.find_spec(module)
+    except (ImportError, ValueError):
+        return None
+    if spec is None or not spec.origin or not spec.has_location:
+        return None
+    return Path(spec.origin)
+
+
+def _imports(module: str, path: Path) -> set[str]:
+    """Absolute names of the modules ``module`` (source at ``path``) imports, at any depth
+    of its code (function-level imports included)."""
+    try:
+        tree = ast.parse(path.read_bytes())
+    except (SyntaxError, ValueError, OSError):
+        return set()
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    found: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            found.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                try:
+                    base = importlib.util.resolve_name("." * node.level + base, package)
+                except (ImportError, ValueError):
+                    continue
+            found.add(base)
+            found.update(f"{base}.{alias.name}" for alias in node.names)  # submodules
+    return found
+
+
+def _closure(roots: Iterable[str], tops: set[str]) -> dict[str, Path]:
+    """Every module reachable from ``roots`` through imports inside the packages ``tops``."""
+    files: dict[str, Path] = {}
+    todo = list(roots)
+    while todo:
+        module = todo.pop()
+        if module in files or module.partition(".")[0] not in tops:
+            continue
+        path = _source_file(module)
+        if path is None or not path.is_file():
+            continue
+        files[module] = path
+        if path.suffix == ".py":
+            todo.extend(_imports(module, path))
+    return files
+
+
+def code_fingerprint(experiment: Experiment) -> CodeFingerprint:
+    """Fingerprint of the code that computes ``experiment``'s numbers (see module doc)."""
+    roots = {f.__module__ for f in (experiment.run_trial, experiment.run_batch)
+             if f is not None and getattr(f, "__module__", None)}
+    tops = {"trackfuse"} | {r.partition(".")[0] for r in roots}
+    files = _closure(roots, tops)
+    files.update((m, path) for m in NUMBERS_PATH if (path := _source_file(m)) is not None)
+    digest = hashlib.sha256()
+    for module in sorted(files):
+        digest.update(module.encode() + b"\0" + files[module].read_bytes() + b"\0")
+    return CodeFingerprint(digest.hexdigest(), tuple(sorted(files)))
