@@ -19,6 +19,7 @@ from rich.console import Console
 from rich.table import Table
 
 from trackfuse import experiments
+from trackfuse.catalog import RunInfo, find_runs, is_run_folder
 from trackfuse.config import ConfigError, allowed_text, load
 from trackfuse.executors import KINDS, ExecutorError, default_workers, scheduler_address
 from trackfuse.results import RunFolderError
@@ -101,6 +102,9 @@ def run(
     force: Annotated[bool, typer.Option("--force", help="Recompute from scratch into the "
                                                         "same folder (drops its old results).")]
     = False,
+    name: Annotated[str | None, typer.Option(help="A label for the run, kept in its manifest "
+                                                  "and shown by `trackfuse runs` (not part "
+                                                  "of the run id).")] = None,
 ) -> None:
     """Run CFG: every sweep point x trial, then trials.csv, summary.csv and figures."""
     from trackfuse.runner import Runner
@@ -117,7 +121,8 @@ def run(
             fail(str(err))
     runner = Runner(config, out_dir, workers=workers or default_workers(), executor=executor,
                     scheduler=scheduler, scheduler_file=scheduler_file, plots=not no_plots,
-                    progress=not no_progress, command=sys.argv, warn=warn, force=force)
+                    progress=not no_progress, command=sys.argv, warn=warn, force=force,
+                    name=name)
     if dry_run:
         print(yaml.safe_dump(config.to_dict(), sort_keys=False), end="")
         print(f"# {len(runner.points)} points x {config.trials} trials = "
@@ -184,6 +189,10 @@ def plot(run_dir: Annotated[Path, typer.Argument(help="A finished run folder.")]
     from trackfuse.runlock import RunLock
     from trackfuse.runner import draw_reports
 
+    if run_dir.is_dir() and not is_run_folder(run_dir) and find_runs(run_dir):
+        print(f"{run_dir} is a folder of runs; plot one of them:")
+        _print_runs(find_runs(run_dir))
+        return
     try:
         run = load_run(run_dir)
         experiment = run.experiment
@@ -201,6 +210,31 @@ def plot(run_dir: Annotated[Path, typer.Argument(help="A finished run folder.")]
         print(f"warning: {message}", file=sys.stderr)
     if errors:
         raise typer.Exit(1)
+
+
+def _print_runs(runs: list[RunInfo]) -> None:
+    table = Table("run folder", "experiment", "name", "status", "trials", "started", "wall")
+    for r in runs:
+        wall = f"{r.wall_s:.0f} s" if r.wall_s is not None else ""
+        table.add_row(str(r.path), r.experiment, r.name, r.status,
+                      f"{r.trials_done}/{r.trials_total}", r.started.replace("T", " ")[:19],
+                      wall)
+    Console(width=max(out.width, 160)).print(table)
+
+
+@app.command()
+def runs(
+    root: Annotated[Path, typer.Argument(help="Output root, a config's folder of runs, or a "
+                                              "run folder.")] = Path("results"),
+) -> None:
+    """List run folders under ROOT, newest first: experiment, name, status, trials, dates."""
+    if not root.is_dir():
+        fail(f"{root}: not a folder")
+    found = find_runs(root)
+    if not found:
+        print(f"no runs under {root}")
+        return
+    _print_runs(found)
 
 
 @app.command()

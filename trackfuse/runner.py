@@ -267,7 +267,8 @@ class Runner:
                  executor: str = "process", scheduler: str | None = None,
                  scheduler_file: str | None = None, plots: bool = True,
                  progress: bool = True, command: list[str] | None = None,
-                 warn: Callable[[str], None] = _print_warning, force: bool = False):
+                 warn: Callable[[str], None] = _print_warning, force: bool = False,
+                 name: str | None = None):
         self.config = config
         self.resolved = config.to_dict()
         self.code = code_fingerprint(config.experiment)
@@ -282,7 +283,7 @@ class Runner:
         self.plots, self.progress = plots, progress
         self.command = command if command is not None else sys.argv
         self.warn = warn
-        self.force = force
+        self.force, self.name = force, name
         self.git = _git_state(Path.cwd())
 
     @property
@@ -317,6 +318,7 @@ class Runner:
         return {
             "status": status,
             "run_id": self.run_id,
+            "name": self.name if self.name is not None else previous.get("name"),
             "experiment": self.config.experiment.name,
             "config_file": self.config.source,
             "command": list(self.command),

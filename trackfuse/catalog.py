@@ -1,0 +1,75 @@
+"""Find the run folders under an output root and say what each one holds.
+
+A run folder is ``<root>/<config-stem>/<run-id>/`` with a ``manifest.json``; this module
+reads only manifests (never the CSVs), so listing thousands of runs is quick. Folders whose
+manifest is missing or unreadable are skipped, not reported as errors: the catalogue is a
+view, and :func:`trackfuse.rundata.load` is where a damaged run is refused.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from datetime import datetime
+from pathlib import Path
+from typing import Any
+
+from trackfuse.results import MANIFEST, RunFolder, RunFolderError
+
+
+@dataclass(frozen=True)
+class RunInfo:
+    """One run folder as its manifest describes it (times as ISO-8601 text)."""
+
+    path: Path
+    stem: str
+    experiment: str
+    name: str
+    status: str
+    trials_done: int
+    trials_total: int
+    started: str
+    wall_s: float | None
+
+
+def _wall_seconds(manifest: dict[str, Any]) -> float | None:
+    """Seconds from the first start to the finish of a complete run, else ``None``."""
+    try:
+        first = datetime.fromisoformat(str(manifest["first_started"]))
+        end = datetime.fromisoformat(str(manifest["finished"]))
+    except (KeyError, TypeError, ValueError):
+        return None
+    return (end - first).total_seconds()
+
+
+def _int(value: Any) -> int:
+    return value if isinstance(value, int) and not isinstance(value, bool) else 0
+
+
+def _info(path: Path, manifest: dict[str, Any]) -> RunInfo:
+    return RunInfo(path, path.parent.name, str(manifest.get("experiment", "")),
+                   str(manifest.get("name") or ""), str(manifest.get("status", "")),
+                   _int(manifest.get("trials_done")), _int(manifest.get("trials_total")),
+                   str(manifest.get("first_started") or manifest.get("started") or ""),
+                   _wall_seconds(manifest))
+
+
+def is_run_folder(path: Path) -> bool:
+    return (Path(path) / MANIFEST).is_file()
+
+
+def find_runs(root: Path) -> list[RunInfo]:
+    """Every run folder at ``root`` itself, one level below it (a config stem's folder) or
+    two levels below (an output root), newest first."""
+    root = Path(root)
+    candidates = [root] + sorted(root.glob("*")) + sorted(root.glob("*/*"))
+    found = []
+    for path in candidates:
+        if not path.is_dir() or not is_run_folder(path):
+            continue
+        try:
+            manifest = RunFolder(path).read_manifest()
+        except RunFolderError:
+            continue
+        if manifest is not None:
+            found.append(_info(path, manifest))
+    return sorted(found, key=lambda r: r.started, reverse=True)
