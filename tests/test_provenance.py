@@ -78,6 +78,7 @@ def test_force_recomputes_into_the_same_folder(write_config, tmp_path):
     config = load(cfg)
     first = Runner(config, tmp_path / "out", progress=False, plots=False).run()
     reference = (first.folder / "trials.csv").read_bytes()
+    (first.folder / "parts").mkdir(exist_ok=True)  # complete runs keep no resume state
     stale = first.folder / "parts" / "stale-note.txt"
     stale.write_text("left by an old run")
     again = Runner(config, tmp_path / "out", progress=False, plots=False).run()

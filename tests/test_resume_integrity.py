@@ -48,11 +48,16 @@ def check_contract(result, allowed=(0, 2)) -> None:
 
 @pytest.fixture(scope="module")
 def reference(tmp_path_factory):
-    """A finished run: (config path, output root, run folder, trials.csv bytes)."""
+    """A finished run: (config path, output root, run folder, trials.csv bytes).
+
+    Its ``parts/`` are kept (the state of a run killed after its manifest said complete and
+    before the resume state was dropped), so tests can damage them."""
     root = tmp_path_factory.mktemp("reference")
     config = root / "cfg.yaml"
     config.write_text(CFG)
-    outcome = Runner(load(config), root / "out", executor="serial", progress=False).run()
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(RunFolder, "drop_resume_state", lambda self: None)
+        outcome = Runner(load(config), root / "out", executor="serial", progress=False).run()
     return config, root / "out", outcome.folder, (outcome.folder / "trials.csv").read_bytes()
 
 
@@ -279,3 +284,22 @@ def test_tamper_matrix_every_file_every_damage(state, tamper, reference, tmp_pat
         assert (copied / "trials.csv").read_bytes() == want, (name, result.stderr)
         manifest = json.loads((copied / "manifest.json").read_text())
         assert manifest["status"] == "complete", name
+
+
+def test_a_complete_run_keeps_no_second_copy_and_still_refuses_to_recompute(tmp_path):
+    config = tmp_path / "cfg.yaml"
+    config.write_text(CFG)
+    first = Runner(load(config), tmp_path / "out", executor="serial", progress=False,
+                   plots=False).run()
+    assert not (first.folder / "parts").exists()
+    again = Runner(load(config), tmp_path / "out", executor="serial", progress=False,
+                   plots=False).run()
+    assert again.status == "already complete" and again.computed_trials == 0
+    want = (first.folder / "trials.csv").read_bytes()
+    (first.folder / "trials.csv").write_bytes(want[:-5])
+    warnings = []
+    repaired = Runner(load(config), tmp_path / "out", executor="serial", progress=False,
+                      plots=False, warn=warnings.append).run()
+    assert repaired.computed_trials == repaired.total_trials
+    assert (first.folder / "trials.csv").read_bytes() == want
+    assert any("rebuilding the final files" in w for w in warnings)

@@ -291,6 +291,11 @@ class RunFolder:
         for name in (MANIFEST, *FINAL_FILES, *INDEX_FILES):
             (self.path / name).unlink(missing_ok=True)
 
+    def drop_resume_state(self) -> None:
+        """Delete ``parts/`` once the final files are written, verified and recorded in a
+        ``complete`` manifest: they hold every row, so the parts would be a second copy."""
+        shutil.rmtree(self.parts, ignore_errors=True)
+
     def remove_temporaries(self) -> list[Path]:
         """Delete temporary files left by killed runs (call only with the lock held)."""
         removed = []

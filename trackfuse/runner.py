@@ -373,10 +373,12 @@ class Runner:
             problem = self.folder.check_final_files(previous)
             if problem is None:
                 self.folder.remove_temporaries()
+                self.folder.drop_resume_state()
                 return RunOutcome(self.folder.path, "already complete", self.total_trials, 0,
                                   _int_or(previous.get("trials_failed"), 0),
                                   _int_or(previous.get("rows"), 0))
-            self.warn(f"{problem}; rebuilding the final files from parts/")
+            self.warn(f"{problem}; rebuilding the final files (from parts/ where they are "
+                      "still there, else by recomputing)")
         session = _Session(previous, _now(), self.folder.prepare(self.resolved),
                            _per_point(previous))
         try:
@@ -483,6 +485,7 @@ class Runner:
         manifest["figure_errors"] = outcome.figure_errors
         manifest["files"] = files
         self.folder.write_manifest(manifest)
+        self.folder.drop_resume_state()
         return outcome
 
 
