@@ -4,10 +4,11 @@ import itertools
 
 import numpy as np
 import pytest
-from scipy.stats import multivariate_normal
+from scipy.stats import chi2, multivariate_normal
 
 from trackfuse.tracking.models import wrap
 from trackfuse.tracking.pda import (
+    PDAOptions,
     SensorReturns,
     linearize,
     pair_weights,
@@ -16,8 +17,12 @@ from trackfuse.tracking.pda import (
 )
 from trackfuse.tracking.sensors import azel, azel_jacobian, gate_threshold, modified_rows
 
-GAMMA = gate_threshold(0.99)
 P_G = 0.99
+
+
+def opts(method="mspda_parallel", covariance="mgekf", **kw):
+    """PDA options at the module's gate probability."""
+    return PDAOptions(method, covariance, P_G=kw.pop("P_G", P_G), **kw)
 SENSORS = (np.array([153209.0, 0.0, 2000.0]), np.array([150000.0, 4000.0, 2100.0]))
 R = np.diag([1e-4, 1.5e-4])
 
@@ -98,8 +103,8 @@ def test_closed_form_collapse_equals_per_hypothesis_mixture(method, covariance):
     rng = np.random.default_rng(7)
     X, P = predicted(rng, 6)
     rets = [returns_for(rng, X, P, SENSORS[0], 5), returns_for(rng, X, P, SENSORS[1], 4)]
-    betas, *_ = pair_weights(X, P, *rets, method, GAMMA, P_G, covariance)
-    Xn, Pn, m = pda_update(X, P, rets, method, GAMMA, P_G, covariance)
+    betas, *_ = pair_weights(X, P, *rets, opts(method, covariance))
+    Xn, Pn, m = pda_update(X, P, rets, opts(method, covariance))
     Xb, Pb = brute_force(X, P, rets, betas, covariance)
     np.testing.assert_allclose(Xn, Xb, rtol=1e-9, atol=1e-6)
     np.testing.assert_allclose(Pn, Pb, rtol=1e-7, atol=1e-6 * np.abs(Pb).max())
@@ -112,8 +117,8 @@ def test_weights_sum_to_one_and_vanish_off_gate(method, joint_cov):
     rng = np.random.default_rng(3)
     X, P = predicted(rng, 8)
     rets = [returns_for(rng, X, P, SENSORS[0], 6), returns_for(rng, X, P, SENSORS[1], 5)]
-    (b00, b1, b2, B), l1, l2, _ = pair_weights(X, P, *rets, method, GAMMA, P_G, "mgekf",
-                                               joint_cov)
+    (b00, b1, b2, B), l1, l2, _ = pair_weights(X, P, *rets,
+                                               opts(method, joint_cov=joint_cov))
     total = b00 + b1.sum(1) + b2.sum(1) + B.sum((1, 2))
     np.testing.assert_allclose(total, 1.0, rtol=1e-12)
     assert np.all(b1[~l1.ok] == 0) and np.all(b2[~l2.ok] == 0)
@@ -130,7 +135,9 @@ def test_pair_weights_match_the_formulas_of_spec_1_6():
     r2 = returns_for(rng, X, P, SENSORS[1], 2, P_D=0.7, lam=500.0, spread=1.0)
     r1 = SensorReturns(r1.z, np.ones((1, 3), bool), r1.pos, R, 0.8, r1.lam)
     r2 = SensorReturns(r2.z, np.ones((1, 2), bool), r2.pos, R, 0.7, r2.lam)
-    (b00, b1, b2, B), l1, l2, _ = pair_weights(X, P, r1, r2, "mspda_parallel", 1e9, P_G)
+    wide = opts(P_G=1.0 - 1e-15)  # a gate wide enough to validate every return
+    assert wide.gamma > 60.0
+    (b00, b1, b2, B), l1, l2, _ = pair_weights(X, P, r1, r2, wide)
     d1, d2 = X[0, :3] - r1.pos, X[0, :3] - r2.pos
     H = np.vstack([azel_jacobian(d1), azel_jacobian(d2)])
     S12 = H @ P[0] @ H.T + np.block([[R, np.zeros((2, 2))], [np.zeros((2, 2)), R]])
@@ -138,7 +145,8 @@ def test_pair_weights_match_the_formulas_of_spec_1_6():
     nu2 = wrap(r2.z[0] - azel(d2))
     n1 = [multivariate_normal(np.zeros(2), S12[:2, :2]).pdf(v) for v in nu1]
     n2 = [multivariate_normal(np.zeros(2), S12[2:, 2:]).pdf(v) for v in nu2]
-    f1, f2 = (1 - 0.8 * P_G) * 200.0, (1 - 0.7 * P_G) * 500.0
+    assert l1.ok.all() and l2.ok.all()
+    f1, f2 = (1 - 0.8 * wide.P_G) * 200.0, (1 - 0.7 * wide.P_G) * 500.0
     w = {(0, 0): f1 * f2}
     w.update({(i + 1, 0): 0.8 * n1[i] * f2 for i in range(3)})
     w.update({(0, j + 1): f1 * 0.7 * n2[j] for j in range(2)})
@@ -158,7 +166,7 @@ def test_reduces_to_single_sensor_pdaf_when_sensor_two_is_silent():
     r1 = returns_for(rng, X, P, SENSORS[0], 6, P_D=0.9, lam=400.0, spread=1.5)
     empty = SensorReturns(np.zeros((10, 1, 2)), np.zeros((10, 1), bool), SENSORS[1], R, 0.0,
                           np.full(10, 400.0))
-    (b00, b1, b2, B), l1, _, _ = pair_weights(X, P, r1, empty, "mspda_parallel", GAMMA, P_G)
+    (b00, b1, b2, B), l1, _, _ = pair_weights(X, P, r1, empty, opts())
     # Bar-Shalom's closed form: beta_i = e_i / (b + sum e), b = lam |2 pi S|^1/2 (1 - PD PG)/PD
     d2 = np.einsum("nma,nab,nmb->nm", l1.nu, np.linalg.inv(l1.S), l1.nu)
     e = np.where(l1.ok, np.exp(-0.5 * d2), 0.0)
@@ -166,8 +174,8 @@ def test_reduces_to_single_sensor_pdaf_when_sensor_two_is_silent():
     np.testing.assert_allclose(b1, e / (b + e.sum(1))[:, None], rtol=1e-9, atol=1e-300)
     np.testing.assert_allclose(b00, b / (b + e.sum(1)), rtol=1e-9)
     assert np.all(b2 == 0) and np.all(B == 0)
-    X2, P2, _ = pda_update(X, P, [r1, empty], "mspda_parallel", GAMMA, P_G)
-    X1, P1, _ = pda_update(X, P, [r1], "mspda_parallel", GAMMA, P_G)
+    X2, P2, _ = pda_update(X, P, [r1, empty], opts())
+    X1, P1, _ = pda_update(X, P, [r1], opts())
     np.testing.assert_allclose(X2, X1, rtol=1e-12)
     np.testing.assert_allclose(P2, P1, rtol=1e-9, atol=1e-9 * np.abs(P1).max())
 
@@ -179,10 +187,10 @@ def test_no_clutter_and_perfect_detection_puts_all_mass_on_the_true_pair():
     rets = [SensorReturns(azel(truth - pos)[:, None], np.ones((5, 1), bool), pos, R, 1.0,
                           np.full(5, lam)) for pos, lam in zip(SENSORS, (1e-9, 1e-9),
                                                                strict=True)]
-    (b00, b1, b2, B), *_ = pair_weights(X, P, *rets, "mspda_parallel", GAMMA, P_G)
+    (b00, b1, b2, B), *_ = pair_weights(X, P, *rets, opts())
     np.testing.assert_allclose(B[:, 0, 0], 1.0, atol=1e-9)
     lam0 = [SensorReturns(r.z, r.valid, r.pos, R, 1.0, np.zeros(5)) for r in rets]
-    (b00, b1, b2, B), *_ = pair_weights(X, P, *lam0, "mspda_parallel", GAMMA, P_G)
+    (b00, b1, b2, B), *_ = pair_weights(X, P, *lam0, opts())
     assert np.all(B[:, 0, 0] == 1.0)
 
 
@@ -191,9 +199,9 @@ def test_mixture_equals_closed_form_pdaf_for_a_linear_update():
     rng = np.random.default_rng(21)
     X, P = predicted(rng, 12)
     ret = returns_for(rng, X, P, SENSORS[0], 7, P_D=0.85, lam=250.0, spread=1.5)
-    lin = linearize(X, P, ret, GAMMA, "ekf_joseph")
+    lin = linearize(X, P, ret, opts(covariance="ekf_joseph"))
     b0, b = single_weights(lin, 0.85, P_G)
-    Xn, Pn, _ = pda_update(X, P, [ret], "mspda_parallel", GAMMA, P_G, "ekf_joseph")
+    Xn, Pn, _ = pda_update(X, P, [ret], opts(covariance="ekf_joseph"))
     nu_c = np.einsum("nm,nma->na", b, lin.nu)
     K = lin.K
     X_ref = X + np.einsum("nab,nb->na", K, nu_c)
@@ -211,26 +219,35 @@ def test_sequential_with_one_sensor_is_the_pdaf_and_two_sensors_regate():
     X, P = predicted(rng, 4)
     r1 = returns_for(rng, X, P, SENSORS[0], 4)
     r2 = returns_for(rng, X, P, SENSORS[1], 4)
-    Xs, Ps, _ = pda_update(X, P, [r1], "mspda_sequential", GAMMA, P_G)
-    Xp, Pp, _ = pda_update(X, P, [r1], "mspda_parallel", GAMMA, P_G)
+    Xs, Ps, _ = pda_update(X, P, [r1], opts("mspda_sequential"))
+    Xp, Pp, _ = pda_update(X, P, [r1], opts())
     np.testing.assert_allclose(Xs, Xp)
-    X2, P2, m = pda_update(X, P, [r1, r2], "mspda_sequential", GAMMA, P_G)
-    X1, P1, _ = pda_update(Xs, Ps, [r2], "mspda_parallel", GAMMA, P_G)
+    X2, P2, m = pda_update(X, P, [r1, r2], opts("mspda_sequential"))
+    X1, P1, _ = pda_update(Xs, Ps, [r2], opts())
     np.testing.assert_allclose(X2, X1)
     np.testing.assert_allclose(P2, P1)
     assert m.shape == (4, 2)
     # sensor 2 is gated at the sensor-1 posterior, not at the prediction
-    np.testing.assert_array_equal(m[:, 0], linearize(X, P, r1, GAMMA).m)
-    np.testing.assert_array_equal(m[:, 1], linearize(Xs, Ps, r2, GAMMA).m)
-    _, _, m_par = pda_update(X, P, [r1, r2], "mspda_parallel", GAMMA, P_G)
+    np.testing.assert_array_equal(m[:, 0], linearize(X, P, r1, opts()).m)
+    np.testing.assert_array_equal(m[:, 1], linearize(Xs, Ps, r2, opts()).m)
+    _, _, m_par = pda_update(X, P, [r1, r2], opts())
     assert not np.array_equal(m[:, 1], m_par[:, 1])
 
 
-def test_unknown_method_rejected():
-    rng = np.random.default_rng(0)
-    X, P = predicted(rng, 1)
+@pytest.mark.parametrize("bad", [dict(method="jpda"), dict(covariance="ukf"),
+                                 dict(joint_cov="diag"), dict(density="guess"),
+                                 dict(mg_at="mean"), dict(P_G=1.0), dict(P_G=0.0)])
+def test_unknown_options_rejected_at_construction(bad):
     with pytest.raises(ValueError):
-        pda_update(X, P, [returns_for(rng, X, P, SENSORS[0], 2)], "jpda")
+        PDAOptions(**bad)
+
+
+@pytest.mark.parametrize("P_G, n_z", [(0.99, 2), (0.95, 2), (0.999, 1), (0.9, 4)])
+def test_gate_threshold_follows_the_gate_probability_and_dimension(P_G, n_z):
+    options = PDAOptions(P_G=P_G, n_z=n_z)
+    assert options.gamma == pytest.approx(chi2.ppf(P_G, n_z), rel=1e-12)
+    assert options.gamma == gate_threshold(P_G, n_z)
+    assert PDAOptions().gamma == pytest.approx(9.2103, abs=1e-4)  # chi2_2^-1(0.99)
 
 
 @pytest.mark.parametrize("method", ["mspda_parallel", "mspda_sequential", "nn", "paper_approx"])
@@ -241,7 +258,7 @@ def test_no_validated_returns_means_no_update(method, lam):
     X, P = predicted(rng, 3)
     empty = [SensorReturns(np.zeros((3, 2, 2)), np.zeros((3, 2), bool), pos, R, 0.9,
                            np.full(3, lam)) for pos in SENSORS]
-    Xn, Pn, m = pda_update(X, P, empty, method, GAMMA, P_G)
+    Xn, Pn, m = pda_update(X, P, empty, opts(method))
     np.testing.assert_allclose(Xn, X)
     np.testing.assert_allclose(Pn, P, rtol=1e-12)
     assert np.all(m == 0)
@@ -252,7 +269,7 @@ def test_a_diverged_trial_does_not_break_the_batch():
     X, P = predicted(rng, 3)
     P[1] = np.nan
     rets = [returns_for(rng, X, P, pos, 3) for pos in SENSORS]
-    Xn, Pn, _ = pda_update(X, P, rets, "mspda_parallel", GAMMA, P_G)
+    Xn, Pn, _ = pda_update(X, P, rets, opts())
     assert np.isfinite(Xn[[0, 2]]).all() and np.isfinite(Pn[[0, 2]]).all()
 
 
@@ -260,15 +277,15 @@ def test_combined_modified_rows_equal_the_mixture_with_g_at_the_combined_return(
     rng = np.random.default_rng(17)
     X, P = predicted(rng, 5)
     rets = [returns_for(rng, X, P, SENSORS[0], 4), returns_for(rng, X, P, SENSORS[1], 3)]
-    (b00, b1, b2, B), l1, l2, _ = pair_weights(X, P, *rets, "mspda_parallel", GAMMA, P_G)
+    (b00, b1, b2, B), l1, l2, _ = pair_weights(X, P, *rets, opts())
     zbar = []
     for ret, lin, w in ((rets[0], l1, b1 + B.sum(2)), (rets[1], l2, b2 + B.sum(1))):
         tot = w.sum(1, keepdims=True)
         nu = (w[:, :, None] * lin.nu).sum(1) / np.where(tot > 0, tot, 1.0)
         zbar.append(azel(X[:, :3] - ret.pos) + nu)
-    Xn, Pn, _ = pda_update(X, P, rets, "mspda_parallel", GAMMA, P_G, mg_at="combined")
+    Xn, Pn, _ = pda_update(X, P, rets, opts(mg_at="combined"))
     Xb, Pb = brute_force(X, P, rets, (b00, b1, b2, B), "mgekf", zbar)
     np.testing.assert_allclose(Xn, Xb, rtol=1e-9, atol=1e-6)
     np.testing.assert_allclose(Pn, Pb, rtol=1e-7, atol=1e-6 * np.abs(Pb).max())
-    Xh, Ph, _ = pda_update(X, P, rets, "mspda_parallel", GAMMA, P_G)
+    Xh, Ph, _ = pda_update(X, P, rets, opts())
     assert not np.allclose(Ph, Pn)  # the choice matters

@@ -42,6 +42,13 @@ Acceptance: ``"monotone"`` (paper-like, reconstruction of the lost flow chart: a
 offspring iff ``J_new >= J``) or ``"anneal"`` (Metropolis acceptance
 ``exp(dJ / T_t)`` with geometric cooling from ``t0`` to ``t1``, the best solution kept).
 
+Random numbers: each operation draws eight uniforms in one row (:class:`Draws`, drawn in
+blocks of rows so memory stays bounded and the stream does not depend on the block size),
+each with one job. ``place`` serves two decisions under ``evict``: ``place < 1/2`` picks the
+evicting re-pair and the position within the chosen column list is ``2 place`` (or
+``2 place - 1``), which is again uniform on [0, 1) given that choice and independent of it,
+so one uniform is split into a fair coin and a position without bias.
+
 The best solution so far is recorded at each checkpoint of the operation count, which is the
 x-axis of the paper's Fig. 2. The budget ``ops`` itself is always a checkpoint, so a run is
 scored at the operation count it was given, whatever checkpoint list accompanies it.
@@ -65,6 +72,7 @@ from bisect import bisect_right
 from collections.abc import Sequence
 from dataclasses import dataclass
 from itertools import accumulate
+from typing import NamedTuple
 
 import numpy as np
 
@@ -133,6 +141,38 @@ def exchange(col_row: list[int], w: list[list[float]], r: int, c: int) -> float:
     return w[r][c] - w[old][c]
 
 
+class Draws(NamedTuple):
+    """The eight uniforms on [0, 1) of one genetic operation, in stream order."""
+
+    first_column: float  # roulette position of the first crossover column
+    second_column: float  # roulette (or uniform) position of the second crossover column
+    mutate: float  # the operation mutates iff mutate < p_m
+    repair: float  # re-pair (if enabled and a row is unpaired) iff repair < 1/2, else unpair
+    pick: float  # which unpaired row is re-paired, or which paired column is unpaired
+    place: float  # the column of a re-pair (with evict: < 1/2 evicting, see module doc)
+    accept_crossover: float  # Metropolis draw for the crossover offspring (staged)
+    accept_mutation: float  # Metropolis draw for the (mutation or joint) offspring
+
+
+@dataclass(frozen=True)
+class _Problem:
+    """One assignment problem in PGA form: the smaller set on the rows (``m1 <= m2``).
+
+    ``w[r][j]`` is the gain of row ``r`` (0 = dummy, gain 0) in column ``j``; ``rank[r][j]``
+    the roulette weight of column ``j`` when it holds row ``r``.
+    """
+
+    w: list[list[float]]
+    rank: list[list[int]]
+    m1: int
+    m2: int
+    transpose: bool
+
+    def objective(self, col_row: Sequence[int]) -> float:
+        """Sum of pair gains ``J`` of a solution."""
+        return sum(self.w[r][j] for j, r in enumerate(col_row))
+
+
 def column_ranks(a: np.ndarray, a_0j: np.ndarray) -> np.ndarray:
     """Descending rank (1 = largest) of each entry within its column of ``[a_0j; a]``.
 
@@ -143,6 +183,158 @@ def column_ranks(a: np.ndarray, a_0j: np.ndarray) -> np.ndarray:
     ranks = np.empty_like(order)
     np.put_along_axis(ranks, order, np.arange(1, full.shape[0] + 1)[:, None], axis=0)
     return ranks
+
+
+def _problem(weights: PairWeights, roulette: str) -> _Problem:
+    """Setup: orient the problem (rows = the smaller set), gains and roulette weights."""
+    transpose = weights.a.shape[0] > weights.a.shape[1]
+    a, a_0j = (weights.a.T, weights.a_i0) if transpose else (weights.a, weights.a_0j)
+    gain = weights.gain.T if transpose else weights.gain
+    m1, m2 = a.shape
+    rank = column_ranks(a, a_0j).tolist()
+    if roulette == "better":
+        rank = [[m1 + 2 - v for v in row] for row in rank]
+    elif roulette != "worse":
+        raise ValueError(f"unknown roulette direction {roulette!r}")
+    return _Problem([[0.0] * m2] + gain.tolist(), rank, m1, m2, transpose)
+
+
+def _initial(problem: _Problem, init: str, rng: np.random.Generator) -> list[int]:
+    """Setup: the initial solution ``col_row`` (module docstring)."""
+    cur = [0] * problem.m2
+    if init == "random_B":
+        for r, j in enumerate(rng.permutation(problem.m2)[:problem.m1].tolist(), start=1):
+            cur[j] = r
+    elif init == "standard":
+        cur[:problem.m1] = range(1, problem.m1 + 1)
+    else:
+        raise ValueError(f"unknown init {init!r}")
+    return cur
+
+
+class _Search:
+    """The state of one PGA run and its genetic operation (:meth:`operate`).
+
+    ``child`` is the offspring under construction and equals ``cur`` outside an operation;
+    moves touch only the columns in ``touched``, so accepting or rejecting an offspring
+    copies those columns one way or the other instead of the whole list.
+    """
+
+    def __init__(self, problem: _Problem, cur: list[int], p_m: float, second: str,
+                 repair_moves: bool, staged: bool, evict: bool, anneal: bool) -> None:
+        if second not in ("roulette", "uniform"):
+            raise ValueError(f"unknown second-column rule {second!r}")
+        self.problem, self.p_m, self.staged, self.anneal = problem, p_m, staged, anneal
+        self.roulette_second, self.repair_moves, self.evict = second == "roulette", \
+            repair_moves, evict
+        self.cur, self.J, self.n_paired = cur, problem.objective(cur), problem.m1
+        self.q = [problem.rank[r][j] for j, r in enumerate(cur)]  # roulette weights
+        self.cum, self.stale = list(accumulate(self.q)), False  # cumulative roulette weights
+        self.best, self.J_best = cur.copy(), self.J
+        self.child, self.dJ, self.child_paired = cur.copy(), 0.0, self.n_paired
+        self.touched: list[int] = []
+        self.T = 1.0  # annealing temperature, set by the caller
+
+    def operate(self, d: Draws) -> None:
+        """One genetic operation: crossover, mutation, evaluation (staged or joint)."""
+        m1, m2 = self.problem.m1, self.problem.m2
+        if m2 >= 2:
+            self._crossover(d.first_column, d.second_column)
+            if self.staged:
+                self._evaluate(d.accept_crossover)
+        if m1 and d.mutate < self.p_m:
+            self._mutate(d)
+        self._evaluate(d.accept_mutation)
+
+    def _crossover(self, u1: float, u2: float) -> None:
+        """Roulette column pair (second by roulette over the rest, or uniform), then swap."""
+        q, m2 = self.q, self.problem.m2
+        if self.stale:
+            self.cum, self.stale = list(accumulate(q)), False
+        cum = self.cum
+        j1 = min(bisect_right(cum, u1 * cum[-1]), m2 - 1)
+        if self.roulette_second:
+            # roulette over the columns other than j1 (their running sum skips q[j1])
+            x, q1 = u2 * (cum[-1] - q[j1]), q[j1]
+            j2 = bisect_right(cum, x, 0, j1)
+            if j2 == j1:
+                j2 = bisect_right(cum, x, j1 + 1, m2, key=lambda c: c - q1)
+                if j2 == m2:
+                    j2 = m2 - 1 if j1 < m2 - 1 else m2 - 2
+        else:
+            j2 = int(u2 * (m2 - 1))
+            j2 += j2 >= j1
+        self.dJ += swap_columns(self.child, self.problem.w, j1, j2)
+        self.touched += [j1, j2]
+
+    def _mutate(self, d: Draws) -> None:
+        """Re-pair (plain or evicting) with probability 1/2 when enabled, else unpair."""
+        child, w, m1, m2 = self.child, self.problem.w, self.problem.m1, self.problem.m2
+        if self.repair_moves and d.repair < 0.5 and self.child_paired < m1:
+            free = sorted(set(range(1, m1 + 1)).difference(child))
+            r = free[int(d.pick * len(free))]
+            if self.evict and d.place < 0.5:
+                c = int(2.0 * d.place * m2)
+                self.child_paired += child[c] == 0
+                self.dJ += exchange(child, w, r, c)
+            else:
+                empty = [j for j, row in enumerate(child) if row == 0]
+                c = empty[int((2.0 * d.place - 1.0 if self.evict else d.place) * len(empty))]
+                self.dJ += repair(child, w, r, c)
+                self.child_paired += 1
+            self.touched.append(c)
+        elif self.child_paired:
+            paired = [j for j, row in enumerate(child) if row]
+            c = paired[int(d.pick * len(paired))]
+            self.dJ += unpair(child, w, c)
+            self.child_paired -= 1
+            self.touched.append(c)
+
+    def _evaluate(self, u_accept: float) -> None:
+        """Accept (monotone, or Metropolis at temperature ``T``) or reject the offspring."""
+        if not self.touched:
+            return
+        dJ, cur, child = self.dJ, self.cur, self.child
+        if dJ >= 0.0 or (self.anneal and u_accept < math.exp(dJ / self.T)):
+            self.J, self.n_paired = self.J + dJ, self.child_paired
+            rank, q = self.problem.rank, self.q
+            for j in self.touched:
+                cur[j] = child[j]
+                q[j] = rank[cur[j]][j]
+            self.stale = True
+            if self.J_best < self.J:
+                self.best, self.J_best = cur.copy(), self.J
+        else:
+            for j in self.touched:
+                child[j] = cur[j]
+        self.dJ, self.child_paired, self.touched = 0.0, self.n_paired, []
+
+
+def _draws(rng: np.random.Generator, ops: int):
+    """The :class:`Draws` of operations ``1..ops``, drawn in blocks of ``_BLOCK`` rows."""
+    for first in range(0, ops, _BLOCK):
+        yield from map(Draws._make, rng.random((min(_BLOCK, ops - first), 8)).tolist())
+
+
+def _collect(problem: _Problem, saved: dict[int, tuple[list[int], float]],
+             rows: int) -> PGAResult:
+    """Collection: checkpointed solutions back in the caller's orientation (``rows`` =
+    sensor-1 count)."""
+    marks = sorted(saved)
+    partner = np.full((len(marks), rows), -1)
+    objective = np.empty(len(marks))
+    elapsed = np.empty(len(marks))
+    for k, c in enumerate(marks):
+        sol, elapsed[k] = saved[c]
+        objective[k] = problem.objective(sol)
+        for j, r in enumerate(sol):
+            if r:
+                if problem.transpose:
+                    partner[k, j] = r - 1
+                else:
+                    partner[k, r - 1] = j
+    return PGAResult(checkpoints=np.array(marks), partner1=partner, objective=objective,
+                     elapsed_s=elapsed)
 
 
 def pga(weights: PairWeights, rng: np.random.Generator, ops: int = 1000,
@@ -173,123 +365,21 @@ def pga(weights: PairWeights, rng: np.random.Generator, ops: int = 1000,
     t0, t1 : initial and final annealing temperatures, in units of J (nats).
     """
     start = time.perf_counter()
-    transpose = weights.a.shape[0] > weights.a.shape[1]
-    a, a_0j = (weights.a.T, weights.a_i0) if transpose else (weights.a, weights.a_0j)
-    gain = weights.gain.T if transpose else weights.gain
-    m1, m2 = a.shape
-    w = [[0.0] * m2] + gain.tolist()
-    rank = column_ranks(a, a_0j).tolist()
-    if roulette == "better":
-        rank = [[m1 + 2 - v for v in row] for row in rank]
-    elif roulette != "worse":
-        raise ValueError(f"unknown roulette direction {roulette!r}")
+    problem = _problem(weights, roulette)
     if accept not in ("monotone", "anneal"):
         raise ValueError(f"unknown acceptance {accept!r}")
     anneal = accept == "anneal"
-
-    cur = [0] * m2
-    if init == "random_B":
-        for r, j in enumerate(rng.permutation(m2)[:m1].tolist(), start=1):
-            cur[j] = r
-    elif init == "standard":
-        cur[:m1] = range(1, m1 + 1)
-    else:
-        raise ValueError(f"unknown init {init!r}")
-    J = sum(w[r][j] for j, r in enumerate(cur))
-    n_paired = m1
-    q = [rank[r][j] for j, r in enumerate(cur)]  # roulette weight of each column
-    best, J_best = cur.copy(), J
-
-    marks = sorted({int(c) for c in checkpoints if 0 <= c <= ops} | {ops})
-    mark_set = set(marks)
+    search = _Search(problem, _initial(problem, init, rng), p_m, second, repair_moves,
+                     staged, evict, anneal)
+    marks = {int(c) for c in checkpoints if 0 <= c <= ops} | {ops}
     saved: dict[int, tuple[list[int], float]] = {}  # checkpoint -> (best, elapsed s)
-    if 0 in mark_set:
-        saved[0] = (best.copy(), time.perf_counter() - start)
+    if 0 in marks:
+        saved[0] = (search.best.copy(), time.perf_counter() - start)
     cool = (t1 / t0) ** (1.0 / max(ops, 1)) if anneal else 1.0
-    T = t0
-    roulette_second = second == "roulette"
-    if second not in ("roulette", "uniform"):
-        raise ValueError(f"unknown second-column rule {second!r}")
-
-    # ``child`` is the offspring under construction and equals ``cur`` outside an operation;
-    # moves touch only the columns in ``touched``, so accepting or rejecting an offspring
-    # copies those columns one way or the other instead of the whole list.
-    child, dJ, child_paired, touched = cur.copy(), 0.0, n_paired, []
-    cum = list(accumulate(q))  # cumulative roulette weights, rebuilt after q changes
-    stale = False
-    for t in range(1, ops + 1):
-        if (t - 1) % _BLOCK == 0:  # uniforms in blocks: bounded memory, same stream
-            U = rng.random((min(_BLOCK, ops - t + 1), 8)).tolist()
-        u = U[(t - 1) % _BLOCK]
-        for stage in (0, 1):
-            if stage == 0 and m2 >= 2:
-                # crossover: roulette column pair, then swap
-                if stale:
-                    cum, stale = list(accumulate(q)), False
-                j1 = min(bisect_right(cum, u[0] * cum[-1]), m2 - 1)
-                if roulette_second:
-                    # roulette over the columns other than j1 (their running sum skips q[j1])
-                    x, q1 = u[1] * (cum[-1] - q[j1]), q[j1]
-                    j2 = bisect_right(cum, x, 0, j1)
-                    if j2 == j1:
-                        j2 = bisect_right(cum, x, j1 + 1, m2, key=lambda c: c - q1)
-                        if j2 == m2:
-                            j2 = m2 - 1 if j1 < m2 - 1 else m2 - 2
-                else:
-                    j2 = int(u[1] * (m2 - 1))
-                    j2 += j2 >= j1
-                dJ += swap_columns(child, w, j1, j2)
-                touched += [j1, j2]
-            elif stage == 1 and m1 and u[2] < p_m:
-                if repair_moves and u[3] < 0.5 and child_paired < m1:
-                    free = sorted(set(range(1, m1 + 1)).difference(child))
-                    r = free[int(u[4] * len(free))]
-                    if evict and u[5] < 0.5:
-                        c = int(2.0 * u[5] * m2)
-                        child_paired += child[c] == 0
-                        dJ += exchange(child, w, r, c)
-                    else:
-                        empty = [j for j, row in enumerate(child) if row == 0]
-                        c = empty[int((2.0 * u[5] - 1.0 if evict else u[5]) * len(empty))]
-                        dJ += repair(child, w, r, c)
-                        child_paired += 1
-                    touched.append(c)
-                elif child_paired:
-                    paired = [j for j, row in enumerate(child) if row]
-                    c = paired[int(u[4] * len(paired))]
-                    dJ += unpair(child, w, c)
-                    child_paired -= 1
-                    touched.append(c)
-            if not (staged or stage == 1) or not touched:
-                continue
-            # evaluation and acceptance of the offspring
-            if dJ >= 0.0 or (anneal and u[6 + stage] < math.exp(dJ / T)):
-                J, n_paired = J + dJ, child_paired
-                for j in touched:
-                    cur[j] = child[j]
-                    q[j] = rank[cur[j]][j]
-                stale = True
-                if J_best < J:
-                    best, J_best = cur.copy(), J
-            else:
-                for j in touched:
-                    child[j] = cur[j]
-            dJ, child_paired, touched = 0.0, n_paired, []
-        T *= cool
-        if t in mark_set:
-            saved[t] = (best.copy(), time.perf_counter() - start)
-
-    partner = np.full((len(marks), weights.a.shape[0]), -1)
-    objective = np.empty(len(marks))
-    elapsed = np.empty(len(marks))
-    for k, c in enumerate(marks):
-        sol, elapsed[k] = saved[c]
-        objective[k] = sum(w[r][j] for j, r in enumerate(sol))
-        for j, r in enumerate(sol):
-            if r:
-                if transpose:
-                    partner[k, j] = r - 1
-                else:
-                    partner[k, r - 1] = j
-    return PGAResult(checkpoints=np.array(marks), partner1=partner, objective=objective,
-                     elapsed_s=elapsed)
+    search.T = t0
+    for t, draws in enumerate(_draws(rng, ops), start=1):
+        search.operate(draws)
+        search.T *= cool
+        if t in marks:
+            saved[t] = (search.best.copy(), time.perf_counter() - start)
+    return _collect(problem, saved, weights.a.shape[0])

@@ -95,7 +95,7 @@ from trackfuse.tracking.pcrlb import (
     position_bound,
     range_bound,
 )
-from trackfuse.tracking.pda import METHODS, SensorReturns, pda_update
+from trackfuse.tracking.pda import METHODS, PDAOptions, SensorReturns, pda_update
 from trackfuse.tracking.platforms import baseline_offset, orbit_positions, straight_positions
 from trackfuse.tracking.sensors import (
     azel,
@@ -454,13 +454,13 @@ def run_filter(sc: Scenario, b: Batch, assoc: str, covariance: str, joint_cov: s
     outside_run, off_run = np.zeros(N, dtype=int), np.zeros(N, dtype=int)
     lost_gate, lost_angle = np.zeros(N, dtype=bool), np.zeros(N, dtype=bool)
     diverged = np.zeros(N, dtype=bool)
+    options = PDAOptions(assoc, covariance, joint_cov, density, mg_at, sc.P_G)
     for k in range(1, sc.K + 1):
         Xp = X @ sc.F.T
         Pp = sc.F @ P @ sc.F.T + sc.Q_filter
         returns, inside = _scan_returns(sc, b, k, Xp, Pp)
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            X, P, m = pda_update(Xp, Pp, returns, assoc, sc.gamma, sc.P_G, covariance,
-                                 joint_cov, density, mg_at)
+            X, P, m = pda_update(Xp, Pp, returns, options)
         P = 0.5 * (P + P.transpose(0, 2, 1))
         diverged |= ~(np.isfinite(X).all(axis=1) & np.isfinite(P).all(axis=(1, 2)))
         X[diverged], P[diverged] = np.nan, np.nan

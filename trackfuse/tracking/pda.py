@@ -57,7 +57,7 @@ multisensor multitarget tracking algorithm", Proc. ACC, 1995.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -65,13 +65,57 @@ from trackfuse.tracking.models import wrap
 from trackfuse.tracking.sensors import (
     azel,
     azel_jacobian,
+    gate_threshold,
     gate_volume,
     inv2,
     modified_position_rows,
 )
 
 METHODS = ("mspda_parallel", "mspda_sequential", "nn", "paper_approx")
+COVARIANCES = ("mgekf", "ekf_joseph")
+JOINT_COVS = ("full", "blockdiag")
+DENSITIES = ("parametric", "nonparametric")
+MG_AT = ("hypothesis", "combined")
 LOG_2PI = float(np.log(2.0 * np.pi))
+
+
+@dataclass(frozen=True)
+class PDAOptions:
+    """How :func:`pda_update` associates and updates (every choice in one place).
+
+    Attributes
+    ----------
+    method : association variant, one of :data:`METHODS`.
+    covariance : ``"mgekf"`` (modified rows in the Joseph form) or ``"ekf_joseph"``.
+    joint_cov : ``"full"`` or ``"blockdiag"`` joint innovation covariance in ``w_ij``.
+    density : ``"parametric"`` (the caller's clutter density) or ``"nonparametric"``
+        (``m_s / V_s``).
+    mg_at : ``"hypothesis"`` (MGEKF rows at each hypothesis's own returns) or
+        ``"combined"`` (at the beta-weighted combined return of each sensor, W000-4).
+    P_G : gate probability of each sensor's gate.
+    n_z : dimension of one sensor's measurement (2: azimuth, elevation).
+    gamma : the gate threshold ``chi2_{n_z}^-1(P_G)``, derived once at construction.
+    """
+
+    method: str = "mspda_parallel"
+    covariance: str = "mgekf"
+    joint_cov: str = "full"
+    density: str = "parametric"
+    mg_at: str = "hypothesis"
+    P_G: float = 0.99
+    n_z: int = 2
+    gamma: float = field(init=False)
+
+    def __post_init__(self) -> None:
+        for name, allowed in (("method", METHODS), ("covariance", COVARIANCES),
+                              ("joint_cov", JOINT_COVS), ("density", DENSITIES),
+                              ("mg_at", MG_AT)):
+            if getattr(self, name) not in allowed:
+                raise ValueError(f"unknown PDA {name} {getattr(self, name)!r}; "
+                                 f"choose from {allowed}")
+        if not 0.0 < self.P_G < 1.0:
+            raise ValueError(f"gate probability P_G must lie in (0, 1), got {self.P_G}")
+        object.__setattr__(self, "gamma", gate_threshold(self.P_G, self.n_z))
 
 
 @dataclass(frozen=True)
@@ -113,12 +157,15 @@ class _Linearized:
     d: np.ndarray  # (N, 3) predicted target-minus-sensor position (m)
 
 
-def linearize(X: np.ndarray, P: np.ndarray, ret: SensorReturns, gamma: float,
-              covariance: str = "mgekf", density: str = "parametric") -> _Linearized:
+def linearize(X: np.ndarray, P: np.ndarray, ret: SensorReturns,
+              options: PDAOptions) -> _Linearized:
     """Predicted angles, Jacobian, innovation covariance, gain and gate for one sensor.
 
-    ``X: (N, 6)``, ``P: (N, 6, 6)``; validated returns satisfy ``nu' S^-1 nu <= gamma``.
+    ``X: (N, 6)``, ``P: (N, 6, 6)``; validated returns satisfy ``nu' S^-1 nu <= gamma``
+    (``options.gamma``); ``options.covariance`` and ``options.density`` choose ``G`` and
+    ``lam``.
     """
+    gamma = options.gamma
     d = X[:, :3] - ret.pos
     H = azel_jacobian(d)
     PHt = P @ H.transpose(0, 2, 1)
@@ -134,14 +181,14 @@ def linearize(X: np.ndarray, P: np.ndarray, ret: SensorReturns, gamma: float,
     with np.errstate(divide="ignore", invalid="ignore"):
         logdet = np.log(det)
     log_n = np.where(ok, -0.5 * d2 - LOG_2PI - 0.5 * logdet[:, None], -np.inf)
-    if covariance == "mgekf":
+    if options.covariance == "mgekf":
         with np.errstate(divide="ignore", invalid="ignore"):
             G = modified_position_rows(ret.z, d[:, None, :])
     else:
         G = np.broadcast_to(H[:, None, :, :3], nu.shape[:2] + (2, 3))
     G = np.where(ok[..., None, None], G, 0.0)
     nu = np.where(ok[..., None], nu, 0.0)
-    lam = m / V if density == "nonparametric" else np.asarray(ret.lam, dtype=float)
+    lam = m / V if options.density == "nonparametric" else np.asarray(ret.lam, dtype=float)
     return _Linearized(H, S, K, nu, G, ok, m, V, log_n, lam, d)
 
 
@@ -253,16 +300,15 @@ def _pair_moments(l1: _Linearized, l2: _Linearized, B: np.ndarray, P: np.ndarray
 
 
 def pair_weights(X: np.ndarray, P: np.ndarray, r1: SensorReturns, r2: SensorReturns,
-                 method: str = "mspda_parallel", gamma: float = 9.21, P_G: float = 0.99,
-                 covariance: str = "mgekf", joint_cov: str = "full",
-                 density: str = "parametric"):
+                 options: PDAOptions):
     """Association probabilities of the two-sensor hypotheses at the prediction ``(X, P)``.
 
     Returns ``(beta_00: (N,), beta_i0: (N, M1), beta_0j: (N, M2), beta_ij: (N, M1, M2))``
     summing to one per trial, plus the two linearized sensors and ``K12: (N, 6, 4)``.
     """
-    l1 = linearize(X, P, r1, gamma, covariance, density)
-    l2 = linearize(X, P, r2, gamma, covariance, density)
+    method, P_G = options.method, options.P_G
+    l1 = linearize(X, P, r1, options)
+    l2 = linearize(X, P, r2, options)
     C = l1.H @ P @ l2.H.transpose(0, 2, 1)
     S12inv, det12 = _block_inverse(l1.S, C, l2.S)
     H12 = np.concatenate([l1.H, l2.H], axis=1)
@@ -278,7 +324,7 @@ def pair_weights(X: np.ndarray, P: np.ndarray, r1: SensorReturns, r2: SensorRetu
         log_1 = lp1 + l1.log_n + f2[:, None]
         log_2 = f1[:, None] + lp2 + l2.log_n
         log_00 = f1 + f2
-        if joint_cov == "full":
+        if options.joint_cov == "full":
             log_pair = _log_joint(l1, l2, S12inv, det12)
             log_pair += lp1 + lp2
             np.putmask(log_pair, ~ok, -np.inf)
@@ -288,11 +334,9 @@ def pair_weights(X: np.ndarray, P: np.ndarray, r1: SensorReturns, r2: SensorRetu
     return betas, l1, l2, K12
 
 
-def _pair_update(X, P, r1: SensorReturns, r2: SensorReturns, method, gamma, P_G, covariance,
-                 joint_cov, density, mg_at):
-    (b00, b1, b2, B), l1, l2, K12 = pair_weights(X, P, r1, r2, method, gamma, P_G, covariance,
-                                                 joint_cov, density)
-    if covariance == "mgekf" and mg_at == "combined":
+def _pair_update(X, P, r1: SensorReturns, r2: SensorReturns, options: PDAOptions):
+    (b00, b1, b2, B), l1, l2, K12 = pair_weights(X, P, r1, r2, options)
+    if options.covariance == "mgekf" and options.mg_at == "combined":
         l1, l2 = _at_combined(l1, b1 + B.sum(axis=2)), _at_combined(l2, b2 + B.sum(axis=1))
     R12 = np.zeros((4, 4))
     R12[:2, :2], R12[2:, 2:] = r1.R, r2.R
@@ -359,20 +403,18 @@ def single_weights(lin: _Linearized, P_D: float, P_G: float, nearest: bool = Fal
     return b0, b
 
 
-def _single_update(X, P, ret: SensorReturns, method, gamma, P_G, covariance, density, mg_at):
-    lin = linearize(X, P, ret, gamma, covariance, density)
-    b0, b = single_weights(lin, ret.P_D, P_G, nearest=method == "nn")
-    if covariance == "mgekf" and mg_at == "combined":
+def _single_update(X, P, ret: SensorReturns, options: PDAOptions):
+    lin = linearize(X, P, ret, options)
+    b0, b = single_weights(lin, ret.P_D, options.P_G, nearest=options.method == "nn")
+    if options.covariance == "mgekf" and options.mg_at == "combined":
         lin = _at_combined(lin, b)
     X_new, P_new = _collapse_single(X, P, lin, ret.R, b0, b)
     return X_new, P_new, lin.m
 
 
 def pda_update(X: np.ndarray, P: np.ndarray, returns: Sequence[SensorReturns],
-               method: str = "mspda_parallel", gamma: float = 9.21, P_G: float = 0.99,
-               covariance: str = "mgekf", joint_cov: str = "full",
-               density: str = "parametric",
-               mg_at: str = "hypothesis") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+               options: PDAOptions = PDAOptions()
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One PDA scan update of ``N`` filters with one or two sensors.
 
     Parameters
@@ -380,29 +422,19 @@ def pda_update(X: np.ndarray, P: np.ndarray, returns: Sequence[SensorReturns],
     X : (N, 6) predicted states (m, m/s).
     P : (N, 6, 6) predicted covariances.
     returns : one :class:`SensorReturns` per sensor (1 or 2).
-    method : one of :data:`METHODS`.
-    gamma, P_G : gate threshold and the matching gate probability.
-    covariance : ``"mgekf"`` (modified rows in the Joseph form) or ``"ekf_joseph"``.
-    joint_cov : ``"full"`` or ``"blockdiag"`` joint innovation covariance in ``w_ij``.
-    density : ``"parametric"`` or ``"nonparametric"`` clutter density.
-    mg_at : ``"hypothesis"`` (MGEKF rows at each hypothesis's own returns) or ``"combined"``
-        (at the beta-weighted combined return of each sensor, W000-4).
+    options : association method, covariance form, gate probability (:class:`PDAOptions`).
 
     Returns
     -------
     X : (N, 6), P : (N, 6, 6) updated; m : (N, n_sensors) validated counts (for the
     sequential method, sensor 2 is gated at the sensor-1 posterior).
     """
-    if method not in METHODS:
-        raise ValueError(f"unknown association method {method!r}")
-    if len(returns) == 1 or method == "mspda_sequential":
+    if len(returns) == 1 or options.method == "mspda_sequential":
         counts = []
         for ret in returns:
-            X, P, m = _single_update(X, P, ret, method, gamma, P_G, covariance, density,
-                                     mg_at)
+            X, P, m = _single_update(X, P, ret, options)
             counts.append(m)
         return X, P, np.stack(counts, axis=1)
     if len(returns) != 2:
         raise ValueError("one or two sensors are supported")
-    return _pair_update(X, P, returns[0], returns[1], method, gamma, P_G, covariance,
-                        joint_cov, density, mg_at)
+    return _pair_update(X, P, returns[0], returns[1], options)
