@@ -21,7 +21,11 @@ from rich.table import Table
 from trackfuse import experiments
 from trackfuse.config import ConfigError, allowed_text, load
 from trackfuse.executors import KINDS, ExecutorError, default_workers, scheduler_address
+from trackfuse.reports import write_report
 from trackfuse.results import RunFolderError
+from trackfuse.rundata import load as load_run
+from trackfuse.runlock import RunLock
+from trackfuse.runner import RunInterrupted, Runner
 from trackfuse.sweep import SweepError, count_points, parse_sets, parse_sweeps
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
@@ -50,8 +54,6 @@ def _interrupted(err) -> None:
 
 def _execute(runner):
     """``runner.run()`` with every expected failure turned into one line and its exit code."""
-    from trackfuse.runner import RunInterrupted
-
     try:
         return runner.run()
     except RunInterrupted as err:
@@ -99,9 +101,7 @@ def run(
     no_progress: Annotated[bool, typer.Option("--no-progress", help="No progress output.")]
     = False,
 ) -> None:
-    """Run CFG: every sweep point x trial, then trials.csv, summary.csv and figures."""
-    from trackfuse.runner import Runner
-
+    """Run CFG: every sweep point x trial, then trials.csv, summary.csv and the report."""
     config = _load(cfg, sets, sweeps, trials=trials, seed=seed)
     if executor not in KINDS:
         fail(f"--executor: got {executor!r}; allowed: {', '.join(KINDS)}")
@@ -126,10 +126,12 @@ def run(
         print(f"already complete: {outcome.folder}")
     else:
         print(f"wrote {outcome.folder}: {outcome.rows} rows, {outcome.total_trials} trials "
-                  f"({outcome.computed_trials} computed now) in {outcome.seconds:.1f} s, "
-                  f"{len(outcome.figures)} figure files")
+              f"({outcome.computed_trials} computed now) in {outcome.seconds:.1f} s, "
+              f"{len(outcome.figures)} figure files")
     for message in outcome.figure_errors:
         print(f"warning: {message}", file=sys.stderr)
+    if outcome.report is not None:
+        print(f"report: {outcome.report}")
     if outcome.failed_trials:
         print(f"error: {outcome.failed_trials} trials failed (status=failed in trials.csv)",
               file=sys.stderr)
@@ -150,8 +152,6 @@ def reproduce(
 ) -> None:
     """Run every config in FOLDER (the shipped paper experiments by default), resuming any
     finished ones; all configs are validated before the first one runs."""
-    from trackfuse.runner import Runner
-
     if not folder.is_dir():
         fail(f"{folder}: not a folder of configs")
     paths = sorted(folder.glob("*.yaml"))
@@ -167,6 +167,8 @@ def reproduce(
         failed += outcome.failed_trials + len(outcome.figure_errors)
         print(f"{config.source}: {outcome.folder} ({outcome.computed_trials} of "
               f"{outcome.total_trials} trials computed now, {outcome.failed_trials} failed)")
+        if outcome.report is not None:
+            print(f"  report: {outcome.report}")
     if failed:
         raise typer.Exit(3)
 
@@ -177,15 +179,10 @@ def plot(run_dir: Annotated[Path, typer.Argument(help="A finished run folder.")]
 
     The final files are checked against the checksums in the run's manifest first. Plotting
     a run of a plugin experiment imports the plugin's module (a config is code)."""
-    from trackfuse.rundata import load as load_run
-    from trackfuse.runlock import RunLock
-    from trackfuse.runner import draw_reports
-
     try:
         run = load_run(run_dir)
-        experiment = run.experiment
         with RunLock(run.path, warn):
-            figures, errors = draw_reports(run.path, experiment, run.config)
+            report = write_report(run)
     except RunFolderError as err:
         fail(str(err))
     except OSError as err:
@@ -193,10 +190,11 @@ def plot(run_dir: Annotated[Path, typer.Argument(help="A finished run folder.")]
     except KeyboardInterrupt:
         print("interrupted: run `trackfuse plot` again to redraw", file=sys.stderr)
         raise typer.Exit(130) from None
-    print(f"drew {len(figures)} figure files in {run_dir / 'figures'}")
-    for message in errors:
+    print(f"drew {len(report.figures)} figure files in {run_dir / 'figures'}")
+    for message in report.errors:
         print(f"warning: {message}", file=sys.stderr)
-    if errors:
+    print(f"report: {report.index}")
+    if report.errors:
         raise typer.Exit(1)
 
 

@@ -6,6 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from conftest import trackfuse
+from trackfuse.plots.esm_radar import paper_vs_reproduced, printed_half_unit, verdict
 
 from trackfuse.association import ahp
 from trackfuse.config import load
@@ -16,7 +17,6 @@ from trackfuse.experiments.esm_radar import (
     manoeuvre_alpha,
     simulate,
 )
-from trackfuse.plots.esm_radar import paper_vs_reproduced, printed_half_unit, verdict
 from trackfuse.reported import ESM_RADAR
 from trackfuse.seeding import trial_streams
 

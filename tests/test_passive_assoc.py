@@ -142,8 +142,9 @@ def test_ci_config_runs_through_the_cli(tmp_path, name):
 
 
 def test_every_algorithm_has_a_legend_label():
-    from trackfuse.experiments.passive_assoc import ALGORITHMS
     from trackfuse.plots.passive_assoc import LABELS
+
+    from trackfuse.experiments.passive_assoc import ALGORITHMS
 
     assert set(ALGORITHMS) <= set(LABELS)
 
@@ -161,6 +162,7 @@ def test_set_ops_beyond_the_default_checkpoints_scores_the_budget():
 
 def test_gap_interval_is_a_bootstrap_interval_that_cannot_go_below_zero():
     from trackfuse.plots.passive_assoc import gap_interval
+
     from trackfuse.stats import t_interval
 
     # 47 runs at the optimum, 3 far from it: the t interval dips below zero, ours cannot

@@ -303,6 +303,11 @@ def _outputs(source: str, exp: Experiment, outputs: Any) -> tuple[list[str] | st
                                  and all(isinstance(f, str) for f in figures)):
         raise ConfigError(source, "outputs.figures",
                           f"got {_describe(figures)}; allowed: 'all' or a list of figure names")
+    for name in figures if isinstance(figures, list) else []:
+        if name not in exp.figures:
+            known = ", ".join(exp.figures) or "none (the experiment draws no figures)"
+            raise ConfigError(source, "outputs.figures", f"unknown figure {_describe(name)}"
+                              f"{did_you_mean(name, list(exp.figures))}; allowed: {known}")
     formats = outputs.get("formats", ["png", "pdf"])
     if isinstance(formats, str):
         formats = [formats]

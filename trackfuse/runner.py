@@ -46,6 +46,7 @@ from trackfuse.config import Config
 from trackfuse.executors import make_executor
 from trackfuse.experiments.base import Experiment
 from trackfuse.progress import RunProgress
+from trackfuse.reports import write_report
 from trackfuse.results import (
     CONFIG,
     SUMMARY,
@@ -63,6 +64,7 @@ from trackfuse.results import (
     sha256_file,
     split_timings,
 )
+from trackfuse.rundata import load
 from trackfuse.runlock import RunLock
 from trackfuse.seeding import batch_streams, trial_streams
 from trackfuse.summary import summarize
@@ -118,6 +120,7 @@ class RunOutcome:
     rows: int = 0
     figures: list[Path] = field(default_factory=list)
     figure_errors: list[str] = field(default_factory=list)
+    report: Path | None = None
     seconds: float = 0.0
 
 
@@ -347,9 +350,11 @@ class Runner:
             problem = self.folder.check_final_files(previous)
             if problem is None:
                 self.folder.remove_temporaries()
+                index = self.folder.path / "index.html"
                 return RunOutcome(self.folder.path, "already complete", self.total_trials, 0,
                                   _int_or(previous.get("trials_failed"), 0),
-                                  _int_or(previous.get("rows"), 0))
+                                  _int_or(previous.get("rows"), 0),
+                                  report=index if index.exists() else None)
             self.warn(f"{problem}; rebuilding the final files from parts/")
         session = _Session(previous, _now(), self.folder.prepare(self.resolved),
                            _per_point(previous))
@@ -416,7 +421,8 @@ class Runner:
             executor.close()
 
     def _finish(self, session: _Session) -> RunOutcome:
-        """Merge verified parts into the final CSVs, summarize, draw, mark the run complete."""
+        """Merge verified parts into the final CSVs, summarize, mark the run complete, then
+        write the report (:func:`trackfuse.reports.write_report`)."""
         path = self.folder.path
         files = {CONFIG: session.config_file,
                  TRIALS: self.folder.merge(self.spans, "trials", TRIALS)}
@@ -437,15 +443,18 @@ class Runner:
             (path / TIMING_SUMMARY).unlink(missing_ok=True)
         outcome = RunOutcome(path, "complete", self.total_trials, session.computed,
                              failed_rows, files[TRIALS]["rows"])
-        if self.plots:
-            outcome.figures, outcome.figure_errors = draw_reports(
-                path, self.config.experiment, self.resolved)
         session.done = self.total_trials
         manifest = self._manifest("complete", session, failed_rows)
         manifest["rows"] = outcome.rows
-        manifest["figure_errors"] = outcome.figure_errors
+        manifest["figure_errors"] = []
         manifest["files"] = files
         self.folder.write_manifest(manifest)
+        if self.plots:
+            report = write_report(load(path))
+            outcome.figures, outcome.figure_errors = report.figures, report.errors
+            outcome.report = report.index
+            if report.errors:
+                self.folder.write_manifest({**manifest, "figure_errors": report.errors})
         return outcome
 
 
@@ -468,96 +477,4 @@ def _per_point(previous: dict[str, Any] | None) -> dict[int, float]:
             if str(k).isdigit() and isinstance(v, (int, float)) and math.isfinite(v)}
 
 
-def draw_reports(folder: Path, experiment: Experiment,
-                 resolved: dict[str, Any]) -> tuple[list[Path], list[str]]:
-    """Draw figures and tables from the CSVs in ``folder`` (no trial is recomputed).
-
-    The summary handed to the experiment includes the timing metrics (``*_time_s``).
-    Returns the written figure paths and one message per figure or table that failed.
-    """
-    import matplotlib.pyplot as plt  # only drawing needs it; workers never import it
-
-    written: list[Path] = []
-    errors: list[str] = []
-    if experiment.tables is None and experiment.figures is None:
-        return written, errors
-    try:
-        trials = pd.read_csv(folder / TRIALS, low_memory=False)
-        summary = pd.read_csv(folder / SUMMARY, low_memory=False)
-        if (folder / TIMING_SUMMARY).exists():
-            timing = pd.read_csv(folder / TIMING_SUMMARY, low_memory=False)
-            summary = pd.concat([summary, timing], ignore_index=True)
-    except (OSError, ValueError, pd.errors.ParserError) as err:
-        return written, [f"reading the CSV files: {type(err).__name__}: {err}"]
-    if experiment.tables is not None:
-        tables_dir = folder / "tables"
-        tables_dir.mkdir(exist_ok=True)
-        try:
-            for name, table in experiment.tables(trials, summary, resolved).items():
-                atomic_write(tables_dir / f"{name}.csv", table.to_csv(index=False))
-                atomic_write(tables_dir / f"{name}.md", markdown_table(table))
-        except Exception as err:  # noqa: BLE001 - a report bug must not lose the run
-            errors.append(f"tables: {type(err).__name__}: {err}")
-    if experiment.figures is None:
-        return written, errors
-    wanted = resolved.get("outputs", {}).get("figures", "all")
-    formats = resolved.get("outputs", {}).get("formats", ["png", "pdf"])
-    fig_dir = folder / "figures"
-    fig_dir.mkdir(exist_ok=True)
-    try:
-        figures = experiment.figures(trials, summary, resolved)
-        if not isinstance(figures, dict):
-            raise TypeError(f"figures() returned {type(figures).__name__}, not a dict")
-    except Exception as err:  # noqa: BLE001
-        return written, [*errors, f"figures: {type(err).__name__}: {err}"]
-    written, failed = _save_figures(figures, fig_dir, wanted, formats, plt.close)
-    return written, errors + failed
-
-
-def _save_figures(figures: dict[str, Any], fig_dir: Path, wanted: Any, formats: list[str],
-                  close: Callable[[Any], None]) -> tuple[list[Path], list[str]]:
-    """Save the wanted figures in every format (atomically), closing each; return the
-    written paths and one message per figure that could not be saved."""
-    written: list[Path] = []
-    errors: list[str] = []
-    for name, fig in figures.items():
-        try:
-            if wanted == "all" or name in wanted:
-                for fmt in formats:
-                    path = fig_dir / f"{name}.{fmt}"
-                    tmp = fig_dir / f".{name}.tmp.{fmt}"
-                    fig.savefig(tmp, format=fmt, metadata=_metadata(fmt))
-                    tmp.replace(path)
-                    written.append(path)
-        except Exception as err:  # noqa: BLE001 - a report bug must not lose the run
-            errors.append(f"figure {name}: {type(err).__name__}: {err}")
-        finally:
-            close(fig)
-    return written, errors
-
-
-def _metadata(fmt: str) -> dict[str, Any] | None:
-    """Strip timestamps so figure files are reproducible too."""
-    if fmt == "pdf":
-        return {"CreationDate": None, "ModDate": None}
-    if fmt == "svg":
-        return {"Date": None}
-    return None
-
-
-def markdown_table(table: pd.DataFrame) -> str:
-    """A GitHub-style Markdown table without the optional ``tabulate`` dependency."""
-    def cell(v: Any) -> str:
-        if isinstance(v, float):
-            return f"{v:.4g}"
-        return str(v).replace("|", "\\|")
-
-    lines = ["| " + " | ".join(map(str, table.columns)) + " |",
-             "|" + "|".join("---" for _ in table.columns) + "|"]
-    lines += ["| " + " | ".join(cell(v) for v in row) + " |"
-              for row in table.itertuples(index=False)]
-    return "\n".join(lines) + "\n"
-
-
-__all__ = ["BatchTask", "RunInterrupted", "RunOutcome", "Runner", "draw_reports",
-           "execute_batch", "markdown_table"]
+__all__ = ["BatchTask", "RunInterrupted", "RunOutcome", "Runner", "execute_batch"]

@@ -53,7 +53,8 @@ Losses are permanent; a trial's flags are the values at the last scan. A trial w
 produced non-finite numbers is flagged lost (both rules) and inconsistent from then on,
 with NaN errors.
 The PCRLB overlay of the figures is recomputed from the config (deterministic, :func:`bounds`),
-not stored as rows. Figures and the report table live in :mod:`trackfuse.plots.twin_sensor`.
+not stored as rows. Figures and the report tables live in
+:mod:`trackfuse.experiments.twin_sensor.report`.
 
 Choices the paper leaves open (and why)
 --------------------------------------
@@ -83,8 +84,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from trackfuse.experiments.base import Experiment, Param
-from trackfuse.plots import twin_sensor as plots
+from trackfuse.experiments.base import Metric, Param
 from trackfuse.seeding import TrialStreams
 from trackfuse.tracking.initialization import los_prior_covariance, range_cue_sd
 from trackfuse.tracking.models import cv_process_noise, cv_transition, wrap
@@ -394,10 +394,28 @@ class LossRules:
                    float(stats.chi2.ppf(float(params["loss.nees_quantile"]), 3)))
 
 
-METRICS = ("range_err_m", "range_sq_err_m2", "pos_sq_err_m2", "nees", "nees_pos", "n_valid",
-           "lost_gate", "lost_angle", "inconsistent_nees")
-"""Per-scan metric columns of :func:`run_filter` (see the module docstring)."""
-BINARY_METRICS = ("lost_gate", "lost_angle", "inconsistent_nees")
+ROW_METRICS = (
+    Metric("range_err_m", "m", "signed range error from platform 1 (its mean is the range "
+           "bias)"),
+    Metric("range_sq_err_m2", "m^2", "squared range error (its mean is the range MSE)",
+           better="lower"),
+    Metric("pos_sq_err_m2", "m^2", "squared position error (its mean is the position MSE)",
+           better="lower"),
+    Metric("nees", "1", "6-state normalized estimation error squared"),
+    Metric("nees_pos", "1", "position normalized estimation error squared"),
+    Metric("n_valid", "returns", "validated returns per sensor (mean over sensors)"),
+    Metric("lost_gate", "1", "lost by the gate rule (permanent)", binary=True, better="lower"),
+    Metric("lost_angle", "1", "lost by the angle rule (permanent)", binary=True,
+           better="lower"),
+    Metric("inconsistent_nees", "1", "position NEES above its chi-square quantile",
+           binary=True, better="lower"),
+    Metric("cpu_time_s", "s", "CPU seconds per scan of this algorithm (batch time shared "
+           "evenly)"),
+)
+"""Every metric column of the rows (see the module docstring)."""
+METRICS = tuple(m.name for m in ROW_METRICS if not m.name.endswith("_time_s"))
+"""Per-scan metric columns of :func:`run_filter`."""
+BINARY_METRICS = tuple(m.name for m in ROW_METRICS if m.binary)
 """The 0/1 columns among :data:`METRICS` (Wilson intervals in the summary)."""
 
 
@@ -578,17 +596,3 @@ def _bounds_cached(key: tuple, q_model: float | None, truth_samples: int):
     Jinv = information_recursion(np.linalg.inv(sc.P0), sc.F, Q, Jz, q2)
     return range_bound(Jinv[1:], x_mean[1:], sc.platform[1:]), position_bound(Jinv[1:])
 
-
-EXPERIMENT = Experiment(
-    name="twin_sensor",
-    title="Paper 000: twin-sensor angle-only tracking (MGEKF, fused-gate PDA) vs PCRLB",
-    params=PARAMS,
-    run_trial=run_trial,
-    run_batch=run_batch,
-    figures=plots.figures,
-    tables=plots.tables,
-    row_keys=("algorithm", "scan"),
-    binary_metrics=BINARY_METRICS,
-    batch_size=100,
-    description=__doc__ or "",
-)

@@ -42,7 +42,8 @@ the PGA variants take fixed children of ``algo`` by their position in :data:`VAR
 (append new variants at the end), so adding or removing an algorithm in a config changes no
 other number.
 
-Figures and report tables, drawn from the saved CSVs: :mod:`trackfuse.plots.passive_assoc`.
+Figures and report tables, drawn from the saved CSVs:
+:mod:`trackfuse.experiments.passive_assoc.report`.
 """
 
 from __future__ import annotations
@@ -55,8 +56,7 @@ import numpy as np
 from trackfuse.association.assignment import pair_weights, solve_exact
 from trackfuse.association.passive_scene import scene_targets, simulate_scan, true_partners
 from trackfuse.association.pga import CHECKPOINTS, pga
-from trackfuse.experiments.base import Experiment, Param
-from trackfuse.plots import passive_assoc as plots
+from trackfuse.experiments.base import Metric, Param
 from trackfuse.seeding import TrialStreams
 
 #: PGA variants: name -> options of :func:`trackfuse.association.pga.pga`.
@@ -204,17 +204,22 @@ def run_trial(params: dict[str, Any], streams: TrialStreams) -> list[dict[str, A
     return rows
 
 
-EXPERIMENT = Experiment(
-    name="passive_assoc",
-    title="Paper 002: two-sensor passive association, improved PGA vs the exact optimum",
-    params=PARAMS,
-    run_trial=run_trial,
-    figures=plots.figures,
-    tables=plots.tables,
-    row_keys=("algorithm", "ops"),
-    binary_metrics=("correct", "at_opt"),
-    batch_size=25,
-    description=__doc__.splitlines()[0],
-)
 
-__all__ = ["EXPERIMENT", "run_trial", "score", "sigma_of"]
+ROW_METRICS = (
+    Metric("accuracy", "1", "measurement-level accuracy: measurements given their true "
+           "partner (or the dummy)", better="higher"),
+    Metric("precision", "1", "declared pairs that are true pairs", better="higher"),
+    Metric("recall", "1", "true pairs that are declared", better="higher"),
+    Metric("correct", "1", "the whole assignment is right", binary=True, better="higher"),
+    Metric("pairs", "pairs", "declared pairs"),
+    Metric("at_opt", "1", "the solution reaches the exact optimum J*", binary=True,
+           better="higher"),
+    Metric("gap", "1", "J* - J, the objective gap to the exact optimum (log-likelihood "
+           "ratio)", better="lower"),
+    Metric("objective", "1", "the objective J of the solution (log-likelihood ratio)"),
+    Metric("solve_time_s", "s", "wall seconds of the solver"),
+    Metric("weights_time_s", "s", "wall seconds of the pair weights"),
+)
+"""Every metric column of the rows (see the module docstring)."""
+
+__all__ = ["ROW_METRICS", "run_trial", "score", "sigma_of"]

@@ -57,7 +57,7 @@ range). Per-scan weights and manoeuvre indices are drawn in the ``trajectory`` a
 Figures (``correct_rate``: the paper's Figs. 3-4; ``trajectory``: its Figs. 1-2;
 ``manoeuvre``: the index with and without the snake) and tables (``table3``: its Table 3;
 ``ahp``: its Table 1; ``ablation``; ``paper_vs_reproduced``) are built by
-:mod:`trackfuse.plots.esm_radar`, which registers them below.
+:mod:`trackfuse.experiments.esm_radar.report`.
 """
 
 from __future__ import annotations
@@ -99,8 +99,7 @@ from trackfuse.association.manoeuvre import (
 from trackfuse.association.tdoa_df import C
 from trackfuse.association.time_align import bracket, interpolate, interpolate_covariance
 from trackfuse.association.track_likelihood import abstaining_decision, ml_track_decision
-from trackfuse.experiments.base import Experiment, Param
-from trackfuse.plots import esm_radar as plots
+from trackfuse.experiments.base import Metric, Param
 from trackfuse.reported import ESM_RADAR_WEIGHTS
 from trackfuse.seeding import TrialStreams
 from trackfuse.tracking.models import wrap
@@ -569,16 +568,19 @@ def run_trial(params: Mapping[str, Any], streams: TrialStreams) -> list[dict]:
     return run_batch(params, [streams])[0]
 
 
-EXPERIMENT = Experiment(
-    name="esm_radar",
-    title="Paper 001: ESM-to-radar track association (improved fuzzy evaluation)",
-    params=PARAMS,
-    run_trial=run_trial,
-    run_batch=run_batch,
-    figures=plots.figures,
-    tables=plots.tables,
-    row_keys=("algorithm",),
-    binary_metrics=("correct", "decided"),
-    batch_size=100,
-    description=__doc__.split("\n\n")[0],
+
+ROW_METRICS = (
+    Metric("chosen", "track", "radar track chosen, 1..3, or 0 for no decision"),
+    Metric("correct", "1", "the ESM track was associated with its radar track", binary=True,
+           better="higher"),
+    Metric("decided", "1", "a radar track was chosen (always 1 except for chi2_lrt)",
+           binary=True),
+    Metric("margin", "1", "decision statistic's lead of the winner over the runner-up"),
+    Metric("range_weight_mean", "1", "range factor's weight, mean over the scans"),
+    Metric("range_weight_min", "1", "range factor's weight, minimum over the scans"),
+    Metric("alpha_mean", "1", "manoeuvre index, mean over the scans where it is defined"),
+    Metric("alpha_peak", "1", "manoeuvre index, maximum over the scans"),
+    Metric("esm_invalid", "samples", "TDOA-DF samples carried forward"),
+    Metric("esm_range_sigma_m", "m", "mean 1-sigma of the TDOA-DF range"),
 )
+"""Every metric column of the rows (see the module docstring)."""

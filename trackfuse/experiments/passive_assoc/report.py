@@ -41,6 +41,7 @@ values written into panel titles; its values are read, never simulated.
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -49,6 +50,7 @@ from numpy.typing import ArrayLike
 
 from trackfuse.plots.style import band, legend_below, new_figure, reference_line
 from trackfuse.reported import PASSIVE_ASSOC
+from trackfuse.rundata import RunData
 from trackfuse.stats import proportion_difference_interval, t_interval, wilson_interval
 
 if TYPE_CHECKING:
@@ -450,8 +452,30 @@ def paper_vs_reproduced(trials: pd.DataFrame, config: dict) -> pd.DataFrame:
 # Entry points of the experiment
 
 
-def figures(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> dict[str, Figure]:
-    """Paper-style figures for the swept axes present in ``config``.
+def _drawers(run: RunData) -> dict[str, Any]:
+    """Figure name -> a function drawing it, for the figures this run supports."""
+    summary, config = run.summary, run.config
+    drawers: dict[str, Any] = {}
+    pgas = _pga_names(summary)
+    if pgas and summary.loc[summary["algorithm"].isin(pgas), "ops"].nunique() > 1 \
+            and summary["point"].nunique() <= 6:
+        drawers["convergence"] = lambda: _convergence_figure(
+            summary, config, "accuracy", "measurement-level accuracy (fraction)",
+            "Paper 002, Fig. 2 analogue: association accuracy vs genetic operations", None)
+        drawers["at_optimum"] = lambda: _convergence_figure(
+            summary, config, "at_opt", "runs at the exact optimum (rate)",
+            "Paper 002: fraction of runs whose PGA solution reaches J*", 1.0)
+    swept = _swept(config)
+    if "noise.sigma" in swept:
+        drawers["noise"] = lambda: _noise_figure(summary, config)
+    if "targets.n" in swept and len(config["sweep"]["targets.n"]) >= 3:
+        drawers["scale"] = lambda: _scale_figure(
+            summary, checkpoint_metrics(run.trials, config), config)
+    return drawers
+
+
+def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure]:
+    """The ``wanted`` figures among those the swept axes of ``run`` support.
 
     * ``convergence`` (paper Fig. 2 analogue) and ``at_optimum`` (fraction of runs at the
       exact optimum): one panel per sweep point (at most 6), when PGA rows with more than
@@ -463,28 +487,13 @@ def figures(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> dict[s
     outcome; a Wilson interval over pooled measurements would ignore their within-scan
     correlation); rates (``correct``, ``at_opt``) with 95 % Wilson bands.
     """
-    out: dict[str, Figure] = {}
-    swept = _swept(config)
-    n_points = summary["point"].nunique()
-    pgas = _pga_names(summary)
-    if pgas and summary.loc[summary["algorithm"].isin(pgas), "ops"].nunique() > 1 \
-            and n_points <= 6:
-        out["convergence"] = _convergence_figure(
-            summary, config, "accuracy", "measurement-level accuracy (fraction)",
-            "Paper 002, Fig. 2 analogue: association accuracy vs genetic operations", None)
-        out["at_optimum"] = _convergence_figure(
-            summary, config, "at_opt", "runs at the exact optimum (rate)",
-            "Paper 002: fraction of runs whose PGA solution reaches J*", 1.0)
-    if "noise.sigma" in swept:
-        out["noise"] = _noise_figure(summary, config)
-    if "targets.n" in swept and len(config["sweep"]["targets.n"]) >= 3:
-        out["scale"] = _scale_figure(summary, checkpoint_metrics(trials, config), config)
-    return out
+    return {name: draw() for name, draw in _drawers(run).items() if name in wanted}
 
 
-def tables(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> dict[str, pd.DataFrame]:
+def tables(run: RunData) -> dict[str, pd.DataFrame]:
     """``checkpoints``, ``final`` and ``paper_vs_reproduced`` (module docstring), from the
-    trial rows (``summary`` is not needed), rounded to 4 digits."""
+    trial rows, rounded to 4 digits."""
+    trials, config = run.trials, run.config
     metrics = checkpoint_metrics(trials, config)
     last = metrics.groupby(["point", "algorithm"])["ops"].transform("max")
     final = metrics[metrics["ops"] == last].reset_index(drop=True)
