@@ -188,7 +188,7 @@ def test_ctrl_c_during_the_finish_leaves_an_interrupted_run_that_resumes(
     config, out, folder = copy
     as_interrupted(folder)
     target = {"merge": (RunFolder, "merge"), "summary": ("trackfuse.runner.summarize", None),
-              "figures": ("trackfuse.runner.draw_reports", None)}[stage]
+              "figures": ("trackfuse.runner.write_report", None)}[stage]
 
     def interrupt(*args, **kwargs):
         raise KeyboardInterrupt

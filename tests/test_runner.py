@@ -19,7 +19,7 @@ from typer.testing import CliRunner
 from cli.main import app
 from trackfuse.config import load
 from trackfuse.results import RunFolder
-from trackfuse.runner import Runner
+from trackfuse.runner import RunInterrupted, Runner
 from trackfuse.seeding import trial_streams
 
 CFG = """
@@ -128,7 +128,6 @@ def test_resume_after_interrupt_equals_uninterrupted(write_config, tmp_path, mon
         original(self, *args)
 
     monkeypatch.setattr(RunFolder, "write_part", flaky)
-    from trackfuse.runner import RunInterrupted
 
     with pytest.raises(RunInterrupted) as err:
         run(path, tmp_path / "res", executor="serial")
@@ -325,7 +324,6 @@ def test_a_billion_trials_in_batches_of_one_start_at_once_in_flat_memory(write_c
             raise KeyboardInterrupt
 
     monkeypatch.setattr(RunFolder, "write_part", stop_after_20)
-    from trackfuse.runner import RunInterrupted
 
     tracemalloc.start()
     t0 = time.perf_counter()

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from collections.abc import Collection
 
-import pandas as pd
 from matplotlib.figure import Figure
 
 from trackfuse.plots.style import band, new_figure
@@ -24,7 +23,3 @@ def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure]:
     ax.legend()
     return {"estimate": fig}
 
-
-def tables(run: RunData) -> dict[str, pd.DataFrame]:
-    """``estimate``: the summary rows of the estimate."""
-    return {"estimate": run.summary[run.summary["metric"] == "estimate"]}

@@ -101,6 +101,8 @@ def _module(run: RunData, report: Report) -> ModuleType | None:
 
 
 def _write_tables(run: RunData, module: ModuleType, report: Report) -> dict[str, pd.DataFrame]:
+    if not hasattr(module, "tables"):  # tables are optional
+        return {}
     folder = run.path / "tables"
     folder.mkdir(exist_ok=True)
     try:

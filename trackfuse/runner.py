@@ -421,8 +421,8 @@ class Runner:
             executor.close()
 
     def _finish(self, session: _Session) -> RunOutcome:
-        """Merge verified parts into the final CSVs, summarize, mark the run complete, then
-        write the report (:func:`trackfuse.reports.write_report`)."""
+        """Merge verified parts into the final CSVs, summarize, write the report
+        (:func:`trackfuse.reports.write_report`), mark the run complete."""
         path = self.folder.path
         files = {CONFIG: session.config_file,
                  TRIALS: self.folder.merge(self.spans, "trials", TRIALS)}
@@ -443,18 +443,16 @@ class Runner:
             (path / TIMING_SUMMARY).unlink(missing_ok=True)
         outcome = RunOutcome(path, "complete", self.total_trials, session.computed,
                              failed_rows, files[TRIALS]["rows"])
+        if self.plots:  # before "complete": a Ctrl-C while drawing leaves a resumable run
+            report = write_report(load(path, require_complete=False))
+            outcome.figures, outcome.figure_errors = report.figures, report.errors
+            outcome.report = report.index
         session.done = self.total_trials
         manifest = self._manifest("complete", session, failed_rows)
         manifest["rows"] = outcome.rows
-        manifest["figure_errors"] = []
+        manifest["figure_errors"] = outcome.figure_errors
         manifest["files"] = files
         self.folder.write_manifest(manifest)
-        if self.plots:
-            report = write_report(load(path))
-            outcome.figures, outcome.figure_errors = report.figures, report.errors
-            outcome.report = report.index
-            if report.errors:
-                self.folder.write_manifest({**manifest, "figure_errors": report.errors})
         return outcome
 
 

@@ -57,9 +57,9 @@ class Param:
     Bounds are given by keyword (``low=``, ``high=``); dimensionless quantities have unit
     ``"1"`` (probabilities: unit ``"1"``, ``low=0.0, high=1.0`` or tighter), free text has
     unit ``""``. ``kind`` is one of ``float``, ``int``, ``bool``, ``str`` or ``list`` (a
-    non-empty list of numbers, or of strings when ``choices`` is given); ``low``/``high`` are inclusive bounds
-    for numbers (and for every element of a list); ``choices`` restricts strings (or numbers,
-    or every element of a list) to a fixed set.
+    non-empty list of numbers, or of strings when ``choices`` is given); ``low``/``high`` are
+    inclusive bounds for numbers (and for every element of a list); ``choices`` restricts
+    strings (or numbers, or every element of a list) to a fixed set.
     """
 
     key: str
