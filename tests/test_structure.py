@@ -161,3 +161,13 @@ def test_experiments_declare_their_report(name):
     assert len(names) == len(set(names)) and all(m.unit for m in exp.metrics)
     assert all(m.better in (None, "lower", "higher") for m in exp.metrics)
     assert exp.binary_metrics and set(exp.directions) <= set(names)
+
+
+@pytest.mark.parametrize("name", list(experiments.BUILTIN))
+def test_schema_spells_units_one_way(name):
+    for p in experiments.get(name).params:
+        if p.kind in (int, float) and p.choices is None:
+            assert p.unit and p.unit not in ("probability", "dimensionless"), p.key
+            assert p.low is not None and p.high is not None, p.key
+        if "probability" in p.doc.lower() and p.kind is float and p.unit == "1":
+            assert 0.0 <= p.low <= p.high <= 1.0, p.key
