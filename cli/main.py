@@ -22,7 +22,7 @@ from trackfuse import experiments
 from trackfuse.config import ConfigError, allowed_text, load
 from trackfuse.executors import KINDS, ExecutorError, default_workers, scheduler_address
 from trackfuse.reports import write_report
-from trackfuse.results import RunFolderError
+from trackfuse.results import RunFolderError, RunStatus
 from trackfuse.rundata import load as load_run
 from trackfuse.runlock import RunLock
 from trackfuse.runner import RunInterrupted, Runner
@@ -122,7 +122,7 @@ def run(
               f"output: {runner.folder.path}")
         return
     outcome = _execute(runner)
-    if outcome.status == "already complete":
+    if outcome.status == RunStatus.ALREADY_COMPLETE:
         print(f"already complete: {outcome.folder}")
     else:
         print(f"wrote {outcome.folder}: {outcome.rows} rows, {outcome.total_trials} trials "

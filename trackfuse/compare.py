@@ -31,6 +31,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from trackfuse.results import FAILED_ROW
 from trackfuse.rundata import RunData
 from trackfuse.stats import (
     mcnemar_p,
@@ -76,7 +77,7 @@ def metric_columns(frame: pd.DataFrame, keys: Sequence[str]) -> list[str]:
 def _long(frame: pd.DataFrame, keys: Sequence[str], metrics: Sequence[str]) -> pd.DataFrame:
     """Rows of finished trials melted to ``[*keys, trial, metric, value]``."""
     if "status" in frame:
-        frame = frame[frame["status"].astype(str) != "failed"]
+        frame = frame[frame["status"].astype(str) != FAILED_ROW]
     return frame.melt(id_vars=[*keys, "trial"], value_vars=list(metrics), var_name="metric",
                       value_name="value").dropna(subset=["value"])
 

@@ -37,6 +37,7 @@ from trackfuse.results import (
     TRIALS,
     RunFolder,
     RunFolderError,
+    RunStatus,
 )
 from trackfuse.safe_yaml import MAX_BYTES, YamlInputError, load_yaml
 from trackfuse.sweep import expand
@@ -119,7 +120,7 @@ def load(path: str | Path, require_complete: bool = True) -> RunData:
         raise RunFolderError(f"{path}: not a run folder (no {MANIFEST})")
     if require_complete:
         status = str(manifest.get("status"))[:40]
-        if status != "complete":
+        if status != RunStatus.COMPLETE:
             raise RunFolderError(f"{path}: run is {status}, not complete; run the same "
                                  "`trackfuse run` command again to finish it")
         problem = folder.check_final_files(manifest)

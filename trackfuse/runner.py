@@ -49,6 +49,7 @@ from trackfuse.progress import RunProgress
 from trackfuse.reports import write_report
 from trackfuse.results import (
     CONFIG,
+    FAILED_ROW,
     SUMMARY,
     TIMING_SUMMARY,
     TIMINGS,
@@ -58,6 +59,7 @@ from trackfuse.results import (
     PartScan,
     RunFolder,
     RunFolderError,
+    RunStatus,
     atomic_write,
     rows_to_csv,
     run_id,
@@ -113,7 +115,7 @@ class RunOutcome:
     """What a run produced (for the CLI's closing lines)."""
 
     folder: Path
-    status: str  # "complete" (finished now) or "already complete" (nothing to do)
+    status: RunStatus  # COMPLETE (finished now) or ALREADY_COMPLETE (nothing to do)
     total_trials: int
     computed_trials: int
     failed_trials: int = 0
@@ -160,7 +162,7 @@ def _is_user_interrupt(err: BaseException) -> bool:
 
 def _failure(prefix: dict[str, Any], err: BaseException) -> dict[str, Any]:
     text = "".join(traceback.format_exception_only(type(err), err)).strip().replace("\n", " ")
-    return {**prefix, "algorithm": "", "status": "failed", "error": text[:500]}
+    return {**prefix, "algorithm": "", "status": FAILED_ROW, "error": text[:500]}
 
 
 def _rows(result: Any, producer: str) -> list[dict[str, Any]]:
@@ -296,7 +298,7 @@ class Runner:
             swept = self.points[span.point].values
             yield BatchTask(cfg.experiment, {**cfg.params, **swept}, swept, cfg.seed, span)
 
-    def _manifest(self, status: str, session: _Session, failed: int = 0) -> dict[str, Any]:
+    def _manifest(self, status: RunStatus, session: _Session, failed: int = 0) -> dict[str, Any]:
         versions = {"trackfuse": trackfuse.__version__, "python": platform.python_version(),
                     "numpy": np.__version__, "scipy": scipy.__version__,
                     "pandas": pd.__version__}
@@ -322,7 +324,7 @@ class Runner:
             "trials_failed": failed,
             "first_started": previous.get("first_started", session.started),
             "started": session.started,
-            "finished": _now() if status == "complete" else None,
+            "finished": _now() if status == RunStatus.COMPLETE else None,
             "sessions": _int_or(previous.get("sessions"), 0) + 1,
             "per_point_wall_s": {str(k): round(v, 6)
                                  for k, v in sorted(session.per_point.items())},
@@ -346,12 +348,13 @@ class Runner:
     def _run_locked(self) -> RunOutcome:
         self.folder.check_layout()
         previous = self._previous_manifest()
-        if previous is not None and previous.get("status") == "complete":
+        if previous is not None and previous.get("status") == RunStatus.COMPLETE:
             problem = self.folder.check_final_files(previous)
             if problem is None:
                 self.folder.remove_temporaries()
                 index = self.folder.path / "index.html"
-                return RunOutcome(self.folder.path, "already complete", self.total_trials, 0,
+                return RunOutcome(self.folder.path, RunStatus.ALREADY_COMPLETE,
+                                  self.total_trials, 0,
                                   _int_or(previous.get("trials_failed"), 0),
                                   _int_or(previous.get("rows"), 0),
                                   report=index if index.exists() else None)
@@ -369,7 +372,7 @@ class Runner:
             raise RunFolderError(f"{self.folder.parts}: parts fail verification right after "
                                  "being written; is the disk failing?")
         except KeyboardInterrupt:
-            self.folder.write_manifest(self._manifest("interrupted", session))
+            self.folder.write_manifest(self._manifest(RunStatus.INTERRUPTED, session))
             raise RunInterrupted(self.folder.path, session.done, self.total_trials) from None
 
     def _previous_manifest(self) -> dict[str, Any] | None:
@@ -401,7 +404,7 @@ class Runner:
         executor = make_executor(self.executor_kind, self.workers, self.scheduler,
                                  self.scheduler_file)
         self.workers = executor.workers
-        self.folder.write_manifest(self._manifest("running", session))
+        self.folder.write_manifest(self._manifest(RunStatus.RUNNING, session))
         last = time.monotonic()
         label = f"{self.config.experiment.name} [{self.run_id}]"
         try:
@@ -416,7 +419,7 @@ class Runner:
                     bar.advance(res.span.trials)
                     if time.monotonic() - last > MANIFEST_EVERY_S:
                         last = time.monotonic()
-                        self.folder.write_manifest(self._manifest("running", session))
+                        self.folder.write_manifest(self._manifest(RunStatus.RUNNING, session))
         finally:
             executor.close()
 
@@ -441,14 +444,14 @@ class Runner:
                                                   timing_summary.to_csv(index=False))
         else:
             (path / TIMING_SUMMARY).unlink(missing_ok=True)
-        outcome = RunOutcome(path, "complete", self.total_trials, session.computed,
+        outcome = RunOutcome(path, RunStatus.COMPLETE, self.total_trials, session.computed,
                              failed_rows, files[TRIALS]["rows"])
         if self.plots:  # before "complete": a Ctrl-C while drawing leaves a resumable run
             report = write_report(load(path, require_complete=False))
             outcome.figures, outcome.figure_errors = report.figures, report.errors
             outcome.report = report.index
         session.done = self.total_trials
-        manifest = self._manifest("complete", session, failed_rows)
+        manifest = self._manifest(RunStatus.COMPLETE, session, failed_rows)
         manifest["rows"] = outcome.rows
         manifest["figure_errors"] = outcome.figure_errors
         manifest["files"] = files

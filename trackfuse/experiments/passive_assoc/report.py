@@ -50,6 +50,7 @@ from numpy.typing import ArrayLike
 
 from trackfuse.plots.style import band, legend_below, new_figure, reference_line
 from trackfuse.reported import PASSIVE_ASSOC
+from trackfuse.results import FAILED_ROW
 from trackfuse.rundata import RunData
 from trackfuse.stats import proportion_difference_interval, t_interval, wilson_interval
 
@@ -309,7 +310,7 @@ def gap_interval(gap: ArrayLike, level: float = 0.95) -> tuple[float, float]:
 def _ok_rows(trials: pd.DataFrame) -> pd.DataFrame:
     """Trial rows that did not fail."""
     if "status" in trials:
-        return trials[trials["status"].astype(str) != "failed"]
+        return trials[trials["status"].astype(str) != FAILED_ROW]
     return trials
 
 
