@@ -96,6 +96,12 @@ class RunData:
         return self.points[point]
 
 
+def swept_keys(config: dict[str, Any]) -> list[str]:
+    """The swept parameter keys of a resolved ``config``, in config order (each is a column
+    of ``trials.csv`` and ``summary.csv``)."""
+    return list(config.get("sweep") or {})
+
+
 def _read_csv(path: Path) -> pd.DataFrame:
     try:
         return pd.read_csv(path, low_memory=False)

@@ -67,17 +67,12 @@ from trackfuse.experiments.esm_radar.model import (
 )
 from trackfuse.plots.style import band, new_figure, reference_line
 from trackfuse.reported import ESM_RADAR, ESM_RADAR_WEIGHTS
-from trackfuse.rundata import RunData
+from trackfuse.rundata import RunData, swept_keys
 from trackfuse.seeding import trial_streams
 from trackfuse.stats import t_interval, wilson_interval
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
-
-
-def _swept(config: Mapping[str, Any], frame: pd.DataFrame) -> list[str]:
-    """The config's swept keys that are columns of ``frame`` (trials or summary)."""
-    return [k for k in config.get("sweep", {}) if k in frame.columns]
 
 
 # --------------------------------------------------------------------------- tables
@@ -86,7 +81,7 @@ def table3(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
     """Counts per chosen radar track (and "no decision"), correct rate with its Wilson 95 %
     interval, and the rate of wrong decisions, per point and algorithm."""
 
-    keys = _swept(config, trials)
+    keys = swept_keys(config)
     out = []
     for group, g in trials.groupby(["point", *keys, "algorithm"], sort=False):
         n = len(g)
@@ -114,7 +109,7 @@ def ablation(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
 
     if "improved" not in set(trials["algorithm"]):
         return pd.DataFrame()
-    keys = _swept(config, trials)
+    keys = swept_keys(config)
     wide = trials.pivot_table(index=["point", *keys, "trial"], columns="algorithm",
                               values="correct", aggfunc="first")
     params = config["params"]
@@ -240,7 +235,7 @@ def paper_vs_reproduced(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.D
     paper's value lies inside our interval (widened by the tolerance). Values come from
     :data:`trackfuse.reported.ESM_RADAR`.
     """
-    keys = _swept(config, trials)
+    keys = swept_keys(config)
     t3 = table3(trials, config)
     out = []
     for _, row in t3[t3["algorithm"].isin(["improved", "traditional"])].iterrows():
@@ -297,7 +292,7 @@ def _correct_rate_figure(summary: pd.DataFrame, config: Mapping[str, Any]) -> Fi
     the summary: curves against the first numeric swept key, else bars per algorithm."""
 
     s = summary[summary["metric"] == "correct"]
-    sweep = _swept(config, s)
+    sweep = swept_keys(config)
     numeric = [k for k in sweep if pd.api.types.is_numeric_dtype(s[k])]
     x = numeric[0] if numeric else None
     panel_keys = [k for k in sweep if k != x]

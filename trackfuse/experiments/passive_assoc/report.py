@@ -51,7 +51,7 @@ from numpy.typing import ArrayLike
 from trackfuse.plots.style import band, legend_below, new_figure, reference_line
 from trackfuse.reported import PASSIVE_ASSOC
 from trackfuse.results import FAILED_ROW
-from trackfuse.rundata import RunData
+from trackfuse.rundata import RunData, swept_keys
 from trackfuse.stats import proportion_difference_interval, t_interval, wilson_interval
 
 if TYPE_CHECKING:
@@ -74,9 +74,10 @@ BOUNDED = ("accuracy", "precision", "recall", "correct", "at_opt")
 # Shared helpers
 
 
-def _swept(config: dict) -> list[str]:
-    """Swept parameter keys of ``config``, the ``algorithms`` axis excluded."""
-    return [k for k in config.get("sweep", {}) if k != "algorithms"]
+def _grouping_keys(config: dict) -> list[str]:
+    """Swept keys that group rows into points: every one except the ``algorithms`` list
+    (whose rows are told apart by the ``algorithm`` row key)."""
+    return [k for k in swept_keys(config) if k != "algorithms"]
 
 
 def _point_label(values: dict[str, Any], config: dict, noise: bool = True) -> str:
@@ -124,7 +125,7 @@ def _clip(values: ArrayLike, metric: str) -> np.ndarray:
 
 def _points(summary: pd.DataFrame, config: dict) -> list[tuple[int, dict[str, Any]]]:
     """``(point, {swept key: value})`` for every sweep point, in point order."""
-    keys = [k for k in _swept(config) if k in summary]
+    keys = [k for k in _grouping_keys(config) if k in summary]
     first = summary.drop_duplicates("point").sort_values("point")
     return [(int(r["point"]), {k: r[k] for k in keys}) for _, r in first.iterrows()]
 
@@ -182,7 +183,7 @@ def _noise_figure(summary: pd.DataFrame, config: dict) -> Figure:
     variant dotted at its final checkpoint; grey verticals at sigma = 0.005 and
     sqrt(0.005) rad, the paper's noise figure read as a standard deviation or a variance.
     """
-    groups = [k for k in _swept(config) if k != "noise.sigma" and k in summary]
+    groups = [k for k in _grouping_keys(config) if k != "noise.sigma" and k in summary]
     parts = list(summary.groupby(groups, sort=True)) if groups else [((), summary)]
     fig, axes = new_figure(ncols=len(parts), nrows=2, width=3.8, height=3.0)
     axes = np.asarray(axes).reshape(2, len(parts))
@@ -341,7 +342,7 @@ def checkpoint_metrics(trials: pd.DataFrame, config: dict) -> pd.DataFrame:
     recall (clipped to [0, 1]); Wilson for ``correct`` and ``at_opt``; percentile
     bootstrap for ``gap`` (:func:`gap_interval`); and the mean number of declared pairs.
     """
-    keys = ["point", *[k for k in _swept(config) if k in trials], "algorithm", "ops"]
+    keys = ["point", *[k for k in _grouping_keys(config) if k in trials], "algorithm", "ops"]
     rows = [{**dict(zip(keys, key, strict=True)), **_interval_columns(g)}
             for key, g in _ok_rows(trials).groupby(keys, sort=True)]
     return pd.DataFrame(rows)
@@ -466,7 +467,7 @@ def _drawers(run: RunData) -> dict[str, Any]:
         drawers["at_optimum"] = lambda: _convergence_figure(
             summary, config, "at_opt", "runs at the exact optimum (rate)",
             "Paper 002: fraction of runs whose PGA solution reaches J*", 1.0)
-    swept = _swept(config)
+    swept = _grouping_keys(config)
     if "noise.sigma" in swept:
         drawers["noise"] = lambda: _noise_figure(summary, config)
     if "targets.n" in swept and len(config["sweep"]["targets.n"]) >= 3:

@@ -58,7 +58,7 @@ from trackfuse.experiments.base import Param
 from trackfuse.experiments.twin_sensor.model import PARAMS, bounds
 from trackfuse.plots.style import band, legend_below, new_figure
 from trackfuse.reported import TWIN_SENSOR
-from trackfuse.rundata import RunData
+from trackfuse.rundata import RunData, swept_keys
 from trackfuse.stats import nees_band, t_interval, wilson_interval
 
 LABELS = {"mspda_parallel": "parallel PDA", "mspda_sequential": "sequential PDA",
@@ -77,11 +77,6 @@ all of them have their default values."""
 
 # --------------------------------------------------------------------------------------------
 # Shared helpers
-
-
-def _swept(config: dict) -> list[str]:
-    """The swept parameter keys, in config order."""
-    return list((config.get("sweep") or {}).keys())
 
 
 def _params_of(run: RunData, frame: pd.DataFrame) -> dict[str, Any]:
@@ -166,7 +161,7 @@ RULES = {
 
 def _rule_text(rule: str, config: dict) -> str:
     """The description of ``rule`` with its parameters (or "swept" when they are)."""
-    params, swept = config["params"], _swept(config)
+    params, swept = config["params"], swept_keys(config)
 
     def value(key: str) -> Any:
         return "swept" if key in swept else params[key]
@@ -181,7 +176,7 @@ def _loss_figure(trials: pd.DataFrame, config: dict, rule: str, x_key: str) -> F
     ``x_key``, one panel per value of the other swept keys."""
     last = trials[trials["scan"] == trials["scan"].max()]
     params = config["params"]
-    swept = _swept(config)
+    swept = swept_keys(config)
     others = [k for k in swept if k != x_key]
     groups = [g for _, g in last.groupby(others, sort=True)] if others else [last]
     where = ("gate or window" if "clutter.model" in swept
@@ -227,7 +222,7 @@ def _range_figure(run: RunData) -> Figure:
         ax.set_xlabel("time t (s)")
         ax.set_ylabel("range RMSE (km)")
         ax.set_ylim(bottom=0)
-        ax.set_title(_point_title(_swept(config), frame))
+        ax.set_title(_point_title(swept_keys(config), frame))
     legend_below(fig, axes[0])
     _suptitle(fig, config, "range RMSE (95% chi-square bands) vs square-root PCRLB",
               fig_width)
@@ -255,7 +250,7 @@ def _nees_figure(run: RunData) -> Figure:
         ax.set_ylim(bottom=0)
         ax.set_xlabel("time t (s)")
         ax.set_ylabel("ANEES (6-state, dimensionless)")
-        ax.set_title(_point_title(_swept(config), frame))
+        ax.set_title(_point_title(swept_keys(config), frame))
     legend_below(fig, axes[0])
     _suptitle(fig, config, "average NEES vs its 95% chi-square band", fig_width)
     return fig
@@ -292,7 +287,7 @@ def _final_figure(run: RunData, x_param: Param) -> Figure:
 def _drawers(run: RunData) -> dict[str, Any]:
     """Figure name -> a function drawing it, for the figures this run supports."""
     trials, config = run.trials, run.config
-    swept = _swept(config)
+    swept = swept_keys(config)
     drawers: dict[str, Any] = {}
     if "clutter.mean" in swept:
         for rule in RULES:
@@ -354,7 +349,7 @@ def final_scan_table(run: RunData) -> pd.DataFrame:
     trials, config = run.trials, run.config
     last = trials[trials["scan"] == trials["scan"].max()]
     first = dict(list(trials[trials["scan"] == 1].groupby(["point", "algorithm"])))
-    swept = _swept(config)
+    swept = swept_keys(config)
     n_valid = {key: s.mean() for key, s in trials.groupby(["point", "algorithm"])["n_valid"]}
     rows = []
     for (pt, name), g in last.groupby(["point", "algorithm"], sort=True):
@@ -399,7 +394,7 @@ def paper_vs_reproduced(trials: pd.DataFrame, config: dict,
     interval lies above the lowest level's). Values come
     from :data:`trackfuse.reported.TWIN_SENSOR`.
     """
-    swept = _swept(config)
+    swept = swept_keys(config)
     if "clutter.mean" not in swept:
         return pd.DataFrame()
     last = trials[trials["scan"] == trials["scan"].max()]
