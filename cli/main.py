@@ -237,6 +237,10 @@ def list_experiments(
     for p in exp.params:
         table.add_row(p.key, str(p.default), p.unit, allowed_text(p), p.doc)
     out.print(table)
+    figures = Table("figure", "paper", "caption", title="figures (outputs.figures)")
+    for fig_name, spec in exp.figures.items():
+        figures.add_row(fig_name, spec.paper or "-", spec.caption)
+    out.print(figures)
 
 
 if __name__ == "__main__":
