@@ -171,3 +171,22 @@ def test_schema_spells_units_one_way(name):
             assert p.low is not None and p.high is not None, p.key
         if "probability" in p.doc.lower() and p.kind is float and p.unit == "1":
             assert 0.0 <= p.low <= p.high <= 1.0, p.key
+
+
+#: Test files about the project as a whole rather than one module.
+CROSS_CUTTING = {"structure", "docs", "packaging"}
+
+
+def test_every_test_file_names_the_module_it_tests():
+    names = set()
+    for module in MODULES:
+        parts = module.split(".")[1:]
+        names |= {parts[-1], "_".join(parts)} if parts else set()
+    names -= {"__main__", "main", "model", "report"}
+    strays = []
+    for path in sorted(Path(__file__).parent.glob("test_*.py")):
+        stem = path.stem.removeprefix("test_")
+        if stem not in CROSS_CUTTING and not any(stem == n or stem.startswith(f"{n}_")
+                                                 for n in names):
+            strays.append(path.name)
+    assert not strays, f"test files that map to no module: {strays}"
