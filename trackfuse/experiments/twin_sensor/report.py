@@ -46,11 +46,12 @@ PCRLB references are recomputed, from the config alone, by
 from __future__ import annotations
 
 import textwrap
-from collections.abc import Collection, Sequence
+from collections.abc import Callable, Collection, Sequence
 from typing import Any
 
 import numpy as np
 import pandas as pd
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from scipy import stats
 
@@ -198,16 +199,31 @@ def _loss_figure(trials: pd.DataFrame, config: dict, rule: str, x_key: str) -> F
     return fig
 
 
-def _range_figure(run: RunData) -> Figure:
-    """Paper Fig. 2: range RMSE (km) against time (s) per sweep point, beside the square-root
-    PCRLB of the truth model and of the filter model."""
+def _time_panels(run: RunData, draw: Callable[[Axes, pd.DataFrame, dict[str, Any]], None],
+                 what: str) -> Figure:
+    """One panel per sweep point (at most nine, :func:`_select_points`) against time: for
+    each, ``draw(ax, frame, params)`` with the point's ``trials.csv`` rows and parameters;
+    then the panel title, a shared legend and the suptitle ``what``."""
     trials, config = run.trials, run.config
     points = _select_points(trials)
     fig, axes, fig_width = _panels(len(points))
-    names = _headline(config["params"]["algorithms"])
     for ax, pt in zip(axes, points, strict=True):
         frame = trials[trials["point"] == pt]
-        params = run.point_params(int(pt))
+        draw(ax, frame, run.point_params(int(pt)))
+        ax.set_xlabel("time t (s)")
+        ax.set_ylim(bottom=0)
+        ax.set_title(_point_title(swept_keys(config), frame))
+    legend_below(fig, axes[0])
+    _suptitle(fig, config, what, fig_width)
+    return fig
+
+
+def _range_figure(run: RunData) -> Figure:
+    """Paper Fig. 2: range RMSE (km) against time (s) per sweep point, beside the square-root
+    PCRLB of the truth model and of the filter model."""
+    names = _headline(run.config["params"]["algorithms"])
+
+    def draw(ax: Axes, frame: pd.DataFrame, params: dict[str, Any]) -> None:
         period = float(params["scan.period"])
         for name in names:
             g = frame[frame["algorithm"] == name].groupby("scan")["range_sq_err_m2"]
@@ -219,26 +235,18 @@ def _range_figure(run: RunData) -> Figure:
         ax.plot(times, rb / 1e3, "k--", lw=1.0, label="sqrt PCRLB (truth model)")
         rf, _ = bounds(params, q_model=float(params["filter.q"]))
         ax.plot(times, rf / 1e3, "k:", lw=1.0, label="sqrt PCRLB (filter model q)")
-        ax.set_xlabel("time t (s)")
         ax.set_ylabel("range RMSE (km)")
-        ax.set_ylim(bottom=0)
-        ax.set_title(_point_title(swept_keys(config), frame))
-    legend_below(fig, axes[0])
-    _suptitle(fig, config, "range RMSE (95% chi-square bands) vs square-root PCRLB",
-              fig_width)
-    return fig
+
+    return _time_panels(run, draw, "range RMSE (95% chi-square bands) vs square-root PCRLB")
 
 
 def _nees_figure(run: RunData) -> Figure:
     """Extension: 6-state ANEES against time (s) per sweep point, with its 95% chi-square
     band for the number of runs."""
-    trials, config = run.trials, run.config
-    points = _select_points(trials)
-    fig, axes, fig_width = _panels(len(points))
-    names = _headline(config["params"]["algorithms"])
-    for ax, pt in zip(axes, points, strict=True):
-        frame = trials[trials["point"] == pt]
-        period = float(run.point_params(int(pt))["scan.period"])
+    names = _headline(run.config["params"]["algorithms"])
+
+    def draw(ax: Axes, frame: pd.DataFrame, params: dict[str, Any]) -> None:
+        period = float(params["scan.period"])
         for name in names:
             anees = frame[frame["algorithm"] == name].groupby("scan")["nees"].mean()
             ax.plot(anees.index * period, anees, marker="o", label=_label(name),
@@ -247,13 +255,9 @@ def _nees_figure(run: RunData) -> Figure:
         lo, hi = nees_band(6, n_runs)
         ax.axhspan(lo, hi, color="k", alpha=0.12, label=f"95% chi2 band, {n_runs} runs")
         ax.axhline(6.0, color="k", lw=0.8)
-        ax.set_ylim(bottom=0)
-        ax.set_xlabel("time t (s)")
         ax.set_ylabel("ANEES (6-state, dimensionless)")
-        ax.set_title(_point_title(swept_keys(config), frame))
-    legend_below(fig, axes[0])
-    _suptitle(fig, config, "average NEES vs its 95% chi-square band", fig_width)
-    return fig
+
+    return _time_panels(run, draw, "average NEES vs its 95% chi-square band")
 
 
 def _final_figure(run: RunData, x_param: Param) -> Figure:
