@@ -417,10 +417,11 @@ def _manoeuvre_figure(run: RunData) -> Figure:
     """Mean manoeuvre index against time (s), with and without the snake, for the default
     detector and the paper's literal index. *Recomputed*: the first
     :data:`MANOEUVRE_TRIALS` trials of point 0 are re-simulated with the runner's streams at
-    the point's snake amplitude (1000 m if it is 0) and at amplitude 0 (same noise)."""
+    the point's snake amplitude (the schema default if it is 0) and at amplitude 0 (same
+    noise)."""
 
     config, params = run.config, run.point_params(0)
-    amplitude = params["snake.amplitude"] or 1000.0
+    amplitude = params["snake.amplitude"] or run.experiment.defaults()["snake.amplitude"]
     n = min(int(config["trials"]), MANOEUVRE_TRIALS)
     streams = [trial_streams(int(config["seed"]), 0, t) for t in range(n)]
     sims = {a: simulate(dict(params, **{"snake.amplitude": a}), streams)

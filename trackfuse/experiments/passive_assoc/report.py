@@ -358,8 +358,8 @@ COMPARED = ("pga_paper", "pga_evict", "pga_anneal")
 
 def _at_paper_setting(values: dict[str, Any], config: dict) -> bool:
     p = {**config.get("params", {}), **values}
-    same = all(p.get(k, v) == v for k, v in PAPER_SETTING.items())
-    return same and int(p.get("targets.n", 10)) in (5, 7, 10)
+    same = all(p[k] == v for k, v in PAPER_SETTING.items())
+    return same and int(p["targets.n"]) in (5, 7, 10)
 
 
 def _versus_exact(pga_rows: pd.DataFrame, exact: pd.DataFrame, metric: str) -> dict:
