@@ -22,7 +22,11 @@ from trackfuse import experiments
 from trackfuse.catalog import RunInfo, find_runs, is_run_folder
 from trackfuse.config import ConfigError, allowed_text, load
 from trackfuse.executors import KINDS, ExecutorError, default_workers, scheduler_address
-from trackfuse.results import RunFolderError
+from trackfuse.reports import write_report
+from trackfuse.results import RunFolderError, RunStatus
+from trackfuse.rundata import load as load_run
+from trackfuse.runlock import RunLock
+from trackfuse.runner import RunInterrupted, Runner
 from trackfuse.sweep import SweepError, count_points, parse_sets, parse_sweeps
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
@@ -51,8 +55,6 @@ def _interrupted(err) -> None:
 
 def _execute(runner):
     """``runner.run()`` with every expected failure turned into one line and its exit code."""
-    from trackfuse.runner import RunInterrupted
-
     try:
         return runner.run()
     except RunInterrupted as err:
@@ -106,19 +108,9 @@ def run(
                                                   "and shown by `trackfuse runs` (not part "
                                                   "of the run id).")] = None,
 ) -> None:
-    """Run CFG: every sweep point x trial, then trials.csv, summary.csv and figures."""
-    from trackfuse.runner import Runner
-
+    """Run CFG: every sweep point x trial, then trials.csv, summary.csv and the report."""
     config = _load(cfg, sets, sweeps, trials=trials, seed=seed)
-    if executor not in KINDS:
-        fail(f"--executor: got {executor!r}; allowed: {', '.join(KINDS)}")
-    if workers < 0:
-        fail(f"--workers: got {workers}; allowed: an integer >= 0 (0 = all cores)")
-    if scheduler_file:
-        try:
-            scheduler_address(scheduler_file)
-        except ExecutorError as err:
-            fail(str(err))
+    _check_execution(executor, workers, scheduler_file)
     runner = Runner(config, out_dir, workers=workers or default_workers(), executor=executor,
                     scheduler=scheduler, scheduler_file=scheduler_file, plots=not no_plots,
                     progress=not no_progress, command=sys.argv, warn=warn, force=force,
@@ -129,15 +121,34 @@ def run(
               f"{runner.total_trials} trials in batches of {config.batch_size}; "
               f"output: {runner.folder.path}")
         return
-    outcome = _execute(runner)
-    if outcome.status == "already complete":
+    _closing_lines(_execute(runner))
+
+
+def _check_execution(executor: str, workers: int, scheduler_file: str | None) -> None:
+    """Refuse a bad ``--executor``, ``--workers`` or ``--scheduler-file`` in one line."""
+    if executor not in KINDS:
+        fail(f"--executor: got {executor!r}; allowed: {', '.join(KINDS)}")
+    if workers < 0:
+        fail(f"--workers: got {workers}; allowed: an integer >= 0 (0 = all cores)")
+    if scheduler_file:
+        try:
+            scheduler_address(scheduler_file)
+        except ExecutorError as err:
+            fail(str(err))
+
+
+def _closing_lines(outcome) -> None:
+    """What ``trackfuse run`` prints at the end, and its exit status (see the module doc)."""
+    if outcome.status == RunStatus.ALREADY_COMPLETE:
         print(f"already complete: {outcome.folder}")
     else:
         print(f"wrote {outcome.folder}: {outcome.rows} rows, {outcome.total_trials} trials "
-                  f"({outcome.computed_trials} computed now) in {outcome.seconds:.1f} s, "
-                  f"{len(outcome.figures)} figure files")
+              f"({outcome.computed_trials} computed now) in {outcome.seconds:.1f} s, "
+              f"{len(outcome.figures)} figure files")
     for message in outcome.figure_errors:
         print(f"warning: {message}", file=sys.stderr)
+    if outcome.report is not None:
+        print(f"report: {outcome.report}")
     if outcome.failed_trials:
         print(f"error: {outcome.failed_trials} trials failed (status=failed in trials.csv)",
               file=sys.stderr)
@@ -158,8 +169,6 @@ def reproduce(
 ) -> None:
     """Run every config in FOLDER (the shipped paper experiments by default), resuming any
     finished ones; all configs are validated before the first one runs."""
-    from trackfuse.runner import Runner
-
     if not folder.is_dir():
         fail(f"{folder}: not a folder of configs")
     paths = sorted(folder.glob("*.yaml"))
@@ -175,6 +184,8 @@ def reproduce(
         failed += outcome.failed_trials + len(outcome.figure_errors)
         print(f"{config.source}: {outcome.folder} ({outcome.computed_trials} of "
               f"{outcome.total_trials} trials computed now, {outcome.failed_trials} failed)")
+        if outcome.report is not None:
+            print(f"  report: {outcome.report}")
     if failed:
         raise typer.Exit(3)
 
@@ -185,19 +196,14 @@ def plot(run_dir: Annotated[Path, typer.Argument(help="A finished run folder.")]
 
     The final files are checked against the checksums in the run's manifest first. Plotting
     a run of a plugin experiment imports the plugin's module (a config is code)."""
-    from trackfuse.rundata import load as load_run
-    from trackfuse.runlock import RunLock
-    from trackfuse.runner import draw_reports
-
     if run_dir.is_dir() and not is_run_folder(run_dir) and find_runs(run_dir):
         print(f"{run_dir} is a folder of runs; plot one of them:")
         _print_runs(find_runs(run_dir))
         return
     try:
         run = load_run(run_dir)
-        experiment = run.experiment
         with RunLock(run.path, warn):
-            figures, errors = draw_reports(run.path, experiment, run.config)
+            report = write_report(run)
     except RunFolderError as err:
         fail(str(err))
     except OSError as err:
@@ -205,10 +211,11 @@ def plot(run_dir: Annotated[Path, typer.Argument(help="A finished run folder.")]
     except KeyboardInterrupt:
         print("interrupted: run `trackfuse plot` again to redraw", file=sys.stderr)
         raise typer.Exit(130) from None
-    print(f"drew {len(figures)} figure files in {run_dir / 'figures'}")
-    for message in errors:
+    print(f"drew {len(report.figures)} figure files in {run_dir / 'figures'}")
+    for message in report.errors:
         print(f"warning: {message}", file=sys.stderr)
-    if errors:
+    print(f"report: {report.index}")
+    if report.errors:
         raise typer.Exit(1)
 
 
@@ -276,6 +283,10 @@ def list_experiments(
     for p in exp.params:
         table.add_row(p.key, str(p.default), p.unit, allowed_text(p), p.doc)
     out.print(table)
+    figures = Table("figure", "paper", "caption", title="figures (outputs.figures)")
+    for fig_name, spec in exp.figures.items():
+        figures.add_row(fig_name, spec.paper or "-", spec.caption)
+    out.print(figures)
 
 
 if __name__ == "__main__":

@@ -28,8 +28,8 @@ def cli_env() -> dict[str, str]:
 
 def trackfuse(*args: str, cwd: Path | None = None, timeout: float = 120,
               **kw) -> subprocess.CompletedProcess:
-    """Run the real CLI (``python -m cli.main``) and capture its output."""
-    return subprocess.run([sys.executable, "-m", "cli.main", *map(str, args)], cwd=cwd,
+    """Run the real CLI (``python -m trackfuse``) and capture its output."""
+    return subprocess.run([sys.executable, "-m", "trackfuse", *map(str, args)], cwd=cwd,
                           env=cli_env(), capture_output=True, text=True, timeout=timeout, **kw)
 
 

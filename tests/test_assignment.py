@@ -7,6 +7,8 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from trackfuse.association.assignment import (
+    BRUTE_FORCE,
+    COSTS,
     EXACT,
     objective,
     pair_weights,
@@ -41,7 +43,7 @@ gains = st.tuples(st.integers(0, 5), st.integers(0, 5)).flatmap(
 @given(gain=gains)
 def test_exact_solvers_agree_with_brute_force(gain):
     m1, m2 = gain.shape
-    brute = solve_exact(gain, "enumerate")
+    brute = solve_exact(gain, BRUTE_FORCE)
     for method in EXACT:
         sol = solve_exact(gain, method)
         assert_feasible(sol, m1, m2)
@@ -67,16 +69,16 @@ def test_exact_equals_enumeration_on_200_paper_scenes():
     for seed in range(200):
         sc = scan(seed)
         w = pair_weights(*sc.z, S1, S2, 0.005, 0.005, 0.95, 0.05)
-        brute = solve_exact(w.gain, "enumerate").objective
+        brute = solve_exact(w.gain, BRUTE_FORCE).objective
         for method in ("lsa_clip", "lsa_augmented"):
             assert solve_exact(w.gain, method).objective == pytest.approx(brute, abs=1e-9)
 
 
-@pytest.mark.parametrize("method", EXACT)
-@pytest.mark.parametrize("cost", ["paper", "pattipati"])
+@pytest.mark.parametrize("method", [*EXACT, BRUTE_FORCE])
+@pytest.mark.parametrize("cost", COSTS)
 def test_noise_free_scene_without_false_alarms_gives_the_truth(method, cost):
     for n in (5, 7, 10):
-        if method == "enumerate" and n > 7:
+        if method == BRUTE_FORCE and n > 7:
             continue
         rng = np.random.default_rng(n)
         sc = simulate_scan(scene_targets(n, "paper", rng), 0.0, 0.0, 1.0, 0.0, rng, rng, rng)

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+import pytest
 
-from trackfuse.compare import compare_trials
+from trackfuse import harness
+from trackfuse.compare import compare_runs, compare_trials
 
 KEYS = ["sigma", "algorithm"]
 
@@ -97,3 +99,23 @@ def test_failed_trials_are_left_out():
     base = frame(np.arange(10.0))
     new = frame(np.arange(10.0)).assign(status=["ok"] * 9 + ["failed"])
     assert gate(base, new).cells["n_new"].iloc[0] == 9
+
+
+def test_compare_runs_takes_binary_metrics_and_directions_from_the_experiment(tmp_path):
+    sweep = {"mu": [0.0, 1.0]}
+    base = harness.run_data(tmp_path / "a", "toy_gaussian", {"n": 5}, sweep, trials=30, seed=3)
+    same = harness.run_data(tmp_path / "b", "toy_gaussian", {"n": 5, "label": "b"}, sweep,
+                            trials=30, seed=3)
+    result = compare_runs(base, same)
+    assert result.paired
+    cells = result.cells.set_index(["mu", "algorithm", "metric"])
+    assert (cells.xs("covered", level="metric")["better"] == "higher").all()
+    assert (cells.xs("estimate", level="metric")["better"] == "").all()
+    assert cells.xs("covered", level="metric")["test"].str.contains("McNemar").all()
+    assert (cells["diff"] == 0).all() and "regression" not in set(cells["verdict"])
+    other = harness.run_data(tmp_path / "c", "toy_gaussian", {"n": 5}, sweep, trials=30,
+                             seed=4)
+    assert not compare_runs(base, other).paired
+    with pytest.raises(ValueError, match="different swept keys"):
+        compare_runs(base, harness.run_data(tmp_path / "d", "toy_gaussian", {"n": 5},
+                                            {"sigma": [1.0, 2.0]}, trials=5, seed=3))

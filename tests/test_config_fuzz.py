@@ -7,8 +7,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
-from cli.main import app
 from trackfuse.config import TOP_LEVEL
+from trackfuse_cli.main import app
 
 KEYS = [*TOP_LEVEL, "params.mu", "params.sigma", "params.n", "params.p_d", "params.label",
         "trails", "param", "sweep.mu", "sweep.n", "sweep.label", "outputs.figures",

@@ -13,8 +13,8 @@ import pytest
 from conftest import cli_env, trackfuse
 from typer.testing import CliRunner
 
-from cli.main import app
 from trackfuse.config import ConfigError, load
+from trackfuse_cli.main import app
 
 BOMB = "a: &a [x, x, x, x, x, x, x, x, x]\n" + "".join(
     f"{c}: &{c} [{', '.join([f'*{p}'] * 9)}]\n"
@@ -123,7 +123,7 @@ def test_plugins_are_imported_only_for_the_config_that_names_them(write_config, 
     def cli(*args):
         env = cli_env()
         env["PYTHONPATH"] = f"{env_path}{os.pathsep}{env['PYTHONPATH']}"
-        return subprocess.run([sys.executable, "-m", "cli.main", *map(str, args)], env=env,
+        return subprocess.run([sys.executable, "-m", "trackfuse", *map(str, args)], env=env,
                               capture_output=True, text=True, timeout=120)
 
     assert cli("list").returncode == 0

@@ -5,11 +5,19 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from trackfuse import harness
 from trackfuse.association.track_likelihood import abstaining_decision, ml_track_decision
 from trackfuse.experiments import get
-from trackfuse.experiments.esm_radar import ALGORITHMS, EXPERIMENT, differences, simulate
+from trackfuse.experiments.esm_radar import EXPERIMENT, report
+from trackfuse.experiments.esm_radar.model import (
+    ALGORITHMS,
+    differences,
+    simulate,
+    static_weights,
+)
+from trackfuse.reported import ESM_RADAR_WEIGHTS
 from trackfuse.seeding import trial_streams
-from trackfuse.stats import t_interval, wilson_interval
+from trackfuse.stats import wilson_interval
 
 ALL = list(ALGORITHMS)
 
@@ -33,32 +41,9 @@ def frame(rows, point=0, extra=None):
     return pd.DataFrame(out)
 
 
-def mini_run(base, sweep, trials, seed=5):
-    """Tiny stand-in for the runner: grid over one axis, seeds as DESIGN.md says."""
-    (key, values), = sweep.items()
-    frames = []
-    for point, value in enumerate(values):
-        p = dict(base, **{key: value})
-        rows = EXPERIMENT.run_trials(p, rngs(trials, point, seed))
-        frames.append(frame(rows, point, {key: value}))
-    trials_df = pd.concat(frames, ignore_index=True)
-    summ = []
-    metrics = [c for c in trials_df.columns if c not in ("point", "trial", "algorithm", key)]
-    for (point, value, alg), g in trials_df.groupby(["point", key, "algorithm"], sort=False):
-        for m in metrics:
-            x = g[m].to_numpy(float)
-            if m in EXPERIMENT.binary_metrics:
-                lo, hi = wilson_interval(x.sum(), len(x))
-                kind = "wilson"
-            else:
-                lo, hi = t_interval(x.mean(), x.std(ddof=1), len(x))
-                kind = "t"
-            summ.append({"point": point, key: value, "algorithm": alg, "metric": m,
-                         "n": len(x), "mean": x.mean(), "std": x.std(ddof=1),
-                         "ci_low": float(lo), "ci_high": float(hi), "interval": kind})
-    config = {"experiment": "esm_radar", "title": "t", "trials": trials, "seed": seed,
-              "params": base, "sweep": {key: list(values)}, "sweep_mode": "grid"}
-    return trials_df, pd.DataFrame(summ), config
+def mini_run(out, base, sweep, trials, seed=5):
+    """A complete run folder made by the harness (the real runner)."""
+    return harness.run_data(out, EXPERIMENT, base, sweep, trials=trials, seed=seed)
 
 
 def test_registered_and_schema_valid():
@@ -200,8 +185,8 @@ def test_table_model_tdoa_decides_and_derived_is_harder():
 
 def test_tables_and_figures_from_saved_frames(tmp_path):
     base = params(algorithms=["traditional", "improved", "improved_static", "chi2", "chi2_lrt"])
-    trials, summary, config = mini_run(base, {"target.separation": [100.0, 1000.0]}, 12)
-    tabs = EXPERIMENT.tables(trials, summary, config)
+    run = mini_run(tmp_path, base, {"target.separation": [100.0, 1000.0]}, 12)
+    tabs = report.tables(run)
     t3 = tabs["table3"]
     assert set(t3.columns) >= {"radar_track_1", "radar_track_2", "radar_track_3",
                                "correct_rate", "ci_low", "ci_high", "n"}
@@ -212,7 +197,7 @@ def test_tables_and_figures_from_saved_frames(tmp_path):
     imp = abl[abl.algorithm == "improved"]
     assert (imp["gain_vs_improved"] == 0).all() and (imp["mcnemar_p"] == 1).all()
     assert set(abl["weights"]) == {"static", "dynamic", "-"}
-    figs = EXPERIMENT.figures(trials, summary, config)
+    figs = report.figures(run, list(EXPERIMENT.figures))
     assert set(figs) == {"correct_rate", "trajectory", "manoeuvre"}
     for name, fig in figs.items():
         assert isinstance(fig, matplotlib.figure.Figure)
@@ -226,19 +211,16 @@ def test_tables_and_figures_from_saved_frames(tmp_path):
     assert "matches saved row" in title
 
 
-def test_categorical_sweep_draws_bar_chart():
+def test_categorical_sweep_draws_bar_chart(tmp_path):
     base = params(algorithms=["traditional", "improved", "chi2"])
-    trials, summary, config = mini_run(base, {"radar.factor_model": ["table", "derived"]}, 8)
-    figs = EXPERIMENT.figures(trials, summary, config)
+    run = mini_run(tmp_path, base, {"radar.factor_model": ["table", "derived"]}, 8)
+    figs = report.figures(run, ["correct_rate"])
     assert len([a for a in figs["correct_rate"].axes if a.has_data()]) == 2
-    t3 = EXPERIMENT.tables(trials, summary, config)["table3"]
+    t3 = report.tables(run)["table3"]
     assert set(t3["radar.factor_model"]) == {"table", "derived"}
 
 
 def test_static_weight_methods():
-    from trackfuse.experiments.esm_radar import static_weights
-    from trackfuse.reported import ESM_RADAR_WEIGHTS
-
     np.testing.assert_allclose(static_weights(ALGORITHMS["improved"].factors, "root_exact"),
                                [0.5100, 0.2638, 0.1296, 0.0636, 0.0329], atol=1e-4)
     np.testing.assert_allclose(static_weights(ALGORITHMS["improved"].factors, "eigen")[0],

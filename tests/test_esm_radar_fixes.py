@@ -9,14 +9,9 @@ from conftest import trackfuse
 
 from trackfuse.association import ahp
 from trackfuse.config import load
-from trackfuse.experiments.esm_radar import (
-    EXPERIMENT,
-    alpha_max,
-    differences,
-    manoeuvre_alpha,
-    simulate,
-)
-from trackfuse.plots.esm_radar import paper_vs_reproduced, printed_half_unit, verdict
+from trackfuse.experiments.esm_radar import EXPERIMENT
+from trackfuse.experiments.esm_radar.model import alpha_max, differences, manoeuvre_alpha, simulate
+from trackfuse.experiments.esm_radar.report import paper_vs_reproduced, printed_half_unit, verdict
 from trackfuse.reported import ESM_RADAR
 from trackfuse.seeding import trial_streams
 

@@ -8,10 +8,14 @@ import pandas as pd
 import pytest
 from conftest import trackfuse
 
+from trackfuse import harness
 from trackfuse.experiments import get
-from trackfuse.experiments.passive_assoc import EXPERIMENT, VARIANTS, score, sigma_of
+from trackfuse.experiments.passive_assoc import EXPERIMENT, report
+from trackfuse.experiments.passive_assoc.model import ALGORITHMS, VARIANTS, score, sigma_of
+from trackfuse.experiments.passive_assoc.report import LABELS, gap_interval
+from trackfuse.reported import PASSIVE_ASSOC
 from trackfuse.seeding import trial_streams
-from trackfuse.summary import summarize
+from trackfuse.stats import t_interval
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -89,20 +93,12 @@ def test_score_counts_partners_and_dummies():
 
 
 def small_run(tmp_path, p, sweep_key, values, trials=4):
-    rows = []
-    for point, v in enumerate(values):
-        q = {**p, sweep_key: v}
-        for trial in range(trials):
-            for r in EXPERIMENT.run_trial(q, trial_streams(1, point, trial)):
-                rows.append({"point": point, "trial": trial, sweep_key: v, **r})
-    trials_df = pd.DataFrame(rows)
-    path = tmp_path / "trials.csv"
-    trials_df.to_csv(path, index=False)
-    summary, _ = summarize(path, ["point", sweep_key, *EXPERIMENT.row_keys],
-                           EXPERIMENT.binary_metrics)
-    config = {"experiment": "passive_assoc", "params": p, "sweep": {sweep_key: values},
-              "trials": trials, "seed": 1}
-    return trials_df, summary, config
+    """A complete run folder made by the harness (the real runner), seed 1."""
+    return harness.run_data(tmp_path, EXPERIMENT, p, {sweep_key: values}, trials=trials,
+                            seed=1)
+
+
+ALL_FIGURES = list(EXPERIMENT.figures)
 
 
 def axis_labels(fig):
@@ -111,20 +107,20 @@ def axis_labels(fig):
 
 def test_figures_for_the_three_studies(tmp_path):
     p = params(algorithms=["exact", "pga_paper", "pga_evict"])
-    conv = EXPERIMENT.figures(*small_run(tmp_path, p, "targets.n", [5, 7]))
+    conv = report.figures(small_run(tmp_path, p, "targets.n", [5, 7]), ALL_FIGURES)
     assert set(conv) == {"convergence", "at_optimum"}
-    noise = EXPERIMENT.figures(*small_run(tmp_path, p, "noise.sigma", [0.002, 0.0707]))
+    noise = report.figures(small_run(tmp_path, p, "noise.sigma", [0.002, 0.0707]), ALL_FIGURES)
     assert "noise" in noise
     scale_p = params(**{"scene.mode": "random", "pga.checkpoints": [200]},
                      algorithms=["exact", "pga_evict"])
-    scale = EXPERIMENT.figures(*small_run(tmp_path, scale_p, "targets.n", [5, 10, 20],
-                                          trials=2))
+    scale = report.figures(small_run(tmp_path, scale_p, "targets.n", [5, 10, 20],
+                                       trials=2), ALL_FIGURES)
     assert set(scale) == {"scale"}
     for fig in [*conv.values(), *noise.values(), *scale.values()]:
         assert fig._suptitle is not None and fig._suptitle.get_text()
         for xlabel, ylabel in axis_labels(fig):
             assert "(" in xlabel and "(" in ylabel  # every axis names its unit
-    table = EXPERIMENT.tables(*small_run(tmp_path, p, "targets.n", [5]))["final"]
+    table = report.tables(small_run(tmp_path, p, "targets.n", [5]))["final"]
     assert set(table["algorithm"]) == {"exact", "pga_paper", "pga_evict"}
     assert (table.loc[table["algorithm"] == "exact", "at_opt"] == 1).all()
 
@@ -142,9 +138,6 @@ def test_ci_config_runs_through_the_cli(tmp_path, name):
 
 
 def test_every_algorithm_has_a_legend_label():
-    from trackfuse.experiments.passive_assoc import ALGORITHMS
-    from trackfuse.plots.passive_assoc import LABELS
-
     assert set(ALGORITHMS) <= set(LABELS)
 
 
@@ -160,9 +153,6 @@ def test_set_ops_beyond_the_default_checkpoints_scores_the_budget():
 
 
 def test_gap_interval_is_a_bootstrap_interval_that_cannot_go_below_zero():
-    from trackfuse.plots.passive_assoc import gap_interval
-    from trackfuse.stats import t_interval
-
     # 47 runs at the optimum, 3 far from it: the t interval dips below zero, ours cannot
     gaps = np.r_[np.zeros(47), 30.0, 45.0, 60.0]
     t_low, _ = t_interval(gaps.mean(), gaps.std(ddof=1), len(gaps))
@@ -176,10 +166,8 @@ def test_gap_interval_is_a_bootstrap_interval_that_cannot_go_below_zero():
 
 
 def test_tables_report_recall_whole_solution_and_the_paper_claims(tmp_path):
-    from trackfuse.reported import PASSIVE_ASSOC
-
     p = params(algorithms=["exact", "pga_paper", "pga_evict"])
-    out = EXPERIMENT.tables(*small_run(tmp_path, p, "targets.n", [5, 7], trials=6))
+    out = report.tables(small_run(tmp_path, p, "targets.n", [5, 7], trials=6))
     assert set(out) == {"checkpoints", "final", "paper_vs_reproduced"}
     cp = out["checkpoints"]
     assert set(cp["ops"]) == {0, 50, 200}
@@ -200,5 +188,5 @@ def test_tables_report_recall_whole_solution_and_the_paper_claims(tmp_path):
     assert pvr.iloc[-1]["verdict"].startswith("refuted")
     # a scene that is not the paper's is not compared with its Fig. 2
     q = params(**{"scene.mode": "random"}, algorithms=["exact", "pga_paper"])
-    other = EXPERIMENT.tables(*small_run(tmp_path, q, "targets.n", [5], trials=3))
+    other = report.tables(small_run(tmp_path, q, "targets.n", [5], trials=3))
     assert list(other["paper_vs_reproduced"]["where"]) == ["Sec. 1"]

@@ -16,11 +16,11 @@ import pytest
 from conftest import cli_env, trackfuse
 from typer.testing import CliRunner
 
-from cli.main import app
 from trackfuse.config import load
 from trackfuse.results import RunFolder
-from trackfuse.runner import Runner
+from trackfuse.runner import RunInterrupted, Runner
 from trackfuse.seeding import trial_streams
+from trackfuse_cli.main import app
 
 CFG = """
 experiment: toy_experiments:GAUSSIAN
@@ -128,7 +128,6 @@ def test_resume_after_interrupt_equals_uninterrupted(write_config, tmp_path, mon
         original(self, *args)
 
     monkeypatch.setattr(RunFolder, "write_part", flaky)
-    from trackfuse.runner import RunInterrupted
 
     with pytest.raises(RunInterrupted) as err:
         run(path, tmp_path / "res", executor="serial")
@@ -208,7 +207,7 @@ def test_plot_refuses_an_incomplete_run(write_config, tmp_path):
 def test_ctrl_c_stops_cleanly_and_the_run_resumes(write_config, tmp_path):
     path = write_config("experiment: toy_experiments:BURN\ntrials: 400\nseed: 1\n"
                         "params: {work: 30}\n", "burn")
-    command = [sys.executable, "-m", "cli.main", "run", str(path), "--out", str(tmp_path),
+    command = [sys.executable, "-m", "trackfuse", "run", str(path), "--out", str(tmp_path),
                "--workers", "2", "--no-plots"]
     # A shell that runs the tests in the background ignores SIGINT, and children inherit
     # that; restore the default so the CLI sees Ctrl-C as a user would.
@@ -325,7 +324,6 @@ def test_a_billion_trials_in_batches_of_one_start_at_once_in_flat_memory(write_c
             raise KeyboardInterrupt
 
     monkeypatch.setattr(RunFolder, "write_part", stop_after_20)
-    from trackfuse.runner import RunInterrupted
 
     tracemalloc.start()
     t0 = time.perf_counter()

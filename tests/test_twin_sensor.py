@@ -1,6 +1,5 @@
 """The twin_sensor experiment: contract, paired data, consistency against the PCRLB, figures."""
 
-import itertools
 from dataclasses import replace
 
 import numpy as np
@@ -8,9 +7,10 @@ import pandas as pd
 import pytest
 from scipy import stats
 
+from trackfuse import harness
 from trackfuse.experiments import get
-from trackfuse.experiments.twin_sensor import (
-    EXPERIMENT,
+from trackfuse.experiments.twin_sensor import EXPERIMENT, report
+from trackfuse.experiments.twin_sensor.model import (
     LossRules,
     angle_off_target,
     bounds,
@@ -18,10 +18,12 @@ from trackfuse.experiments.twin_sensor import (
     run_filter,
     simulate,
     stack,
+    truth_trajectory,
 )
+from trackfuse.rundata import RunData
 from trackfuse.seeding import trial_streams
 from trackfuse.stats import nees_band
-from trackfuse.tracking.models import wrap
+from trackfuse.tracking.models import cv_noise_gain, cv_transition, wrap
 from trackfuse.tracking.sensors import azel
 
 ROW_METRICS = {"range_err_m", "range_sq_err_m2", "pos_sq_err_m2", "nees", "nees_pos",
@@ -34,24 +36,9 @@ def params(**kw):
     return p
 
 
-def frames(base: dict, sweep: dict[str, list], trials: int, seed: int = 1):
-    """A tiny stand-in for the runner: grid sweep, trial seeds, trials and summary frames."""
-    keys = list(sweep)
-    rows = []
-    for point, values in enumerate(itertools.product(*sweep.values())):  # keeps the types
-        swept = dict(zip(keys, values, strict=True))
-        rngs = [trial_streams(seed, point, t) for t in range(trials)]
-        for t, trial_rows in enumerate(EXPERIMENT.run_batch(dict(base, **swept), rngs)):
-            for r in trial_rows:
-                rows.append({"point": point, "trial": t, **swept, **r})
-    trials_df = pd.DataFrame(rows).drop(columns="cpu_time_s")
-    long = trials_df.melt(id_vars=["point", *keys, "algorithm", "scan", "trial"],
-                          var_name="metric")
-    summary = long.groupby(["point", *keys, "algorithm", "scan", "metric"])["value"].agg(
-        n="count", mean="mean", std="std").reset_index()
-    config = {"experiment": "twin_sensor", "title": "test", "trials": trials, "seed": seed,
-              "params": base, "sweep": sweep, "sweep_mode": "grid"}
-    return trials_df, summary, config
+def frames(out, base: dict, sweep: dict[str, list], trials: int, seed: int = 1):
+    """A complete run folder of ``base`` and ``sweep`` made by the harness (the real runner)."""
+    return harness.run_data(out, EXPERIMENT, base, sweep, trials=trials, seed=seed)
 
 
 def test_registered_schema_is_complete():
@@ -81,8 +68,6 @@ def test_rows_are_tidy_and_reproducible():
 
 
 def test_truth_trajectory_follows_the_cv_recursion():
-    from trackfuse.experiments.twin_sensor import truth_trajectory
-    from trackfuse.tracking.models import cv_noise_gain, cv_transition
 
     sc = build_scenario(params(target__q=400.0, target__velocity=[10.0, -20.0, 3.0],
                                scan__period=0.5))
@@ -174,17 +159,15 @@ def test_bound_grows_with_clutter_and_shrinks_with_baseline():
 
 
 @pytest.fixture(scope="module")
-def small_run():
+def small_run(tmp_path_factory):
     base = params(algorithms=["mspda_parallel/mgekf", "mspda_parallel/ekf", "nn/mgekf"])
-    return frames(base, {"clutter.mean": [0.0, 8.0]}, trials=6)
+    return frames(tmp_path_factory.mktemp("twin"), base, {"clutter.mean": [0.0, 8.0]},
+                  trials=6)
 
 
 def test_figures_from_tables(small_run):
-    trials, summary, config = small_run
-    figs = EXPERIMENT.figures(trials, summary, config)
-    assert {"loss_gate_vs_clutter", "loss_angle_vs_clutter", "inconsistent_nees_vs_clutter",
-            "range_rmse_vs_time",
-            "anees_vs_time", "final_range_rmse_vs_clutter_mean"} <= set(figs)
+    figs = report.figures(small_run, list(EXPERIMENT.figures))
+    assert set(figs) == set(EXPERIMENT.figures)
     for fig in figs.values():
         for ax in fig.axes:
             if ax.get_visible() and ax.has_data():
@@ -194,8 +177,7 @@ def test_figures_from_tables(small_run):
 
 
 def test_tables_report_loss_and_bound(small_run):
-    trials, summary, config = small_run
-    table = EXPERIMENT.tables(trials, summary, config)["final_scan"]
+    table = report.tables(small_run)["final_scan"]
     assert len(table) == 2 * 3
     assert {"lost_gate_pct", "lost_angle_pct", "inconsistent_nees_pct", "range_rmse_km",
             "range_rmse_ci95_km", "range_pcrlb_km", "range_bias_scan1_km",
@@ -203,14 +185,14 @@ def test_tables_report_loss_and_bound(small_run):
     assert (table["range_pcrlb_km"] > 0).all()
 
 
-def test_figures_use_time_axes_and_accept_a_swept_string_key():
+def test_figures_use_time_axes_and_accept_a_swept_string_key(tmp_path):
     """Regression: the RMSE curve was drawn against the scan index while its PCRLB was drawn
     against time, and a swept string key crashed the loss-figure titles."""
     base = params(algorithms=["mspda_parallel/mgekf", "nn/mgekf"], scan__count=4,
                   scan__period=2.0)
-    trials, summary, config = frames(
-        base, {"clutter.model": ["in_gate", "window"], "clutter.mean": [0.0, 5.0]}, trials=3)
-    figs = EXPERIMENT.figures(trials, summary, config)
+    run = frames(tmp_path, base, {"clutter.model": ["in_gate", "window"],
+                                  "clutter.mean": [0.0, 5.0]}, trials=3)
+    figs = report.figures(run, list(EXPERIMENT.figures))
     titles = [ax.get_title() for ax in figs["loss_gate_vs_clutter"].axes if ax.get_visible()]
     assert titles == ["model=in_gate", "model=window"]
     for line in figs["range_rmse_vs_time"].axes[0].get_lines():
@@ -218,13 +200,14 @@ def test_figures_use_time_axes_and_accept_a_swept_string_key():
 
 
 def test_tables_carry_paper_vs_reproduced_only_at_the_papers_setting(small_run):
-    trials, summary, config = small_run
-    table = EXPERIMENT.tables(trials, summary, config)["paper_vs_reproduced"]
+    table = report.tables(small_run)["paper_vs_reproduced"]
     assert len(table) == 3 * 2  # algorithms x {gate, angle} rules
     assert set(table["rule"]) == {"lost_gate", "lost_angle"}
     assert (table["paper_runs"] == 50).all() and table["paper"].str.contains("5 %").all()
+    config = small_run.config
     off_paper = dict(config, params=dict(config["params"], **{"sensors.pd": 0.8}))
-    assert "paper_vs_reproduced" not in EXPERIMENT.tables(trials, summary, off_paper)
+    off_run = RunData(small_run.path, off_paper, small_run.manifest)
+    assert "paper_vs_reproduced" not in report.tables(off_run)
 
 
 # --------------------------------------------------------------------------------------------

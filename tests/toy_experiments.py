@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from trackfuse.experiments import register
-from trackfuse.experiments.base import Experiment, Param
+from trackfuse.experiments.base import Experiment, FigureSpec, Metric, Param
 from trackfuse.seeding import TrialStreams
 
 
@@ -26,18 +26,11 @@ def gaussian_trial(params, streams: TrialStreams) -> list[dict]:
     ]
 
 
-def gaussian_figures(trials, summary, config) -> dict:
-    """Estimate RMSE-free check figure: mean estimate per algorithm with its t band."""
-    from trackfuse.plots.style import band, new_figure
-
-    fig, ax = new_figure()
-    rows = summary[summary["metric"] == "estimate"]
-    for algorithm, group in rows.groupby("algorithm", sort=False):
-        band(ax, group["point"], group["mean"], group["ci_low"], group["ci_high"], algorithm)
-    ax.set_xlabel("sweep point")
-    ax.set_ylabel("estimate (m)")
-    ax.legend()
-    return {"estimate": fig}
+GAUSSIAN_METRICS = (
+    Metric("estimate", "m", "the estimate of mu", better=None),
+    Metric("covered", "1", "the 95 % interval covers mu", binary=True, better="higher"),
+)
+GAUSSIAN_FIGURES = {"estimate": FigureSpec("mean estimate per algorithm with its 95 % t band")}
 
 
 def gaussian_batch(params, streams) -> list[list[dict]]:
@@ -71,8 +64,9 @@ GAUSSIAN = register(Experiment(
     ),
     run_trial=gaussian_trial,
     run_batch=gaussian_batch,
-    figures=gaussian_figures,
-    binary_metrics=("covered",),
+    metrics=GAUSSIAN_METRICS,
+    report="toy_report",
+    figures=GAUSSIAN_FIGURES,
     batch_size=7,
 ))
 
@@ -193,7 +187,8 @@ TIMED = register(Experiment(
     title="The Gaussian toy with timings",
     params=GAUSSIAN.params,
     run_trial=timed_trial,
-    figures=gaussian_figures,
-    binary_metrics=("covered",),
+    metrics=GAUSSIAN_METRICS,
+    report="toy_report",
+    figures=GAUSSIAN_FIGURES,
     batch_size=5,
 ))

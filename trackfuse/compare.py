@@ -17,6 +17,9 @@ confidence: the one-sided bound of the difference on the good side lies beyond t
 tolerance. The bounds are Bonferroni-adjusted over the gated cells, so the chance that any
 cell of two runs of the same code is flagged stays below ``alpha`` (family-wise). An
 *improvement* is the mirror image. Metrics without a direction are reported, never gated.
+
+:func:`compare_runs` compares two run folders and takes the 0/1 metrics and the directions
+from the experiment's declared :class:`~trackfuse.experiments.base.Metric` list.
 """
 
 from __future__ import annotations
@@ -28,6 +31,8 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from trackfuse.results import FAILED_ROW
+from trackfuse.rundata import RunData
 from trackfuse.stats import (
     mcnemar_p,
     proportion_difference_interval,
@@ -72,7 +77,7 @@ def metric_columns(frame: pd.DataFrame, keys: Sequence[str]) -> list[str]:
 def _long(frame: pd.DataFrame, keys: Sequence[str], metrics: Sequence[str]) -> pd.DataFrame:
     """Rows of finished trials melted to ``[*keys, trial, metric, value]``."""
     if "status" in frame:
-        frame = frame[frame["status"].astype(str) != "failed"]
+        frame = frame[frame["status"].astype(str) != FAILED_ROW]
     return frame.melt(id_vars=[*keys, "trial"], value_vars=list(metrics), var_name="metric",
                       value_name="value").dropna(subset=["value"])
 
@@ -175,3 +180,26 @@ def compare_trials(base: pd.DataFrame, new: pd.DataFrame, keys: Sequence[str],
     columns = [*keys, "metric", "better", "n_base", "n_new", "base", "new", "diff", "ci_low",
                "ci_high", "p_value", "test", "verdict"]
     return Comparison(cells[columns].reset_index(drop=True), paired, m, alpha)
+
+
+def compare_runs(base: RunData, new: RunData, tolerance: Mapping[str, float] | None = None,
+                 alpha: float = 0.05, family_wise: bool = True) -> Comparison:
+    """Compare two complete runs of the same experiment (see :func:`compare_trials`).
+
+    Cells are keyed by the swept keys of ``base`` and the experiment's row keys; 0/1 metrics
+    and the direction of each metric come from ``Experiment.metrics``. Trials are paired when
+    both runs share the root seed and the trial count. Raises ``ValueError`` for runs of
+    different experiments or different swept keys.
+    """
+    if base.config["experiment"] != new.config["experiment"]:
+        raise ValueError(f"different experiments: {base.config['experiment']!r} and "
+                         f"{new.config['experiment']!r}")
+    if list(base.sweep) != list(new.sweep):
+        raise ValueError(f"different swept keys: {list(base.sweep)} and {list(new.sweep)}")
+    experiment = base.experiment
+    paired = (base.config.get("seed") == new.config.get("seed")
+              and base.config.get("trials") == new.config.get("trials"))
+    return compare_trials(base.trials, new.trials, [*base.sweep, *experiment.row_keys],
+                          binary=experiment.binary_metrics, better=experiment.directions,
+                          paired=paired, tolerance=tolerance, alpha=alpha,
+                          family_wise=family_wise)

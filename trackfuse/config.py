@@ -247,7 +247,18 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
     for key, value in sets.items():
         params[key] = _validated(source, exp, "set", key, value)
         sweep_raw.pop(key, None)
+    sweep = _sweep(source, exp, sweep_raw)
+    mode = _sweep_mode(source, raw.get("sweep_mode", "grid"), sweep)
+    if count_points(sweep, mode) > MAX_POINTS:
+        raise ConfigError(source, "sweep", f"the {mode} has {count_points(sweep, mode)} points;"
+                                           f" allowed: at most {MAX_POINTS}")
+    figures, formats = _outputs(source, exp, raw.get("outputs") or {})
+    return Config(source, exp, title, trials, seed, batch_size, params, sweep, mode,
+                  figures, formats, name)
 
+
+def _sweep(source: str, exp: Experiment, sweep_raw: dict[str, Any]) -> dict[str, list[Any]]:
+    """Every sweep axis parsed and each value validated against the schema."""
     sweep: dict[str, list[Any]] = {}
     for key, spec in sweep_raw.items():
         if key not in exp.schema:
@@ -257,20 +268,17 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
         except SweepError as err:
             raise ConfigError(source, f"sweep.{key}", str(err)) from None
         sweep[key] = [_validated(source, exp, "sweep", key, v) for v in values]
+    return sweep
 
-    mode = raw.get("sweep_mode", "grid")
+
+def _sweep_mode(source: str, mode: Any, sweep: dict[str, list[Any]]) -> str:
+    """``grid`` or ``zip`` (whose axes must have equal lengths)."""
     if mode not in ("grid", "zip"):
         raise ConfigError(source, "sweep_mode", f"got {_describe(mode)}; allowed: grid, zip")
     if mode == "zip" and len({len(v) for v in sweep.values()}) > 1:
         lengths = ", ".join(f"{k}={len(v)}" for k, v in sweep.items())
         raise ConfigError(source, "sweep", f"zip needs axes of equal length, got {lengths}")
-
-    if count_points(sweep, mode) > MAX_POINTS:
-        raise ConfigError(source, "sweep", f"the {mode} has {count_points(sweep, mode)} points;"
-                                           f" allowed: at most {MAX_POINTS}")
-    figures, formats = _outputs(source, exp, raw.get("outputs") or {})
-    return Config(source, exp, title, trials, seed, batch_size, params, sweep, mode,
-                  figures, formats, name)
+    return mode
 
 
 def _experiment(source: str, name: Any) -> Experiment:
@@ -303,6 +311,11 @@ def _outputs(source: str, exp: Experiment, outputs: Any) -> tuple[list[str] | st
                                  and all(isinstance(f, str) for f in figures)):
         raise ConfigError(source, "outputs.figures",
                           f"got {_describe(figures)}; allowed: 'all' or a list of figure names")
+    for name in figures if isinstance(figures, list) else []:
+        if name not in exp.figures:
+            known = ", ".join(exp.figures) or "none (the experiment draws no figures)"
+            raise ConfigError(source, "outputs.figures", f"unknown figure {_describe(name)}"
+                              f"{did_you_mean(name, list(exp.figures))}; allowed: {known}")
     formats = outputs.get("formats", ["png", "pdf"])
     if isinstance(formats, str):
         formats = [formats]

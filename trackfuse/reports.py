@@ -11,6 +11,10 @@ noise-free geometry). Every file is written under a temporary name and renamed i
 PNG files at :data:`PNG_DPI` dpi, PDF files as vectors, both without timestamps so that
 redrawing gives the same bytes. ``index.html`` needs no network and no JavaScript: its images
 sit beside it in ``figures/``.
+
+This module imports no matplotlib: report modules draw on :class:`matplotlib.figure.Figure`
+objects (:func:`trackfuse.plots.style.new_figure`, not registered with pyplot, freed with
+their last reference), and the runner, which imports this module, stays free of it.
 """
 
 from __future__ import annotations
@@ -21,17 +25,13 @@ import os
 from collections.abc import Collection, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
-import matplotlib
 import pandas as pd
 
-matplotlib.use("Agg")
-
-import matplotlib.pyplot as plt  # noqa: E402
-
-from trackfuse.results import atomic_write  # noqa: E402
-from trackfuse.rundata import RunData  # noqa: E402
+from trackfuse.results import atomic_write
+from trackfuse.rundata import RunData
 
 PNG_DPI = 200
 HEADLINE_TABLE = "paper_vs_reproduced"
@@ -87,11 +87,22 @@ def save_figure(fig, folder: Path, name: str, formats: Sequence[str]) -> list[Pa
     return written
 
 
-def _module(run: RunData):
-    return importlib.import_module(run.experiment.report)
+def _module(run: RunData, report: Report) -> ModuleType | None:
+    """The experiment's report module, or ``None`` (no report declared, or it fails to
+    import: one message in ``report.errors``)."""
+    if not run.experiment.report:
+        return None
+    try:
+        return importlib.import_module(run.experiment.report)
+    except Exception as err:  # noqa: BLE001 - a report bug must not lose the run
+        report.errors.append(f"report module {run.experiment.report}: "
+                             f"{type(err).__name__}: {err}")
+        return None
 
 
-def _write_tables(run: RunData, module, report: Report) -> dict[str, pd.DataFrame]:
+def _write_tables(run: RunData, module: ModuleType, report: Report) -> dict[str, pd.DataFrame]:
+    if not hasattr(module, "tables"):  # tables are optional
+        return {}
     folder = run.path / "tables"
     folder.mkdir(exist_ok=True)
     try:
@@ -106,8 +117,8 @@ def _write_tables(run: RunData, module, report: Report) -> dict[str, pd.DataFram
     return made
 
 
-def _write_figures(run: RunData, module, wanted: Collection[str], formats: Sequence[str],
-                   report: Report) -> None:
+def _write_figures(run: RunData, module: ModuleType, wanted: Collection[str],
+                   formats: Sequence[str], report: Report) -> None:
     folder = run.path / "figures"
     folder.mkdir(exist_ok=True)
     try:
@@ -118,8 +129,8 @@ def _write_figures(run: RunData, module, wanted: Collection[str], formats: Seque
     for name, fig in made.items():
         try:
             report.figures += save_figure(fig, folder, name, formats)
-        finally:
-            plt.close(fig)
+        except Exception as err:  # noqa: BLE001 - one figure's bug must not lose the others
+            report.errors.append(f"figure {name}: {type(err).__name__}: {err}")
 
 
 def write_report(run: RunData, wanted: Collection[str] | None = None,
@@ -136,9 +147,11 @@ def write_report(run: RunData, wanted: Collection[str] | None = None,
         wanted = declared if choice == "all" else list(choice)
     formats = list(formats or outputs.get("formats") or ["png", "pdf"])
     report = Report()
-    module = _module(run)
-    tables = _write_tables(run, module, report)
-    _write_figures(run, module, wanted, formats, report)
+    module = _module(run, report)
+    tables: dict[str, pd.DataFrame] = {}
+    if module is not None:
+        tables = _write_tables(run, module, report)
+        _write_figures(run, module, wanted, formats, report)
     md = index_markdown(run, tables, report)
     atomic_write(run.path / "index.md", md)
     atomic_write(run.path / "index.html", index_html(run, tables, report))

@@ -39,6 +39,7 @@ import re
 import shutil
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
+from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
@@ -58,6 +59,20 @@ _PART_NAME = re.compile(r"^p(\d{6})-b(\d{7})\.(trials|timings)\.csv$")
 _PART_HEADER = re.compile(r"^#trackfuse-part 1 point=(\d+) batch=(\d+) first=(\d+) "
                           r"stop=(\d+) rows=(\d+) bytes=(\d+) sha256=([0-9a-f]{64})\n$")
 _TEMPORARY = re.compile(r"^\..+\.tmp(\.\w+)?$")
+
+
+class RunStatus(StrEnum):
+    """A run's status: in ``manifest.json`` (``RUNNING``, ``INTERRUPTED``, ``COMPLETE``) or
+    as the outcome of a ``run()`` that found nothing to do (``ALREADY_COMPLETE``)."""
+
+    RUNNING = "running"
+    INTERRUPTED = "interrupted"
+    COMPLETE = "complete"
+    ALREADY_COMPLETE = "already complete"
+
+
+FAILED_ROW = "failed"
+"""``status`` of the one row a contained trial failure leaves in ``trials.csv``."""
 
 
 class RunFolderError(ValueError):

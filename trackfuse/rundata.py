@@ -37,6 +37,7 @@ from trackfuse.results import (
     TRIALS,
     RunFolder,
     RunFolderError,
+    RunStatus,
 )
 from trackfuse.safe_yaml import MAX_BYTES, YamlInputError, load_yaml
 from trackfuse.sweep import expand
@@ -95,6 +96,12 @@ class RunData:
         return self.points[point]
 
 
+def swept_keys(config: dict[str, Any]) -> list[str]:
+    """The swept parameter keys of a resolved ``config``, in config order (each is a column
+    of ``trials.csv`` and ``summary.csv``)."""
+    return list(config.get("sweep") or {})
+
+
 def _read_csv(path: Path) -> pd.DataFrame:
     try:
         return pd.read_csv(path, low_memory=False)
@@ -119,7 +126,7 @@ def load(path: str | Path, require_complete: bool = True) -> RunData:
         raise RunFolderError(f"{path}: not a run folder (no {MANIFEST})")
     if require_complete:
         status = str(manifest.get("status"))[:40]
-        if status != "complete":
+        if status != RunStatus.COMPLETE:
             raise RunFolderError(f"{path}: run is {status}, not complete; run the same "
                                  "`trackfuse run` command again to finish it")
         problem = folder.check_final_files(manifest)

@@ -48,8 +48,10 @@ from trackfuse.executors import make_executor
 from trackfuse.experiments.base import Experiment
 from trackfuse.fingerprint import code_fingerprint
 from trackfuse.progress import RunProgress
+from trackfuse.reports import write_report
 from trackfuse.results import (
     CONFIG,
+    FAILED_ROW,
     SUMMARY,
     TIMING_SUMMARY,
     TIMINGS,
@@ -59,6 +61,7 @@ from trackfuse.results import (
     PartScan,
     RunFolder,
     RunFolderError,
+    RunStatus,
     atomic_write,
     config_hash,
     rows_to_csv,
@@ -67,6 +70,7 @@ from trackfuse.results import (
     sibling_manifests,
     split_timings,
 )
+from trackfuse.rundata import load
 from trackfuse.runlock import RunLock
 from trackfuse.seeding import batch_streams, trial_streams
 from trackfuse.summary import summarize
@@ -115,13 +119,14 @@ class RunOutcome:
     """What a run produced (for the CLI's closing lines)."""
 
     folder: Path
-    status: str  # "complete" (finished now) or "already complete" (nothing to do)
+    status: RunStatus  # COMPLETE (finished now) or ALREADY_COMPLETE (nothing to do)
     total_trials: int
     computed_trials: int
     failed_trials: int = 0
     rows: int = 0
     figures: list[Path] = field(default_factory=list)
     figure_errors: list[str] = field(default_factory=list)
+    report: Path | None = None
     seconds: float = 0.0
 
 
@@ -161,7 +166,7 @@ def _is_user_interrupt(err: BaseException) -> bool:
 
 def _failure(prefix: dict[str, Any], err: BaseException) -> dict[str, Any]:
     text = "".join(traceback.format_exception_only(type(err), err)).strip().replace("\n", " ")
-    return {**prefix, "algorithm": "", "status": "failed", "error": text[:500]}
+    return {**prefix, "algorithm": "", "status": FAILED_ROW, "error": text[:500]}
 
 
 def _rows(result: Any, producer: str) -> list[dict[str, Any]]:
@@ -310,7 +315,7 @@ class Runner:
             swept = self.points[span.point].values
             yield BatchTask(cfg.experiment, {**cfg.params, **swept}, swept, cfg.seed, span)
 
-    def _manifest(self, status: str, session: _Session, failed: int = 0) -> dict[str, Any]:
+    def _manifest(self, status: RunStatus, session: _Session, failed: int = 0) -> dict[str, Any]:
         versions = {"trackfuse": trackfuse.__version__, "python": platform.python_version(),
                     "numpy": np.__version__, "scipy": scipy.__version__,
                     "pandas": pd.__version__, "matplotlib": _version("matplotlib")}
@@ -341,7 +346,7 @@ class Runner:
             "trials_failed": failed,
             "first_started": previous.get("first_started", session.started),
             "started": session.started,
-            "finished": _now() if status == "complete" else None,
+            "finished": _now() if status == RunStatus.COMPLETE else None,
             "sessions": _int_or(previous.get("sessions"), 0) + 1,
             "per_point_wall_s": {str(k): round(v, 6)
                                  for k, v in sorted(session.per_point.items())},
@@ -369,14 +374,17 @@ class Runner:
         previous = self._previous_manifest()
         if previous is None:
             self._note_other_code()
-        if previous is not None and previous.get("status") == "complete":
+        if previous is not None and previous.get("status") == RunStatus.COMPLETE:
             problem = self.folder.check_final_files(previous)
             if problem is None:
                 self.folder.remove_temporaries()
                 self.folder.drop_resume_state()
-                return RunOutcome(self.folder.path, "already complete", self.total_trials, 0,
+                index = self.folder.path / "index.html"
+                return RunOutcome(self.folder.path, RunStatus.ALREADY_COMPLETE,
+                                  self.total_trials, 0,
                                   _int_or(previous.get("trials_failed"), 0),
-                                  _int_or(previous.get("rows"), 0))
+                                  _int_or(previous.get("rows"), 0),
+                                  report=index if index.exists() else None)
             self.warn(f"{problem}; rebuilding the final files (from parts/ where they are "
                       "still there, else by recomputing)")
         session = _Session(previous, _now(), self.folder.prepare(self.resolved),
@@ -392,7 +400,7 @@ class Runner:
             raise RunFolderError(f"{self.folder.parts}: parts fail verification right after "
                                  "being written; is the disk failing?")
         except KeyboardInterrupt:
-            self.folder.write_manifest(self._manifest("interrupted", session))
+            self.folder.write_manifest(self._manifest(RunStatus.INTERRUPTED, session))
             raise RunInterrupted(self.folder.path, session.done, self.total_trials) from None
 
     def _note_other_code(self) -> None:
@@ -435,7 +443,7 @@ class Runner:
         executor = make_executor(self.executor_kind, self.workers, self.scheduler,
                                  self.scheduler_file)
         self.workers, self.executor_used = executor.workers, executor.kind
-        self.folder.write_manifest(self._manifest("running", session))
+        self.folder.write_manifest(self._manifest(RunStatus.RUNNING, session))
         last = time.monotonic()
         label = f"{self.config.experiment.name} [{self.run_id}]"
         try:
@@ -450,12 +458,13 @@ class Runner:
                     bar.advance(res.span.trials)
                     if time.monotonic() - last > MANIFEST_EVERY_S:
                         last = time.monotonic()
-                        self.folder.write_manifest(self._manifest("running", session))
+                        self.folder.write_manifest(self._manifest(RunStatus.RUNNING, session))
         finally:
             executor.close()
 
     def _finish(self, session: _Session) -> RunOutcome:
-        """Merge verified parts into the final CSVs, summarize, draw, mark the run complete."""
+        """Merge verified parts into the final CSVs, summarize, write the report
+        (:func:`trackfuse.reports.write_report`), mark the run complete."""
         path = self.folder.path
         files = {CONFIG: session.config_file,
                  TRIALS: self.folder.merge(self.spans, "trials", TRIALS)}
@@ -474,13 +483,14 @@ class Runner:
                                                   timing_summary.to_csv(index=False))
         else:
             (path / TIMING_SUMMARY).unlink(missing_ok=True)
-        outcome = RunOutcome(path, "complete", self.total_trials, session.computed,
+        outcome = RunOutcome(path, RunStatus.COMPLETE, self.total_trials, session.computed,
                              failed_rows, files[TRIALS]["rows"])
-        if self.plots:
-            outcome.figures, outcome.figure_errors = draw_reports(
-                path, self.config.experiment, self.resolved)
+        if self.plots:  # before "complete": a Ctrl-C while drawing leaves a resumable run
+            report = write_report(load(path, require_complete=False))
+            outcome.figures, outcome.figure_errors = report.figures, report.errors
+            outcome.report = report.index
         session.done = self.total_trials
-        manifest = self._manifest("complete", session, failed_rows)
+        manifest = self._manifest(RunStatus.COMPLETE, session, failed_rows)
         manifest["rows"] = outcome.rows
         manifest["figure_errors"] = outcome.figure_errors
         manifest["files"] = files
@@ -508,96 +518,4 @@ def _per_point(previous: dict[str, Any] | None) -> dict[int, float]:
             if str(k).isdigit() and isinstance(v, (int, float)) and math.isfinite(v)}
 
 
-def draw_reports(folder: Path, experiment: Experiment,
-                 resolved: dict[str, Any]) -> tuple[list[Path], list[str]]:
-    """Draw figures and tables from the CSVs in ``folder`` (no trial is recomputed).
-
-    The summary handed to the experiment includes the timing metrics (``*_time_s``).
-    Returns the written figure paths and one message per figure or table that failed.
-    """
-    import matplotlib.pyplot as plt  # only drawing needs it; workers never import it
-
-    written: list[Path] = []
-    errors: list[str] = []
-    if experiment.tables is None and experiment.figures is None:
-        return written, errors
-    try:
-        trials = pd.read_csv(folder / TRIALS, low_memory=False)
-        summary = pd.read_csv(folder / SUMMARY, low_memory=False)
-        if (folder / TIMING_SUMMARY).exists():
-            timing = pd.read_csv(folder / TIMING_SUMMARY, low_memory=False)
-            summary = pd.concat([summary, timing], ignore_index=True)
-    except (OSError, ValueError, pd.errors.ParserError) as err:
-        return written, [f"reading the CSV files: {type(err).__name__}: {err}"]
-    if experiment.tables is not None:
-        tables_dir = folder / "tables"
-        tables_dir.mkdir(exist_ok=True)
-        try:
-            for name, table in experiment.tables(trials, summary, resolved).items():
-                atomic_write(tables_dir / f"{name}.csv", table.to_csv(index=False))
-                atomic_write(tables_dir / f"{name}.md", markdown_table(table))
-        except Exception as err:  # noqa: BLE001 - a report bug must not lose the run
-            errors.append(f"tables: {type(err).__name__}: {err}")
-    if experiment.figures is None:
-        return written, errors
-    wanted = resolved.get("outputs", {}).get("figures", "all")
-    formats = resolved.get("outputs", {}).get("formats", ["png", "pdf"])
-    fig_dir = folder / "figures"
-    fig_dir.mkdir(exist_ok=True)
-    try:
-        figures = experiment.figures(trials, summary, resolved)
-        if not isinstance(figures, dict):
-            raise TypeError(f"figures() returned {type(figures).__name__}, not a dict")
-    except Exception as err:  # noqa: BLE001
-        return written, [*errors, f"figures: {type(err).__name__}: {err}"]
-    written, failed = _save_figures(figures, fig_dir, wanted, formats, plt.close)
-    return written, errors + failed
-
-
-def _save_figures(figures: dict[str, Any], fig_dir: Path, wanted: Any, formats: list[str],
-                  close: Callable[[Any], None]) -> tuple[list[Path], list[str]]:
-    """Save the wanted figures in every format (atomically), closing each; return the
-    written paths and one message per figure that could not be saved."""
-    written: list[Path] = []
-    errors: list[str] = []
-    for name, fig in figures.items():
-        try:
-            if wanted == "all" or name in wanted:
-                for fmt in formats:
-                    path = fig_dir / f"{name}.{fmt}"
-                    tmp = fig_dir / f".{name}.tmp.{fmt}"
-                    fig.savefig(tmp, format=fmt, metadata=_metadata(fmt))
-                    tmp.replace(path)
-                    written.append(path)
-        except Exception as err:  # noqa: BLE001 - a report bug must not lose the run
-            errors.append(f"figure {name}: {type(err).__name__}: {err}")
-        finally:
-            close(fig)
-    return written, errors
-
-
-def _metadata(fmt: str) -> dict[str, Any] | None:
-    """Strip timestamps so figure files are reproducible too."""
-    if fmt == "pdf":
-        return {"CreationDate": None, "ModDate": None}
-    if fmt == "svg":
-        return {"Date": None}
-    return None
-
-
-def markdown_table(table: pd.DataFrame) -> str:
-    """A GitHub-style Markdown table without the optional ``tabulate`` dependency."""
-    def cell(v: Any) -> str:
-        if isinstance(v, float):
-            return f"{v:.4g}"
-        return str(v).replace("|", "\\|")
-
-    lines = ["| " + " | ".join(map(str, table.columns)) + " |",
-             "|" + "|".join("---" for _ in table.columns) + "|"]
-    lines += ["| " + " | ".join(cell(v) for v in row) + " |"
-              for row in table.itertuples(index=False)]
-    return "\n".join(lines) + "\n"
-
-
-__all__ = ["BatchTask", "RunInterrupted", "RunOutcome", "Runner", "draw_reports",
-           "execute_batch", "markdown_table"]
+__all__ = ["BatchTask", "RunInterrupted", "RunOutcome", "Runner", "execute_batch"]

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from trackfuse.results import FAILED_ROW
 from trackfuse.stats import t_interval, wilson_interval
 
 CHUNK_ROWS = 200_000
@@ -37,7 +38,7 @@ def summarize(path: Path, keys: Sequence[str], binary: Sequence[str] = (),
         chunks = []
     for chunk in chunks:
         if "status" in chunk:
-            bad = chunk["status"].astype(str) == "failed"
+            bad = chunk["status"].astype(str) == FAILED_ROW
             failed += int(bad.sum())
             chunk = chunk[~bad]
         group = [k for k in keys if k in chunk]

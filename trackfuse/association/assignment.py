@@ -61,7 +61,10 @@ from scipy.optimize import linear_sum_assignment
 from trackfuse.association.triangulation import angle_residuals, triangulate
 
 COSTS = ("paper", "pattipati")
-EXACT = ("lsa_clip", "lsa_augmented", "enumerate")
+"""Pair-weight forms of :func:`pair_weights`."""
+EXACT = ("lsa_clip", "lsa_augmented")
+"""Exact solvers a config may choose; ``"enumerate"`` (brute force) is a test reference."""
+BRUTE_FORCE = "enumerate"
 
 
 @dataclass(frozen=True)
@@ -229,6 +232,6 @@ def solve_exact(gain: np.ndarray, method: str = "lsa_clip") -> Assignment:
         return _lsa_clip(gain)
     if method == "lsa_augmented":
         return _lsa_augmented(gain)
-    if method == "enumerate":
+    if method == BRUTE_FORCE:
         return _enumerate(gain)
     raise ValueError(f"unknown exact method {method!r}")

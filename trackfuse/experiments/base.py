@@ -19,16 +19,21 @@ An experiment module is the only place that knows its science. It exposes one mo
   Each trial must draw its data from its own streams only, so the rows are identical to
   ``[run_trial(params, s) for s in streams]`` up to floating-point reassociation inside
   vectorized algebra.
-* ``figures(trials, summary, config) -> dict[str, Figure]``: paper-style figures drawn from
-  the saved CSV tables alone (no recomputation of trials). ``config`` is the resolved config
-  as a plain dict (``params``, ``sweep``, ``trials``, ``seed``, ...).
-* ``tables(trials, summary, config) -> dict[str, DataFrame]`` (optional): extra report tables
-  written as CSV and Markdown.
+* ``metrics``: every metric column a trial returns (:class:`Metric`: unit, whether it is
+  0/1, and whether lower or higher is better). 0/1 metrics get Wilson intervals in the
+  summary; ``trackfuse.compare`` gates regressions in the declared direction.
+* ``report``: the module path of the experiment's report module, which provides
+  ``figures(run, wanted) -> dict[str, Figure]`` and ``tables(run) -> dict[str, DataFrame]``
+  and reads saved results only through :class:`trackfuse.rundata.RunData` (no trial is
+  recomputed). The report module imports the experiment's science, never the reverse, and
+  is imported only when a report is drawn (so workers and the runner load no matplotlib).
+* ``figures``: name -> :class:`FigureSpec` for every figure the report can draw (the names
+  a config may list in ``outputs.figures``).
 
 Row columns: the runner adds ``point``, ``trial`` and the swept parameter values; the
 experiment supplies ``algorithm``, the keys listed in ``row_keys`` and numeric metric columns.
-Metrics listed in ``binary_metrics`` are 0/1 and get Wilson intervals in the summary; every
-other numeric column gets a mean with a Student-t interval. Columns whose name ends in
+Metrics declared binary are 0/1 and get Wilson intervals in the summary; every other numeric
+column gets a mean with a Student-t interval. Columns whose name ends in
 ``_time_s`` are wall/CPU-time measurements: the runner keeps them out of ``trials.csv`` (which
 must be byte-identical for any worker count) and writes them to ``timings.csv`` instead.
 """
@@ -37,9 +42,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
-
-import pandas as pd
+from typing import Any, Literal
 
 from trackfuse.seeding import TrialStreams
 
@@ -51,10 +54,12 @@ Params = Mapping[str, Any]
 class Param:
     """One parameter of an experiment's schema.
 
-    ``kind`` is one of ``float``, ``int``, ``bool``, ``str`` or ``list`` (a non-empty list of
-    numbers, or of strings when ``choices`` is given); ``low``/``high`` are inclusive bounds
-    for numbers (and for every element of a list); ``choices`` restricts strings (or numbers,
-    or every element of a list) to a fixed set.
+    Bounds are given by keyword (``low=``, ``high=``); dimensionless quantities have unit
+    ``"1"`` (probabilities: unit ``"1"``, ``low=0.0, high=1.0`` or tighter), free text has
+    unit ``""``. ``kind`` is one of ``float``, ``int``, ``bool``, ``str`` or ``list`` (a
+    non-empty list of numbers, or of strings when ``choices`` is given); ``low``/``high`` are
+    inclusive bounds for numbers (and for every element of a list); ``choices`` restricts
+    strings (or numbers, or every element of a list) to a fixed set.
     """
 
     key: str
@@ -67,6 +72,34 @@ class Param:
     choices: tuple[Any, ...] | None = None
 
 
+Better = Literal["lower", "higher"]
+
+
+@dataclass(frozen=True)
+class Metric:
+    """One metric column of an experiment's rows.
+
+    ``unit``: its unit (``"1"`` for dimensionless); ``binary``: 0/1 per row (Wilson
+    intervals); ``better``: ``"lower"`` or ``"higher"`` when a change in one direction is a
+    regression (``trackfuse.compare`` gates it), ``None`` for a diagnostic.
+    """
+
+    name: str
+    unit: str
+    doc: str
+    binary: bool = False
+    better: Better | None = None
+
+
+@dataclass(frozen=True)
+class FigureSpec:
+    """One figure of an experiment's report: a one-line ``caption`` and the ``paper``
+    figure or table it stands for (``""`` for an extension or a diagnostic)."""
+
+    caption: str
+    paper: str = ""
+
+
 @dataclass(frozen=True)
 class Experiment:
     """A registered experiment kind (see the module docstring for the contract)."""
@@ -75,17 +108,26 @@ class Experiment:
     title: str
     params: tuple[Param, ...]
     run_trial: Callable[[Params, TrialStreams], list[Row]]
-    figures: Callable[[pd.DataFrame, pd.DataFrame, dict], dict[str, Any]] | None = None
+    metrics: tuple[Metric, ...] = ()
+    report: str | None = None
+    figures: Mapping[str, FigureSpec] = field(default_factory=dict, compare=False)
     run_batch: Callable[[Params, Sequence[TrialStreams]], list[list[Row]]] | None = None
-    tables: Callable[[pd.DataFrame, pd.DataFrame, dict], dict[str, pd.DataFrame]] | None = None
     row_keys: tuple[str, ...] = ("algorithm",)
-    binary_metrics: tuple[str, ...] = ()
     batch_size: int = 25
-    description: str = ""
     schema: dict[str, Param] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "schema", {p.key: p for p in self.params})
+
+    @property
+    def binary_metrics(self) -> tuple[str, ...]:
+        """Names of the 0/1 metrics (Wilson intervals)."""
+        return tuple(m.name for m in self.metrics if m.binary)
+
+    @property
+    def directions(self) -> dict[str, Better]:
+        """Metric name -> ``"lower"`` or ``"higher"`` for every metric with a direction."""
+        return {m.name: m.better for m in self.metrics if m.better is not None}
 
     def defaults(self) -> dict[str, Any]:
         """Every parameter at its default value, keyed by dotted name."""

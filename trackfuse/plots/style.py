@@ -7,12 +7,9 @@ curve with its confidence band, and :func:`reference_line` for bounds and exact 
 from __future__ import annotations
 
 import matplotlib
-
-matplotlib.use("Agg")
-
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.text import Text  # noqa: E402
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.text import Text
 
 RC = {
     "figure.dpi": 110,
@@ -31,10 +28,9 @@ RC = {
 
 def new_figure(ncols: int = 1, nrows: int = 1, width: float = 5.0, height: float = 3.4):
     """Return ``(fig, axes)`` with the house style; ``axes`` is a flat array if > 1 panel."""
-    with plt.rc_context(RC):
-        fig, axes = plt.subplots(nrows, ncols, figsize=(width * ncols, height * nrows),
-                                 squeeze=False)
-    fig.set_layout_engine("constrained")
+    with matplotlib.rc_context(RC):
+        fig = Figure(figsize=(width * ncols, height * nrows), layout="constrained")
+        axes = fig.subplots(nrows, ncols, squeeze=False)
     flat = axes.ravel()
     return fig, (flat[0] if flat.size == 1 else flat)
 

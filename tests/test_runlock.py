@@ -24,7 +24,7 @@ BUSY = re.compile(r"^error: (?P<folder>\S+): in use by trackfuse pid (?P<pid>\d+
 
 
 def command(path, out) -> list[str]:
-    return [sys.executable, "-m", "cli.main", "run", str(path), "--out", str(out),
+    return [sys.executable, "-m", "trackfuse", "run", str(path), "--out", str(out),
             "--executor", "serial", "--no-plots", "--no-progress"]
 
 

@@ -10,10 +10,7 @@ from pathlib import Path
 
 from conftest import ROOT, TESTS
 from toy_experiments import GAUSSIAN
-from typer.testing import CliRunner
 
-from cli.main import app
-from trackfuse.catalog import find_runs
 from trackfuse.config import load
 from trackfuse.experiments import get
 from trackfuse.fingerprint import NUMBERS_PATH, code_fingerprint
@@ -42,7 +39,7 @@ seed: 3
 def _cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join([str(cwd), str(TESTS), str(ROOT)])
-    return subprocess.run([sys.executable, "-m", "cli.main", *args], cwd=cwd, env=env,
+    return subprocess.run([sys.executable, "-m", "trackfuse", *args], cwd=cwd, env=env,
                           capture_output=True, text=True, timeout=120)
 
 
@@ -114,25 +111,8 @@ def test_manifest_records_the_repository_run_from_and_the_executor_used(write_co
 
 def test_fingerprint_covers_the_experiment_its_imports_and_the_numbers_path():
     modules = code_fingerprint(get("passive_assoc")).modules
-    assert "trackfuse.experiments.passive_assoc" in modules
+    assert "trackfuse.experiments.passive_assoc.model" in modules
+    assert not any(m.endswith(".report") or m.startswith("trackfuse.plots") for m in modules)
     assert "trackfuse.association.pga" in modules  # imported by the experiment
     assert set(NUMBERS_PATH) <= set(modules)
     assert "toy_experiments" in code_fingerprint(GAUSSIAN).modules
-
-
-def test_runs_lists_run_folders_with_their_name_and_plot_lists_a_folder_of_runs(
-        write_config, tmp_path):
-    cfg = write_config("experiment: toy_gaussian\ntrials: 4\nseed: 1\n", name="gauss")
-    out = tmp_path / "out"
-    Runner(load(cfg), out, progress=False, plots=False, name="first try").run()
-    Runner(load(cfg, {"seed": 2}), out, progress=False, plots=False).run()
-    found = find_runs(out)
-    assert sorted((r.stem, r.name, r.status, r.trials_done) for r in found) == \
-        [("gauss", "", "complete", 4), ("gauss", "first try", "complete", 4)]
-    again = Runner(load(cfg), out, progress=False, plots=False)  # resume keeps the name
-    again.run()
-    assert json.loads((again.folder.path / "manifest.json").read_text())["name"] == "first try"
-    listed = CliRunner().invoke(app, ["runs", str(out)])
-    assert listed.exit_code == 0 and "first try" in listed.stdout
-    plotted = CliRunner().invoke(app, ["plot", str(out / "gauss")])
-    assert plotted.exit_code == 0 and "folder of runs" in plotted.stdout

@@ -2,10 +2,10 @@
 
 Wang, Wang & Yang, "Fusion algorithm for airborne twin-sensor synchronous angle-only
 tracking", Control and Decision 20(10), 2005. :func:`figures` and :func:`tables` follow the
-:class:`~trackfuse.experiments.base.Experiment` contract: they receive ``trials`` (the tidy
-``trials.csv`` frame, one row per point, trial, algorithm and scan, with the swept values as
-columns), ``summary`` (unused: the chi-square RMSE bands need the per-trial squared errors)
-and ``config`` (the resolved config as a plain dict).
+report contract of :class:`~trackfuse.experiments.base.Experiment`: they read a finished
+run through :class:`~trackfuse.rundata.RunData`, mostly its ``trials`` (one row per point,
+trial, algorithm and scan; the chi-square RMSE bands need the per-trial squared errors), its
+resolved ``config`` and its ``points`` (each sweep point's parameters).
 
 Figures (the keys of :func:`figures`, which name the files)
 ------------------------------------------------------------
@@ -21,10 +21,10 @@ Figures (the keys of :func:`figures`, which name the files)
     the filter's ``q``; one panel per sweep point (at most nine, evenly spread).
 ``anees_vs_time``
     Extension (consistency): 6-state ANEES against time with its 95 % chi-square band.
-``final_range_rmse_vs_<key>``
+``final_range_rmse_vs_sweep``
     Extension (``configs/twin_sensor_baseline.yaml``): range RMSE (km) at the last scan
     against the only swept axis, beside the square-root PCRLB on a fine grid of that axis.
-    Drawn only when exactly one numeric key is swept.
+    Drawn only when exactly one numeric key is swept (file ``final_range_rmse_vs_sweep``).
 
 Tables
 ------
@@ -40,30 +40,27 @@ Saved data vs recomputed
 ------------------------
 Every curve, band and table entry is drawn from ``trials.csv``; no trial is re-run. Only the
 PCRLB references are recomputed, from the config alone, by
-:func:`trackfuse.experiments.twin_sensor.bounds` (deterministic and cached). The experiment
-module imports this one to declare its figures, so :func:`figures` and :func:`tables` import
-``bounds`` and the parameter schema when called (not at import time) and hand them to the
-helpers that need them.
+:func:`trackfuse.experiments.twin_sensor.model.bounds` (deterministic and cached).
 """
 
 from __future__ import annotations
 
 import textwrap
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 from typing import Any
 
 import numpy as np
 import pandas as pd
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from scipy import stats
 
 from trackfuse.experiments.base import Param
+from trackfuse.experiments.twin_sensor.model import PARAMS, bounds
 from trackfuse.plots.style import band, legend_below, new_figure
 from trackfuse.reported import TWIN_SENSOR
+from trackfuse.rundata import RunData, swept_keys
 from trackfuse.stats import nees_band, t_interval, wilson_interval
-
-BoundsFn = Callable[..., tuple[np.ndarray, np.ndarray]]
-"""``bounds(params, q_model=None) -> (range_bound, position_bound)``, each ``(K,)`` metres."""
 
 LABELS = {"mspda_parallel": "parallel PDA", "mspda_sequential": "sequential PDA",
           "nn": "nearest neighbour", "paper_approx": "paper approx. (reconstruction)"}
@@ -83,18 +80,9 @@ all of them have their default values."""
 # Shared helpers
 
 
-def _swept(config: dict) -> list[str]:
-    """The swept parameter keys, in config order."""
-    return list((config.get("sweep") or {}).keys())
-
-
-def _point_params(config: dict, frame: pd.DataFrame) -> dict[str, Any]:
-    """Resolved params of the sweep point of ``frame``'s first row."""
-    params = dict(config["params"])
-    for key in _swept(config):
-        value = frame[key].iloc[0]
-        params[key] = value.item() if hasattr(value, "item") else value
-    return params
+def _params_of(run: RunData, frame: pd.DataFrame) -> dict[str, Any]:
+    """Every parameter of the sweep point of ``frame``'s first row (the sweep's expansion)."""
+    return run.point_params(int(frame["point"].iloc[0]))
 
 
 def _label(name: str) -> str:
@@ -174,7 +162,7 @@ RULES = {
 
 def _rule_text(rule: str, config: dict) -> str:
     """The description of ``rule`` with its parameters (or "swept" when they are)."""
-    params, swept = config["params"], _swept(config)
+    params, swept = config["params"], swept_keys(config)
 
     def value(key: str) -> Any:
         return "swept" if key in swept else params[key]
@@ -189,7 +177,7 @@ def _loss_figure(trials: pd.DataFrame, config: dict, rule: str, x_key: str) -> F
     ``x_key``, one panel per value of the other swept keys."""
     last = trials[trials["scan"] == trials["scan"].max()]
     params = config["params"]
-    swept = _swept(config)
+    swept = swept_keys(config)
     others = [k for k in swept if k != x_key]
     groups = [g for _, g in last.groupby(others, sort=True)] if others else [last]
     where = ("gate or window" if "clutter.model" in swept
@@ -211,15 +199,31 @@ def _loss_figure(trials: pd.DataFrame, config: dict, rule: str, x_key: str) -> F
     return fig
 
 
-def _range_figure(trials: pd.DataFrame, config: dict, bounds: BoundsFn) -> Figure:
-    """Paper Fig. 2: range RMSE (km) against time (s) per sweep point, beside the square-root
-    PCRLB of the truth model and of the filter model."""
+def _time_panels(run: RunData, draw: Callable[[Axes, pd.DataFrame, dict[str, Any]], None],
+                 what: str) -> Figure:
+    """One panel per sweep point (at most nine, :func:`_select_points`) against time: for
+    each, ``draw(ax, frame, params)`` with the point's ``trials.csv`` rows and parameters;
+    then the panel title, a shared legend and the suptitle ``what``."""
+    trials, config = run.trials, run.config
     points = _select_points(trials)
     fig, axes, fig_width = _panels(len(points))
-    names = _headline(config["params"]["algorithms"])
     for ax, pt in zip(axes, points, strict=True):
         frame = trials[trials["point"] == pt]
-        params = _point_params(config, frame)
+        draw(ax, frame, run.point_params(int(pt)))
+        ax.set_xlabel("time t (s)")
+        ax.set_ylim(bottom=0)
+        ax.set_title(_point_title(swept_keys(config), frame))
+    legend_below(fig, axes[0])
+    _suptitle(fig, config, what, fig_width)
+    return fig
+
+
+def _range_figure(run: RunData) -> Figure:
+    """Paper Fig. 2: range RMSE (km) against time (s) per sweep point, beside the square-root
+    PCRLB of the truth model and of the filter model."""
+    names = _headline(run.config["params"]["algorithms"])
+
+    def draw(ax: Axes, frame: pd.DataFrame, params: dict[str, Any]) -> None:
         period = float(params["scan.period"])
         for name in names:
             g = frame[frame["algorithm"] == name].groupby("scan")["range_sq_err_m2"]
@@ -231,25 +235,18 @@ def _range_figure(trials: pd.DataFrame, config: dict, bounds: BoundsFn) -> Figur
         ax.plot(times, rb / 1e3, "k--", lw=1.0, label="sqrt PCRLB (truth model)")
         rf, _ = bounds(params, q_model=float(params["filter.q"]))
         ax.plot(times, rf / 1e3, "k:", lw=1.0, label="sqrt PCRLB (filter model q)")
-        ax.set_xlabel("time t (s)")
         ax.set_ylabel("range RMSE (km)")
-        ax.set_ylim(bottom=0)
-        ax.set_title(_point_title(_swept(config), frame))
-    legend_below(fig, axes[0])
-    _suptitle(fig, config, "range RMSE (95% chi-square bands) vs square-root PCRLB",
-              fig_width)
-    return fig
+
+    return _time_panels(run, draw, "range RMSE (95% chi-square bands) vs square-root PCRLB")
 
 
-def _nees_figure(trials: pd.DataFrame, config: dict) -> Figure:
+def _nees_figure(run: RunData) -> Figure:
     """Extension: 6-state ANEES against time (s) per sweep point, with its 95% chi-square
     band for the number of runs."""
-    points = _select_points(trials)
-    fig, axes, fig_width = _panels(len(points))
-    names = _headline(config["params"]["algorithms"])
-    for ax, pt in zip(axes, points, strict=True):
-        frame = trials[trials["point"] == pt]
-        period = float(_point_params(config, frame)["scan.period"])
+    names = _headline(run.config["params"]["algorithms"])
+
+    def draw(ax: Axes, frame: pd.DataFrame, params: dict[str, Any]) -> None:
+        period = float(params["scan.period"])
         for name in names:
             anees = frame[frame["algorithm"] == name].groupby("scan")["nees"].mean()
             ax.plot(anees.index * period, anees, marker="o", label=_label(name),
@@ -258,19 +255,15 @@ def _nees_figure(trials: pd.DataFrame, config: dict) -> Figure:
         lo, hi = nees_band(6, n_runs)
         ax.axhspan(lo, hi, color="k", alpha=0.12, label=f"95% chi2 band, {n_runs} runs")
         ax.axhline(6.0, color="k", lw=0.8)
-        ax.set_ylim(bottom=0)
-        ax.set_xlabel("time t (s)")
         ax.set_ylabel("ANEES (6-state, dimensionless)")
-        ax.set_title(_point_title(_swept(config), frame))
-    legend_below(fig, axes[0])
-    _suptitle(fig, config, "average NEES vs its 95% chi-square band", fig_width)
-    return fig
+
+    return _time_panels(run, draw, "average NEES vs its 95% chi-square band")
 
 
-def _final_figure(trials: pd.DataFrame, config: dict, x_param: Param,
-                  bounds: BoundsFn) -> Figure:
+def _final_figure(run: RunData, x_param: Param) -> Figure:
     """Extension: range RMSE (km) at the last scan against the swept ``x_param`` (a baseline
     is shown in km), beside the square-root PCRLB on a 41-point grid plus the swept values."""
+    trials, config = run.trials, run.config
     x_key = x_param.key
     last = trials[trials["scan"] == trials["scan"].max()]
     fig, ax = new_figure(width=5.6, height=3.6)
@@ -280,7 +273,7 @@ def _final_figure(trials: pd.DataFrame, config: dict, x_param: Param,
         vals = np.array([_rmse_band(s) for _, s in g]) / 1e3
         band(ax, np.array(list(g.groups), dtype=float) / scale, vals[:, 0], vals[:, 1],
              vals[:, 2], _label(name), linestyle="-" if name.endswith("mgekf") else "--")
-    base = _point_params(config, last)
+    base = _params_of(run, last)
     values = last[x_key].astype(float)
     grid = np.unique(np.concatenate([np.linspace(values.min(), values.max(), 41), values]))
     bound_km = [bounds({**base, x_key: x_param.kind(v)})[0][-1] / 1e3 for v in grid]
@@ -295,24 +288,28 @@ def _final_figure(trials: pd.DataFrame, config: dict, x_param: Param,
     return fig
 
 
-def figures(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> dict[str, Figure]:
-    """Loss vs clutter (both rules), range RMSE vs time with sqrt PCRLB, ANEES vs time, and
-    final range RMSE vs the swept axis when there is exactly one."""
-    from trackfuse.experiments.twin_sensor import PARAMS, bounds  # imports this module
-
-    swept = _swept(config)
-    figs: dict[str, Figure] = {}
+def _drawers(run: RunData) -> dict[str, Any]:
+    """Figure name -> a function drawing it, for the figures this run supports."""
+    trials, config = run.trials, run.config
+    swept = swept_keys(config)
+    drawers: dict[str, Any] = {}
     if "clutter.mean" in swept:
         for rule in RULES:
-            name = rule.replace("lost_", "loss_")
-            figs[f"{name}_vs_clutter"] = _loss_figure(trials, config, rule, "clutter.mean")
-    figs["range_rmse_vs_time"] = _range_figure(trials, config, bounds)
-    figs["anees_vs_time"] = _nees_figure(trials, config)
+            drawers[f"{rule.replace('lost_', 'loss_')}_vs_clutter"] = (
+                lambda rule=rule: _loss_figure(trials, config, rule, "clutter.mean"))
+    drawers["range_rmse_vs_time"] = lambda: _range_figure(run)
+    drawers["anees_vs_time"] = lambda: _nees_figure(run)
     if len(swept) == 1 and pd.api.types.is_numeric_dtype(trials[swept[0]]):
         x_param = next(p for p in PARAMS if p.key == swept[0])
-        figs[f"final_range_rmse_vs_{swept[0].replace('.', '_')}"] = _final_figure(
-            trials, config, x_param, bounds)
-    return figs
+        drawers["final_range_rmse_vs_sweep"] = lambda: _final_figure(run, x_param)
+    return drawers
+
+
+def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure]:
+    """The ``wanted`` figures among loss vs clutter (both rules and the NEES flag), range
+    RMSE vs time with sqrt PCRLB, ANEES vs time, and final range RMSE vs the swept axis when
+    there is exactly one."""
+    return {name: draw() for name, draw in _drawers(run).items() if name in wanted}
 
 
 # --------------------------------------------------------------------------------------------
@@ -344,7 +341,7 @@ def _mean_interval(x: pd.Series) -> tuple[float, float, float]:
     return float(x.mean()), float(lo), float(hi)
 
 
-def final_scan_table(trials: pd.DataFrame, config: dict, bounds: BoundsFn) -> pd.DataFrame:
+def final_scan_table(run: RunData) -> pd.DataFrame:
     """Per point and algorithm at the last scan (lengths in km, rates in %).
 
     Columns: the three 0/1 rules with 95 % Wilson intervals; range RMSE with its 95 %
@@ -353,14 +350,15 @@ def final_scan_table(trials: pd.DataFrame, config: dict, bounds: BoundsFn) -> pd
     at the last scan with 95 % t intervals; position RMSE; 6-state ANEES; validated returns
     per sensor and scan averaged over all scans.
     """
+    trials, config = run.trials, run.config
     last = trials[trials["scan"] == trials["scan"].max()]
     first = dict(list(trials[trials["scan"] == 1].groupby(["point", "algorithm"])))
-    swept = _swept(config)
+    swept = swept_keys(config)
     n_valid = {key: s.mean() for key, s in trials.groupby(["point", "algorithm"])["n_valid"]}
     rows = []
     for (pt, name), g in last.groupby(["point", "algorithm"], sort=True):
         n = len(g)
-        params = _point_params(config, g)
+        params = run.point_params(int(pt))
         rec: dict[str, Any] = {"point": pt, **{k: g[k].iloc[0] for k in swept},
                                "algorithm": name, "trials": n}
         for rule in RULES:
@@ -400,7 +398,7 @@ def paper_vs_reproduced(trials: pd.DataFrame, config: dict,
     interval lies above the lowest level's). Values come
     from :data:`trackfuse.reported.TWIN_SENSOR`.
     """
-    swept = _swept(config)
+    swept = swept_keys(config)
     if "clutter.mean" not in swept:
         return pd.DataFrame()
     last = trials[trials["scan"] == trials["scan"].max()]
@@ -453,13 +451,11 @@ def _same(value: Any, default: Any) -> bool:
     return value == default
 
 
-def tables(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> dict[str, pd.DataFrame]:
+def tables(run: RunData) -> dict[str, pd.DataFrame]:
     """``final_scan`` (:func:`final_scan_table`) and, for a clutter sweep at the paper's
     scenario, ``paper_vs_reproduced`` (:func:`paper_vs_reproduced`)."""
-    from trackfuse.experiments.twin_sensor import EXPERIMENT, bounds  # imports this module
-
-    out = {"final_scan": final_scan_table(trials, config, bounds)}
-    paper = paper_vs_reproduced(trials, config, EXPERIMENT.defaults())
+    out = {"final_scan": final_scan_table(run)}
+    paper = paper_vs_reproduced(run.trials, run.config, run.experiment.defaults())
     if not paper.empty:
         out["paper_vs_reproduced"] = paper
     return out

@@ -57,7 +57,7 @@ range). Per-scan weights and manoeuvre indices are drawn in the ``trajectory`` a
 Figures (``correct_rate``: the paper's Figs. 3-4; ``trajectory``: its Figs. 1-2;
 ``manoeuvre``: the index with and without the snake) and tables (``table3``: its Table 3;
 ``ahp``: its Table 1; ``ablation``; ``paper_vs_reproduced``) are built by
-:mod:`trackfuse.plots.esm_radar`, which registers them below.
+:mod:`trackfuse.experiments.esm_radar.report`.
 """
 
 from __future__ import annotations
@@ -99,8 +99,7 @@ from trackfuse.association.manoeuvre import (
 from trackfuse.association.tdoa_df import C
 from trackfuse.association.time_align import bracket, interpolate, interpolate_covariance
 from trackfuse.association.track_likelihood import abstaining_decision, ml_track_decision
-from trackfuse.experiments.base import Experiment, Param
-from trackfuse.plots import esm_radar as plots
+from trackfuse.experiments.base import Metric, Param
 from trackfuse.reported import ESM_RADAR_WEIGHTS
 from trackfuse.seeding import TrialStreams
 from trackfuse.tracking.models import wrap
@@ -154,90 +153,90 @@ ALGORITHMS: dict[str, Variant] = {
 
 PARAMS = (
     Param("algorithms", ["traditional", "improved", "chi2"],
-          "association algorithms run on every trial (same data)", "", list,
+          "association algorithms run on every trial (same data)", kind=list,
           choices=tuple(ALGORITHMS)),
-    Param("scan.count", 50, "ESM samples per trial K", "samples", int, 3, 10_000),
-    Param("esm.period", 1.0, "ESM sampling period", "s", float, 1e-3, 600.0),
-    Param("radar.period", 1.0, "radar sampling period", "s", float, 1e-3, 600.0),
-    Param("esm.offset", 0.0, "time of the first ESM sample after the first radar sample",
-          "s", float, 0.0, 600.0),
+    Param("scan.count", 50, "ESM samples per trial K", "samples", kind=int, low=3, high=10_000),
+    Param("esm.period", 1.0, "ESM sampling period", "s", low=1e-3, high=600.0),
+    Param("radar.period", 1.0, "radar sampling period", "s", low=1e-3, high=600.0),
+    Param("esm.offset", 0.0, "time of the first ESM sample after the first radar sample", "s",
+          low=0.0, high=600.0),
     Param("time_align", False,
           "interpolate radar factors to ESM times (eq. 1, corrected eq. 2); else hold the "
-          "latest radar sample", "", bool),
-    Param("geometry.baseline", 10_000.0, "A2 - A1 along x (A1 at the origin)", "m", float,
-          1.0, 1e6),
-    Param("target.separation", 200.0, "T2 - T1 along x", "m", float, 0.0, 1e5),
-    Param("snake.amplitude", 1000.0, "snake manoeuvre amplitude A", "m", float, 0.0, 1e5),
-    Param("snake.period", 40.0, "snake manoeuvre period P_w", "s", float, 1.0, 1e4),
-    Param("snake.speed", 200.0, "T1/T2 speed toward the own aircraft V", "m/s", float,
-          0.0, 3000.0),
-    Param("crossing.time", 30.0, "time t_c at which T3 crosses the T1/T2 centre line", "s",
-          float, 1.0, 1e4),
-    Param("phase.d_over_lambda", 0.5, "interferometer spacing over wavelength", "", float,
-          0.01, 100.0),
+          "latest radar sample", kind=bool),
+    Param("geometry.baseline", 10_000.0, "A2 - A1 along x (A1 at the origin)", "m", low=1.0,
+          high=1e6),
+    Param("target.separation", 200.0, "T2 - T1 along x", "m", low=0.0, high=1e5),
+    Param("snake.amplitude", 1000.0, "snake manoeuvre amplitude A", "m", low=0.0, high=1e5),
+    Param("snake.period", 40.0, "snake manoeuvre period P_w", "s", low=1.0, high=1e4),
+    Param("snake.speed", 200.0, "T1/T2 speed toward the own aircraft V", "m/s", low=0.0,
+          high=3000.0),
+    Param("crossing.time", 30.0, "time t_c at which T3 crosses the T1/T2 centre line", "s", low=1.0,
+          high=1e4),
+    Param("phase.d_over_lambda", 0.5, "interferometer spacing over wavelength", "1", low=0.01,
+          high=100.0),
     Param("radar.factor_model", "table",
           "radar TDOA/phase: 'table' = own noise (Table 2), 'derived' = from radar position",
-          "", str, choices=("table", "derived")),
-    Param("radar.sigma_range_coef", 0.01, "radar range sd as a fraction of range", "1/R",
-          float, 0.0, 1.0),
-    Param("radar.sigma_speed", 10.0, "radar speed sd", "m/s", float, 0.0, 1e4),
-    Param("radar.sigma_angle", 8e-3, "radar bearing sd", "rad", float, 0.0, 3.0),
-    Param("radar.sigma_tdoa", 3e-8, "radar TDOA sd ('table' model)", "s", float, 0.0, 1e-3),
-    Param("radar.sigma_phase", 0.5, "radar phase sd ('table' model)", "rad", float, 0.0, 10.0),
+          kind=str, choices=("table", "derived")),
+    Param("radar.sigma_range_coef", 0.01, "radar range sd as a fraction of range", "1/R", low=0.0,
+          high=1.0),
+    Param("radar.sigma_speed", 10.0, "radar speed sd", "m/s", low=0.0, high=1e4),
+    Param("radar.sigma_angle", 8e-3, "radar bearing sd", "rad", low=0.0, high=3.0),
+    Param("radar.sigma_tdoa", 3e-8, "radar TDOA sd ('table' model)", "s", low=0.0, high=1e-3),
+    Param("radar.sigma_phase", 0.5, "radar phase sd ('table' model)", "rad", low=0.0, high=10.0),
     Param("esm.sigma_speed", 20.0, "ESM speed sd (> 0: memberships divide by the summed "
-          "variance)", "m/s", float, 1e-6, 1e4),
-    Param("esm.sigma_angle", 0.03, "ESM bearing sd", "rad", float, 1e-6, 3.0),
-    Param("esm.sigma_tdoa", 3e-8, "ESM TDOA sd", "s", float, 1e-12, 1e-3),
-    Param("esm.sigma_phase", 1.0, "ESM phase sd (> 0)", "rad", float, 1e-6, 10.0),
+          "variance)", "m/s", low=1e-6, high=1e4),
+    Param("esm.sigma_angle", 0.03, "ESM bearing sd", "rad", low=1e-6, high=3.0),
+    Param("esm.sigma_tdoa", 3e-8, "ESM TDOA sd", "s", low=1e-12, high=1e-3),
+    Param("esm.sigma_phase", 1.0, "ESM phase sd (> 0)", "rad", low=1e-6, high=10.0),
     Param("esm.min_denominator", 1.0,
-          "TDOA-DF guard: |2(u'b - dr)| below this flags the sample invalid", "m", float,
-          0.0, 1e5),
+          "TDOA-DF guard: |2(u'b - dr)| below this flags the sample invalid", "m", low=0.0,
+          high=1e5),
     Param("noise.scale", 1.0,
           "multiplies every simulated noise draw (0 = noise-free data); the algorithms keep "
-          "the nominal sigmas", "", float, 0.0, 100.0),
+          "the nominal sigmas", "1", low=0.0, high=100.0),
     Param("weights", "root_exact", "AHP weights: root method, eigenvector, or the paper's "
-          "rounded set (5 factors only; subsets use the root method)", "", str,
+          "rounded set (5 factors only; subsets use the root method)", kind=str,
           choices=("root_exact", "eigen", "paper_rounded")),
-    Param("membership_norm", "l1", "normalization of the 1/d membership of 'improved'", "",
-          str, choices=("l1", "l2")),
+    Param("membership_norm", "l1", "normalization of the 1/d membership of 'improved'", kind=str,
+          choices=("l1", "l2")),
     Param("alpha.index", "nis_tdoa",
           "manoeuvre index: 'nis_tdoa' = windowed NIS of a constant-acceleration filter on the "
           "ESM range difference c*dt (default), 'literal' = paper eq. 8-13, residual of a CV "
-          "filter on the TDOA-DF range over its measurement variance", "", str,
+          "filter on the TDOA-DF range over its measurement variance", kind=str,
           choices=("nis_tdoa", "literal")),
-    Param("alpha.window", 5, "scans N averaged in the manoeuvre index", "samples", int,
-          1, 10_000),
+    Param("alpha.window", 5, "scans N averaged in the manoeuvre index", "samples", kind=int, low=1,
+          high=10_000),
     Param("alpha.max_mode", "chi2",
           "alpha_max of eq. 14: 'chi2' = quantile 1 - alpha.false_alarm of chi2(N)/N, the "
           "no-manoeuvre distribution of the 'nis_tdoa' index; 'fixed' = alpha.max; "
-          "'running_max' = running maximum of alpha", "", str,
+          "'running_max' = running maximum of alpha", kind=str,
           choices=("chi2", "fixed", "running_max")),
     Param("alpha.false_alarm", 0.01, "'chi2' mode: probability that the index of a "
-          "non-manoeuvring target exceeds alpha_max in a window", "", float, 1e-9, 0.5),
-    Param("alpha.max", 10.0, "alpha_max of eq. 14 in 'fixed' mode", "", float, 1e-6, 1e9),
+          "non-manoeuvring target exceeds alpha_max in a window", "1", low=1e-9, high=0.5),
+    Param("alpha.max", 10.0, "alpha_max of eq. 14 in 'fixed' mode", "1", low=1e-6, high=1e9),
     Param("alpha.accel_change_sd", 0.05,
           "'nis_tdoa': sd of the range-difference acceleration change over one period "
-          "(DWPA process noise)", "m/s^2", float, 0.0, 1e4),
+          "(DWPA process noise)", "m/s^2", low=0.0, high=1e4),
     Param("alpha.q", 1.0, "'literal': white acceleration variance of the range CV filter",
-          "m^2/s^4", float, 0.0, 1e6),
+          "m^2/s^4", low=0.0, high=1e6),
     Param("lrt.threshold", float(np.log(19.0)),
           "chi2_lrt: least best-vs-second log-likelihood ratio to declare a track "
-          "(log 19: 95 % between the two)", "nat", float, 0.0, 1e6),
+          "(log 19: 95 % between the two)", "nat", low=0.0, high=1e6),
     Param("gate.alpha", 0.001, "chi2_lrt: false-rejection probability of the chi-square "
-          "goodness-of-fit gate on the best track (0 = no gate)", "", float, 0.0, 0.5),
-    Param("baseline.factors", ["range", "speed", "angle"], "factors of 'traditional'", "",
-          list, choices=FACTORS),
-    Param("baseline.tau", 0.5, "Gaussian grade exp(-tau d^2/(s_E^2+s_R^2))", "", float,
-          1e-6, 1e6),
+          "goodness-of-fit gate on the best track (0 = no gate)", "1", low=0.0, high=0.5),
+    Param("baseline.factors", ["range", "speed", "angle"], "factors of 'traditional'", kind=list,
+          choices=FACTORS),
+    Param("baseline.tau", 0.5, "Gaussian grade exp(-tau d^2/(s_E^2+s_R^2))", "1", low=1e-6,
+          high=1e6),
     Param("baseline.spread", "nominal",
           "spread of the traditional Gaussian grade: 'nominal' = sensor sd at the scenario's "
           "noise-free geometry, averaged over the scans (static, default); 'trial_mean' = "
           "per-trial time mean of the sd from the measured values (static); 'per_sample' = "
           "sd recomputed at every scan from the measured bearing/TDOA/range (handicapped: "
-          "sharp when the ESM range falls short)", "", str,
+          "sharp when the ESM range falls short)", kind=str,
           choices=("nominal", "trial_mean", "per_sample")),
     Param("baseline.decision", "mean", "'traditional' decision: mean membership or majority "
-          "vote of per-scan decisions", "", str, choices=("mean", "vote")),
+          "vote of per-scan decisions", kind=str, choices=("mean", "vote")),
 )
 
 
@@ -569,16 +568,19 @@ def run_trial(params: Mapping[str, Any], streams: TrialStreams) -> list[dict]:
     return run_batch(params, [streams])[0]
 
 
-EXPERIMENT = Experiment(
-    name="esm_radar",
-    title="Paper 001: ESM-to-radar track association (improved fuzzy evaluation)",
-    params=PARAMS,
-    run_trial=run_trial,
-    run_batch=run_batch,
-    figures=plots.figures,
-    tables=plots.tables,
-    row_keys=("algorithm",),
-    binary_metrics=("correct", "decided"),
-    batch_size=100,
-    description=__doc__.split("\n\n")[0],
+
+ROW_METRICS = (
+    Metric("chosen", "track", "radar track chosen, 1..3, or 0 for no decision"),
+    Metric("correct", "1", "the ESM track was associated with its radar track", binary=True,
+           better="higher"),
+    Metric("decided", "1", "a radar track was chosen (always 1 except for chi2_lrt)",
+           binary=True),
+    Metric("margin", "1", "decision statistic's lead of the winner over the runner-up"),
+    Metric("range_weight_mean", "1", "range factor's weight, mean over the scans"),
+    Metric("range_weight_min", "1", "range factor's weight, minimum over the scans"),
+    Metric("alpha_mean", "1", "manoeuvre index, mean over the scans where it is defined"),
+    Metric("alpha_peak", "1", "manoeuvre index, maximum over the scans"),
+    Metric("esm_invalid", "samples", "TDOA-DF samples carried forward"),
+    Metric("esm_range_sigma_m", "m", "mean 1-sigma of the TDOA-DF range"),
 )
+"""Every metric column of the rows (see the module docstring)."""

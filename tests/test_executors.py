@@ -105,7 +105,7 @@ def test_kill_9_at_random_moments_then_resume_equals_uninterrupted(write_config,
     path = write_config("experiment: toy_experiments:BURN\ntrials: 320\nseed: 9\n"
                         "batch_size: 4\nparams: {work: 15}\n", "burn")
     out = tmp_path / "out"
-    command = [sys.executable, "-m", "cli.main", "run", str(path), "--out", str(out),
+    command = [sys.executable, "-m", "trackfuse", "run", str(path), "--out", str(out),
                "--workers", "2", "--no-plots", "--no-progress"]
     rng = random.Random(1234)
     kills, parts = 0, 0

@@ -41,6 +41,7 @@ values written into panel titles; its values are read, never simulated.
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -49,6 +50,8 @@ from numpy.typing import ArrayLike
 
 from trackfuse.plots.style import band, legend_below, new_figure, reference_line
 from trackfuse.reported import PASSIVE_ASSOC
+from trackfuse.results import FAILED_ROW
+from trackfuse.rundata import RunData, swept_keys
 from trackfuse.stats import proportion_difference_interval, t_interval, wilson_interval
 
 if TYPE_CHECKING:
@@ -71,9 +74,10 @@ BOUNDED = ("accuracy", "precision", "recall", "correct", "at_opt")
 # Shared helpers
 
 
-def _swept(config: dict) -> list[str]:
-    """Swept parameter keys of ``config``, the ``algorithms`` axis excluded."""
-    return [k for k in config.get("sweep", {}) if k != "algorithms"]
+def _grouping_keys(config: dict) -> list[str]:
+    """Swept keys that group rows into points: every one except the ``algorithms`` list
+    (whose rows are told apart by the ``algorithm`` row key)."""
+    return [k for k in swept_keys(config) if k != "algorithms"]
 
 
 def _point_label(values: dict[str, Any], config: dict, noise: bool = True) -> str:
@@ -121,7 +125,7 @@ def _clip(values: ArrayLike, metric: str) -> np.ndarray:
 
 def _points(summary: pd.DataFrame, config: dict) -> list[tuple[int, dict[str, Any]]]:
     """``(point, {swept key: value})`` for every sweep point, in point order."""
-    keys = [k for k in _swept(config) if k in summary]
+    keys = [k for k in _grouping_keys(config) if k in summary]
     first = summary.drop_duplicates("point").sort_values("point")
     return [(int(r["point"]), {k: r[k] for k in keys}) for _, r in first.iterrows()]
 
@@ -179,7 +183,7 @@ def _noise_figure(summary: pd.DataFrame, config: dict) -> Figure:
     variant dotted at its final checkpoint; grey verticals at sigma = 0.005 and
     sqrt(0.005) rad, the paper's noise figure read as a standard deviation or a variance.
     """
-    groups = [k for k in _swept(config) if k != "noise.sigma" and k in summary]
+    groups = [k for k in _grouping_keys(config) if k != "noise.sigma" and k in summary]
     parts = list(summary.groupby(groups, sort=True)) if groups else [((), summary)]
     fig, axes = new_figure(ncols=len(parts), nrows=2, width=3.8, height=3.0)
     axes = np.asarray(axes).reshape(2, len(parts))
@@ -307,7 +311,7 @@ def gap_interval(gap: ArrayLike, level: float = 0.95) -> tuple[float, float]:
 def _ok_rows(trials: pd.DataFrame) -> pd.DataFrame:
     """Trial rows that did not fail."""
     if "status" in trials:
-        return trials[trials["status"].astype(str) != "failed"]
+        return trials[trials["status"].astype(str) != FAILED_ROW]
     return trials
 
 
@@ -338,7 +342,7 @@ def checkpoint_metrics(trials: pd.DataFrame, config: dict) -> pd.DataFrame:
     recall (clipped to [0, 1]); Wilson for ``correct`` and ``at_opt``; percentile
     bootstrap for ``gap`` (:func:`gap_interval`); and the mean number of declared pairs.
     """
-    keys = ["point", *[k for k in _swept(config) if k in trials], "algorithm", "ops"]
+    keys = ["point", *[k for k in _grouping_keys(config) if k in trials], "algorithm", "ops"]
     rows = [{**dict(zip(keys, key, strict=True)), **_interval_columns(g)}
             for key, g in _ok_rows(trials).groupby(keys, sort=True)]
     return pd.DataFrame(rows)
@@ -354,8 +358,8 @@ COMPARED = ("pga_paper", "pga_evict", "pga_anneal")
 
 def _at_paper_setting(values: dict[str, Any], config: dict) -> bool:
     p = {**config.get("params", {}), **values}
-    same = all(p.get(k, v) == v for k, v in PAPER_SETTING.items())
-    return same and int(p.get("targets.n", 10)) in (5, 7, 10)
+    same = all(p[k] == v for k, v in PAPER_SETTING.items())
+    return same and int(p["targets.n"]) in (5, 7, 10)
 
 
 def _versus_exact(pga_rows: pd.DataFrame, exact: pd.DataFrame, metric: str) -> dict:
@@ -450,8 +454,30 @@ def paper_vs_reproduced(trials: pd.DataFrame, config: dict) -> pd.DataFrame:
 # Entry points of the experiment
 
 
-def figures(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> dict[str, Figure]:
-    """Paper-style figures for the swept axes present in ``config``.
+def _drawers(run: RunData) -> dict[str, Any]:
+    """Figure name -> a function drawing it, for the figures this run supports."""
+    summary, config = run.summary, run.config
+    drawers: dict[str, Any] = {}
+    pgas = _pga_names(summary)
+    if pgas and summary.loc[summary["algorithm"].isin(pgas), "ops"].nunique() > 1 \
+            and summary["point"].nunique() <= 6:
+        drawers["convergence"] = lambda: _convergence_figure(
+            summary, config, "accuracy", "measurement-level accuracy (fraction)",
+            "Paper 002, Fig. 2 analogue: association accuracy vs genetic operations", None)
+        drawers["at_optimum"] = lambda: _convergence_figure(
+            summary, config, "at_opt", "runs at the exact optimum (rate)",
+            "Paper 002: fraction of runs whose PGA solution reaches J*", 1.0)
+    swept = _grouping_keys(config)
+    if "noise.sigma" in swept:
+        drawers["noise"] = lambda: _noise_figure(summary, config)
+    if "targets.n" in swept and len(config["sweep"]["targets.n"]) >= 3:
+        drawers["scale"] = lambda: _scale_figure(
+            summary, checkpoint_metrics(run.trials, config), config)
+    return drawers
+
+
+def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure]:
+    """The ``wanted`` figures among those the swept axes of ``run`` support.
 
     * ``convergence`` (paper Fig. 2 analogue) and ``at_optimum`` (fraction of runs at the
       exact optimum): one panel per sweep point (at most 6), when PGA rows with more than
@@ -463,28 +489,13 @@ def figures(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> dict[s
     outcome; a Wilson interval over pooled measurements would ignore their within-scan
     correlation); rates (``correct``, ``at_opt``) with 95 % Wilson bands.
     """
-    out: dict[str, Figure] = {}
-    swept = _swept(config)
-    n_points = summary["point"].nunique()
-    pgas = _pga_names(summary)
-    if pgas and summary.loc[summary["algorithm"].isin(pgas), "ops"].nunique() > 1 \
-            and n_points <= 6:
-        out["convergence"] = _convergence_figure(
-            summary, config, "accuracy", "measurement-level accuracy (fraction)",
-            "Paper 002, Fig. 2 analogue: association accuracy vs genetic operations", None)
-        out["at_optimum"] = _convergence_figure(
-            summary, config, "at_opt", "runs at the exact optimum (rate)",
-            "Paper 002: fraction of runs whose PGA solution reaches J*", 1.0)
-    if "noise.sigma" in swept:
-        out["noise"] = _noise_figure(summary, config)
-    if "targets.n" in swept and len(config["sweep"]["targets.n"]) >= 3:
-        out["scale"] = _scale_figure(summary, checkpoint_metrics(trials, config), config)
-    return out
+    return {name: draw() for name, draw in _drawers(run).items() if name in wanted}
 
 
-def tables(trials: pd.DataFrame, summary: pd.DataFrame, config: dict) -> dict[str, pd.DataFrame]:
+def tables(run: RunData) -> dict[str, pd.DataFrame]:
     """``checkpoints``, ``final`` and ``paper_vs_reproduced`` (module docstring), from the
-    trial rows (``summary`` is not needed), rounded to 4 digits."""
+    trial rows, rounded to 4 digits."""
+    trials, config = run.trials, run.config
     metrics = checkpoint_metrics(trials, config)
     last = metrics.groupby(["point", "algorithm"])["ops"].transform("max")
     final = metrics[metrics["ops"] == last].reset_index(drop=True)

@@ -42,7 +42,8 @@ the PGA variants take fixed children of ``algo`` by their position in :data:`VAR
 (append new variants at the end), so adding or removing an algorithm in a config changes no
 other number.
 
-Figures and report tables, drawn from the saved CSVs: :mod:`trackfuse.plots.passive_assoc`.
+Figures and report tables, drawn from the saved CSVs:
+:mod:`trackfuse.experiments.passive_assoc.report`.
 """
 
 from __future__ import annotations
@@ -52,11 +53,10 @@ from typing import Any
 
 import numpy as np
 
-from trackfuse.association.assignment import pair_weights, solve_exact
+from trackfuse.association.assignment import COSTS, EXACT, pair_weights, solve_exact
 from trackfuse.association.passive_scene import scene_targets, simulate_scan, true_partners
 from trackfuse.association.pga import CHECKPOINTS, pga
-from trackfuse.experiments.base import Experiment, Param
-from trackfuse.plots import passive_assoc as plots
+from trackfuse.experiments.base import Metric, Param
 from trackfuse.seeding import TrialStreams
 
 #: PGA variants: name -> options of :func:`trackfuse.association.pga.pga`.
@@ -75,51 +75,43 @@ AT_OPT_RTOL = 1e-9
 PARAMS = (
     Param("scene.mode", "paper", "target set: the paper's M1..Mn, or n uniform in their box",
           kind=str, choices=("paper", "random")),
-    Param("targets.n", 10, "number of targets (paper scene: first n of M1-M10)", "count",
-          kind=int, low=1, high=2000),
+    Param("targets.n", 10, "number of targets (paper scene: first n of M1-M10)", "count", kind=int,
+          low=1, high=2000),
     Param("noise.sigma", 0.005, "the paper's angle-error figure (azimuth and elevation, both "
-          "sensors), read as a standard deviation or a variance per noise.reading", "rad",
-          low=1e-7, high=1.0),
+          "sensors), read as a standard deviation or a variance per noise.reading", "rad", low=1e-7,
+          high=1.0),
     Param("noise.reading", "std", "reading of noise.sigma: 'std' (sigma = value) or "
           "'variance' (sigma = sqrt(value), in rad^2)", kind=str, choices=("std", "variance")),
-    Param("sensor.p_d", 0.95, "detection probability of each sensor", "probability",
-          low=1e-3, high=1.0),
-    Param("clutter.p_f", 0.05, "false alarms per sensor: Poisson(p_f N) or Binomial(N, p_f)",
-          "probability", low=0.0, high=1.0),
+    Param("sensor.p_d", 0.95, "detection probability of each sensor", "1", low=1e-3, high=1.0),
+    Param("clutter.p_f", 0.05, "false alarms per sensor: Poisson(p_f N) or Binomial(N, p_f)", "1",
+          low=0.0, high=1.0),
     Param("clutter.model", "poisson", "false-alarm count model", kind=str,
           choices=("poisson", "binomial")),
-    Param("clutter.margin", 0.1, "FOV box margin around the true target angles", "rad",
-          low=0.0, high=1.0),
+    Param("clutter.margin", 0.1, "FOV box margin around the true target angles", "rad", low=0.0,
+          high=1.0),
     Param("assoc.p_f", 0.05, "the paper's false-measurement likelihood p_f in a_i0 = ln p_f "
-          "(cost 'paper' only)", "probability", low=1e-12, high=1.0),
+          "(cost 'paper' only)", "1", low=1e-12, high=1.0),
     Param("assoc.tri", "unit_normal", "triangulation of a candidate pair", kind=str,
           choices=("paper", "unit_normal", "wls", "ml")),
     Param("assoc.cost", "paper", "assignment weights: the paper's (sign-corrected) or "
-          "Pattipati's FOV-normalised likelihood ratio", kind=str,
-          choices=("paper", "pattipati")),
+          "Pattipati's FOV-normalised likelihood ratio", kind=str, choices=COSTS),
     Param("assoc.exact", "lsa_clip", "exact solver for the reference optimum", kind=str,
-          choices=("lsa_clip", "lsa_augmented")),
+          choices=EXACT),
     Param("algorithms", ["exact", "pga_paper", "pga_evict"], "solvers reported per trial",
           kind=list, choices=ALGORITHMS),
-    Param("pga.ops", 1000, "genetic operations per PGA run", "count", kind=int, low=0,
-          high=10**7),
+    Param("pga.ops", 1000, "genetic operations per PGA run", "count", kind=int, low=0, high=10**7),
     Param("pga.checkpoints", list(CHECKPOINTS), "operation counts at which the best "
           "solution is scored (values above pga.ops are ignored; pga.ops itself is always "
-          "scored)", "count", kind=list,
-          low=0, high=10**7),
-    Param("pga.p_m", 0.2, "mutation probability per genetic operation", "probability",
-          low=0.0, high=1.0),
+          "scored)", "count", kind=list, low=0, high=10**7),
+    Param("pga.p_m", 0.2, "mutation probability per genetic operation", "1", low=0.0, high=1.0),
     Param("pga.init", "random_B", "initial individual: random injection or identity "
           "(paper eq. 31)", kind=str, choices=("random_B", "standard")),
     Param("pga.roulette", "worse", "roulette direction: badly placed columns swapped more "
-          "often ('worse') or well placed ones ('better')", kind=str,
-          choices=("worse", "better")),
+          "often ('worse') or well placed ones ('better')", kind=str, choices=("worse", "better")),
     Param("pga.second", "roulette", "second crossover column: roulette over the rest or "
           "uniform", kind=str, choices=("roulette", "uniform")),
-    Param("pga.t0", 2.0, "initial annealing temperature (pga_anneal)", "nat", low=1e-9,
-          high=1e6),
-    Param("pga.t1", 0.01, "final annealing temperature (pga_anneal)", "nat", low=1e-9,
-          high=1e6),
+    Param("pga.t0", 2.0, "initial annealing temperature (pga_anneal)", "nat", low=1e-9, high=1e6),
+    Param("pga.t1", 0.01, "final annealing temperature (pga_anneal)", "nat", low=1e-9, high=1e6),
 )
 
 
@@ -204,17 +196,22 @@ def run_trial(params: dict[str, Any], streams: TrialStreams) -> list[dict[str, A
     return rows
 
 
-EXPERIMENT = Experiment(
-    name="passive_assoc",
-    title="Paper 002: two-sensor passive association, improved PGA vs the exact optimum",
-    params=PARAMS,
-    run_trial=run_trial,
-    figures=plots.figures,
-    tables=plots.tables,
-    row_keys=("algorithm", "ops"),
-    binary_metrics=("correct", "at_opt"),
-    batch_size=25,
-    description=__doc__.splitlines()[0],
-)
 
-__all__ = ["EXPERIMENT", "run_trial", "score", "sigma_of"]
+ROW_METRICS = (
+    Metric("accuracy", "1", "measurement-level accuracy: measurements given their true "
+           "partner (or the dummy)", better="higher"),
+    Metric("precision", "1", "declared pairs that are true pairs", better="higher"),
+    Metric("recall", "1", "true pairs that are declared", better="higher"),
+    Metric("correct", "1", "the whole assignment is right", binary=True, better="higher"),
+    Metric("pairs", "pairs", "declared pairs"),
+    Metric("at_opt", "1", "the solution reaches the exact optimum J*", binary=True,
+           better="higher"),
+    Metric("gap", "1", "J* - J, the objective gap to the exact optimum (log-likelihood "
+           "ratio)", better="lower"),
+    Metric("objective", "1", "the objective J of the solution (log-likelihood ratio)"),
+    Metric("solve_time_s", "s", "wall seconds of the solver"),
+    Metric("weights_time_s", "s", "wall seconds of the pair weights"),
+)
+"""Every metric column of the rows (see the module docstring)."""
+
+__all__ = ["ROW_METRICS", "run_trial", "score", "sigma_of"]

@@ -17,10 +17,10 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-from cli.main import app
 from trackfuse.config import load
 from trackfuse.results import RunFolder
 from trackfuse.runner import RunInterrupted, Runner
+from trackfuse_cli.main import app
 
 CFG = """
 experiment: toy_experiments:TIMED
@@ -193,7 +193,7 @@ def test_ctrl_c_during_the_finish_leaves_an_interrupted_run_that_resumes(
     config, out, folder = copy
     as_interrupted(folder)
     target = {"merge": (RunFolder, "merge"), "summary": ("trackfuse.runner.summarize", None),
-              "figures": ("trackfuse.runner.draw_reports", None)}[stage]
+              "figures": ("trackfuse.runner.write_report", None)}[stage]
 
     def interrupt(*args, **kwargs):
         raise KeyboardInterrupt
@@ -252,10 +252,10 @@ def _files(folder: Path) -> list[str]:
 def test_the_reference_folder_holds_every_kind_of_file(reference):
     names = _files(reference[2])
     for expected in ("config.yaml", "manifest.json", "trials.csv", "timings.csv", "summary.csv",
-                     "timings_summary.csv", "figures/estimate.png", ".lock",
-                     "parts/p000001-b0000001.timings.csv"):
+                     "timings_summary.csv", "figures/estimate.png", ".lock", "index.md",
+                     "index.html", "parts/p000001-b0000001.timings.csv"):
         assert expected in names
-    assert len(names) == 8 + 2 + 7
+    assert len(names) == 8 + 2 + 2 + 7
 
 
 @pytest.mark.parametrize("state", ["complete", "interrupted"])

@@ -15,9 +15,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
-from cli.main import app
 from trackfuse.config import load
 from trackfuse.runner import Runner
+from trackfuse_cli.main import app
 
 CFG = """
 experiment: toy_experiments:GAUSSIAN

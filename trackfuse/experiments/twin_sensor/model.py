@@ -53,7 +53,8 @@ Losses are permanent; a trial's flags are the values at the last scan. A trial w
 produced non-finite numbers is flagged lost (both rules) and inconsistent from then on,
 with NaN errors.
 The PCRLB overlay of the figures is recomputed from the config (deterministic, :func:`bounds`),
-not stored as rows. Figures and the report table live in :mod:`trackfuse.plots.twin_sensor`.
+not stored as rows. Figures and the report tables live in
+:mod:`trackfuse.experiments.twin_sensor.report`.
 
 Choices the paper leaves open (and why)
 --------------------------------------
@@ -83,8 +84,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from trackfuse.experiments.base import Experiment, Param
-from trackfuse.plots import twin_sensor as plots
+from trackfuse.experiments.base import Metric, Param
 from trackfuse.seeding import TrialStreams
 from trackfuse.tracking.initialization import los_prior_covariance, range_cue_sd
 from trackfuse.tracking.models import cv_process_noise, cv_transition, wrap
@@ -112,77 +112,77 @@ MAX_SENSORS = 2
 ALGORITHMS = tuple(f"{a}/{f}" for a, f in product(METHODS, FILTERS))
 
 PARAMS = (
-    Param("scan.period", 1.0, "Sampling period T", "s", float, 1e-3, 100.0),
-    Param("scan.count", 20, "Number of scans after initialization at t = 0", "scans", int, 1,
-          1000),
+    Param("scan.period", 1.0, "Sampling period T", "s", low=1e-3, high=100.0),
+    Param("scan.count", 20, "Number of scans after initialization at t = 0", "scans", kind=int,
+          low=1, high=1000),
     Param("target.position", [0.0, 128558.0, 4000.0], "True target position at t = 0 (x, y, z)",
-          "m", list),
-    Param("target.velocity", [0.0, 0.0, 0.0], "True target velocity at t = 0", "m/s", list),
+          "m", kind=list),
+    Param("target.velocity", [0.0, 0.0, 0.0], "True target velocity at t = 0", "m/s", kind=list),
     Param("target.q", 0.0, "Truth process-noise acceleration variance (0 = stationary or exact "
-          "CV truth)", "m^2/s^4", float, 0.0, 1e6),
-    Param("platform.motion", "orbit", "Platform trajectory of sensor 1", "", str,
+          "CV truth)", "m^2/s^4", low=0.0, high=1e6),
+    Param("platform.motion", "orbit", "Platform trajectory of sensor 1", kind=str,
           choices=("orbit", "straight")),
-    Param("platform.start", [153209.0, 0.0, 2000.0], "Platform position at t = 0", "m", list),
-    Param("platform.speed", 500.0, "Horizontal platform speed", "m/s", float, 0.0, 5000.0),
-    Param("platform.climb", 50.0, "Vertical platform rate", "m/s", float, -1000.0, 1000.0),
-    Param("platform.direction", 1, "Orbit sense: +1 counter-clockwise, -1 clockwise", "1", int,
+    Param("platform.start", [153209.0, 0.0, 2000.0], "Platform position at t = 0", "m", kind=list),
+    Param("platform.speed", 500.0, "Horizontal platform speed", "m/s", low=0.0, high=5000.0),
+    Param("platform.climb", 50.0, "Vertical platform rate", "m/s", low=-1000.0, high=1000.0),
+    Param("platform.direction", 1, "Orbit sense: +1 counter-clockwise, -1 clockwise", "1", kind=int,
           choices=(1, -1)),
     Param("platform.heading", 90.0, "Course of straight flight, from +x towards +y", "deg",
-          float, -360.0, 360.0),
-    Param("sensors.count", 2, "Number of sensors (1 = sensor 1 only)", "1", int, 1, 2),
+          low=-360.0, high=360.0),
+    Param("sensors.count", 2, "Number of sensors (1 = sensor 1 only)", "sensors", kind=int,
+          low=1, high=2),
     Param("sensors.baseline", 0.0, "Horizontal formation offset of sensor 2 from sensor 1",
-          "m", float, 0.0, 1e6),
+          "m", low=0.0, high=1e6),
     Param("sensors.baseline_angle", 90.0, "Direction of the baseline from the initial line of "
-          "sight (90 = broadside)", "deg", float, -360.0, 360.0),
+          "sight (90 = broadside)", "deg", low=-360.0, high=360.0),
     Param("sensors.sigma_az", 0.01, "Azimuth noise standard deviation of sensor 1 (paper: 0.01)",
-          "rad",
-          float, 1e-6, 1.0),
+          "rad", low=1e-6, high=1.0),
     Param("sensors.sigma_el_ratio", 1.0, "Elevation noise standard deviation relative to the "
-          "azimuth one (1: equal accuracy, the default sigma_el = 0.01 rad)", "1", float,
-          1e-3, 1e3),
-    Param("sensors.pd", 1.0, "Detection probability of sensor 1", "1", float, 0.0, 1.0),
+          "azimuth one (1: equal accuracy, the default sigma_el = 0.01 rad)", "1", low=1e-3,
+          high=1e3),
+    Param("sensors.pd", 1.0, "Detection probability of sensor 1", "1", low=0.0, high=1.0),
     Param("sensor2.noise_ratio", 1.0, "Sensor 2 noise standard deviations relative to sensor 1",
-          "1", float, 1e-3, 1e3),
+          "1", low=1e-3, high=1e3),
     Param("sensor2.pd_ratio", 1.0, "Sensor 2 detection probability relative to sensor 1", "1",
-          float, 0.0, 1.0),
+          low=0.0, high=1.0),
     Param("clutter.model", "in_gate", "Clutter model: uniform in each filter's gate, or in a "
-          "fixed window about the true line of sight", "", str, choices=("in_gate", "window")),
+          "fixed window about the true line of sight", kind=str, choices=("in_gate", "window")),
     Param("clutter.mean", 0.0, "Mean number of false returns per sensor and scan (in the gate "
-          "or window)", "returns/scan", float, 0.0, 200.0),
+          "or window)", "returns/scan", low=0.0, high=200.0),
     Param("clutter.window", 0.1, "Half-width of the window clutter box in azimuth and elevation",
-          "rad", float, 1e-4, 1.0),
+          "rad", low=1e-4, high=1.0),
     Param("init.range_cue", "absolute", "How the radar range cue's standard deviation is "
           "given: in metres (init.sigma_range) or as a fraction of the true initial range "
-          "(init.sigma_range_fraction)", "", str, choices=("absolute", "relative")),
+          "(init.sigma_range_fraction)", kind=str, choices=("absolute", "relative")),
     Param("init.sigma_range", 20000.0, "Initial range standard deviation of an absolute cue "
-          "(paper default: 20 km = 10 % of 200 km)", "m", float, 1.0, 1e7),
+          "(paper default: 20 km = 10 % of 200 km)", "m", low=1.0, high=1e7),
     Param("init.sigma_range_fraction", 0.1, "Initial range standard deviation of a relative "
-          "cue, as a fraction of the true range from sensor 1 at t = 0", "1", float, 1e-4, 10.0),
+          "cue, as a fraction of the true range from sensor 1 at t = 0", "1", low=1e-4, high=10.0),
     Param("init.sigma_angle", float(0.01 / np.sqrt(2.0)), "Initial cross-range standard "
-          "deviation per axis, as an angle", "rad", float, 1e-7, 1.0),
+          "deviation per axis, as an angle", "rad", low=1e-7, high=1.0),
     Param("init.sigma_velocity", 30.0, "Initial velocity standard deviation per axis", "m/s",
-          float, 1e-3, 1e4),
-    Param("filter.q", 900.0, "Filter process-noise acceleration variance", "m^2/s^4", float,
-          0.0, 1e8),
-    Param("gate.pg", 0.99, "Gate probability P_G", "1", float, 0.5, 0.999999),
+          low=1e-3, high=1e4),
+    Param("filter.q", 900.0, "Filter process-noise acceleration variance", "m^2/s^4", low=0.0,
+          high=1e8),
+    Param("gate.pg", 0.99, "Gate probability P_G", "1", low=0.5, high=0.999999),
     Param("filter.mg_at", "hypothesis", "Where the MGEKF modified rows are evaluated: each "
-          "hypothesis's own returns, or the beta-weighted combined return (W000-4)", "", str,
+          "hypothesis's own returns, or the beta-weighted combined return (W000-4)", kind=str,
           choices=("hypothesis", "combined")),
-    Param("pda.joint_cov", "full", "Joint innovation covariance of the pair hypotheses", "",
-          str, choices=("full", "blockdiag")),
-    Param("pda.density", "parametric", "Clutter density: true value or m_s / V_s", "", str,
+    Param("pda.joint_cov", "full", "Joint innovation covariance of the pair hypotheses", kind=str,
+          choices=("full", "blockdiag")),
+    Param("pda.density", "parametric", "Clutter density: true value or m_s / V_s", kind=str,
           choices=("parametric", "nonparametric")),
     Param("algorithms", list(ALGORITHMS), "Algorithm variants run on the same data, as "
-          "association/filter", "", list, choices=ALGORITHMS),
+          "association/filter", kind=list, choices=ALGORITHMS),
     Param("loss.window", 3, "Consecutive scans with the target outside every gate that mean "
-          "a lost track (gate rule)", "scans", int, 1, 1000),
+          "a lost track (gate rule)", "scans", kind=int, low=1, high=1000),
     Param("loss.angle_sigmas", 3.0, "Angle rule: a scan counts as off-target when the "
           "estimate's azimuth or elevation seen from sensor 1 is further than this many "
-          "sensor-1 noise standard deviations from the true one", "1", float, 0.1, 1e3),
+          "sensor-1 noise standard deviations from the true one", "1", low=0.1, high=1e3),
     Param("loss.angle_window", 3, "Consecutive off-target scans that mean a lost track "
-          "(angle rule)", "scans", int, 1, 1000),
+          "(angle rule)", "scans", kind=int, low=1, high=1000),
     Param("loss.nees_quantile", 0.999, "Chi-square (3 dof) quantile above which the final "
-          "position NEES marks the filter inconsistent", "1", float, 0.5, 0.999999),
+          "position NEES marks the filter inconsistent", "1", low=0.5, high=0.999999),
 )
 
 
@@ -394,10 +394,28 @@ class LossRules:
                    float(stats.chi2.ppf(float(params["loss.nees_quantile"]), 3)))
 
 
-METRICS = ("range_err_m", "range_sq_err_m2", "pos_sq_err_m2", "nees", "nees_pos", "n_valid",
-           "lost_gate", "lost_angle", "inconsistent_nees")
-"""Per-scan metric columns of :func:`run_filter` (see the module docstring)."""
-BINARY_METRICS = ("lost_gate", "lost_angle", "inconsistent_nees")
+ROW_METRICS = (
+    Metric("range_err_m", "m", "signed range error from platform 1 (its mean is the range "
+           "bias)"),
+    Metric("range_sq_err_m2", "m^2", "squared range error (its mean is the range MSE)",
+           better="lower"),
+    Metric("pos_sq_err_m2", "m^2", "squared position error (its mean is the position MSE)",
+           better="lower"),
+    Metric("nees", "1", "6-state normalized estimation error squared"),
+    Metric("nees_pos", "1", "position normalized estimation error squared"),
+    Metric("n_valid", "returns", "validated returns per sensor (mean over sensors)"),
+    Metric("lost_gate", "1", "lost by the gate rule (permanent)", binary=True, better="lower"),
+    Metric("lost_angle", "1", "lost by the angle rule (permanent)", binary=True,
+           better="lower"),
+    Metric("inconsistent_nees", "1", "position NEES above its chi-square quantile",
+           binary=True, better="lower"),
+    Metric("cpu_time_s", "s", "CPU seconds per scan of this algorithm (batch time shared "
+           "evenly)"),
+)
+"""Every metric column of the rows (see the module docstring)."""
+METRICS = tuple(m.name for m in ROW_METRICS if not m.name.endswith("_time_s"))
+"""Per-scan metric columns of :func:`run_filter`."""
+BINARY_METRICS = tuple(m.name for m in ROW_METRICS if m.binary)
 """The 0/1 columns among :data:`METRICS` (Wilson intervals in the summary)."""
 
 
@@ -578,17 +596,3 @@ def _bounds_cached(key: tuple, q_model: float | None, truth_samples: int):
     Jinv = information_recursion(np.linalg.inv(sc.P0), sc.F, Q, Jz, q2)
     return range_bound(Jinv[1:], x_mean[1:], sc.platform[1:]), position_bound(Jinv[1:])
 
-
-EXPERIMENT = Experiment(
-    name="twin_sensor",
-    title="Paper 000: twin-sensor angle-only tracking (MGEKF, fused-gate PDA) vs PCRLB",
-    params=PARAMS,
-    run_trial=run_trial,
-    run_batch=run_batch,
-    figures=plots.figures,
-    tables=plots.tables,
-    row_keys=("algorithm", "scan"),
-    binary_metrics=BINARY_METRICS,
-    batch_size=100,
-    description=__doc__ or "",
-)

@@ -2,7 +2,7 @@
 
 Zhang Xiaoqiang et al., "An ESM-radar track correlation algorithm based on improved fuzzy
 comprehensive evaluation", J. Air Force Eng. Univ. (Nat. Sci.) 18(1), 2017, 44-49. The
-experiment itself (scenario, algorithms, rows) is :mod:`trackfuse.experiments.esm_radar`.
+experiment itself (scenario, algorithms, rows) is :mod:`trackfuse.experiments.esm_radar.model`.
 
 Figures, returned by :func:`figures`:
 
@@ -38,14 +38,13 @@ paper_vs_reproduced  what paper 001 reports (:data:`trackfuse.reported.ESM_RADAR
                      or not).
 ===================  ======================================================================
 
-The science (simulation, algorithms, AHP weight subsets) stays in the experiment module,
-which imports this one to register :func:`figures` and :func:`tables`; functions here that
-need it import it when called, never at import time (that import would be circular).
+The science (simulation, algorithms, AHP weight subsets) is
+:mod:`trackfuse.experiments.esm_radar.model`; this module imports it, never the reverse.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -54,8 +53,21 @@ from scipy.stats import binomtest
 
 from trackfuse.association import ahp
 from trackfuse.association.esm_scenario import FACTORS
+from trackfuse.experiments.esm_radar.model import (
+    ALGORITHMS,
+    N_TRACKS,
+    THREE,
+    alpha_max,
+    differences,
+    evaluate,
+    factor_names,
+    manoeuvre_alpha,
+    simulate,
+    static_weights,
+)
 from trackfuse.plots.style import band, new_figure, reference_line
 from trackfuse.reported import ESM_RADAR, ESM_RADAR_WEIGHTS
+from trackfuse.rundata import RunData, swept_keys
 from trackfuse.seeding import trial_streams
 from trackfuse.stats import t_interval, wilson_interval
 
@@ -63,19 +75,13 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 
-def _swept(config: Mapping[str, Any], frame: pd.DataFrame) -> list[str]:
-    """The config's swept keys that are columns of ``frame`` (trials or summary)."""
-    return [k for k in config.get("sweep", {}) if k in frame.columns]
-
-
 # --------------------------------------------------------------------------- tables
 
 def table3(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
     """Counts per chosen radar track (and "no decision"), correct rate with its Wilson 95 %
     interval, and the rate of wrong decisions, per point and algorithm."""
-    from trackfuse.experiments.esm_radar import N_TRACKS
 
-    keys = _swept(config, trials)
+    keys = swept_keys(config)
     out = []
     for group, g in trials.groupby(["point", *keys, "algorithm"], sort=False):
         n = len(g)
@@ -100,11 +106,10 @@ def ablation(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
     binomial test of those counts (Q. McNemar, Psychometrika 12, 1947, 153-157). Empty when
     ``improved`` was not run.
     """
-    from trackfuse.experiments.esm_radar import ALGORITHMS, factor_names
 
     if "improved" not in set(trials["algorithm"]):
         return pd.DataFrame()
-    keys = _swept(config, trials)
+    keys = swept_keys(config)
     wide = trials.pivot_table(index=["point", *keys, "trial"], columns="algorithm",
                               values="correct", aggfunc="first")
     params = config["params"]
@@ -142,7 +147,6 @@ def ahp_table() -> pd.DataFrame:
     weights by factor name, ``lambda_max``, ``CI`` and ``CR``, plus the paper's printed
     rounded weights and consistency numbers for comparison.
     """
-    from trackfuse.experiments.esm_radar import THREE
 
     out = []
     for names in (FACTORS, THREE):
@@ -231,7 +235,7 @@ def paper_vs_reproduced(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.D
     paper's value lies inside our interval (widened by the tolerance). Values come from
     :data:`trackfuse.reported.ESM_RADAR`.
     """
-    keys = _swept(config, trials)
+    keys = swept_keys(config)
     t3 = table3(trials, config)
     out = []
     for _, row in t3[t3["algorithm"].isin(["improved", "traditional"])].iterrows():
@@ -245,9 +249,9 @@ def paper_vs_reproduced(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.D
     return pd.DataFrame(out)
 
 
-def tables(trials: pd.DataFrame, summary: pd.DataFrame,
-           config: dict[str, Any]) -> dict[str, pd.DataFrame]:
-    """The Table 3 analogue, the ablation table and the AHP weights (``summary`` unused)."""
+def tables(run: RunData) -> dict[str, pd.DataFrame]:
+    """The Table 3 analogue, the ablation table and the AHP weights (from ``trials.csv``)."""
+    trials, config = run.trials, run.config
     out = {"table3": table3(trials, config), "ahp": ahp_table(),
            "paper_vs_reproduced": paper_vs_reproduced(trials, config)}
     abl = ablation(trials, config)
@@ -286,10 +290,9 @@ def _algorithm_line_style(name: str) -> dict[str, Any]:
 def _correct_rate_figure(summary: pd.DataFrame, config: Mapping[str, Any]) -> Figure:
     """Correct-association rate (fraction) with Wilson bands, from the ``correct`` rows of
     the summary: curves against the first numeric swept key, else bars per algorithm."""
-    from trackfuse.experiments.esm_radar import N_TRACKS
 
     s = summary[summary["metric"] == "correct"]
-    sweep = _swept(config, s)
+    sweep = swept_keys(config)
     numeric = [k for k in sweep if pd.api.types.is_numeric_dtype(s[k])]
     x = numeric[0] if numeric else None
     panel_keys = [k for k in sweep if k != x]
@@ -344,36 +347,11 @@ def _correct_rate_figure(summary: pd.DataFrame, config: Mapping[str, Any]) -> Fi
     return fig
 
 
-def _point0_params(trials: pd.DataFrame, config: Mapping[str, Any]) -> dict[str, Any]:
-    """The params of sweep point 0: the config's params with point 0's swept values, read
-    back from ``trials.csv`` and cast to their schema type."""
-    from trackfuse.experiments.esm_radar import PARAMS
-
-    params = dict(config["params"])
-    row = trials[trials["point"] == 0].iloc[0]
-    schema = {p.key: p for p in PARAMS}
-    for key in config.get("sweep", {}):
-        value = row[key]
-        kind = schema[key].kind
-        # trials.csv stores bools as 0/1: the schema type casts them back.
-        params[key] = kind(value) if kind in (int, float, str, bool) else value
-    return params
-
-
-def _trajectory_figure(trials: pd.DataFrame, config: Mapping[str, Any]) -> Figure:
+def _trajectory_figure(run: RunData) -> Figure:
     """Paper 001 Figs. 1-2: re-simulate trial 0 of point 0 and draw its tracks (km) and the
     per-scan manoeuvre index and range weight of ``improved`` against time (s)."""
-    from trackfuse.experiments.esm_radar import (
-        ALGORITHMS,
-        N_TRACKS,
-        alpha_max,
-        differences,
-        evaluate,
-        simulate,
-        static_weights,
-    )
 
-    params = _point0_params(trials, config)
+    trials, config, params = run.trials, run.config, run.point_params(0)
     sim = simulate(params, [trial_streams(int(config["seed"]), 0, 0)])
     fig, (ax, ax2) = new_figure(ncols=2, width=5.0, height=4.0)
     names = ("T1 (snake)", "T2 (snake, ESM target)", "T3 (crossing)")
@@ -435,15 +413,15 @@ def _index_band(ax, t: np.ndarray, alpha: np.ndarray, label: str, **kw) -> None:
     band(ax, t[ok], a.mean(axis=0), lo, hi, label=label, marker="", **kw)
 
 
-def _manoeuvre_figure(trials: pd.DataFrame, config: Mapping[str, Any]) -> Figure:
+def _manoeuvre_figure(run: RunData) -> Figure:
     """Mean manoeuvre index against time (s), with and without the snake, for the default
     detector and the paper's literal index. *Recomputed*: the first
     :data:`MANOEUVRE_TRIALS` trials of point 0 are re-simulated with the runner's streams at
-    the point's snake amplitude (1000 m if it is 0) and at amplitude 0 (same noise)."""
-    from trackfuse.experiments.esm_radar import alpha_max, manoeuvre_alpha, simulate
+    the point's snake amplitude (the schema default if it is 0) and at amplitude 0 (same
+    noise)."""
 
-    params = _point0_params(trials, config)
-    amplitude = params["snake.amplitude"] or 1000.0
+    config, params = run.config, run.point_params(0)
+    amplitude = params["snake.amplitude"] or run.experiment.defaults()["snake.amplitude"]
     n = min(int(config["trials"]), MANOEUVRE_TRIALS)
     streams = [trial_streams(int(config["seed"]), 0, t) for t in range(n)]
     sims = {a: simulate(dict(params, **{"snake.amplitude": a}), streams)
@@ -474,9 +452,10 @@ def _manoeuvre_figure(trials: pd.DataFrame, config: Mapping[str, Any]) -> Figure
     return fig
 
 
-def figures(trials: pd.DataFrame, summary: pd.DataFrame,
-            config: dict[str, Any]) -> dict[str, Figure]:
-    """``correct_rate`` from the summary; ``trajectory`` and ``manoeuvre`` recomputed."""
-    return {"correct_rate": _correct_rate_figure(summary, config),
-            "trajectory": _trajectory_figure(trials, config),
-            "manoeuvre": _manoeuvre_figure(trials, config)}
+def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure]:
+    """The ``wanted`` figures among ``correct_rate`` (from the summary), ``trajectory`` and
+    ``manoeuvre`` (recomputed)."""
+    drawers = {"correct_rate": lambda: _correct_rate_figure(run.summary, run.config),
+               "trajectory": lambda: _trajectory_figure(run),
+               "manoeuvre": lambda: _manoeuvre_figure(run)}
+    return {name: draw() for name, draw in drawers.items() if name in wanted}

@@ -1,0 +1,30 @@
+"""trackfuse.catalog: finding run folders; `trackfuse runs`; --name."""
+
+from __future__ import annotations
+
+import json
+
+from typer.testing import CliRunner
+
+from trackfuse.catalog import find_runs
+from trackfuse.config import load
+from trackfuse.runner import Runner
+from trackfuse_cli.main import app
+
+
+def test_runs_lists_run_folders_with_their_name_and_plot_lists_a_folder_of_runs(
+        write_config, tmp_path):
+    cfg = write_config("experiment: toy_gaussian\ntrials: 4\nseed: 1\n", name="gauss")
+    out = tmp_path / "out"
+    Runner(load(cfg), out, progress=False, plots=False, name="first try").run()
+    Runner(load(cfg, {"seed": 2}), out, progress=False, plots=False).run()
+    found = find_runs(out)
+    assert sorted((r.stem, r.name, r.status, r.trials_done) for r in found) == \
+        [("gauss", "", "complete", 4), ("gauss", "first try", "complete", 4)]
+    again = Runner(load(cfg), out, progress=False, plots=False)  # resume keeps the name
+    again.run()
+    assert json.loads((again.folder.path / "manifest.json").read_text())["name"] == "first try"
+    listed = CliRunner().invoke(app, ["runs", str(out)])
+    assert listed.exit_code == 0 and "first try" in listed.stdout
+    plotted = CliRunner().invoke(app, ["plot", str(out / "gauss")])
+    assert plotted.exit_code == 0 and "folder of runs" in plotted.stdout

@@ -1,0 +1,189 @@
+"""The house rules a reviewer would otherwise check by hand: imports flow one way, the runner
+draws nothing, functions stay short, experiments declare what their reports draw."""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from trackfuse import experiments
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = {"trackfuse": ROOT / "trackfuse", "trackfuse_cli": ROOT / "cli"}
+MAX_FUNCTION_LINES = 60
+
+
+def _modules() -> dict[str, Path]:
+    """Every module of the installed packages by dotted name."""
+    found = {}
+    for package, folder in PACKAGES.items():
+        for path in sorted(folder.rglob("*.py")):
+            parts = list(path.relative_to(folder).with_suffix("").parts)
+            if parts[-1] == "__init__":
+                parts = parts[:-1]
+            found[".".join([package, *parts])] = path
+    return found
+
+
+MODULES = _modules()
+
+
+def _is_ours(name: str) -> bool:
+    return name.split(".")[0] in ("trackfuse", "cli", "trackfuse_cli")
+
+
+def _imported(node: ast.Import | ast.ImportFrom, module: str) -> list[str]:
+    """Module names an import statement of ``module`` loads (ours only)."""
+    if isinstance(node, ast.Import):
+        return [a.name for a in node.names if _is_ours(a.name)]
+    base = node.module or ""
+    if node.level:
+        package = module.rsplit(".", node.level)[0]
+        base = f"{package}.{base}" if base else package
+    if not _is_ours(base):
+        return []
+    return [f"{base}.{a.name}" if f"{base}.{a.name}" in MODULES else base for a in node.names]
+
+
+def _function_level_imports(tree: ast.AST) -> list[tuple[int, str]]:
+    out = []
+    for fn in ast.walk(tree):
+        if isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            for node in ast.walk(fn):
+                if isinstance(node, ast.Import | ast.ImportFrom):
+                    names = [a.name for a in node.names] if isinstance(node, ast.Import) \
+                        else [node.module or "."]
+                    out += [(node.lineno, n) for n in names if _is_ours(n) or n == "."]
+    return out
+
+
+def test_no_function_level_import_between_our_modules():
+    found = [f"{path.relative_to(ROOT)}:{line} imports {name}"
+             for path in MODULES.values()
+             for line, name in _function_level_imports(ast.parse(path.read_text()))]
+    assert not found, "\n".join(found)
+
+
+def _graph() -> dict[str, set[str]]:
+    graph = {}
+    for module, path in MODULES.items():
+        tree = ast.parse(path.read_text())
+        edges: set[str] = set()
+        for node in tree.body:
+            nodes = [node]
+            if isinstance(node, ast.If):  # TYPE_CHECKING blocks load nothing at run time
+                nodes = [] if "TYPE_CHECKING" in ast.unparse(node.test) else node.body
+            for n in nodes:
+                if isinstance(n, ast.Import | ast.ImportFrom):
+                    edges |= {m.replace("cli.", "trackfuse_cli.", 1) for m in _imported(n, module)}
+        graph[module] = {e for e in edges if e in MODULES and e != module}
+    return graph
+
+
+def _cycle(graph: dict[str, set[str]]) -> list[str] | None:
+    state: dict[str, int] = {}
+    stack: list[str] = []
+
+    def visit(node: str) -> list[str] | None:
+        state[node] = 1
+        stack.append(node)
+        for nxt in sorted(graph[node]):
+            if state.get(nxt) == 1:
+                return stack[stack.index(nxt):] + [nxt]
+            if nxt not in state and (found := visit(nxt)):
+                return found
+        stack.pop()
+        state[node] = 2
+        return None
+
+    for node in sorted(graph):
+        if node not in state and (found := visit(node)):
+            return found
+    return None
+
+
+def test_no_import_cycle():
+    assert _cycle(_graph()) is None, " -> ".join(_cycle(_graph()) or [])
+
+
+def test_the_cycle_finder_finds_a_cycle():
+    assert _cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
+    assert _cycle({"a": {"b"}, "b": set()}) is None
+
+
+def test_reports_import_the_science_never_the_reverse():
+    graph = _graph()
+    for name in experiments.BUILTIN:
+        package = f"trackfuse.experiments.{name}"
+        science = [m for m in graph if m.startswith(package) and not m.endswith(".report")]
+        for module in science:
+            assert f"{package}.report" not in graph[module], module
+            assert not any(m.startswith("trackfuse.plots") for m in graph[module]), module
+
+
+@pytest.mark.parametrize("module", ["trackfuse.runner", "trackfuse_cli.main",
+                                    "trackfuse.experiments.twin_sensor",
+                                    "trackfuse.experiments.esm_radar",
+                                    "trackfuse.experiments.passive_assoc"])
+def test_importing_loads_no_matplotlib(module):
+    code = (f"import sys, {module}\n"
+            "print(sorted(m for m in sys.modules if m.split('.')[0] == 'matplotlib'))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=ROOT).stdout.strip()
+    assert out == "[]", out
+
+
+def test_every_function_is_short():
+    long = []
+    for path in MODULES.values():
+        rel = str(path.relative_to(ROOT))
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                lines = node.end_lineno - node.lineno + 1
+                if lines > MAX_FUNCTION_LINES:
+                    long.append(f"{rel}:{node.lineno} {node.name}: {lines} lines")
+    assert not long, "\n".join(long)
+
+
+@pytest.mark.parametrize("name", list(experiments.BUILTIN))
+def test_experiments_declare_their_report(name):
+    exp = experiments.get(name)
+    assert exp.report == f"trackfuse.experiments.{name}.report"
+    assert exp.figures and all(spec.caption for spec in exp.figures.values())
+    names = [m.name for m in exp.metrics]
+    assert len(names) == len(set(names)) and all(m.unit for m in exp.metrics)
+    assert all(m.better in (None, "lower", "higher") for m in exp.metrics)
+    assert exp.binary_metrics and set(exp.directions) <= set(names)
+
+
+@pytest.mark.parametrize("name", list(experiments.BUILTIN))
+def test_schema_spells_units_one_way(name):
+    for p in experiments.get(name).params:
+        if p.kind in (int, float) and p.choices is None:
+            assert p.unit and p.unit not in ("probability", "dimensionless"), p.key
+            assert p.low is not None and p.high is not None, p.key
+        if "probability" in p.doc.lower() and p.kind is float and p.unit == "1":
+            assert 0.0 <= p.low <= p.high <= 1.0, p.key
+
+
+#: Test files about the project as a whole rather than one module.
+CROSS_CUTTING = {"structure", "docs", "packaging"}
+
+
+def test_every_test_file_names_the_module_it_tests():
+    names = set()
+    for module in MODULES:
+        parts = module.split(".")[1:]
+        names |= {parts[-1], "_".join(parts)} if parts else set()
+    names -= {"__main__", "main", "model", "report"}
+    strays = []
+    for path in sorted(Path(__file__).parent.glob("test_*.py")):
+        stem = path.stem.removeprefix("test_")
+        if stem not in CROSS_CUTTING and not any(stem == n or stem.startswith(f"{n}_")
+                                                 for n in names):
+            strays.append(path.name)
+    assert not strays, f"test files that map to no module: {strays}"

@@ -1,0 +1,72 @@
+"""Run an experiment in memory: trials and summary frames from params, a sweep and a seed.
+
+The harness is the real runner on a throw-away folder (serial executor, no report), so its
+numbers are the numbers ``trackfuse run`` writes for the same config, seeding, batching,
+summary and intervals included::
+
+    from trackfuse import harness
+    trials, summary = harness.run("twin_sensor", params={"scan.count": 5},
+                                  sweep={"clutter.mean": [0, 4]}, trials=20, seed=1)
+
+:func:`run_data` keeps the folder and returns it as :class:`~trackfuse.rundata.RunData`,
+which is what report modules read (figure tests draw from it).
+"""
+
+from __future__ import annotations
+
+import tempfile
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from trackfuse import experiments
+from trackfuse.config import build
+from trackfuse.experiments.base import Experiment
+from trackfuse.rundata import RunData, load
+from trackfuse.runner import Runner
+
+
+def _config(experiment: str | Experiment, params: Mapping[str, Any] | None,
+            sweep: Mapping[str, list[Any]] | None, trials: int, seed: int,
+            sweep_mode: str, batch_size: int | None):
+    if isinstance(experiment, Experiment):
+        if experiment.name not in experiments.names():
+            experiments.register(experiment)
+        experiment = experiment.name
+    raw: dict[str, Any] = {"experiment": experiment, "trials": trials, "seed": seed,
+                           "params": dict(params or {}), "sweep": dict(sweep or {}),
+                           "sweep_mode": sweep_mode}
+    if batch_size is not None:
+        raw["batch_size"] = batch_size
+    return build(raw, "harness")
+
+
+def run_data(out: str | Path, experiment: str | Experiment,
+             params: Mapping[str, Any] | None = None,
+             sweep: Mapping[str, list[Any]] | None = None, *, trials: int = 10, seed: int = 0,
+             sweep_mode: str = "grid", batch_size: int | None = None) -> RunData:
+    """Run ``experiment`` (a name or an :class:`Experiment`) into ``out`` and return the
+    complete run. ``params`` override defaults (dotted keys); ``sweep`` maps a key to its
+    values; ``trials`` per sweep point; ``seed`` the root seed; ``batch_size`` default: the
+    experiment's."""
+    config = _config(experiment, params, sweep, trials, seed, sweep_mode, batch_size)
+    runner = Runner(config, Path(out), workers=1, executor="serial", plots=False,
+                    progress=False, command=["trackfuse.harness"])
+    return load(runner.run().folder)
+
+
+def run(experiment: str | Experiment, params: Mapping[str, Any] | None = None,
+        sweep: Mapping[str, list[Any]] | None = None, *, trials: int = 10, seed: int = 0,
+        sweep_mode: str = "grid",
+        batch_size: int | None = None) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """``(trials, summary)`` frames of ``experiment`` (see :func:`run_data`); the summary
+    includes the timing metrics (``*_time_s``). Nothing is kept on disk."""
+    with tempfile.TemporaryDirectory(prefix="trackfuse-harness-") as tmp:
+        data = run_data(tmp, experiment, params, sweep, trials=trials, seed=seed,
+                        sweep_mode=sweep_mode, batch_size=batch_size)
+        return data.trials, data.summary
+
+
+__all__ = ["run", "run_data"]
