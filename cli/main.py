@@ -9,6 +9,7 @@ line starting with ``warning:``.
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 from typing import Annotated
@@ -20,6 +21,7 @@ from rich.table import Table
 
 from trackfuse import experiments
 from trackfuse.catalog import RunInfo, find_runs, is_run_folder
+from trackfuse.compare import Comparison, compare_runs
 from trackfuse.config import ConfigError, allowed_text, load
 from trackfuse.executors import KINDS, ExecutorError, default_workers, scheduler_address
 from trackfuse.reports import write_report
@@ -242,6 +244,78 @@ def runs(
         print(f"no runs under {root}")
         return
     _print_runs(found)
+
+
+def _tolerances(specs: list[str]) -> dict[str, float]:
+    """``--tolerance METRIC=NUMBER`` options as a mapping (one-line error otherwise)."""
+    found = {}
+    for spec in specs:
+        metric, _, value = spec.partition("=")
+        try:
+            found[metric.strip() or "?"] = float(value)
+        except ValueError:
+            fail(f"--tolerance: got {spec!r}; allowed: METRIC=NUMBER (in the metric's unit)")
+    if "?" in found:
+        fail("--tolerance: a metric name is missing; allowed: METRIC=NUMBER")
+    return found
+
+
+def _print_comparison(result: Comparison, shown: int = 30) -> None:
+    """One summary line, then the cells that differ (most ``shown``)."""
+    cells = result.cells
+    counts = cells["verdict"].value_counts().to_dict()
+    print(f"{'paired' if result.paired else 'unpaired'} comparison, {len(cells)} cells, "
+          f"{result.gated} gated (family-wise alpha {result.alpha:g}): "
+          + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())))
+    notable = cells[~cells["verdict"].str.startswith("no significant")]
+    if notable.empty:
+        return
+    hidden = ("n_base", "n_new", "better")
+    columns = [c for c in notable.columns if c not in hidden]
+    table = Table(*columns)
+    for row in notable.head(shown)[columns].itertuples(index=False):
+        table.add_row(*(f"{v:.4g}" if isinstance(v, float) else str(v) for v in row))
+    Console(width=max(out.width, 160)).print(table)
+    if len(notable) > shown:
+        print(f"(+{len(notable) - shown} more cells; --json lists every cell)")
+
+
+@app.command()
+def compare(
+    base: Annotated[Path, typer.Argument(help="The reference run folder.")],
+    new: Annotated[Path, typer.Argument(help="The run folder to judge.")],
+    fail_on_regression: Annotated[bool, typer.Option(
+        "--fail-on-regression", help="Exit 1 when a metric is significantly worse than BASE "
+                                     "by more than its tolerance.")] = False,
+    tolerance: Annotated[list[str], typer.Option(
+        help="Accepted worsening of a metric: METRIC=NUMBER (repeatable; default 0).")] = [],  # noqa: B006
+    alpha: Annotated[float, typer.Option(help="Family-wise false-alarm level of the "
+                                              "regression gate.")] = 0.05,
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object instead of "
+                                                         "a table.")] = False,
+) -> None:
+    """Compare two complete runs of one experiment cell by cell (sweep point x row key x
+    metric): both means, the difference NEW - BASE with its 95 % interval. Runs with the same
+    seed and trial count are paired (paired t, Newcombe and McNemar for 0/1 metrics);
+    otherwise unpaired (Welch, Newcombe hybrid score). Exit 0, 1 (regression, with
+    --fail-on-regression) or 2 (bad input)."""
+    if not 0 < alpha < 1:
+        fail(f"--alpha: got {alpha}; allowed: a number in (0, 1)")
+    tolerances = _tolerances(tolerance)
+    try:
+        result = compare_runs(load_run(base), load_run(new), tolerances, alpha=alpha)
+    except (RunFolderError, ValueError) as err:
+        fail(str(err))
+    if as_json:
+        print(json.dumps({"paired": result.paired, "alpha": result.alpha,
+                          "gated": result.gated, "regressions": len(result.regressions),
+                          "cells": json.loads(result.cells.to_json(orient="records"))}))
+    else:
+        _print_comparison(result)
+    if fail_on_regression and len(result.regressions):
+        if not as_json:
+            print(f"error: {len(result.regressions)} regressions", file=sys.stderr)
+        raise typer.Exit(1)
 
 
 @app.command()

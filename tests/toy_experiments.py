@@ -192,3 +192,17 @@ TIMED = register(Experiment(
     figures=GAUSSIAN_FIGURES,
     batch_size=5,
 ))
+
+
+def shifted_trial(params, streams: TrialStreams) -> list[dict]:
+    """A miss of ``shift + N(0, 1)`` (m): a regression of known size for ``compare``."""
+    return [{"algorithm": "a", "miss": params["shift"] + float(streams.common.normal())}]
+
+
+SHIFTED = register(Experiment(
+    name="toy_shifted",
+    title="A metric shifted by a known amount",
+    params=(Param("shift", 0.0, "added to every error", "m"),),
+    run_trial=shifted_trial,
+    metrics=(Metric("miss", "m", "a miss distance, lower is better", better="lower"),),
+))
