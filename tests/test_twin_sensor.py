@@ -24,6 +24,7 @@ from trackfuse.rundata import RunData
 from trackfuse.seeding import trial_streams
 from trackfuse.stats import nees_band
 from trackfuse.tracking.models import cv_noise_gain, cv_transition, wrap
+from trackfuse.tracking.pda import PDAOptions
 from trackfuse.tracking.sensors import azel
 
 ROW_METRICS = {"range_err_m", "range_sq_err_m2", "pos_sq_err_m2", "nees", "nees_pos",
@@ -272,15 +273,13 @@ def test_angle_rule_flags_a_diverged_filter_and_not_a_good_one():
     sc, good = _diverged_batch(p, 20, 0.0)
     sc, bad = _diverged_batch(p, 20, 6.0)
     for batch, expected in ((good, 0.0), (bad, 1.0)):
-        out = run_filter(sc, batch, "mspda_parallel", "mgekf", "full", "parametric",
-                         "hypothesis", rules)
+        out = run_filter(sc, batch, PDAOptions("mspda_parallel", "mgekf", P_G=sc.P_G), rules)
         assert out["lost_angle"][:, -1].mean() == expected
         # one or two off-target scans are not a loss: the window must be filled
         assert out["lost_angle"][:, : rules.angle_window - 1].sum() == 0
     # an off-target run shorter than the window never counts
     long_window = replace(rules, angle_window=sc.K + 1)
-    out = run_filter(sc, bad, "nn", "ekf_joseph", "full", "parametric", "hypothesis",
-                     long_window)
+    out = run_filter(sc, bad, PDAOptions("nn", "ekf_joseph", P_G=sc.P_G), long_window)
     assert out["lost_angle"].sum() == 0
 
 

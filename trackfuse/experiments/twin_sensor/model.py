@@ -461,10 +461,10 @@ def angle_off_target(X: np.ndarray, sensor: np.ndarray, los_true: np.ndarray,
         return ~(err <= sigmas).all(axis=1)
 
 
-def run_filter(sc: Scenario, b: Batch, assoc: str, covariance: str, joint_cov: str,
-               density: str, mg_at: str, rules: LossRules) -> dict[str, np.ndarray]:
-    """Run one algorithm over a batch; every metric of :data:`METRICS` is returned as
-    ``(N, K)``."""
+def run_filter(sc: Scenario, b: Batch, options: PDAOptions,
+               rules: LossRules) -> dict[str, np.ndarray]:
+    """Run one algorithm (its association and filter choices in ``options``) over a batch;
+    every metric of :data:`METRICS` is returned as ``(N, K)``."""
     N = b.x0.shape[0]
     X = b.x0.copy()
     P = np.broadcast_to(sc.P0, (N, 6, 6)).copy()
@@ -472,7 +472,6 @@ def run_filter(sc: Scenario, b: Batch, assoc: str, covariance: str, joint_cov: s
     outside_run, off_run = np.zeros(N, dtype=int), np.zeros(N, dtype=int)
     lost_gate, lost_angle = np.zeros(N, dtype=bool), np.zeros(N, dtype=bool)
     diverged = np.zeros(N, dtype=bool)
-    options = PDAOptions(assoc, covariance, joint_cov, density, mg_at, sc.P_G)
     for k in range(1, sc.K + 1):
         Xp = X @ sc.F.T
         Pp = sc.F @ P @ sc.F.T + sc.Q_filter
@@ -527,9 +526,9 @@ def run_batch(params: dict[str, Any], streams: Sequence[TrialStreams]) -> list[l
     for name in params["algorithms"]:
         assoc, filt = name.split("/")
         t0 = time.process_time()
-        res = run_filter(sc, batch, assoc, FILTERS[filt], str(params["pda.joint_cov"]),
-                         str(params["pda.density"]), str(params["filter.mg_at"]),
-                         rules)
+        options = PDAOptions(assoc, FILTERS[filt], str(params["pda.joint_cov"]),
+                             str(params["pda.density"]), str(params["filter.mg_at"]), sc.P_G)
+        res = run_filter(sc, batch, options, rules)
         cpu = (time.process_time() - t0) / (N * sc.K)
         for flag in BINARY_METRICS:
             res[flag] = res[flag].astype(int)
