@@ -29,6 +29,7 @@ from trackfuse.results import RunFolderError, RunStatus
 from trackfuse.rundata import load as load_run
 from trackfuse.runlock import RunLock
 from trackfuse.runner import RunInterrupted, Runner
+from trackfuse.shipped import config_path, configs_folder
 from trackfuse.sweep import SweepError, count_points, parse_sets, parse_sweeps
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
@@ -69,6 +70,7 @@ def _execute(runner):
 
 
 def _load(cfg: Path, sets: list[str], sweeps: list[str], **top):
+    cfg = config_path(cfg)
     try:
         overrides = parse_sets(sets)
         overrides.update({k: v for k, v in top.items() if v is not None})
@@ -161,8 +163,9 @@ def _closing_lines(outcome) -> None:
 
 @app.command()
 def reproduce(
-    folder: Annotated[Path, typer.Argument(help="Folder of configs (default: configs/).")]
-    = Path("configs"),
+    folder: Annotated[Path | None, typer.Argument(
+        help="Folder of configs (default: ./configs if present, else the shipped paper "
+             "configs).")] = None,
     workers: Annotated[int, typer.Option(help="Parallel workers (default: all cores).")] = 0,
     out_dir: Annotated[Path, typer.Option("--out", help="Output root folder.")] = Path("results"),
     executor: Annotated[str, typer.Option(help="serial, process or dask.")] = "process",
@@ -171,6 +174,10 @@ def reproduce(
 ) -> None:
     """Run every config in FOLDER (the shipped paper experiments by default), resuming any
     finished ones; all configs are validated before the first one runs."""
+    if folder is None:
+        folder = Path("configs") if Path("configs").is_dir() else configs_folder()
+        if folder is None:
+            fail("no configs/ folder here and no shipped configs installed; name a folder")
     if not folder.is_dir():
         fail(f"{folder}: not a folder of configs")
     paths = sorted(folder.glob("*.yaml"))

@@ -9,6 +9,8 @@ from pathlib import Path
 
 from setuptools import find_packages
 
+from trackfuse.shipped import config_path, configs_folder
+
 ROOT = Path(__file__).resolve().parents[1]
 PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text())
 
@@ -16,8 +18,9 @@ PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text())
 def test_every_package_is_listed_and_the_cli_is_renamed():
     listed = PYPROJECT["tool"]["setuptools"]["packages"]
     assert sorted(listed) == sorted([*find_packages(str(ROOT), include=["trackfuse*"]),
-                                     "trackfuse_cli"])
-    assert PYPROJECT["tool"]["setuptools"]["package-dir"] == {"trackfuse_cli": "cli"}
+                                     "trackfuse_cli", "trackfuse.configs"])
+    assert PYPROJECT["tool"]["setuptools"]["package-dir"] == {"trackfuse_cli": "cli",
+                                                              "trackfuse.configs": "configs"}
     assert PYPROJECT["project"]["scripts"]["trackfuse"] == "trackfuse_cli.main:app"
 
 
@@ -25,3 +28,16 @@ def test_python_dash_m_trackfuse_runs_the_cli(tmp_path):
     out = subprocess.run([sys.executable, "-m", "trackfuse", "list"], capture_output=True,
                          text=True, check=True, cwd=tmp_path).stdout
     assert "twin_sensor" in out and "passive_assoc" in out
+
+
+def test_shipped_configs_run_by_name_outside_a_checkout(tmp_path):
+    """`trackfuse validate twin_sensor_orbit` in an empty folder finds the shipped config,
+    and every shipped paper config is there."""
+    shipped = configs_folder()
+    assert shipped is not None
+    assert {p.name for p in shipped.glob("*.yaml")} == \
+        {p.name for p in (ROOT / "configs").glob("*.yaml")}
+    out = subprocess.run([sys.executable, "-m", "trackfuse", "validate", "twin_sensor_orbit"],
+                         capture_output=True, text=True, cwd=tmp_path)
+    assert out.returncode == 0 and "ok:" in out.stdout, out.stderr
+    assert config_path(Path("ci/passive_assoc_ci")).is_file()
