@@ -108,7 +108,7 @@ def test_kill_9_at_random_moments_then_resume_equals_uninterrupted(write_config,
     command = [sys.executable, "-m", "trackfuse", "run", str(path), "--out", str(out),
                "--workers", "2", "--no-plots", "--no-progress"]
     rng = random.Random(1234)
-    kills, parts = 0, 0
+    kills, parts, most = 0, 0, 0
     for _ in range(4):
         proc = subprocess.Popen(command, env=cli_env(), stdout=subprocess.DEVNULL,
                                 stderr=subprocess.DEVNULL, start_new_session=True)
@@ -119,10 +119,11 @@ def test_kill_9_at_random_moments_then_resume_equals_uninterrupted(write_config,
             kills += 1
         proc.wait(timeout=30)
         folder = next(out.glob("burn/*"), None)
-        if folder is not None:
+        if folder is not None:  # a run that finished has dropped its parts (complete)
             parts = _parts_are_whole(folder, 320, 4)
+            most = max(most, parts)
     assert kills >= 3, "the runs finished before they could be killed"
-    assert parts > 0, "no run was killed after it wrote parts"
+    assert most > 0, "no run was killed after it wrote parts"
     final = subprocess.run(command, env=cli_env(), capture_output=True, text=True, timeout=300)
     assert final.returncode == 0, final.stderr
     reference = run(load(path), tmp_path / "ref", executor="serial")

@@ -7,22 +7,17 @@ accept a shipped config by name (``trackfuse run twin_sensor_orbit``) wherever i
 
 from __future__ import annotations
 
-from importlib import resources
 from pathlib import Path
 
 import trackfuse
 
 
 def configs_folder() -> Path | None:
-    """The shipped configs: the installed data package, else a source checkout's
-    ``configs/`` beside the package; ``None`` if neither exists."""
-    try:
-        installed = Path(str(resources.files("trackfuse.configs")))
-    except (ModuleNotFoundError, TypeError):
-        installed = None
-    checkout = Path(trackfuse.__file__).resolve().parent.parent / "configs"
-    for folder in (installed, checkout):
-        if folder is not None and folder.is_dir() and any(folder.glob("*.yaml")):
+    """The shipped configs: ``trackfuse/configs`` of an installed package, else a source
+    checkout's ``configs/`` beside the package; ``None`` if neither holds a config."""
+    package = Path(trackfuse.__file__).resolve().parent
+    for folder in (package / "configs", package.parent / "configs"):
+        if folder.is_dir() and any(folder.glob("*.yaml")):
             return folder
     return None
 
