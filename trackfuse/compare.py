@@ -31,7 +31,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from trackfuse.results import FAILED_ROW
+from trackfuse.results import FAILED_ROW, RUNNER_COLUMNS
 from trackfuse.rundata import RunData
 from trackfuse.stats import (
     mcnemar_p,
@@ -41,7 +41,6 @@ from trackfuse.stats import (
     welch_interval,
 )
 
-NON_METRIC = ("point", "trial", "status", "error")
 BETTER = ("lower", "higher")
 
 
@@ -70,7 +69,7 @@ class Comparison:
 
 def metric_columns(frame: pd.DataFrame, keys: Sequence[str]) -> list[str]:
     """Numeric columns of ``frame`` that are neither keys nor bookkeeping columns."""
-    return [c for c in frame.columns if c not in keys and c not in NON_METRIC
+    return [c for c in frame.columns if c not in keys and c not in RUNNER_COLUMNS
             and pd.api.types.is_numeric_dtype(frame[c])]
 
 

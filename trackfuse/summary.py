@@ -14,11 +14,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from trackfuse.results import FAILED_ROW
+from trackfuse.results import FAILED_ROW, RUNNER_COLUMNS
 from trackfuse.stats import t_interval, wilson_interval
 
 CHUNK_ROWS = 200_000
-NON_METRIC = ("point", "trial", "status", "error")
 _VALUE = "__value__"
 
 
@@ -42,7 +41,7 @@ def summarize(path: Path, keys: Sequence[str], binary: Sequence[str] = (),
             failed += int(bad.sum())
             chunk = chunk[~bad]
         group = [k for k in keys if k in chunk]
-        metrics = [c for c in chunk.columns if c not in group and c not in NON_METRIC
+        metrics = [c for c in chunk.columns if c not in group and c not in RUNNER_COLUMNS
                    and pd.api.types.is_numeric_dtype(chunk[c])]
         if chunk.empty or not metrics:
             continue

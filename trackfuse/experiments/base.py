@@ -44,6 +44,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from trackfuse.results import RUNNER_COLUMNS
 from trackfuse.seeding import TrialStreams
 
 Row = dict[str, Any]
@@ -118,6 +119,10 @@ class Experiment:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "schema", {p.key: p for p in self.params})
+        taken = [m.name for m in self.metrics if m.name in (*RUNNER_COLUMNS, *self.row_keys)]
+        if taken:
+            raise ValueError(f"experiment {self.name!r}: metric names {taken} are row columns "
+                             f"of the runner {RUNNER_COLUMNS} or row keys {self.row_keys}")
 
     @property
     def binary_metrics(self) -> tuple[str, ...]:
