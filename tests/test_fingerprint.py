@@ -8,6 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 from conftest import ROOT, TESTS
 from toy_experiments import GAUSSIAN
 
@@ -65,7 +66,7 @@ def test_editing_the_experiment_code_gives_new_numbers_in_a_new_folder(tmp_path)
     assert values == [4, 4]
     means = sorted(float((p / "trials.csv").read_text().splitlines()[1].split(",")[-1])
                    for p in (old, new))
-    assert means[1] - means[0] == 100.0
+    assert means[1] - means[0] == pytest.approx(100.0, abs=1e-9)
     third = _cli(*args, cwd=tmp_path)  # unchanged code: the new folder is reused
     assert "already complete" in third.stdout and len(_runs(tmp_path / "out")) == 2
 

@@ -30,7 +30,7 @@ from typing import Any
 
 import pandas as pd
 
-from trackfuse.results import atomic_write
+from trackfuse.results import INDEX_HTML, INDEX_MD, atomic_write
 from trackfuse.rundata import RunData
 
 PNG_DPI = 200
@@ -38,13 +38,14 @@ HEADLINE_TABLE = "paper_vs_reproduced"
 #: What each file of a run folder holds (figures and tables add their own captions).
 FILES = {
     "config.yaml": "the resolved config: every parameter, defaults included",
-    "manifest.json": "status, versions, git commit, command, times, trial counts",
+    "manifest.json": "status, versions, git repository and commit, code fingerprint, "
+                     "command, times, trial counts, checksums of the final files",
     "trials.csv": "one row per sweep point, trial and row key: swept values and metrics",
     "timings.csv": "wall and CPU time columns, kept out of trials.csv",
     "summary.csv": "per point, row key and metric: n, mean, std, 95 % interval",
     "timings_summary.csv": "the summary of the timing columns",
-    "index.md": "this report as Markdown",
-    "index.html": "this report as a web page",
+    INDEX_MD: "this report as Markdown",
+    INDEX_HTML: "this report as a web page",
 }
 
 
@@ -153,9 +154,9 @@ def write_report(run: RunData, wanted: Collection[str] | None = None,
         tables = _write_tables(run, module, report)
         _write_figures(run, module, wanted, formats, report)
     md = index_markdown(run, tables, report)
-    atomic_write(run.path / "index.md", md)
-    atomic_write(run.path / "index.html", index_html(run, tables, report))
-    report.index = run.path / "index.html"
+    atomic_write(run.path / INDEX_MD, md)
+    atomic_write(run.path / INDEX_HTML, index_html(run, tables, report))
+    report.index = run.path / INDEX_HTML
     return report
 
 

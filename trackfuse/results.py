@@ -50,7 +50,8 @@ TRIALS, TIMINGS, SUMMARY, MANIFEST, CONFIG = (
 TIMING_SUMMARY = "timings_summary.csv"
 FINAL_FILES = (CONFIG, TRIALS, TIMINGS, SUMMARY, TIMING_SUMMARY)
 REPORT_DIRS = ("figures", "tables")
-INDEX_FILES = ("index.md", "index.html")
+INDEX_MD, INDEX_HTML = "index.md", "index.html"
+INDEX_FILES = (INDEX_MD, INDEX_HTML)
 TIME_SUFFIX = "_time_s"
 PART_KINDS = ("trials", "timings")
 PART_MAGIC = "#trackfuse-part 1"
@@ -302,8 +303,8 @@ class RunFolder:
 
     def clear(self) -> None:
         """Delete the run's state, final files and reports, for a fresh start in the same
-        folder (``--force``; call only with the lock held). Other files are left alone."""
-        self.check_layout()
+        folder (``--force``; call only with the lock held, after :meth:`check_layout`).
+        Other files are left alone."""
         for folder in (self.parts, *(self.path / d for d in REPORT_DIRS)):
             shutil.rmtree(folder, ignore_errors=True)
         for name in (MANIFEST, *FINAL_FILES, *INDEX_FILES):

@@ -52,6 +52,7 @@ from trackfuse.reports import write_report
 from trackfuse.results import (
     CONFIG,
     FAILED_ROW,
+    INDEX_HTML,
     SUMMARY,
     TIMING_SUMMARY,
     TIMINGS,
@@ -379,7 +380,7 @@ class Runner:
             if problem is None:
                 self.folder.remove_temporaries()
                 self.folder.drop_resume_state()
-                index = self.folder.path / "index.html"
+                index = self.folder.path / INDEX_HTML
                 return RunOutcome(self.folder.path, RunStatus.ALREADY_COMPLETE,
                                   self.total_trials, 0,
                                   _int_or(previous.get("trials_failed"), 0),
