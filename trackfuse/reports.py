@@ -35,6 +35,17 @@ from trackfuse.rundata import RunData
 
 PNG_DPI = 200
 HEADLINE_TABLE = "paper_vs_reproduced"
+#: Columns of every experiment's headline table, one row per paper item compared:
+#: ``paper_item`` the paper's figure or table ("Table 3"); ``quantity`` in words;
+#: ``algorithm`` our algorithm name; ``paper_value`` what the paper reports (number or words);
+#: ``reproduced`` our estimate (number, in ``unit``) with its 95 % interval
+#: ``ci_low``/``ci_high``; ``trials`` behind it; ``verdict`` one of :data:`VERDICTS`;
+#: ``reason`` one line; ``docs`` a link into ``docs/papers/`` with the longer explanation.
+HEADLINE_COLUMNS = ("paper_item", "quantity", "algorithm", "paper_value", "reproduced",
+                    "ci_low", "ci_high", "unit", "trials", "verdict", "reason", "docs")
+#: ``agrees``: the paper's number lies inside our interval, or its claim holds;
+#: ``differs``: it does not; ``not comparable``: the run's config cannot answer it.
+VERDICTS = ("agrees", "differs", "not comparable")
 #: What each file of a run folder holds (figures and tables add their own captions).
 FILES = {
     "config.yaml": "the resolved config: every parameter, defaults included",
