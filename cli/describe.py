@@ -74,15 +74,19 @@ class _Wrapper:
     """Prints names unbroken and descriptions wrapped and indented below them."""
 
     def __init__(self, width: int):
-        self.text = textwrap.TextWrapper(width=max(width, 40), initial_indent="    ",
+        self.width = max(width, 40)
+        self.text = textwrap.TextWrapper(width=self.width, initial_indent="    ",
                                          subsequent_indent="    ", break_on_hyphens=False,
                                          break_long_words=False)
 
     def line(self, text: str) -> None:
-        print(text)
+        print(self.line_text(text))
 
     def heading(self, text: str) -> None:
-        print(f"\n{text}:")
+        print("\n" + self.line_text(f"{text}:"))
+
+    def line_text(self, text: str) -> str:
+        return textwrap.fill(text, self.width, break_long_words=False)
 
     def entry(self, name: str, description: str) -> None:
         if name:

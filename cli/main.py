@@ -24,7 +24,6 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 import trackfuse
-from trackfuse_cli import describe
 from trackfuse_cli.options import (
     Cfg,
     DryRun,
@@ -506,6 +505,7 @@ def list_experiments(
     parameter with its default, unit and allowed values, the metrics, algorithms and figure
     names (what outputs.figures may list)."""
     from trackfuse import experiments
+    from trackfuse_cli import describe
     if name is None:
         if output is not Format.table:
             fail("--format yaml/json describes one experiment; name it: trackfuse list "
