@@ -1,8 +1,8 @@
 """What ``trackfuse list`` prints: the experiments, or one experiment's parameters, metrics,
 algorithms and figures as a table, a commented config template (YAML) or JSON.
 
-Keys and names are never cut: their columns are as wide as the longest one, and the
-meanings wrap instead (also when the output is piped, where the width is 80 columns).
+Keys and names are never cut: each heads its own line in full, and its description wraps
+below it (also when the output is piped, where the width is 80 columns).
 """
 
 from __future__ import annotations
@@ -12,36 +12,22 @@ import textwrap
 from typing import Any
 
 import yaml
-from rich.console import Console
-from rich.table import Table
 
 from trackfuse.config import FORMATS, allowed_text
 from trackfuse.experiments import Listed
 from trackfuse.experiments.base import Experiment, Param
 
 
-def print_listing(listed: list[Listed], console: Console | None = None) -> None:
+def print_listing(listed: list[Listed], width: int | None = None) -> None:
     """The experiments a config may name, with where each comes from."""
-    console = console or Console()
-    table = _named_column_table("experiment", "from", "description",
-                                widest=_widest(listed, "name"))
+    out = _Wrapper(width or shutil.get_terminal_size().columns)
+    out.line("experiments (experiment: in a config):")
     for item in listed:
-        origin = item.origin + (f" ({item.reference})" if ":" in item.reference else "")
-        table.add_row(item.name, origin, item.description)
-    console.print(table)
-    console.print("`trackfuse list EXPERIMENT` shows its parameters, metrics, algorithms and "
-                  "figures; `--format yaml` prints a config template.", soft_wrap=False)
-
-
-def _widest(items, attribute: str) -> int:
-    return max((len(str(getattr(i, attribute))) for i in items), default=1)
-
-
-def _named_column_table(*columns: str, widest: int, title: str = "") -> Table:
-    """A table whose first column (a key or name) never wraps or truncates."""
-    table = Table(*columns, title=title or None, title_justify="left")
-    table.columns[0].no_wrap, table.columns[0].min_width = True, widest
-    return table
+        origin = item.origin + (f", {item.reference}" if ":" in item.reference else "")
+        out.entry(f"{item.name} ({origin})", item.description)
+    out.line("")
+    out.line("`trackfuse list EXPERIMENT` shows its parameters, metrics, algorithms and "
+             "figures; `--format yaml` prints a config template.")
 
 
 def print_experiment(exp: Experiment, width: int | None = None) -> None:
