@@ -1,68 +1,160 @@
-"""The ``trackfuse`` command line: run, reproduce, plot, validate, list.
+"""The ``trackfuse`` command line: run, reproduce, plot, runs, compare, validate, list.
 
-Exit status: 0 success; 1 figures or tables could not be drawn; 2 bad input (config,
-override, option, run folder, output root) or a run folder in use by another process; 3 the
-run finished but some trials failed; 130 interrupted (re-run the same command to resume).
-Every error is one line on stderr starting with ``error:``; repairs are announced with one
+Exit status: 0 success; 1 figures or tables could not be drawn (or, for ``compare
+--fail-on-regression``, a regression); 2 bad input (config, override, option, run folder,
+output root) or a run folder in use by another process; 3 the run finished but some trials
+failed; 130 interrupted (re-run the same command to resume). Every error, usage errors
+included, is one line on stderr starting with ``error:``; repairs are announced with one
 line starting with ``warning:``.
+
+Start-up: the commands import the runner, pandas, scipy and matplotlib only inside the
+functions that need them, so ``--help``, ``list`` and ``validate`` stay quick
+(``benchmarks/startup.py``).
 """
 
 from __future__ import annotations
 
 import json
+import os
 import sys
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
-import yaml
-from rich.console import Console
-from rich.table import Table
 
-from trackfuse import experiments
-from trackfuse.catalog import RunInfo, find_runs, is_run_folder
-from trackfuse.compare import Comparison, compare_runs
-from trackfuse.config import ConfigError, allowed_text, load
-from trackfuse.executors import KINDS, ExecutorError, default_workers, scheduler_address
-from trackfuse.reports import write_report
-from trackfuse.reproduction import write_reproduction_report
-from trackfuse.results import RunFolderError, RunStatus
-from trackfuse.rundata import load as load_run
-from trackfuse.runlock import RunLock
-from trackfuse.runner import RunInterrupted, Runner
-from trackfuse.shipped import config_path, configs_folder
-from trackfuse.sweep import SweepError, count_points, parse_sets, parse_sweeps
+import trackfuse
+from trackfuse_cli.options import (
+    Cfg,
+    DryRun,
+    Executor,
+    ExecutorOpt,
+    Format,
+    NoPlots,
+    NoProgress,
+    OneLineErrors,
+    OutDir,
+    Overrides,
+    Scheduler,
+    SchedulerFile,
+    Sets,
+    Sweeps,
+    Workers,
+    fail,
+    print_error,
+    warn,
+)
 
-app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
+if TYPE_CHECKING:
+    from trackfuse.config import Config
+    from trackfuse.runner import Runner, RunOutcome
+
+
+app = typer.Typer(cls=OneLineErrors, add_completion=True, pretty_exceptions_enable=False,
                   help="Monte Carlo experiment runner for passive multi-sensor tracking.")
-out = Console()
 
 
-def fail(message: str, code: int = 2) -> None:
-    """Print a one-line error to stderr and exit."""
-    safe = "".join(c if c.isprintable() else repr(c)[1:-1] for c in message)
-    print(f"error: {safe}", file=sys.stderr)
-    raise typer.Exit(code)
+def _show_version(value: bool) -> None:
+    if value:
+        print(f"trackfuse {trackfuse.__version__}")
+        raise typer.Exit()
 
 
-def warn(message: str) -> None:
-    """Print a one-line warning to stderr."""
-    safe = "".join(c if c.isprintable() else repr(c)[1:-1] for c in message)
-    print(f"warning: {safe}", file=sys.stderr, flush=True)
+@app.callback(invoke_without_command=True)
+def _main(
+    ctx: typer.Context,
+    version: Annotated[bool, typer.Option("--version", callback=_show_version, is_eager=True,
+                                          metavar="", help="Print the version and exit.")]
+    = False,
+) -> None:
+    """Monte Carlo experiment runner for passive multi-sensor tracking."""
+    if ctx.invoked_subcommand is None:
+        print(ctx.get_help())
+        raise typer.Exit(2)
+    # Like `python -m`, find plugin modules (experiment: module:ATTR) in the current folder;
+    # appended, so a local file never shadows an installed library.
+    if os.getcwd() not in sys.path:
+        sys.path.append(os.getcwd())
 
 
-def _interrupted(err) -> None:
-    print(f"interrupted: {err.done}/{err.total} trials saved in {err.folder}; run the same "
-          "command again to resume", file=sys.stderr)
-    raise typer.Exit(130)
+def _complete_experiment(incomplete: str) -> list[str]:
+    from trackfuse import experiments
+    return [n for n in experiments.names() if n.startswith(incomplete)]
 
 
-def _execute(runner):
+# ---------------------------------------------------------------------------- loading
+
+
+def _overrides(sets: list[str], positional: list[str] | None) -> dict[str, Any]:
+    """``--set`` items and positional ``key=value`` items as one mapping (one-line error)."""
+    from trackfuse.sweep import SweepError, parse_sets
+    try:
+        return parse_sets([*(positional or []), *sets])
+    except SweepError as err:
+        fail(f"--set: {err}")
+
+
+def _load(cfg: Path, sets: dict[str, Any], sweeps: list[str], **top) -> Config:
+    from trackfuse.config import ConfigError, load
+    from trackfuse.shipped import config_path
+    from trackfuse.sweep import SweepError, parse_sweeps
+    try:
+        axes = parse_sweeps(sweeps)
+    except SweepError as err:
+        fail(f"--sweep: {err}")
+    overrides = {**sets, **{k: v for k, v in top.items() if v is not None}}
+    try:
+        return load(config_path(cfg), overrides, axes)
+    except ConfigError as err:
+        fail(str(err))
+
+
+@dataclass(frozen=True)
+class RunOptions:
+    """How ``run`` and ``reproduce`` execute configs (everything but the config)."""
+
+    out: Path
+    workers: int = 0
+    executor: str = "process"
+    scheduler: str | None = None
+    scheduler_file: str | None = None
+    plots: bool = True
+    progress: bool = True
+    force: bool = False
+    name: str | None = None
+
+    def check(self) -> None:
+        """Refuse a ``--scheduler-file`` without an address in one line."""
+        from trackfuse.executors import ExecutorError, scheduler_address
+        if self.scheduler_file:
+            try:
+                scheduler_address(self.scheduler_file)
+            except ExecutorError as err:
+                fail(str(err))
+
+    def runner(self, config: Config) -> Runner:
+        from trackfuse.executors import default_workers
+        from trackfuse.progress import PhaseLog
+        from trackfuse.runner import Runner
+        return Runner(config, self.out, workers=self.workers or default_workers(),
+                      executor=self.executor, scheduler=self.scheduler,
+                      scheduler_file=self.scheduler_file, plots=self.plots,
+                      progress=self.progress, command=sys.argv, warn=warn, force=self.force,
+                      name=self.name,
+                      on_phase=PhaseLog(config.experiment.name, self.progress))
+
+
+def _execute(runner: Runner) -> RunOutcome:
     """``runner.run()`` with every expected failure turned into one line and its exit code."""
+    from trackfuse.executors import ExecutorError
+    from trackfuse.results import RunFolderError
+    from trackfuse.runner import RunInterrupted
     try:
         return runner.run()
     except RunInterrupted as err:
-        _interrupted(err)
+        print(f"interrupted: {err.done}/{err.total} trials saved in {err.folder}; run the same "
+              "command again to resume", file=sys.stderr)
+        raise typer.Exit(130) from None
     except (ExecutorError, RunFolderError) as err:
         fail(str(err))
     except OSError as err:
@@ -70,80 +162,66 @@ def _execute(runner):
         fail(f"{where}{err.strerror or type(err).__name__} (while writing {runner.folder.path})")
 
 
-def _load(cfg: Path, sets: list[str], sweeps: list[str], **top):
-    cfg = config_path(cfg)
-    try:
-        overrides = parse_sets(sets)
-        overrides.update({k: v for k, v in top.items() if v is not None})
-        return load(cfg, overrides, parse_sweeps(sweeps))
-    except SweepError as err:
-        fail(f"{cfg}: override: {err}")
-    except ConfigError as err:
-        fail(str(err))
+def exit_status(outcomes: list[RunOutcome]) -> int:
+    """3 if a trial failed, else 1 if a figure or table could not be drawn, else 0."""
+    if any(o.failed_trials for o in outcomes):
+        return 3
+    return 1 if any(o.figure_errors for o in outcomes) else 0
 
 
-Sets = Annotated[list[str], typer.Option("--set", help="Override a value: key=value "
-                                                        "(repeatable).")]
-Sweeps = Annotated[list[str], typer.Option("--sweep", help="Sweep an axis: key=v1,v2 or "
-                                                           "key=range(a,b,s) (repeatable).")]
+def _print_plan(runner: Runner) -> None:
+    config = runner.config
+    print(f"# {config.source}: {len(runner.points)} points x {config.trials} trials = "
+          f"{runner.total_trials} trials in batches of {config.batch_size}; "
+          f"output: {runner.folder.path}")
+
+
+# ---------------------------------------------------------------------------- run
 
 
 @app.command()
 def run(
-    cfg: Annotated[Path, typer.Argument(help="Scenario config (YAML).")],
-    trials: Annotated[int | None, typer.Option(help="Trials per sweep point.")] = None,
-    workers: Annotated[int, typer.Option(help="Parallel workers (default: all cores).")] = 0,
-    seed: Annotated[int | None, typer.Option(help="Root seed.")] = None,
-    out_dir: Annotated[Path, typer.Option("--out", help="Output root folder.")] = Path("results"),
+    cfg: Cfg,
+    overrides: Overrides = None,
+    trials: Annotated[int | None, typer.Option(metavar="N", min=1,
+                                               help="Trials per sweep point.")] = None,
+    workers: Workers = 0,
+    seed: Annotated[int | None, typer.Option(metavar="N", min=0, help="Root seed.")] = None,
+    out_dir: OutDir = Path("results"),
     sets: Sets = [],  # noqa: B006 - typer reads the default
     sweeps: Sweeps = [],  # noqa: B006
-    executor: Annotated[str, typer.Option(help="serial, process or dask.")] = "process",
-    scheduler: Annotated[str | None, typer.Option(help="dask scheduler address, "
-                                                       "e.g. tcp://host:8786.")] = None,
-    scheduler_file: Annotated[str | None, typer.Option(help="dask scheduler file.")] = None,
-    dry_run: Annotated[bool, typer.Option("--dry-run", help="Print the resolved config and "
-                                                            "the work, run nothing.")] = False,
-    no_plots: Annotated[bool, typer.Option("--no-plots", help="Skip figures.")] = False,
-    no_progress: Annotated[bool, typer.Option("--no-progress", help="No progress output.")]
+    executor: ExecutorOpt = Executor.process,
+    scheduler: Scheduler = None,
+    scheduler_file: SchedulerFile = None,
+    dry_run: DryRun = False,
+    no_plots: NoPlots = False,
+    no_progress: NoProgress = False,
+    force: Annotated[bool, typer.Option("--force", metavar="", help="Recompute from scratch "
+                                        "into the same folder (drops its old results).")]
     = False,
-    force: Annotated[bool, typer.Option("--force", help="Recompute from scratch into the "
-                                                        "same folder (drops its old results).")]
-    = False,
-    name: Annotated[str | None, typer.Option(help="A label for the run, kept in its manifest "
-                                                  "and shown by `trackfuse runs` (not part "
-                                                  "of the run id).")] = None,
+    name: Annotated[str | None, typer.Option(metavar="TEXT", help="A label for the run, kept "
+                                             "in its manifest and shown by `trackfuse runs` "
+                                             "(not part of the run id).")] = None,
 ) -> None:
-    """Run CFG: every sweep point x trial, then trials.csv, summary.csv and the report."""
-    config = _load(cfg, sets, sweeps, trials=trials, seed=seed)
-    _check_execution(executor, workers, scheduler_file)
-    runner = Runner(config, out_dir, workers=workers or default_workers(), executor=executor,
-                    scheduler=scheduler, scheduler_file=scheduler_file, plots=not no_plots,
-                    progress=not no_progress, command=sys.argv, warn=warn, force=force,
-                    name=name)
+    """Run CONFIG: every sweep point x trial, then trials.csv, summary.csv and the report."""
+    config = _load(cfg, _overrides(sets, overrides), sweeps, trials=trials, seed=seed)
+    options = RunOptions(out_dir, workers, executor.value, scheduler, scheduler_file,
+                         not no_plots, not no_progress, force, name)
+    options.check()
+    runner = options.runner(config)
     if dry_run:
+        import yaml
         print(yaml.safe_dump(config.to_dict(), sort_keys=False), end="")
-        print(f"# {len(runner.points)} points x {config.trials} trials = "
-              f"{runner.total_trials} trials in batches of {config.batch_size}; "
-              f"output: {runner.folder.path}")
+        _print_plan(runner)
         return
-    _closing_lines(_execute(runner))
+    outcome = _execute(runner)
+    _closing_lines(outcome)
+    raise typer.Exit(exit_status([outcome]))
 
 
-def _check_execution(executor: str, workers: int, scheduler_file: str | None) -> None:
-    """Refuse a bad ``--executor``, ``--workers`` or ``--scheduler-file`` in one line."""
-    if executor not in KINDS:
-        fail(f"--executor: got {executor!r}; allowed: {', '.join(KINDS)}")
-    if workers < 0:
-        fail(f"--workers: got {workers}; allowed: an integer >= 0 (0 = all cores)")
-    if scheduler_file:
-        try:
-            scheduler_address(scheduler_file)
-        except ExecutorError as err:
-            fail(str(err))
-
-
-def _closing_lines(outcome) -> None:
-    """What ``trackfuse run`` prints at the end, and its exit status (see the module doc)."""
+def _closing_lines(outcome: RunOutcome) -> None:
+    """What ``trackfuse run`` prints at the end of a run."""
+    from trackfuse.results import RunStatus
     if outcome.status == RunStatus.ALREADY_COMPLETE:
         print(f"already complete: {outcome.folder}")
     else:
@@ -151,30 +229,19 @@ def _closing_lines(outcome) -> None:
               f"({outcome.computed_trials} computed now) in {outcome.seconds:.1f} s, "
               f"{len(outcome.figures)} figure files")
     for message in outcome.figure_errors:
-        print(f"warning: {message}", file=sys.stderr)
+        warn(message)
     if outcome.report is not None:
         print(f"report: {outcome.report}")
     if outcome.failed_trials:
-        print(f"error: {outcome.failed_trials} trials failed (status=failed in trials.csv)",
-              file=sys.stderr)
-        raise typer.Exit(3)
-    if outcome.figure_errors:
-        raise typer.Exit(1)
+        print_error(f"{outcome.failed_trials} trials failed (status=failed in trials.csv)")
 
 
-@app.command()
-def reproduce(
-    folder: Annotated[Path | None, typer.Argument(
-        help="Folder of configs (default: ./configs if present, else the shipped paper "
-             "configs).")] = None,
-    workers: Annotated[int, typer.Option(help="Parallel workers (default: all cores).")] = 0,
-    out_dir: Annotated[Path, typer.Option("--out", help="Output root folder.")] = Path("results"),
-    executor: Annotated[str, typer.Option(help="serial, process or dask.")] = "process",
-    no_progress: Annotated[bool, typer.Option("--no-progress", help="No progress output.")]
-    = False,
-) -> None:
-    """Run every config in FOLDER (the shipped paper experiments by default), resuming any
-    finished ones; all configs are validated before the first one runs."""
+# ---------------------------------------------------------------------------- reproduce
+
+
+def _config_paths(folder: Path | None) -> list[Path]:
+    """The ``*.yaml`` configs ``reproduce`` runs (one-line error if there are none)."""
+    from trackfuse.shipped import configs_folder
     if folder is None:
         folder = Path("configs") if Path("configs").is_dir() else configs_folder()
         if folder is None:
@@ -184,32 +251,93 @@ def reproduce(
     paths = sorted(folder.glob("*.yaml"))
     if not paths:
         fail(f"{folder}: no *.yaml configs")
-    configs = [_load(path, [], []) for path in paths]
-    failed = 0
-    finished = []
+    return paths
+
+
+def _load_all(paths: list[Path], sets: dict[str, Any]) -> list[Config]:
+    """Every config with the overrides that apply to it: top-level keys to all, a parameter
+    to the configs whose experiment has it; a key no config accepts is an error."""
+    from trackfuse.config import OVERRIDABLE_TOP_LEVEL
+    configs, used = [], set()
+    for path in paths:
+        schema = _load(path, {}, []).experiment.schema
+        mine = {k: v for k, v in sets.items() if k in OVERRIDABLE_TOP_LEVEL or k in schema}
+        used |= set(mine)
+        configs.append(_load(path, mine, []))
+    unused = sorted(set(sets) - used)
+    if unused:
+        fail(f"--set: {unused[0]}: no config has this parameter (see `trackfuse list "
+             "EXPERIMENT`)")
+    return configs
+
+
+def run_configs(configs: list[Config], options: RunOptions) -> list[RunOutcome]:
+    """Run each config in turn (a finished one resumes at once) and return their outcomes,
+    printing one line per config."""
+    outcomes = []
     for config in configs:
-        runner = Runner(config, out_dir, workers=workers or default_workers(),
-                        executor=executor, progress=not no_progress, command=sys.argv,
-                        warn=warn)
-        outcome = _execute(runner)
-        failed += outcome.failed_trials + len(outcome.figure_errors)
+        outcome = _execute(options.runner(config))
+        outcomes.append(outcome)
         print(f"{config.source}: {outcome.folder} ({outcome.computed_trials} of "
               f"{outcome.total_trials} trials computed now, {outcome.failed_trials} failed)")
+        for message in outcome.figure_errors:
+            warn(message)
         if outcome.report is not None:
             print(f"  report: {outcome.report}")
-            finished.append(outcome.folder)
-    if finished:
-        print(f"report: {write_reproduction_report(finished, out_dir)}")
-    if failed:
-        raise typer.Exit(3)
+    return outcomes
 
 
 @app.command()
-def plot(run_dir: Annotated[Path, typer.Argument(help="A finished run folder.")]) -> None:
+def reproduce(
+    folder: Annotated[Path | None, typer.Argument(
+        metavar="[FOLDER]", show_default=False,
+        help="Folder of configs (default: ./configs if present, else the shipped paper "
+             "configs).")] = None,
+    workers: Workers = 0,
+    out_dir: OutDir = Path("results"),
+    sets: Sets = [],  # noqa: B006
+    executor: ExecutorOpt = Executor.process,
+    scheduler: Scheduler = None,
+    scheduler_file: SchedulerFile = None,
+    dry_run: DryRun = False,
+    no_plots: NoPlots = False,
+    no_progress: NoProgress = False,
+) -> None:
+    """Run every config in FOLDER (by default the shipped paper experiments).
+
+    Finished configs resume at once; all configs are validated before the first one runs.
+    A --set parameter applies to every config whose experiment has it."""
+    configs = _load_all(_config_paths(folder), _overrides(sets, None))
+    options = RunOptions(out_dir, workers, executor.value, scheduler, scheduler_file,
+                         not no_plots, not no_progress)
+    options.check()
+    if dry_run:
+        for config in configs:
+            _print_plan(options.runner(config))
+        return
+    outcomes = run_configs(configs, options)
+    finished = [o.folder for o in outcomes if o.report is not None]
+    if finished:
+        from trackfuse.reproduction import write_reproduction_report
+        print(f"report: {write_reproduction_report(finished, out_dir)}")
+    raise typer.Exit(exit_status(outcomes))
+
+
+# ---------------------------------------------------------------------------- plot, runs
+
+
+@app.command()
+def plot(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR",
+                                                 help="A finished run folder.")]) -> None:
     """Redraw every figure and table of RUN_DIR from its CSVs (nothing is recomputed).
 
     The final files are checked against the checksums in the run's manifest first. Plotting
     a run of a plugin experiment imports the plugin's module (a config is code)."""
+    from trackfuse.catalog import find_runs, is_run_folder
+    from trackfuse.reports import write_report
+    from trackfuse.results import RunFolderError
+    from trackfuse.rundata import load as load_run
+    from trackfuse.runlock import RunLock
     runs = find_runs(run_dir) if run_dir.is_dir() and not is_run_folder(run_dir) else []
     if runs:
         print(f"{run_dir} is a folder of runs; plot one of them:")
@@ -228,28 +356,31 @@ def plot(run_dir: Annotated[Path, typer.Argument(help="A finished run folder.")]
         raise typer.Exit(130) from None
     print(f"drew {len(report.figures)} figure files in {run_dir / 'figures'}")
     for message in report.errors:
-        print(f"warning: {message}", file=sys.stderr)
+        warn(message)
     print(f"report: {report.index}")
     if report.errors:
         raise typer.Exit(1)
 
 
-def _print_runs(runs: list[RunInfo]) -> None:
+def _print_runs(runs) -> None:
+    from rich.console import Console
+    from rich.table import Table
     table = Table("run folder", "experiment", "name", "status", "trials", "started", "wall")
     for r in runs:
         wall = f"{r.wall_s:.0f} s" if r.wall_s is not None else ""
         table.add_row(str(r.path), r.experiment, r.name, r.status,
                       f"{r.trials_done}/{r.trials_total}", r.started.replace("T", " ")[:19],
                       wall)
-    Console(width=max(out.width, 160)).print(table)
+    Console(width=max(Console().width, 160)).print(table)
 
 
 @app.command()
 def runs(
-    root: Annotated[Path, typer.Argument(help="Output root, a config's folder of runs, or a "
-                                              "run folder.")] = Path("results"),
+    root: Annotated[Path, typer.Argument(metavar="[ROOT]", help="Output root, a config's "
+                                         "folder of runs, or a run folder.")] = Path("results"),
 ) -> None:
     """List run folders under ROOT, newest first: experiment, name, status, trials, dates."""
+    from trackfuse.catalog import find_runs
     if not root.is_dir():
         fail(f"{root}: not a folder")
     found = find_runs(root)
@@ -257,6 +388,9 @@ def runs(
         print(f"no runs under {root}")
         return
     _print_runs(found)
+
+
+# ---------------------------------------------------------------------------- compare
 
 
 def _tolerances(specs: list[str]) -> dict[str, float]:
@@ -273,8 +407,10 @@ def _tolerances(specs: list[str]) -> dict[str, float]:
     return found
 
 
-def _print_comparison(result: Comparison, shown: int = 30) -> None:
+def _print_comparison(result, shown: int = 30) -> None:
     """One summary line, then the cells that differ (most ``shown``)."""
+    from rich.console import Console
+    from rich.table import Table
     cells = result.cells
     counts = cells["verdict"].value_counts().to_dict()
     print(f"{'paired' if result.paired else 'unpaired'} comparison, {len(cells)} cells, "
@@ -288,30 +424,37 @@ def _print_comparison(result: Comparison, shown: int = 30) -> None:
     table = Table(*columns)
     for row in notable.head(shown)[columns].itertuples(index=False):
         table.add_row(*(f"{v:.4g}" if isinstance(v, float) else str(v) for v in row))
-    Console(width=max(out.width, 160)).print(table)
+    Console(width=max(Console().width, 160)).print(table)
     if len(notable) > shown:
         print(f"(+{len(notable) - shown} more cells; --json lists every cell)")
 
 
 @app.command()
 def compare(
-    base: Annotated[Path, typer.Argument(help="The reference run folder.")],
-    new: Annotated[Path, typer.Argument(help="The run folder to judge.")],
+    base: Annotated[Path, typer.Argument(metavar="BASE", help="The reference run folder.")],
+    new: Annotated[Path, typer.Argument(metavar="NEW", help="The run folder to judge.")],
     fail_on_regression: Annotated[bool, typer.Option(
-        "--fail-on-regression", help="Exit 1 when a metric is significantly worse than BASE "
-                                     "by more than its tolerance.")] = False,
+        "--fail-on-regression", metavar="", help="Exit 1 when a metric is significantly worse "
+                                                 "than BASE by more than its tolerance.")]
+    = False,
     tolerance: Annotated[list[str], typer.Option(
-        help="Accepted worsening of a metric: METRIC=NUMBER (repeatable; default 0).")] = [],  # noqa: B006
-    alpha: Annotated[float, typer.Option(help="Family-wise false-alarm level of the "
-                                              "regression gate.")] = 0.05,
-    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object instead of "
-                                                         "a table.")] = False,
+        metavar="METRIC=NUMBER", show_default=False,
+        help="Accepted worsening of a metric, in its unit (repeatable; default 0).")] = [],  # noqa: B006
+    alpha: Annotated[float, typer.Option(metavar="P", help="Family-wise false-alarm level of "
+                                         "the regression gate.")] = 0.05,
+    as_json: Annotated[bool, typer.Option("--json", metavar="", help="Print one JSON object "
+                                          "instead of a table.")] = False,
 ) -> None:
-    """Compare two complete runs of one experiment cell by cell (sweep point x row key x
-    metric): both means, the difference NEW - BASE with its 95 % interval. Runs with the same
+    """Compare two complete runs of one experiment, cell by cell.
+
+    A cell is a sweep point x row key x metric: both means, the difference NEW - BASE with
+    its 95 % interval. Runs with the same
     seed and trial count are paired (paired t, Newcombe and McNemar for 0/1 metrics);
     otherwise unpaired (Welch, Newcombe hybrid score). Exit 0, 1 (regression, with
     --fail-on-regression) or 2 (bad input)."""
+    from trackfuse.compare import compare_runs
+    from trackfuse.results import RunFolderError
+    from trackfuse.rundata import load as load_run
     if not 0 < alpha < 1:
         fail(f"--alpha: got {alpha}; allowed: a number in (0, 1)")
     tolerances = _tolerances(tolerance)
@@ -327,53 +470,66 @@ def compare(
         _print_comparison(result)
     if fail_on_regression and len(result.regressions):
         if not as_json:
-            print(f"error: {len(result.regressions)} regressions", file=sys.stderr)
+            print_error(f"{len(result.regressions)} regressions")
         raise typer.Exit(1)
+
+
+# ---------------------------------------------------------------------------- validate, list
 
 
 @app.command()
 def validate(
-    cfg: Annotated[Path, typer.Argument(help="Scenario config (YAML).")],
+    cfg: Cfg,
+    overrides: Overrides = None,
     sets: Sets = [],  # noqa: B006
     sweeps: Sweeps = [],  # noqa: B006
 ) -> None:
-    """Check CFG (and overrides) without running anything. A config naming a plugin
+    """Check CONFIG and its overrides without running anything.
+
+    Every key, value, sweep axis and figure name is checked. A config naming a plugin
     (package.module:ATTR) imports that module: a config is trusted like a script."""
-    config = _load(cfg, sets, sweeps)
+    from trackfuse.sweep import count_points
+    config = _load(cfg, _overrides(sets, overrides), sweeps)
     points = count_points(config.sweep, config.sweep_mode)
     print(f"ok: {cfg}: {config.experiment.name}, {points} points x {config.trials} trials")
 
 
 @app.command("list")
 def list_experiments(
-    name: Annotated[str | None, typer.Argument(help="Show this experiment's parameters.")]
-    = None,
+    name: Annotated[str | None, typer.Argument(
+        metavar="[EXPERIMENT]", autocompletion=_complete_experiment, show_default=False,
+        help="Show this experiment's parameters, metrics, algorithms and figures.")] = None,
+    output: Annotated[Format, typer.Option(
+        "--format", help="table; yaml: a commented config template that `trackfuse "
+                         "validate` accepts as is; json: everything, machine-readable.")]
+    = Format.table,
 ) -> None:
-    """List experiments, or one experiment's parameters with defaults and units."""
+    """List experiments, or one experiment's parameters, metrics, algorithms, figures.
+
+    Without EXPERIMENT: the built-in experiments and installed plugins. With it: every
+    parameter with its default, unit and allowed values, the metrics, algorithms and figure
+    names (what outputs.figures may list)."""
+    from trackfuse import experiments
+    from trackfuse_cli import describe
     if name is None:
-        table = Table("experiment", "title", "parameters")
-        for exp_name in experiments.names():
-            try:
-                exp = experiments.get(exp_name)
-                table.add_row(exp_name, exp.title, str(len(exp.params)))
-            except Exception as err:  # noqa: BLE001 - one broken experiment, listed as such
-                table.add_row(exp_name, f"(unavailable: {type(err).__name__}: {err})", "")
-        out.print(table)
+        if output is not Format.table:
+            fail("--format yaml/json describes one experiment; name it: trackfuse list "
+                 "EXPERIMENT --format yaml")
+        describe.print_listing(experiments.listing())
         return
     try:
         exp = experiments.get(name)
     except experiments.UnknownExperiment:
-        fail(f"unknown experiment {name[:80]!r}; allowed: {', '.join(experiments.names())}")
+        fail(f"unknown experiment {name[:80]!r}; allowed: {', '.join(experiments.names())}, "
+             "or package.module:ATTRIBUTE")
     except experiments.PluginError as err:
         fail(str(err))
-    table = Table("parameter", "default", "unit", "allowed", "meaning", title=exp.title)
-    for p in exp.params:
-        table.add_row(p.key, str(p.default), p.unit, allowed_text(p), p.doc)
-    out.print(table)
-    figures = Table("figure", "paper", "caption", title="figures (outputs.figures)")
-    for fig_name, spec in exp.figures.items():
-        figures.add_row(fig_name, spec.paper or "-", spec.caption)
-    out.print(figures)
+    if output is Format.yaml:
+        print(describe.config_template(exp, name), end="")
+    elif output is Format.json:
+        print(json.dumps(describe.as_data(exp, name), indent=1))
+    else:
+        describe.print_experiment(exp)
 
 
 if __name__ == "__main__":

@@ -94,7 +94,8 @@ def test_cli_bad_override_and_missing_file(tmp_path, write_config):
     result = trackfuse("validate", path, "--set", "sigma")
     assert result.returncode == 2 and "allowed: key=value" in result.stderr
     result = trackfuse("validate", path, "--set", "n=0")
-    assert result.returncode == 2 and "set.n: got 0; allowed: an integer >= 1" in result.stderr
+    assert result.returncode == 2
+    assert "error: --set: n: got 0; allowed: an integer >= 1" in result.stderr
     result = trackfuse("validate", tmp_path / "nope.yaml")
     assert result.returncode == 2 and "nope.yaml: no such file" in result.stderr
 

@@ -62,8 +62,10 @@ def _function_level_imports(tree: ast.AST) -> list[tuple[int, str]]:
 
 
 def test_no_function_level_import_between_our_modules():
+    # The command line (trackfuse_cli) is exempt: its commands import the runner, pandas and
+    # matplotlib when they run, so `--help`, `list` and `validate` start quickly.
     found = [f"{path.relative_to(ROOT)}:{line} imports {name}"
-             for path in MODULES.values()
+             for module, path in MODULES.items() if module.split(".")[0] == "trackfuse"
              for line, name in _function_level_imports(ast.parse(path.read_text()))]
     assert not found, "\n".join(found)
 

@@ -178,15 +178,17 @@ def flatten(mapping: Mapping, prefix: str = "") -> dict[str, Any]:
 
 
 def _validated(source: str, exp: Experiment, where: str, key: str, value: Any) -> Any:
+    """``value`` checked against parameter ``key``; errors name ``source`` and
+    ``where.key`` (just ``key`` when ``where`` is empty: a command-line override)."""
     p = exp.schema.get(key)
     if p is None:
-        raise ConfigError(source, f"{where}.{key}",
+        raise ConfigError(source, _dotted(where, key),
                           f"unknown parameter of '{exp.name}'{did_you_mean(key, exp.schema)}"
                           f" (see `trackfuse list {exp.name}`)")
     try:
         return check_value(p, value)
     except (ValueError, TypeError, OverflowError):
-        raise ConfigError(source, f"{where}.{key}",
+        raise ConfigError(source, _dotted(where, key),
                           f"got {_describe(value)}; allowed: {allowed_text(p)}") from None
 
 
@@ -197,13 +199,19 @@ def _int(source: str, key: str, value: Any, low: int, high: int = MAX_TRIALS) ->
     return value
 
 
+SET, SWEEP = "--set", "--sweep"
+"""The source named by errors in command-line overrides (not the YAML file they override)."""
+OVERRIDABLE_TOP_LEVEL = ("trials", "seed", "batch_size", "title", "sweep_mode")
+
+
 def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
           sweeps: Mapping[str, Any] | None = None) -> Config:
     """Validate a parsed YAML document plus overrides into a :class:`Config`.
 
     ``sets`` are ``--set`` overrides (dotted key -> value; keys outside the top level are
     experiment parameters, and a set on a swept key removes that axis); ``sweeps`` are
-    ``--sweep`` axes (dotted key -> list or ``"range(...)"``), replacing config axes.
+    ``--sweep`` axes (dotted key -> list or ``"range(...)"``), replacing config axes. A bad
+    override is blamed on ``--set``/``--sweep``, not on the file.
     """
     if raw is None:
         raise ConfigError(source, "", "the file is empty; expected a mapping with at least "
@@ -217,38 +225,25 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
             raise ConfigError(source, str(key), "unknown top-level key"
                               f"{did_you_mean(key, TOP_LEVEL)}; allowed: {', '.join(TOP_LEVEL)}")
     sets = dict(sets or {})
-    for key in [k for k in sets if k in ("trials", "seed", "batch_size", "title", "sweep_mode")]:
-        raw[key] = sets.pop(key)
+    origin = {key: source for key in TOP_LEVEL}
+    for key in [k for k in sets if k in OVERRIDABLE_TOP_LEVEL]:
+        raw[key], origin[key] = sets.pop(key), SET
 
     name = raw.get("experiment")
     exp = _experiment(source, name)
 
     title = raw.get("title", exp.title)
     if not isinstance(title, str):
-        raise ConfigError(source, "title", f"got {_describe(title)}; allowed: a string")
-    trials = _int(source, "trials", raw.get("trials", 1), 1)
-    seed = _int(source, "seed", raw.get("seed", 0), 0, 2**63 - 1)
-    batch_size = _int(source, "batch_size", raw.get("batch_size", exp.batch_size), 1, 10**6)
-
-    params_raw = raw.get("params") or {}
-    if not isinstance(params_raw, Mapping):
-        raise ConfigError(source, "params", f"got {_describe(params_raw)}; allowed: a mapping "
-                                            "of parameter names to values")
-    params = exp.defaults()
-    for key, value in flatten(params_raw).items():
-        params[key] = _validated(source, exp, "params", str(key), value)
-
-    sweep_raw = raw.get("sweep") or {}
-    if not isinstance(sweep_raw, Mapping):
-        raise ConfigError(source, "sweep", f"got {_describe(sweep_raw)}; allowed: a mapping of "
-                                           "parameter names to value lists or 'range(a, b, s)'")
-    sweep_raw = {str(k): v for k, v in sweep_raw.items()}
-    sweep_raw.update({str(k): v for k, v in (sweeps or {}).items()})
+        raise ConfigError(origin["title"], "title", f"got {_describe(title)}; allowed: a string")
+    trials = _int(origin["trials"], "trials", raw.get("trials", 1), 1)
+    seed = _int(origin["seed"], "seed", raw.get("seed", 0), 0, 2**63 - 1)
+    batch_size = _int(origin["batch_size"], "batch_size", raw.get("batch_size", exp.batch_size),
+                      1, 10**6)
+    params = _params(source, exp, raw.get("params") or {})
     for key, value in sets.items():
-        params[key] = _validated(source, exp, "set", key, value)
-        sweep_raw.pop(key, None)
-    sweep = _sweep(source, exp, sweep_raw)
-    mode = _sweep_mode(source, raw.get("sweep_mode", "grid"), sweep)
+        params[key] = _validated(SET, exp, "", key, value)
+    sweep = _sweep(source, exp, raw.get("sweep") or {}, dict(sweeps or {}), dropped=set(sets))
+    mode = _sweep_mode(origin["sweep_mode"], raw.get("sweep_mode", "grid"), sweep)
     if count_points(sweep, mode) > MAX_POINTS:
         raise ConfigError(source, "sweep", f"the {mode} has {count_points(sweep, mode)} points;"
                                            f" allowed: at most {MAX_POINTS}")
@@ -257,18 +252,42 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
                   figures, formats, name)
 
 
-def _sweep(source: str, exp: Experiment, sweep_raw: dict[str, Any]) -> dict[str, list[Any]]:
-    """Every sweep axis parsed and each value validated against the schema."""
+def _params(source: str, exp: Experiment, params_raw: Any) -> dict[str, Any]:
+    """Every schema parameter: the defaults, overridden by the config's ``params``."""
+    if not isinstance(params_raw, Mapping):
+        raise ConfigError(source, "params", f"got {_describe(params_raw)}; allowed: a mapping "
+                                            "of parameter names to values")
+    params = exp.defaults()
+    for key, value in flatten(params_raw).items():
+        params[key] = _validated(source, exp, "params", str(key), value)
+    return params
+
+
+def _sweep(source: str, exp: Experiment, sweep_raw: Any, sweeps: dict[str, Any],
+           dropped: set[str]) -> dict[str, list[Any]]:
+    """Every sweep axis (the config's, then ``--sweep`` ones replacing them, without the
+    ``dropped`` keys that ``--set`` fixed) parsed and validated against the schema."""
+    if not isinstance(sweep_raw, Mapping):
+        raise ConfigError(source, "sweep", f"got {_describe(sweep_raw)}; allowed: a mapping of "
+                                           "parameter names to value lists or 'range(a, b, s)'")
+    axes = {str(k): (source, "sweep", v) for k, v in sweep_raw.items()}
+    axes.update({str(k): (SWEEP, "", v) for k, v in sweeps.items()})
     sweep: dict[str, list[Any]] = {}
-    for key, spec in sweep_raw.items():
+    for key, (where, section, spec) in axes.items():
+        if key in dropped:
+            continue
         if key not in exp.schema:
-            _validated(source, exp, "sweep", key, None)
+            _validated(where, exp, section, key, None)
         try:
             values = parse_axis_values(spec)
         except SweepError as err:
-            raise ConfigError(source, f"sweep.{key}", str(err)) from None
-        sweep[key] = [_validated(source, exp, "sweep", key, v) for v in values]
+            raise ConfigError(where, _dotted(section, key), str(err)) from None
+        sweep[key] = [_validated(where, exp, section, key, v) for v in values]
     return sweep
+
+
+def _dotted(section: str, key: str) -> str:
+    return f"{section}.{key}" if section else key
 
 
 def _sweep_mode(source: str, mode: Any, sweep: dict[str, list[Any]]) -> str:

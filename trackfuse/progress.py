@@ -1,9 +1,12 @@
-"""Progress of a run: a rich bar on a terminal, plain periodic lines otherwise (CI logs)."""
+"""Progress of a run: a rich bar on a terminal, plain periodic lines otherwise (CI logs), and
+one line per phase after the last trial (merging, summarising, drawing)."""
 
 from __future__ import annotations
 
+import math
 import sys
 import time
+from collections.abc import Callable
 
 from rich.console import Console
 from rich.markup import escape
@@ -13,29 +16,63 @@ from rich.progress import (
     Progress,
     TaskProgressColumn,
     TextColumn,
-    TimeElapsedColumn,
     TimeRemainingColumn,
 )
+from rich.table import Column
 
 PLAIN_EVERY_S = 10.0
+#: Columns the bar needs besides the label: count, percent, rate, "ETA", time left, gaps.
+FIXED_WIDTH = 48
+MIN_BAR_WIDTH = 10
+
+
+def duration_text(seconds: float) -> str:
+    """``"42 s"``, ``"3:05"`` (min:s) or ``"1:02:03"`` (h:min:s); ``"unknown"`` if not finite."""
+    if not math.isfinite(seconds) or seconds < 0:
+        return "unknown"
+    whole = round(seconds)
+    if whole < 60:
+        return f"{whole} s"
+    hours, rest = divmod(whole, 3600)
+    minutes, secs = divmod(rest, 60)
+    return f"{hours}:{minutes:02d}:{secs:02d}" if hours else f"{minutes}:{secs:02d}"
+
+
+def fit_label(label: str, width: int) -> str:
+    """``label`` cut to ``width`` characters: first its trailing ``" [...]"`` (the run id),
+    then with an ellipsis."""
+    if len(label) <= width:
+        return label
+    if label.endswith("]") and " [" in label:
+        label = label[:label.rindex(" [")]
+    return label if len(label) <= width else label[:max(width - 1, 1)] + "…"
 
 
 class RunProgress:
-    """Trials done / total with rate and ETA. Use as a context manager."""
+    """Trials done / total with rate and ETA. Use as a context manager.
 
-    def __init__(self, total: int, done: int, label: str, enabled: bool = True):
+    ``console`` (default: standard error) decides between the bar (a terminal) and plain
+    lines; the label is shortened so the count and ETA always fit the console's width.
+    """
+
+    def __init__(self, total: int, done: int, label: str, enabled: bool = True,
+                 console: Console | None = None):
         self.total, self.done, self.label = total, done, label
         self.start_done, self.t0 = done, time.monotonic()
         self._last_print, self._printed = self.t0, -1
-        console = Console(stderr=True)
+        console = console or Console(stderr=True)
         self._rich = enabled and console.is_terminal
         self._plain = enabled and not self._rich
         if self._rich:
-            self._bar = Progress(TextColumn("{task.description}"), BarColumn(),
-                                 MofNCompleteColumn(), TaskProgressColumn(),
-                                 TextColumn("{task.fields[rate]}"), TimeElapsedColumn(),
-                                 TextColumn("ETA"), TimeRemainingColumn(), console=console)
-            self._task = self._bar.add_task(escape(label), total=total, completed=done, rate="")
+            room = max(console.width - FIXED_WIDTH - MIN_BAR_WIDTH, 8)
+            shown = fit_label(label, room)
+            self._bar = Progress(
+                TextColumn("{task.description}", table_column=Column(no_wrap=True)),
+                BarColumn(bar_width=None), MofNCompleteColumn(), TaskProgressColumn(),
+                TextColumn("{task.fields[rate]}"), TextColumn("ETA"), TimeRemainingColumn(),
+                console=console, expand=True)
+            self._task = self._bar.add_task(escape(shown), total=total, completed=done,
+                                            rate="")
 
     def __enter__(self) -> RunProgress:
         if self._rich:
@@ -64,8 +101,35 @@ class RunProgress:
     def _line(self) -> None:
         self._last_print = time.monotonic()
         self._printed = self.done
-        rate = self.rate()
-        eta = (self.total - self.done) / rate if rate > 0 else float("nan")
-        pct = 100.0 * self.done / max(self.total, 1)
-        print(f"{self.label}: {self.done}/{self.total} trials ({pct:.0f}%), "
-              f"{rate:,.0f} trials/s, ETA {eta:,.0f} s", file=sys.stderr, flush=True)
+        print(plain_line(self.label, self.done, self.total, self.rate()), file=sys.stderr,
+              flush=True)
+
+
+def plain_line(label: str, done: int, total: int, rate: float) -> str:
+    """One progress line for logs; the rate and ETA only once trials have been timed."""
+    pct = 100.0 * done / max(total, 1)
+    text = f"{label}: {done:,}/{total:,} trials ({pct:.0f}%)"
+    if rate > 0:
+        text += f", {rate:,.0f} trials/s, ETA {duration_text((total - done) / rate)}"
+    return text
+
+
+class PhaseLog:
+    """Announces the phases after the last trial on standard error, one line each, with the
+    time the previous phase took: pass it as the runner's ``on_phase``."""
+
+    def __init__(self, label: str, enabled: bool = True,
+                 write: Callable[[str], None] | None = None):
+        self.label, self.enabled = label, enabled
+        self._write = write or (lambda text: print(text, file=sys.stderr, flush=True))
+        self._previous: tuple[str, float] | None = None
+
+    def __call__(self, phase: str) -> None:
+        if not self.enabled:
+            return
+        now = time.monotonic()
+        took = ""
+        if self._previous is not None:
+            took = f" ({self._previous[0]} took {duration_text(now - self._previous[1])})"
+        self._previous = (phase, now)
+        self._write(f"{self.label}: {phase}...{took}")

@@ -299,7 +299,7 @@ class Runner:
                  scheduler_file: str | None = None, plots: bool = True,
                  progress: bool = True, command: list[str] | None = None,
                  warn: Callable[[str], None] = _print_warning, force: bool = False,
-                 name: str | None = None):
+                 name: str | None = None, on_phase: Callable[[str], None] | None = None):
         self.config = config
         self.resolved = config.to_dict()
         self.code = code_fingerprint(config.experiment)
@@ -315,6 +315,7 @@ class Runner:
         self.command = command if command is not None else sys.argv
         self.warn = warn
         self.force, self.name = force, name
+        self.on_phase = on_phase or (lambda phase: None)  # told each step after the trials
         self.git = _git_state(Path.cwd())
 
     @property
@@ -492,6 +493,7 @@ class Runner:
         """Merge verified parts into the final CSVs, summarize, write the report
         (:func:`trackfuse.reports.write_report`), mark the run complete."""
         path = self.folder.path
+        self.on_phase("merging parts into trials.csv")
         files = {CONFIG: session.config_file,
                  TRIALS: self.folder.merge(self.spans, "trials", TRIALS)}
         timings = self.folder.merge(self.spans, "timings", TIMINGS)
@@ -500,6 +502,7 @@ class Runner:
         else:
             (path / TIMINGS).unlink()
         keys = ["point", *self.config.sweep, *self.config.experiment.row_keys]
+        self.on_phase("summarising into summary.csv")
         summary, failed_rows = summarize(path / TRIALS, keys,
                                          self.config.experiment.binary_metrics)
         files[SUMMARY] = _write_record(path / SUMMARY, summary.to_csv(index=False))
@@ -512,6 +515,7 @@ class Runner:
         outcome = RunOutcome(path, RunStatus.COMPLETE, self.total_trials, session.computed,
                              failed_rows, files[TRIALS]["rows"])
         if self.plots:  # before "complete": a Ctrl-C while drawing leaves a resumable run
+            self.on_phase("drawing figures and tables")
             report = write_report(load(path, require_complete=False))
             outcome.figures, outcome.figure_errors = report.figures, report.errors
             outcome.report = report.index

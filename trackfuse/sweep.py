@@ -7,7 +7,9 @@ element by element.
 
 Overrides follow Hydra's spelling: ``--set a.b=1`` and ``--sweep a.b=0,5,10`` or
 ``--sweep "a.b=range(0,21,2)"``. Values are parsed as YAML scalars (``1`` is an int, ``1.5``
-a float, ``true`` a bool, anything else a string); ``[1, 2]`` is a list.
+a float, ``true`` a bool, anything else a string); ``[1, 2]`` is a list. A comma separates
+sweep values only outside brackets and quotes, so ``--sweep "algorithms=[a,b],[c]"`` is an
+axis of two lists.
 """
 
 from __future__ import annotations
@@ -83,12 +85,35 @@ def parse_axis_values(spec: Any) -> list[Any]:
     if isinstance(spec, str):
         if _RANGE.match(spec):
             return parse_range(spec)
-        spec = [parse_scalar(s) for s in spec.split(",")] if "," in spec else [spec]
+        spec = [parse_scalar(s) for s in split_values(spec)] if "," in spec else [spec]
     if not isinstance(spec, list):
         spec = [spec]
     if not spec:
         raise SweepError("the axis is empty; allowed: a non-empty list or 'range(a, b, s)'")
     return spec
+
+
+def split_values(text: str) -> list[str]:
+    """Split ``text`` at the commas outside brackets, braces, parentheses and quotes:
+    ``"[a,b],[c]"`` -> ``["[a,b]", "[c]"]``; raise :class:`SweepError` if they do not balance."""
+    parts, depth, quote, start = [], 0, "", 0
+    for i, char in enumerate(text):
+        if quote:
+            quote = "" if char == quote else quote
+        elif char in "'\"":
+            quote = char
+        elif char in "([{":
+            depth += 1
+        elif char in ")]}":
+            depth -= 1
+            if depth < 0:
+                break
+        elif char == "," and depth == 0:
+            parts.append(text[start:i])
+            start = i + 1
+    if depth or quote:
+        raise SweepError(f"got {text!r}; unbalanced brackets or quotes")
+    return parts + [text[start:]]
 
 
 def parse_scalar(text: str) -> Any:
@@ -127,7 +152,8 @@ def parse_sweeps(items: list[str]) -> dict[str, Any]:
         value = value.strip()
         if not value:
             raise SweepError(f"got {item!r}; the axis is empty")
-        axes[key] = value if _RANGE.match(value) else [parse_scalar(v) for v in value.split(",")]
+        axes[key] = value if _RANGE.match(value) else [parse_scalar(v)
+                                                        for v in split_values(value)]
     return axes
 
 

@@ -1,9 +1,9 @@
 """A minimal trackfuse experiment plugin: estimate a coin's bias by the sample mean.
 
-Run it from this folder (so that Python finds ``coin``)::
+Run it from this folder (trackfuse puts the current folder on the path)::
 
     cd examples/plugin_example
-    PYTHONPATH=. trackfuse run coin.yaml --out /tmp/coin-results
+    trackfuse run coin.yaml --out /tmp/coin-results
 
 See ``docs/plugins.md`` for the contract.
 """

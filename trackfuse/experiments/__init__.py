@@ -1,7 +1,10 @@
 """Registry of experiment kinds, looked up by name.
 
 Built-in experiments live in modules of this package; each exposes ``EXPERIMENT``. A config
-may also name an experiment of its own as ``"package.module:ATTRIBUTE"`` (a plugin).
+may also name an experiment of its own as ``"package.module:ATTRIBUTE"`` (a plugin), or by
+the name an installed distribution registers in the entry-point group
+:data:`ENTRY_POINT_GROUP` (``[project.entry-points."trackfuse.experiments"]`` in its
+``pyproject.toml``: ``coin = "coin:EXPERIMENT"``). Built-in names win over entry points.
 
 A config is code: naming a plugin runs its module. The module is imported only when a config
 naming it is validated or run, or when a run folder made from it is plotted, never while
@@ -23,10 +26,13 @@ Any error while importing is reported in one line (:class:`PluginError`).
 from __future__ import annotations
 
 import ast
+import difflib
 import importlib
+import importlib.metadata
 import importlib.util
 import re
 import traceback
+from dataclasses import dataclass
 
 from trackfuse.experiments.base import Experiment, Param
 
@@ -35,6 +41,7 @@ BUILTIN: dict[str, str] = {
     "esm_radar": "trackfuse.experiments.esm_radar",
     "passive_assoc": "trackfuse.experiments.passive_assoc",
 }
+ENTRY_POINT_GROUP = "trackfuse.experiments"
 MAX_SOURCE_BYTES = 5_000_000
 _MODULE_PATH = re.compile(r"^[A-Za-z_]\w*(\.[A-Za-z_]\w*)*$", re.ASCII)
 
@@ -55,13 +62,63 @@ def register(experiment: Experiment) -> Experiment:
     return experiment
 
 
+@dataclass(frozen=True)
+class Listed:
+    """One experiment as ``trackfuse list`` shows it, found without importing it.
+
+    ``origin``: ``"built-in"``, ``"registered"`` or ``"plugin <distribution> <version>"``;
+    ``reference``: the module (built-in) or ``module:ATTRIBUTE`` (plugin) it comes from.
+    """
+
+    name: str
+    origin: str
+    reference: str
+    description: str
+
+
+def _entry_points() -> dict[str, importlib.metadata.EntryPoint]:
+    """Installed plugins by name (entry-point group :data:`ENTRY_POINT_GROUP`)."""
+    found = importlib.metadata.entry_points(group=ENTRY_POINT_GROUP)
+    return {ep.name: ep for ep in found if ep.name not in BUILTIN}
+
+
 def names() -> list[str]:
-    """Every experiment name a config may use (built-in first)."""
-    return list(BUILTIN) + sorted(n for n in _registered if n not in BUILTIN)
+    """Every experiment name a config may use (built-in first, then installed plugins and
+    registered experiments)."""
+    return list(BUILTIN) + sorted((set(_entry_points()) | set(_registered)) - set(BUILTIN))
+
+
+def listing() -> list[Listed]:
+    """Every named experiment, in :func:`names` order, without importing any of them."""
+    plugins = _entry_points()
+    found = []
+    for name in names():
+        if name in BUILTIN:
+            found.append(Listed(name, "built-in", BUILTIN[name], _docstring_line(BUILTIN[name])))
+        elif name in _registered:
+            found.append(Listed(name, "registered", "", _registered[name].title))
+        else:
+            ep = plugins[name]
+            dist = f" {ep.dist.name} {ep.dist.version}" if ep.dist is not None else ""
+            found.append(Listed(name, f"plugin{dist}", ep.value, "(imported when used)"))
+    return found
+
+
+def _docstring_line(module: str) -> str:
+    """First line of ``module``'s docstring, read from its source without running it."""
+    try:
+        spec = importlib.util.find_spec(module)
+        with open(spec.origin, "rb") as fh:
+            doc = ast.get_docstring(ast.parse(fh.read())) or ""
+    except (OSError, SyntaxError, ValueError, TypeError, AttributeError, ImportError):
+        return ""
+    first = doc.strip().splitlines()[0] if doc.strip() else ""
+    return first.replace("``", "").rstrip(".")
 
 
 def get(name: str) -> Experiment:
-    """Return the experiment called ``name`` (a registered name or ``module:ATTRIBUTE``).
+    """Return the experiment called ``name`` (built in, registered, an installed plugin's
+    entry-point name, or ``module:ATTRIBUTE``).
 
     Raises :class:`UnknownExperiment` for an unknown plain name and :class:`PluginError` for
     a plugin reference that is refused or fails to import.
@@ -72,6 +129,12 @@ def get(name: str) -> Experiment:
         return importlib.import_module(BUILTIN[name]).EXPERIMENT
     if ":" in name:
         return _plugin(name)
+    plugin = _entry_points().get(name)
+    if plugin is not None:
+        try:
+            return _plugin(plugin.value)
+        except PluginError as err:
+            raise PluginError(f"entry point {name!r} ({ENTRY_POINT_GROUP}): {err}") from None
     raise UnknownExperiment(name)
 
 
@@ -112,7 +175,9 @@ def _check_source(module: str, attr: str, where: str) -> None:
     except BaseException as err:  # noqa: BLE001 - a parent package failed to import
         raise PluginError(f"{where}: cannot locate {module}: {_one_line(err)}") from None
     if spec is None:
-        raise PluginError(f"{where}: no module named {module!r} (is its folder on PYTHONPATH?)")
+        raise PluginError(f"{where}: no module named {module!r} on the Python path (run "
+                          "trackfuse from the folder that holds it, or add that folder to "
+                          "PYTHONPATH)")
     origin = spec.origin if spec.has_location else None
     if origin is None or not origin.endswith(".py"):
         raise PluginError(f"{where}: {module} is not a Python source module")
@@ -121,8 +186,11 @@ def _check_source(module: str, attr: str, where: str) -> None:
             tree = ast.parse(fh.read(MAX_SOURCE_BYTES + 1), filename=origin)
     except (OSError, SyntaxError, ValueError) as err:
         raise PluginError(f"{where}: cannot read {module}: {_one_line(err)}") from None
-    if attr not in _top_level_names(tree.body):
-        raise PluginError(f"{where}: {module} does not define {attr} at its top level")
+    defined = _top_level_names(tree.body)
+    if attr not in defined:
+        close = difflib.get_close_matches(attr, sorted(defined), n=1, cutoff=0.6)
+        hint = f"; did you mean '{close[0]}'?" if close else ""
+        raise PluginError(f"{where}: {module} does not define {attr} at its top level{hint}")
     line = _first_bare_call(tree.body)
     if line is not None:
         raise PluginError(f"{where}: {module} runs code when imported (a call statement at "
@@ -171,5 +239,5 @@ def _blocks(stmt: ast.stmt) -> list[list[ast.stmt]]:
     return []
 
 
-__all__ = ["Experiment", "Param", "PluginError", "UnknownExperiment", "get", "names",
-           "register"]
+__all__ = ["ENTRY_POINT_GROUP", "Experiment", "Listed", "Param", "PluginError",
+           "UnknownExperiment", "get", "listing", "names", "register"]

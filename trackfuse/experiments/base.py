@@ -29,6 +29,8 @@ An experiment module is the only place that knows its science. It exposes one mo
   is imported only when a report is drawn (so workers and the runner load no matplotlib).
 * ``figures``: name -> :class:`FigureSpec` for every figure the report can draw (the names
   a config may list in ``outputs.figures``).
+* the algorithms it compares: by convention the ``choices`` of a list parameter called
+  ``algorithms`` (:attr:`Experiment.algorithms`; ``trackfuse list`` prints them).
 
 Row columns: the runner adds ``point``, ``trial`` and the swept parameter values; the
 experiment supplies ``algorithm``, the keys listed in ``row_keys`` and numeric metric columns.
@@ -42,13 +44,16 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from trackfuse.results import RUNNER_COLUMNS
-from trackfuse.seeding import TrialStreams
+
+if TYPE_CHECKING:  # only for annotations: declaring an experiment loads no numpy
+    from trackfuse.seeding import TrialStreams
 
 Row = dict[str, Any]
 Params = Mapping[str, Any]
+ALGORITHMS_PARAM = "algorithms"
 
 
 @dataclass(frozen=True)
@@ -133,6 +138,13 @@ class Experiment:
     def directions(self) -> dict[str, Better]:
         """Metric name -> ``"lower"`` or ``"higher"`` for every metric with a direction."""
         return {m.name: m.better for m in self.metrics if m.better is not None}
+
+    @property
+    def algorithms(self) -> tuple[str, ...]:
+        """Every algorithm a config may choose: the choices of the ``algorithms`` parameter
+        (``()`` when the experiment has none)."""
+        param = self.schema.get(ALGORITHMS_PARAM)
+        return tuple(str(c) for c in param.choices) if param and param.choices else ()
 
     def defaults(self) -> dict[str, Any]:
         """Every parameter at its default value, keyed by dotted name."""

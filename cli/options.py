@@ -1,0 +1,97 @@
+"""What the ``trackfuse`` commands share: option declarations, choices, and one-line errors.
+
+Every error, usage errors from the option parser included (a bad value, a missing
+argument), is printed as one line ``error: ...`` on stderr; usage errors exit with status 2.
+"""
+
+from __future__ import annotations
+
+import sys
+from enum import StrEnum
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from typer.core import TyperGroup
+
+
+class OneLineErrors(TyperGroup):
+    """Usage errors (a bad option value, a missing argument) as one ``error:`` line, exit 2."""
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True,
+             **extra):
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        try:
+            code = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except typer.TyperException as err:  # click's ClickException and UsageError
+            ctx = getattr(err, "ctx", None)
+            hint = f" (see `{ctx.command_path} --help`)" if ctx is not None else ""
+            print_error(f"{err.format_message()}{hint}")
+            sys.exit(err.exit_code)
+        except typer.Abort:
+            print_error("aborted")
+            sys.exit(1)
+        sys.exit(code if isinstance(code, int) else 0)
+
+
+class Executor(StrEnum):
+    """Where the batches run (``trackfuse.executors.KINDS``)."""
+
+    serial = "serial"
+    process = "process"
+    dask = "dask"
+
+
+class Format(StrEnum):
+    """Output of ``trackfuse list EXPERIMENT``."""
+
+    table = "table"
+    yaml = "yaml"
+    json = "json"
+
+
+def _printable(message: str) -> str:
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in message)
+
+
+def print_error(message: str) -> None:
+    print(f"error: {_printable(message)}", file=sys.stderr)
+
+
+def fail(message: str, code: int = 2) -> None:
+    """Print a one-line error to stderr and exit."""
+    print_error(message)
+    raise typer.Exit(code)
+
+
+def warn(message: str) -> None:
+    """Print a one-line warning to stderr."""
+    print(f"warning: {_printable(message)}", file=sys.stderr, flush=True)
+
+
+Cfg = Annotated[Path, typer.Argument(metavar="CONFIG", help="Scenario config (YAML), or the "
+                                     "name of a shipped one (twin_sensor_orbit).")]
+Overrides = Annotated[list[str] | None, typer.Argument(
+    metavar="KEY=VALUE", show_default=False,
+    help="Overrides as in Hydra: clutter.mean=5 (same as --set).")]
+Sets = Annotated[list[str], typer.Option(
+    "--set", metavar="KEY=VALUE", show_default=False,
+    help="Override a value: clutter.mean=5, 'algorithms=\\[nn/ekf,nn/mgekf]' "
+         "(repeatable).")]
+Sweeps = Annotated[list[str], typer.Option(
+    "--sweep", metavar="KEY=V1,V2", show_default=False,
+    help="Sweep an axis: clutter.mean=0,5,10 or 'clutter.mean=range(0,21,2)'; lists in "
+         "brackets: 'algorithms=\\[a,b],\\[c]' (repeatable).")]
+Workers = Annotated[int, typer.Option(metavar="N", min=0, show_default="all cores",
+                                      help="Parallel workers (0 = all cores).")]
+OutDir = Annotated[Path, typer.Option("--out", metavar="FOLDER", help="Output root folder.")]
+ExecutorOpt = Annotated[Executor, typer.Option(help="Where batches run.")]
+Scheduler = Annotated[str | None, typer.Option(metavar="ADDRESS", help="dask scheduler "
+                                               "address, e.g. tcp://host:8786.")]
+SchedulerFile = Annotated[str | None, typer.Option(metavar="FILE", help="dask scheduler file.")]
+DryRun = Annotated[bool, typer.Option("--dry-run", metavar="", help="Print the resolved "
+                                      "config and the work; run nothing.")]
+NoPlots = Annotated[bool, typer.Option("--no-plots", metavar="", help="Skip figures.")]
+NoProgress = Annotated[bool, typer.Option("--no-progress", metavar="",
+                                          help="No progress output.")]

@@ -1,0 +1,61 @@
+"""Command-line overrides: positional KEY=VALUE, bracket lists, errors blamed on their source,
+figure names checked at validation."""
+
+from __future__ import annotations
+
+import yaml
+from conftest import trackfuse
+
+CONFIG = "experiment: toy_experiments:GAUSSIAN\ntrials: 3\nsweep: {mu: [0, 1]}\n"
+
+
+def test_positional_overrides_work_like_set(write_config):
+    path = write_config(CONFIG)
+    positional = trackfuse("run", path, "--dry-run", "sigma=2.5", "mu=0.5", "trials=4")
+    with_set = trackfuse("run", path, "--dry-run", "--set", "sigma=2.5", "--set", "mu=0.5",
+                         "--set", "trials=4")
+    assert positional.returncode == 0, positional.stderr
+    assert positional.stdout == with_set.stdout
+    resolved = yaml.safe_load(positional.stdout.split("\n# ")[0])
+    assert resolved["params"]["sigma"] == 2.5 and resolved["sweep"] == {}
+    assert resolved["trials"] == 4
+    assert trackfuse("validate", path, "n=2").returncode == 0
+    refused = trackfuse("validate", path, "n")
+    assert refused.returncode == 2 and refused.stderr.startswith("error: --set: got 'n'")
+
+
+def test_sweep_list_values_keep_their_commas():
+    result = trackfuse("run", "twin_sensor_orbit", "--dry-run", "--sweep",
+                       "algorithms=[nn/ekf,nn/mgekf],[nn/ekf]")
+    assert result.returncode == 0, result.stderr
+    resolved = yaml.safe_load(result.stdout.split("\n# ")[0])
+    assert resolved["sweep"]["algorithms"] == [["nn/ekf", "nn/mgekf"], ["nn/ekf"]]
+
+
+def test_errors_name_the_override_not_the_file(write_config):
+    path = write_config(CONFIG)
+    cases = [(["--set", "n=0"], "error: --set: n: got 0; allowed: an integer >= 1"),
+             (["n=0"], "error: --set: n: got 0"),
+             (["--set", "trials=-2"], "error: --set: trials: got -2"),
+             (["--set", "sigam=1"], "error: --set: sigam: unknown parameter of 'toy_gaussian';"
+                                    " did you mean 'sigma'?"),
+             (["--sweep", "label=a,c"], "error: --sweep: label: got 'c'; allowed: one of a, b"),
+             (["--sweep", "mu=range(0,1,0)"], "error: --sweep: mu: got 'range(0,1,0)'")]
+    for args, expected in cases:
+        result = trackfuse("validate", path, *args)
+        assert result.returncode == 2 and result.stderr.startswith(expected), (args,
+                                                                                result.stderr)
+        assert str(path) not in result.stderr
+    in_file = trackfuse("validate", write_config(CONFIG + "params: {n: 0}\n", "bad"))
+    assert in_file.stderr.startswith("error: ") and "bad.yaml: params.n: got 0" in in_file.stderr
+
+
+def test_a_typo_in_outputs_figures_is_refused_at_validation(write_config):
+    path = write_config(CONFIG + "outputs: {figures: [estimat]}\n")
+    for command in (["validate"], ["run", "--no-progress"]):
+        result = trackfuse(*command, path)
+        assert result.returncode == 2
+        assert "outputs.figures: unknown figure 'estimat'; did you mean 'estimate'?" in \
+            result.stderr
+    listed = trackfuse("list", "toy_experiments:GAUSSIAN")
+    assert "\n  estimate\n" in listed.stdout  # every figure name is listed

@@ -1,0 +1,72 @@
+"""cli/options.py: one-line usage errors, --version, help text, choices, completion."""
+
+from __future__ import annotations
+
+import pytest
+from conftest import trackfuse
+from typer.testing import CliRunner
+
+import trackfuse as package
+from trackfuse.executors import KINDS
+from trackfuse_cli.main import app
+from trackfuse_cli.options import Executor
+
+
+@pytest.mark.parametrize("args, expected", [
+    (["run", "--workers", "x", "cfg.yaml"], "'--workers'"),
+    (["run"], "Missing argument 'CONFIG'"),
+    (["run", "cfg.yaml", "--executor", "threads"], "'--executor'"),
+    (["validate", "cfg.yaml", "--no-such-option"], "No such option: --no-such-option"),
+    (["run", "cfg.yaml", "--trials", "0"], "'--trials'"),
+    (["frobnicate"], "No such command 'frobnicate'"),
+])
+def test_usage_errors_are_one_line_with_exit_2(args, expected):
+    result = trackfuse(*args)
+    assert result.returncode == 2, result.stderr
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and expected in lines[0], lines
+    assert "╭" not in result.stderr and "Traceback" not in result.stderr
+
+
+def test_version():
+    result = trackfuse("--version")
+    assert result.returncode == 0 and result.stdout.strip() == f"trackfuse {package.__version__}"
+
+
+def test_executor_choices_are_the_executors_kinds():
+    assert tuple(e.value for e in Executor) == KINDS
+
+
+@pytest.mark.parametrize("command", ["run", "reproduce", "validate", "list", "compare"])
+def test_help_shows_no_type_placeholders_or_contradicting_defaults(command):
+    """Options show a metavar (N, KEY=VALUE, FOLDER), flags nothing; typer's own --help
+    keeps its ``<bool>``."""
+    result = CliRunner().invoke(app, [command, "--help"], env={"COLUMNS": "160"})
+    assert result.exit_code == 0
+    rows = [line.strip("│ ") for line in result.stdout.splitlines()
+            if line.strip("│ ").startswith("--") and not line.strip("│ ").startswith("--help")]
+    assert rows
+    for row in rows:
+        for placeholder in ("<bool>", "<int>", "<str>", "<float>", "<path>", "<list[str]>"):
+            assert placeholder not in row, row
+    assert "[default: 0]" not in result.stdout
+
+
+def test_reproduce_offers_the_run_options():
+    text = CliRunner().invoke(app, ["reproduce", "--help"], env={"COLUMNS": "200"}).stdout
+    for option in ("--no-plots", "--set", "--dry-run", "--scheduler", "--executor"):
+        assert option in text, option
+
+
+def test_shell_completion_is_offered_and_completes_experiment_names():
+    text = CliRunner().invoke(app, ["--help"], env={"COLUMNS": "120"}).stdout
+    assert "--install-completion" in text and "--show-completion" in text
+    result = CliRunner().invoke(app, [], env={"_TRACKFUSE_COMPLETE": "complete_bash",
+                                              "COMP_WORDS": "trackfuse list twin",
+                                              "COMP_CWORD": "2"}, prog_name="trackfuse")
+    assert "twin_sensor" in result.stdout
+
+
+def test_no_command_prints_help_and_exits_2():
+    result = trackfuse()
+    assert result.returncode == 2 and "Usage: " in result.stdout

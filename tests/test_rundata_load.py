@@ -1,0 +1,38 @@
+"""``trackfuse.load``: the public reader of a run folder; importing trackfuse stays light."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+import trackfuse
+from trackfuse.harness import run_data
+from trackfuse.results import RunFolderError
+
+
+def test_load_returns_the_frames_and_config_of_a_run(tmp_path):
+    folder = run_data(tmp_path, "toy_gaussian", sweep={"mu": [0.0, 1.0]}, trials=6).path
+    run = trackfuse.load(folder)
+    assert run.config["experiment"] == "toy_gaussian" and run.manifest["status"] == "complete"
+    assert len(run.trials) == 2 * 6 * 2  # points x trials x algorithms
+    assert {"metric", "mean", "ci_low", "ci_high", "interval"} <= set(run.summary.columns)
+    assert (run.summary["ci_low"] <= run.summary["mean"]).all()
+    assert run.summary.query("metric == 'covered' and algorithm == 'mean'")["interval"].eq(
+        "wilson").all()
+    (folder / "summary.csv").write_text("point,metric\n")
+    with pytest.raises(RunFolderError, match="summary.csv"):
+        trackfuse.load(folder)
+
+
+def test_importing_the_config_layer_loads_no_pandas_scipy_or_matplotlib():
+    code = ("import sys, trackfuse, trackfuse.config, trackfuse.experiments\n"
+            "trackfuse.experiments.listing()\n"
+            "print(sorted({m.split('.')[0] for m in sys.modules} & "
+            "{'pandas', 'scipy', 'matplotlib', 'numpy'}))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.strip()
+    assert out == "[]", out
+    with pytest.raises(AttributeError):
+        trackfuse.no_such_thing  # noqa: B018
