@@ -56,7 +56,6 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from trackfuse.association.triangulation import angle_residuals, triangulate
 
@@ -169,6 +168,14 @@ def from_pairs(rows: np.ndarray, cols: np.ndarray, gain: np.ndarray) -> Assignme
     p1[rows] = cols
     p2[cols] = rows
     return Assignment(partner1=p1, partner2=p2, objective=objective(gain, p1))
+
+
+def linear_sum_assignment(cost: np.ndarray, maximize: bool = False):
+    """``scipy.optimize.linear_sum_assignment``, imported on first use (scipy.optimize costs
+    every ``trackfuse list``/``validate`` about half a second at module load)."""
+    from scipy.optimize import linear_sum_assignment as solve
+
+    return solve(cost, maximize=maximize)
 
 
 def _lsa_clip(gain: np.ndarray) -> Assignment:

@@ -54,7 +54,8 @@ alpha-beta-gamma target trackers", IEEE Trans. AES 20(2), 1984, 174-182.
 from __future__ import annotations
 
 import numpy as np
-from scipy.stats import chi2
+
+from trackfuse.chi2 import chi2_quantile
 
 #: Scan of the first innovation of the constant-acceleration filter (three-point start).
 FIRST_CA_INNOVATION = 3
@@ -130,7 +131,7 @@ def windowed_nis(nu: np.ndarray, S: np.ndarray, window: int) -> np.ndarray:
 def nis_threshold(window: int, false_alarm: float) -> float:
     """``alpha_max`` for :func:`windowed_nis`: the ``1 - false_alarm`` quantile of
     ``chi2(window) / window``, the index's distribution without a manoeuvre."""
-    return float(chi2.ppf(1.0 - false_alarm, window) / window)
+    return chi2_quantile(1.0 - false_alarm, window) / window
 
 
 def cv_residuals(z: np.ndarray, R: np.ndarray, T: float, q: float) -> np.ndarray:

@@ -25,7 +25,8 @@ YBS Publishing, 1995, sec. 8.4 (track-to-track association).
 from __future__ import annotations
 
 import numpy as np
-from scipy.stats import chi2
+
+from trackfuse.chi2 import chi2_quantile
 
 
 def gaussian_nll_terms(d: np.ndarray, S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -103,5 +104,5 @@ def abstaining_decision(j: np.ndarray, log_lr: np.ndarray, D_best: np.ndarray, d
     """
     ok = log_lr >= lr_threshold
     if gate_alpha > 0:
-        ok &= D_best <= chi2.ppf(1.0 - gate_alpha, dof)
+        ok &= D_best <= chi2_quantile(1.0 - gate_alpha, dof)
     return np.where(ok, j, -1)

@@ -419,7 +419,7 @@ def _single_update(X, P, ret: SensorReturns, options: PDAOptions):
 
 
 def pda_update(X: np.ndarray, P: np.ndarray, returns: Sequence[SensorReturns],
-               options: PDAOptions = PDAOptions()
+               options: PDAOptions | None = None
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One PDA scan update of ``N`` filters with one or two sensors.
 
@@ -428,13 +428,15 @@ def pda_update(X: np.ndarray, P: np.ndarray, returns: Sequence[SensorReturns],
     X : (N, 6) predicted states (m, m/s).
     P : (N, 6, 6) predicted covariances.
     returns : one :class:`SensorReturns` per sensor (1 or 2).
-    options : association method, covariance form, gate probability (:class:`PDAOptions`).
+    options : association method, covariance form, gate probability (:class:`PDAOptions`;
+        default ``PDAOptions()``).
 
     Returns
     -------
     X : (N, 6), P : (N, 6, 6) updated; m : (N, n_sensors) validated counts (for the
     sequential method, sensor 2 is gated at the sensor-1 posterior).
     """
+    options = options if options is not None else PDAOptions()
     if len(returns) == 1 or options.method == "mspda_sequential":
         counts = []
         for ret in returns:

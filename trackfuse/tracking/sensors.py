@@ -32,8 +32,11 @@ Y. Bar-Shalom and T. E. Fortmann, *Tracking and Data Association*, Academic Pres
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
-from scipy import special, stats
+
+from trackfuse.chi2 import chi2_quantile
 
 
 def azel(d: np.ndarray) -> np.ndarray:
@@ -90,7 +93,16 @@ def modified_position_rows(z: np.ndarray, d_bar: np.ndarray) -> np.ndarray:
 
 def gate_threshold(P_G: float, nz: int = 2) -> float:
     """Chi-square gate ``gamma`` with probability ``P_G`` for an ``nz``-dimensional innovation."""
-    return float(stats.chi2.ppf(P_G, nz))
+    return chi2_quantile(P_G, nz)
+
+
+def _gamma(x: float) -> float:
+    """Gamma function: exact ``math.gamma`` at integers, scipy's elsewhere (as before)."""
+    if float(x).is_integer():
+        return math.gamma(x)
+    from scipy.special import gamma  # on first use: see trackfuse/chi2.py
+
+    return float(gamma(x))
 
 
 def gate_volume(S: np.ndarray, gamma: float) -> np.ndarray:
@@ -99,7 +111,7 @@ def gate_volume(S: np.ndarray, gamma: float) -> np.ndarray:
     ``c_n gamma^(n/2) |S|^(1/2)`` with the unit-ball volume ``c_n = pi^(n/2) / Gamma(n/2 + 1)``.
     """
     n = S.shape[-1]
-    c_n = np.pi ** (n / 2) / special.gamma(n / 2 + 1)
+    c_n = np.pi ** (n / 2) / _gamma(n / 2 + 1)
     det = inv2(S)[1] if n == 2 else np.linalg.det(S)
     with np.errstate(invalid="ignore"):
         return c_n * gamma ** (n / 2) * np.sqrt(det)

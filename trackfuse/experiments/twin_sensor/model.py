@@ -83,8 +83,8 @@ from itertools import product
 from typing import Any
 
 import numpy as np
-from scipy import stats
 
+from trackfuse.chi2 import chi2_quantile
 from trackfuse.experiments.base import Metric, Param
 from trackfuse.rowtable import RowTable
 from trackfuse.seeding import TrialStreams
@@ -393,7 +393,7 @@ class LossRules:
         """The rules of resolved ``params``."""
         return cls(int(params["loss.window"]), float(params["loss.angle_sigmas"]),
                    int(params["loss.angle_window"]),
-                   float(stats.chi2.ppf(float(params["loss.nees_quantile"]), 3)))
+                   chi2_quantile(float(params["loss.nees_quantile"]), 3))
 
 
 ROW_METRICS = (
