@@ -1,15 +1,18 @@
-"""Wall time of redrawing a finished run's report (what ``trackfuse plot <folder>`` does).
+"""Time of redrawing a finished run's report (what ``trackfuse plot <folder>`` does).
 
-Times :func:`trackfuse.reports.write_report` on :func:`trackfuse.rundata.load` of each run
-folder given (a complete run of, e.g., ``configs/twin_sensor_orbit.yaml``), best of
-``--repeat`` (the machine may be shared), then prints a per-figure breakdown: the time to
-draw each figure (the report module's ``figures``) and to save it in each format, and the time
-of ``tables``. Each repeat is a fresh process state only for the data (``load`` again); the
-report module stays imported, as in a long session. ``--import`` adds the one-off import time
-of the report module and matplotlib, which a fresh ``trackfuse plot`` process pays.
+For each run folder given (a complete run of, e.g., ``configs/twin_sensor_orbit.yaml``) it
+prints, on a copy of the folder:
+
+* ``trackfuse plot``: wall time of the real command in a fresh process (imports included);
+* ``write_report(load(folder))`` in this process: the first call (cold: it pays one-off
+  caches such as the PCRLB's clutter table) and the best of ``--repeat`` further calls, each
+  as wall time and as this process's CPU time (CPU time is what the work costs on an idle
+  core; wall time grows when other jobs share the machine);
+* a per-figure breakdown: the time to draw each figure (the report module's ``figures``) and
+  to save it in each format, the time of ``tables`` and of reading ``trials.csv``.
 
 To compare two versions of the code on the same folder under the same load, run this script
-once with each checkout's interpreter, one right after the other (``--repeat 3`` each).
+with each checkout on ``PYTHONPATH``, one right after the other.
 
 Usage: ``python benchmarks/report_speed.py RUN_FOLDER [RUN_FOLDER ...] [--repeat 3]
 [--profile]``
@@ -22,6 +25,7 @@ import cProfile
 import importlib
 import io
 import pstats
+import subprocess
 import sys
 import tempfile
 import time
@@ -41,16 +45,21 @@ def _copy(folder: Path, into: Path) -> Path:
     return target
 
 
-def time_report(folder: Path, repeat: int) -> float:
-    """Best wall time (s) of ``write_report(load(folder))`` over ``repeat`` runs."""
-    best = float("inf")
-    for _ in range(repeat):
-        start = time.perf_counter()
-        report = reports.write_report(rundata.load(folder))
-        best = min(best, time.perf_counter() - start)
-        if report.errors:
-            print("  report errors:", *report.errors, sep="\n    ")
-    return best
+def time_report(folder: Path) -> tuple[float, float]:
+    """``(wall_s, cpu_s)`` of one ``write_report(load(folder))``."""
+    wall, cpu = time.perf_counter(), time.process_time()
+    report = reports.write_report(rundata.load(folder))
+    if report.errors:
+        print("  report errors:", *report.errors, sep="\n    ")
+    return time.perf_counter() - wall, time.process_time() - cpu
+
+
+def time_plot_command(folder: Path) -> float:
+    """Wall time (s) of ``python -m trackfuse plot folder`` in a fresh process."""
+    start = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "trackfuse", "plot", str(folder)], check=True,
+                   capture_output=True)
+    return time.perf_counter() - start
 
 
 def breakdown(folder: Path) -> None:
@@ -94,10 +103,14 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="trackfuse-report-speed-") as tmp:
         for folder in args.folders:
             work = _copy(folder, Path(tmp))
-            rundata.load(work)  # checksums match: the copy is byte-identical
             importlib.import_module(rundata.load(work).experiment.report)
-            print(f"{folder}: write_report best of {args.repeat}: "
-                  f"{time_report(work, args.repeat):.2f} s")
+            print(f"{folder}:")
+            print(f"  trackfuse plot (fresh process) {time_plot_command(work):6.2f} s wall")
+            cold = time_report(work)
+            warm = min((time_report(work) for _ in range(args.repeat)), key=lambda t: t[0])
+            print(f"  write_report cold              {cold[0]:6.2f} s wall, {cold[1]:6.2f} s CPU")
+            print(f"  write_report warm, best of {args.repeat}   {warm[0]:6.2f} s wall, "
+                  f"{warm[1]:6.2f} s CPU")
             breakdown(work)
             if args.profile:
                 profiler = cProfile.Profile()

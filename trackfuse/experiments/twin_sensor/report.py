@@ -86,6 +86,8 @@ CLAIM_LABEL = "paper: < 5 % up to 9"
 FIG2_LEVELS = (0.0, 9.0, 15.0)
 """Clutter levels (mean false returns) of the Fig. 2 panels, the nearest swept ones."""
 MAIN_RULE = "lost_angle"
+SINGLE_PANEL, PANEL, TIME_PANEL = (5.6, 2.9), (3.9, 2.7), (3.1, 2.3)
+"""Panel sizes (width, height) in inches: a figure of one panel, of several, against time."""
 MAX_FACETS = 4
 SINGLE_RUNS = 5
 DOCS = "docs/papers/twin_sensor.md"
@@ -156,11 +158,12 @@ def _x_scale(key: str) -> float:
 
 
 def _headline_pair(algorithms: Sequence[str]) -> list[str]:
-    """MGEKF beside EKF for one association: the paper's if run with the MGEKF, else the
-    first listed association that has an MGEKF (else the first algorithm)."""
+    """MGEKF beside EKF for one association: the paper's, else the first listed, that was
+    run with both filters; else the first with an MGEKF (else the first algorithm)."""
     assocs = [a.split("/")[0] for a in algorithms]
-    chosen = next((a for a in ("paper_approx", *assocs) if f"{a}/mgekf" in algorithms),
-                  assocs[0])
+    order = ("paper_approx", *assocs)
+    chosen = next((a for a in order if {f"{a}/mgekf", f"{a}/ekf"} <= set(algorithms)),
+                  next((a for a in order if f"{a}/mgekf" in algorithms), assocs[0]))
     return [n for n in (f"{chosen}/mgekf", f"{chosen}/ekf") if n in algorithms] or \
         [algorithms[0]]
 
@@ -206,7 +209,7 @@ def _same(value: Any, default: Any) -> bool:
         return len(value) == len(default) and all(_same(v, d) for v, d in zip(value, default,
                                                                              strict=True))
     if isinstance(default, (int, float)) and not isinstance(default, bool):
-        return bool(np.isclose(float(value), float(default)))
+        return abs(float(value) - float(default)) <= 1e-8 + 1e-5 * abs(float(default))
     return value == default
 
 
@@ -255,7 +258,7 @@ def _frame(n_panels: int, ncols: int, panel: tuple[float, float], title_lines: l
     ``legend_entries`` entries."""
     nrows = -(-n_panels // ncols)
     width = 0.85 + ncols * panel[0] + (ncols - 1) * 0.55
-    legend_cols = max(1, min(legend_entries, int(width / 3.3)))
+    legend_cols = max(1, min(legend_entries, int(width / 3.2)))
     strip = 0.2 * -(-legend_entries // legend_cols) + 0.1
     margins = Margins(top=0.15 + 0.19 * len(title_lines) + 0.18 * panel_titles + 0.07,
                       hspace=0.55 + 0.18 * panel_titles, strip=strip)
@@ -277,8 +280,7 @@ def _figure(n_panels: int, ncols: int, panel: tuple[float, float], title: Sequen
     width = 0.85 + ncols * panel[0] + (ncols - 1) * 0.55
     lines = _title_lines(width, *title)
     fig, axes, cols = _frame(n_panels, ncols, panel, lines, legend_entries, panel_titles)
-    with context():
-        fig.suptitle("\n".join(lines), y=1 - 0.08 / fig.get_figheight(), va="top")
+    fig.suptitle("\n".join(lines), y=1 - 0.08 / fig.get_figheight(), va="top")
     return fig, axes, cols
 
 
@@ -402,24 +404,23 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
     ncols = len(columns) if len(columns) > 1 else min(len(facets), MAX_FACETS)
     entries = len({n for _, names, _ in columns for n in names}) + claim
     every_bar = max(len(names) for _, names, _ in columns) <= 2
-    panel = (6.0, 3.0) if n_panels == 1 else (4.2, 2.9)
+    panel = SINGLE_PANEL if n_panels == 1 else PANEL
     titles = _wrapped([", ".join(t for t in (
         col_title if len(rules) == 1 else f"{col_title}, {words[rule]}",
         facet_title if len(facets) > 1 else "") if t)
         for facet_title, _ in facets for col_title, _, rule in columns], panel[0])
     fig, axes, cols = _figure(n_panels, ncols, panel, title, entries + (not every_bar),
                               _lines(titles))
-    with context():
-        for i, (_, frame) in enumerate(facets):
-            for j, (_, names, rule) in enumerate(columns):
-                ax = axes[i * len(columns) + j]
-                if claim and rule != "inconsistent_nees":
-                    _draw_claim(ax)
-                _loss_ylim(ax, _draw_rates(ax, frame, "clutter.mean", rule,
-                                           _emphasis_last(names), every_bar))
-                ax.set_xlabel(_axis_label("clutter.mean", run.params))
-                ax.set_ylabel(RULES[rule][0])
-                ax.set_title(titles[i * len(columns) + j])
+    for i, (_, frame) in enumerate(facets):
+        for j, (_, names, rule) in enumerate(columns):
+            ax = axes[i * len(columns) + j]
+            if claim and rule != "inconsistent_nees":
+                _draw_claim(ax)
+            _loss_ylim(ax, _draw_rates(ax, frame, "clutter.mean", rule,
+                                       _emphasis_last(names), every_bar))
+            ax.set_xlabel(_axis_label("clutter.mean", run.params))
+            ax.set_ylabel(RULES[rule][0])
+            ax.set_title(titles[i * len(columns) + j])
     return _finish(fig, axes[:len(columns)], cols)
 
 
@@ -447,17 +448,16 @@ def _index_figure(run: RunData) -> Figure | str:
              "point)",
              _context(run, "truth q = filter q")]
     free = last[last["clutter.mean"] == 0]
-    fig, axes, cols = _figure(2, 2, (4.2, 2.9), title, len(names) + 1 + (len(free) > 0), 1)
-    with context():
-        for ax, rule in zip(axes, ("lost_angle", "lost_gate"), strict=True):
-            _loss_ylim(ax, _draw_rates(ax, with_clutter, "index", rule, names, False))
-            if len(free):
-                worst = free.groupby(["index", "algorithm"])[rule].mean().groupby(level=0).max()
-                ax.plot(worst.index, 100 * worst, "x", color=GREYS[0], markersize=6,
-                        label="no clutter (worst algorithm)", zorder=4)
-            ax.set_xlabel("manoeuvring index sqrt(q) T^2 / (r sigma) (1)")
-            ax.set_ylabel(RULES[rule][0])
-            ax.set_title(_rule_text(rule, run.params, swept_keys(run.config)))
+    fig, axes, cols = _figure(2, 2, PANEL, title, len(names) + 1 + (len(free) > 0), 1)
+    for ax, rule in zip(axes, ("lost_angle", "lost_gate"), strict=True):
+        _loss_ylim(ax, _draw_rates(ax, with_clutter, "index", rule, names, False))
+        if len(free):
+            worst = free.groupby(["index", "algorithm"])[rule].mean().groupby(level=0).max()
+            ax.plot(worst.index, 100 * worst, "x", color=GREYS[0], markersize=6,
+                    label="no clutter (worst algorithm)", zorder=4)
+        ax.set_xlabel("manoeuvring index sqrt(q) T^2 / (r sigma) (1)")
+        ax.set_ylabel(RULES[rule][0])
+        ax.set_title(_rule_text(rule, run.params, swept_keys(run.config)))
     return _finish(fig, axes[:1], cols)
 
 
@@ -489,18 +489,18 @@ def _time_figure(run: RunData, draw: Callable[[Axes, pd.DataFrame, dict[str, Any
     points = _time_points(run)
     swept = swept_keys(run.config)
     per_row = 3 if len(points) % 3 == 0 or len(points) > 4 else len(points)
-    titles = _wrapped([_point_title(run.point_params(pt), swept) for pt in points], 3.5)
-    fig, axes, cols = _figure(len(points), per_row, (3.5, 2.5), title, legend_entries,
+    titles = _wrapped([_point_title(run.point_params(pt), swept) for pt in points],
+                      TIME_PANEL[0])
+    fig, axes, cols = _figure(len(points), per_row, TIME_PANEL, title, legend_entries,
                               _lines(titles))
     trials = run.trials
-    with context():
-        for ax, pt, panel_title in zip(axes, points, titles, strict=True):
-            params = run.point_params(pt)
-            draw(ax, trials[trials["point"] == pt], params)
-            ax.set_xlabel("time t (s)")
-            ax.set_ylabel(y_label)
-            ax.set_ylim(bottom=0)
-            ax.set_title(panel_title)
+    for ax, pt, panel_title in zip(axes, points, titles, strict=True):
+        params = run.point_params(pt)
+        draw(ax, trials[trials["point"] == pt], params)
+        ax.set_xlabel("time t (s)")
+        ax.set_ylabel(y_label)
+        ax.set_ylim(bottom=0)
+        ax.set_title(panel_title)
     return _finish(fig, axes[:1], cols)
 
 
@@ -541,8 +541,7 @@ def _range_figure(run: RunData) -> Figure:
     """Paper Fig. 2: range RMSE (km) against time (s)."""
     names = _headline_pair(run.config["params"]["algorithms"])
     title = [f"{_fig_words(run, 2)}: range RMSE against time ({_runs(run.trials)} runs per "
-             "point)", _context(run, "95 % chi-square bands per scan; errors correlate "
-                            "across scans (grey: single runs)")]
+             "point)", _context(run, "95 % chi-square bands; grey: single runs")]
     return _time_figure(run, lambda ax, f, p: _draw_range(ax, f, p, names), title,
                         "range RMSE (km)", len(names) + 3)
 
@@ -595,19 +594,18 @@ def _final_figure(run: RunData) -> Figure | str:
         return facets
     names = _headline_pair(run.params["algorithms"])
     title = [("Paper Fig. 2 quantified: final" if x_key == "clutter.mean" else "Final")
-             + f" range RMSE vs the bound ({_runs(last)} runs per point)",
+             + f" range RMSE ({_runs(last)} runs per point)",
              _context(run, "95 % bootstrap intervals")]
-    panel = (6.0, 3.0) if len(facets) == 1 else (4.0, 2.8)
+    panel = SINGLE_PANEL if len(facets) == 1 else PANEL
     titles = _wrapped([t if len(facets) > 1 else "" for t, _ in facets], panel[0])
     fig, axes, cols = _figure(len(facets), min(len(facets), 3), panel, title, len(names) + 2,
                               _lines(titles))
-    with context():
-        for ax, (_, frame), facet_title in zip(axes, facets, titles, strict=True):
-            _draw_final(ax, run, frame, x_key, names)
-            ax.set_xlabel(_axis_label(x_key, run.params))
-            ax.set_ylabel("final range RMSE (km)")
-            ax.set_ylim(bottom=0)
-            ax.set_title(facet_title)
+    for ax, (_, frame), facet_title in zip(axes, facets, titles, strict=True):
+        _draw_final(ax, run, frame, x_key, names)
+        ax.set_xlabel(_axis_label(x_key, run.params))
+        ax.set_ylabel("final range RMSE (km)")
+        ax.set_ylim(bottom=0)
+        ax.set_title(facet_title)
     return _finish(fig, axes[:1], cols)
 
 
@@ -617,8 +615,9 @@ def _draw_final(ax: Axes, run: RunData, frame: pd.DataFrame, x_key: str,
     values = np.sort(frame[x_key].astype(float).unique())
     for i, name in enumerate(names):
         rows = frame[frame["algorithm"] == name]
-        stats_ = [(x, np.sqrt(g.mean()), *_bootstrap_rmse(g.to_numpy()))
-                  for x, g in rows.groupby(x_key)["range_sq_err_m2"]]
+        groups = list(rows.groupby(x_key)["range_sq_err_m2"])
+        stats_ = [(x, np.sqrt(g.mean()), *ci) for (x, g), ci in zip(
+            groups, _bootstrap_rmse_many([g.to_numpy() for _, g in groups]), strict=True)]
         x, rmse, lo, hi = (np.array(c, dtype=float) for c in zip(*stats_, strict=True))
         x = x / scale + 0.006 * (values[-1] - values[0]) / scale * (i - (len(names) - 1) / 2)
         ax.errorbar(x, rmse / 1e3, yerr=[(rmse - lo) / 1e3, (hi - rmse) / 1e3], capsize=2,
@@ -655,7 +654,7 @@ def _drawers(run: RunData) -> dict[str, Callable[[], Figure | str]]:
     index_reason = "target.q is not swept"
     return {
         "loss_vs_clutter": loss([("", _main_algorithms(algorithms), MAIN_RULE)],
-                                f"{_fig_words(run, 1)}: tracks lost against false returns",
+                                f"{_fig_words(run, 1)}: tracks lost vs false returns",
                                 claim=True),
         "loss_vs_clutter_ablation": loss([c for c in by_filter if c[1]],
                                          "Fig. 1 ablation: every algorithm"),
@@ -677,8 +676,9 @@ def _with_hint(drawn: Figure | str, hint: str) -> Figure | str:
 
 def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure | str]:
     """The ``wanted`` figures (module docstring); a one-line reason for each that this run
-    cannot draw."""
-    return {name: draw() for name, draw in _drawers(run).items() if name in wanted}
+    cannot draw. Drawn in the house style (:func:`trackfuse.plots.style.context`)."""
+    with context():
+        return {name: draw() for name, draw in _drawers(run).items() if name in wanted}
 
 
 # --------------------------------------------------------------------------------------------
@@ -702,8 +702,10 @@ def _bootstrap_rmse_many(groups: Sequence[np.ndarray], resamples: int = 2000,
     for n in {len(c) for c in clean if len(c) >= 2}:
         which = [i for i, c in enumerate(clean) if len(c) == n]
         idx = np.random.default_rng(seed).integers(0, n, (resamples, n))
+        counts = np.bincount((np.arange(resamples)[:, None] * n + idx).ravel(),
+                             minlength=resamples * n).reshape(resamples, n)
         sq = np.stack([clean[i] for i in which])
-        rmse = np.sqrt(sq[:, idx].mean(axis=2))
+        rmse = np.sqrt(sq @ counts.T / n)  # (groups, resamples): each resample's mean
         for i, (lo, hi) in zip(which, np.quantile(rmse, [0.025, 0.975], axis=1).T,
                                strict=True):
             out[i] = (float(lo), float(hi))
