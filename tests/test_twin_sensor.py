@@ -1,6 +1,8 @@
 """The twin_sensor experiment: contract, paired data, consistency against the PCRLB, figures."""
 
+import re
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -8,6 +10,7 @@ import pytest
 from scipy import stats
 
 from trackfuse import harness
+from trackfuse.config import load as load_config
 from trackfuse.experiments import get
 from trackfuse.experiments.twin_sensor import EXPERIMENT, report
 from trackfuse.experiments.twin_sensor.model import (
@@ -20,6 +23,9 @@ from trackfuse.experiments.twin_sensor.model import (
     stack,
     truth_trajectory,
 )
+from trackfuse.plots.algorithms import look
+from trackfuse.plots.style import text_overlaps
+from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS
 from trackfuse.rundata import RunData
 from trackfuse.seeding import trial_streams
 from trackfuse.stats import nees_band
@@ -27,6 +33,8 @@ from trackfuse.tracking.models import cv_noise_gain, cv_transition, wrap
 from trackfuse.tracking.pda import PDAOptions
 from trackfuse.tracking.sensors import azel
 
+ROOT = Path(__file__).resolve().parents[1]
+CONFIGS = ROOT / "configs"
 ROW_METRICS = {"range_err_m", "range_sq_err_m2", "pos_sq_err_m2", "nees", "nees_pos",
                "n_valid", "lost_gate", "lost_angle", "inconsistent_nees", "cpu_time_s"}
 
@@ -172,24 +180,109 @@ def small_run(tmp_path_factory):
                   trials=6)
 
 
-def test_figures_from_tables(small_run):
-    figs = report.figures(small_run, list(EXPERIMENT.figures))
+# --------------------------------------------------------------------------------------------
+# Figures of every shipped config, from a small run of that config (the real runner)
+
+SHIPPED = sorted(p.stem for p in CONFIGS.glob("twin_sensor_*.yaml"))
+DRAWN = {  # figures each shipped config must draw (the others give a one-line reason)
+    "twin_sensor_orbit": {"loss_vs_clutter", "loss_vs_clutter_ablation",
+                          "loss_gate_and_nees_vs_clutter", "range_error_vs_time",
+                          "anees_vs_time", "final_range_rmse_vs_sweep"},
+    "twin_sensor_rmse_vs_bound": {"loss_vs_clutter", "loss_vs_clutter_ablation",
+                                  "loss_gate_and_nees_vs_clutter", "range_error_vs_time",
+                                  "anees_vs_time", "final_range_rmse_vs_sweep"},
+    "twin_sensor_close": {"loss_vs_clutter", "loss_vs_clutter_ablation",
+                          "loss_gate_and_nees_vs_clutter", "range_error_vs_time",
+                          "anees_vs_time", "final_range_rmse_vs_sweep"},
+    "twin_sensor_hard": {"loss_vs_manoeuvring_index", "range_error_vs_time", "anees_vs_time"},
+    "twin_sensor_range": {"range_error_vs_time", "anees_vs_time", "final_range_rmse_vs_sweep"},
+    "twin_sensor_baseline": {"range_error_vs_time", "anees_vs_time",
+                             "final_range_rmse_vs_sweep"},
+}
+
+
+@pytest.fixture(scope="module")
+def shipped(tmp_path_factory):
+    """Config stem -> a complete 3-trial run of that shipped config (its sweep and params)."""
+    runs: dict[str, RunData] = {}
+
+    def run_of(name: str) -> RunData:
+        if name not in runs:
+            cfg = load_config(CONFIGS / f"{name}.yaml")
+            runs[name] = harness.run_data(tmp_path_factory.mktemp(name), EXPERIMENT,
+                                          cfg.params, cfg.sweep, trials=3, seed=1,
+                                          sweep_mode=cfg.sweep_mode)
+        return runs[name]
+    return run_of
+
+
+def test_every_shipped_config_is_listed():
+    assert set(SHIPPED) == set(DRAWN)
+
+
+@pytest.mark.parametrize("name", SHIPPED)
+def test_every_figure_of_a_shipped_config_is_clean(shipped, name):
+    """Every declared figure is drawn or gives a one-line reason; a drawn one has no
+    overlapping text, a suptitle of at most two lines, and axis labels with units."""
+    figs = report.figures(shipped(name), list(EXPERIMENT.figures))
     assert set(figs) == set(EXPERIMENT.figures)
-    for fig in figs.values():
+    drawn = {n for n, f in figs.items() if not isinstance(f, str)}
+    assert drawn == DRAWN[name]
+    for fig_name, fig in figs.items():
+        if isinstance(fig, str):
+            assert fig.strip() and "\n" not in fig, fig_name
+            continue
+        assert text_overlaps(fig) == [], fig_name
+        assert 1 <= fig.get_suptitle().count("\n") + 1 <= 2, fig_name
+        assert "runs per point" in fig.get_suptitle(), fig_name
         for ax in fig.axes:
             if ax.get_visible() and ax.has_data():
-                assert "(" in ax.get_xlabel() and "(" in ax.get_ylabel()
-    legend = figs["range_rmse_vs_time"].legends[0]
-    assert any("PCRLB" in t.get_text() for t in legend.get_texts())
+                for label in (ax.get_xlabel(), ax.get_ylabel()):
+                    assert re.search(r"\(.+\)$", label), (fig_name, label)
+                assert "=" not in ax.get_title(), (fig_name, ax.get_title())
 
 
-def test_tables_report_loss_and_bound(small_run):
-    table = report.tables(small_run)["final_scan"]
-    assert len(table) == 2 * 3
-    assert {"lost_gate_pct", "lost_angle_pct", "inconsistent_nees_pct", "range_rmse_km",
-            "range_rmse_ci95_km", "range_pcrlb_km", "range_bias_scan1_km",
-            "range_bias_final_km"} <= set(table)
-    assert (table["range_pcrlb_km"] > 0).all()
+def _legend_texts(fig) -> list[str]:
+    return [t.get_text() for legend in fig.legends for t in legend.get_texts()]
+
+
+def test_main_fig1_shows_the_papers_claim_on_its_scale(tmp_path):
+    """At the paper's scenario no PDA track is lost (docs: W000-5), so the axis stays on the
+    claim's scale."""
+    cfg = load_config(CONFIGS / "twin_sensor_orbit.yaml")
+    run = harness.run_data(tmp_path, EXPERIMENT, {**cfg.params, "algorithms": [
+        "mspda_parallel/mgekf", "paper_approx/mgekf"]}, {"clutter.mean": [0.0, 5.0, 9.0, 12.0]},
+        trials=10, seed=1)
+    fig = report.figures(run, ["loss_vs_clutter"])["loss_vs_clutter"]
+    ax = fig.axes[0]
+    assert report.CLAIM_LABEL in _legend_texts(fig)
+    claim = next(line for line in ax.get_lines() if line.get_label() == report.CLAIM_LABEL)
+    np.testing.assert_allclose(claim.get_xdata(), [0.0, 9.0])
+    np.testing.assert_allclose(claim.get_ydata(), [5.0, 5.0])
+    assert ax.get_ylim()[1] <= 20.0 and ax.get_ylim()[0] < 0.0  # 0 % stays visible
+    curves = {line.get_label(): line for line in ax.get_lines() if line.get_marker() != "None"}
+    paper, ours = (curves[look(n).label] for n in ("paper_approx/mgekf",
+                                                    "mspda_parallel/mgekf"))
+    assert np.all(paper.get_xdata() != ours.get_xdata())  # offset: both visible at 0 %
+    assert paper.get_linewidth() >= 2.0 and "angle rule" in fig.get_suptitle()
+    assert ax.get_children().index(paper) > ax.get_children().index(ours)  # paper on top
+
+
+def test_the_claim_is_not_drawn_for_a_departure(shipped):
+    fig = report.figures(shipped("twin_sensor_close"), ["loss_vs_clutter"])["loss_vs_clutter"]
+    assert report.CLAIM_LABEL not in _legend_texts(fig)
+    assert "departure" in fig.get_suptitle() and "Fig. 1 analogue" in fig.get_suptitle()
+    assert [ax.get_title() for ax in fig.axes] == ["1 sensor", "2 sensors"]
+
+
+def test_fig2_shows_the_bound_single_runs_and_three_clutter_levels(shipped):
+    fig = report.figures(shipped("twin_sensor_orbit"),
+                         ["range_error_vs_time"])["range_error_vs_time"]
+    titles = [ax.get_title() for ax in fig.axes]
+    assert [t.split()[1] for t in titles] == ["0", "9", "15"]
+    texts = _legend_texts(fig)
+    assert any("PCRLB" in t for t in texts) and any("single runs" in t for t in texts)
+    assert any(look("paper_approx/ekf").label == t for t in texts)
 
 
 def test_figures_use_time_axes_and_accept_a_swept_string_key(tmp_path):
@@ -198,23 +291,84 @@ def test_figures_use_time_axes_and_accept_a_swept_string_key(tmp_path):
     base = params(algorithms=["mspda_parallel/mgekf", "nn/mgekf"], scan__count=4,
                   scan__period=2.0)
     run = frames(tmp_path, base, {"clutter.model": ["in_gate", "window"],
-                                  "clutter.mean": [0.0, 5.0]}, trials=3)
+                                  "clutter.mean": [0.0, 5.0, 9.0]}, trials=3)
     figs = report.figures(run, list(EXPERIMENT.figures))
-    titles = [ax.get_title() for ax in figs["loss_gate_vs_clutter"].axes if ax.get_visible()]
-    assert titles == ["model=in_gate", "model=window"]
-    for line in figs["range_rmse_vs_time"].axes[0].get_lines():
+    titles = [ax.get_title() for ax in figs["loss_vs_clutter"].axes]
+    assert titles == ["clutter in the gate", "clutter in a window"]
+    for line in figs["range_error_vs_time"].axes[0].get_lines()[:2]:
         np.testing.assert_allclose(line.get_xdata(), [2.0, 4.0, 6.0, 8.0])
 
 
+# --------------------------------------------------------------------------------------------
+# Tables
+
+
+def test_final_scan_intervals_are_numeric_and_hold_their_value(small_run):
+    table = report.tables(small_run)["final_scan"]
+    assert len(table) == 2 * 3
+    assert {"lost_gate_pct", "lost_angle_pct", "inconsistent_nees_pct", "range_rmse_km",
+            "range_pcrlb_km", "range_bias_scan1_km", "range_bias_final_km"} <= set(table)
+    lows = [c for c in table if c.endswith("_ci_low")]
+    assert len(lows) == 6
+    for low in lows:
+        value, high = low[: -len("_ci_low")], low.replace("_ci_low", "_ci_high")
+        assert pd.api.types.is_float_dtype(table[low]) and high in table and value in table
+        assert (table[low] <= table[value] + 1e-12).all() and \
+            (table[value] <= table[high] + 1e-12).all(), value
+    assert (table["range_pcrlb_km"] > 0).all()
+    assert not any("ci95" in c for c in table)
+
+
+def test_bootstrap_of_many_groups_equals_one_group_at_a_time():
+    rng = np.random.default_rng(4)
+    groups = [rng.exponential(size=n) for n in (5, 7, 5, 30)] + [np.array([1.0, np.inf, 2.0])]
+    many = report._bootstrap_rmse_many(groups)
+    assert many == [report._bootstrap_rmse(g) for g in groups]
+    assert many[0] != many[2]
+
+
+def _anchors(page) -> set[str]:
+    return {re.sub(r"[^\w\- ]", "", h.strip().lower()).replace(" ", "-")
+            for h in re.findall(r"^#+ (.+)$", page.read_text(), flags=re.M)}
+
+
+def test_headline_table_has_the_shared_schema(shipped):
+    table = report.tables(shipped("twin_sensor_orbit"))["paper_vs_reproduced"]
+    assert tuple(table.columns) == HEADLINE_COLUMNS
+    assert set(table["verdict"]) <= set(VERDICTS)
+    assert list(table["paper_item"]) == ["Fig. 1"] * 4 + ["Fig. 2"]
+    assert set(table["algorithm"][:4]) == {"paper_approx/mgekf", "mspda_parallel/mgekf"}
+    assert table["reason"].map(lambda r: r and "\n" not in r).all()
+    assert ((table["ci_low"] <= table["reproduced"]) & (table["reproduced"] <= table["ci_high"])
+            ).all()
+    for link in table["docs"]:
+        page, _, anchor = link.partition("#")
+        assert anchor in _anchors(ROOT / page), link
+
+
 def test_tables_carry_paper_vs_reproduced_only_at_the_papers_setting(small_run):
-    table = report.tables(small_run)["paper_vs_reproduced"]
-    assert len(table) == 3 * 2  # algorithms x {gate, angle} rules
-    assert set(table["rule"]) == {"lost_gate", "lost_angle"}
-    assert (table["paper_runs"] == 50).all() and table["paper"].str.contains("5 %").all()
+    assert "paper_vs_reproduced" in report.tables(small_run)
     config = small_run.config
     off_paper = dict(config, params=dict(config["params"], **{"sensors.pd": 0.8}))
     off_run = RunData(small_run.path, off_paper, small_run.manifest)
     assert "paper_vs_reproduced" not in report.tables(off_run)
+
+
+def _levels(lost_per_level: dict[float, int], runs: int) -> pd.DataFrame:
+    return pd.DataFrame([{"clutter.mean": c, "lost_angle": int(t < k)}
+                         for c, k in lost_per_level.items() for t in range(runs)])
+
+
+@pytest.mark.parametrize(("lost", "runs", "below", "rises"), [
+    ({c: 0 for c in range(16)}, 50, "agrees", "differs"),           # flat at 0: our finding
+    ({c: 10 for c in range(16)}, 50, "differs", "differs"),         # 20 % everywhere
+    ({c: (c >= 10) * 2 * c for c in range(16)}, 50, "agrees", "agrees"),  # the paper's shape
+    ({0: 0, 9: 3}, 50, "not comparable", "differs"),                # 3 % of 100: interval > 5
+])
+def test_fig1_verdicts_follow_the_intervals(lost, runs, below, rises):
+    rows = report._fig1_rows("paper_approx/mgekf", _levels(lost, runs))
+    assert [r["verdict"] for r in rows] == [below, rises]
+    assert all(tuple(r) == HEADLINE_COLUMNS for r in rows)
 
 
 # --------------------------------------------------------------------------------------------
