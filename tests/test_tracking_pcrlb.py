@@ -6,6 +6,8 @@ import pytest
 from trackfuse.tracking.initialization import los_prior_covariance
 from trackfuse.tracking.models import cv_process_noise, cv_transition
 from trackfuse.tracking.pcrlb import (
+    Q2_TABLES,
+    compute_q2_table,
     information_recursion,
     irf_q2,
     irf_q2_interp,
@@ -72,3 +74,8 @@ def test_irf_sanity_values():
     q = irf_q2_interp(grid, 1.0)
     assert q[0] == 1.0 and np.all(np.diff(q) < 0)
     assert abs(q[2] - 0.55) < 0.03
+
+
+@pytest.mark.parametrize("P_D", sorted(Q2_TABLES))
+def test_the_stored_q2_tables_equal_the_monte_carlo_bit_for_bit(P_D):
+    assert compute_q2_table(P_D).tolist() == list(Q2_TABLES[P_D])

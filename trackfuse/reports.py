@@ -34,6 +34,8 @@ from trackfuse.results import INDEX_HTML, INDEX_MD, atomic_write
 from trackfuse.rundata import RunData
 
 PNG_DPI = 200
+#: zlib level of PNG files: 1 halves the encoding time of level 6 for files ~1.3x larger.
+PNG_COMPRESSION = 1
 HEADLINE_TABLE = "paper_vs_reproduced"
 #: Columns of every experiment's headline table, one row per paper item compared:
 #: ``paper_item`` the paper's figure or table ("Table 3"); ``quantity`` in words;
@@ -114,7 +116,8 @@ def save_figure(fig, folder: Path, name: str, formats: Sequence[str]) -> list[Pa
         tmp = folder / f".{name}.{os.getpid()}.tmp.{fmt}"
         metadata = {"pdf": {"CreationDate": None, "ModDate": None},
                     "svg": {"Date": None}}.get(fmt)
-        fig.savefig(tmp, format=fmt, dpi=PNG_DPI, metadata=metadata)
+        extra = {"pil_kwargs": {"compress_level": PNG_COMPRESSION}} if fmt == "png" else {}
+        fig.savefig(tmp, format=fmt, dpi=PNG_DPI, metadata=metadata, **extra)
         tmp.replace(path)
         written.append(path)
     return written
