@@ -6,6 +6,8 @@ installed non-editable into its own virtual environment under ``.bench/`` (cache
 exactly as a new user installs it, and runs its own shipped configs:
 
 * ``run``: ``trackfuse run configs/twin_sensor_orbit.yaml --workers 2`` (figures included),
+* ``run --no-plots``: the same without figures (simulation, filters, CSVs and summaries: the
+  compute part, apart from the drawing),
 * ``reproduce``: ``trackfuse reproduce configs --workers 2`` (every paper config, figures
   included; the two versions may ship different sets of configs, so the config counts and
   trial totals are printed beside the times),
@@ -87,18 +89,21 @@ def main() -> None:
     parser.add_argument("--baseline", default="6f49e5c")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--skip", nargs="*", default=[], choices=["run", "reproduce",
-                                                                  "startup"])
+                                                                  "startup"],
+                        help="skip commands by first word (run skips both run lines)")
     args = parser.parse_args()
     homes = {"baseline": install(args.baseline), "current": install("HEAD")}
     commands = {
         "run": ["run", MAIN_CONFIG, "--workers", "2"],
+        "run --no-plots": ["run", MAIN_CONFIG, "--workers", "2", "--no-plots"],
         "reproduce": ["reproduce", "configs", "--workers", "2"],
         "startup --help": ["--help"],
         "startup list": ["list"],
         "startup validate": ["validate", MAIN_CONFIG],
     }
     commands = {k: v for k, v in commands.items() if k.split()[0] not in args.skip}
-    times = measure(homes, commands, args.repeats, writes={"run", "reproduce"})
+    times = measure(homes, commands, args.repeats,
+                    writes={"run", "run --no-plots", "reproduce"})
     for name, home in homes.items():
         print(f"{name}: {home.name}, {config_count(home)} paper configs")
     print(f"{'command':<18} {'baseline min/median s':>22} {'current min/median s':>21} "

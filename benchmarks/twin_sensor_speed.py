@@ -23,7 +23,8 @@ import time
 
 import numpy as np
 
-from trackfuse.experiments.twin_sensor import EXPERIMENT, build_scenario, simulate
+from trackfuse.experiments.twin_sensor import EXPERIMENT
+from trackfuse.experiments.twin_sensor.model import build_scenario, simulate
 from trackfuse.seeding import trial_streams
 
 

@@ -25,6 +25,7 @@ from trackfuse.compare import Comparison, compare_runs
 from trackfuse.config import ConfigError, allowed_text, load
 from trackfuse.executors import KINDS, ExecutorError, default_workers, scheduler_address
 from trackfuse.reports import write_report
+from trackfuse.reproduction import write_reproduction_report
 from trackfuse.results import RunFolderError, RunStatus
 from trackfuse.rundata import load as load_run
 from trackfuse.runlock import RunLock
@@ -185,6 +186,7 @@ def reproduce(
         fail(f"{folder}: no *.yaml configs")
     configs = [_load(path, [], []) for path in paths]
     failed = 0
+    finished = []
     for config in configs:
         runner = Runner(config, out_dir, workers=workers or default_workers(),
                         executor=executor, progress=not no_progress, command=sys.argv,
@@ -195,6 +197,9 @@ def reproduce(
               f"{outcome.total_trials} trials computed now, {outcome.failed_trials} failed)")
         if outcome.report is not None:
             print(f"  report: {outcome.report}")
+            finished.append(outcome.folder)
+    if finished:
+        print(f"report: {write_reproduction_report(finished, out_dir)}")
     if failed:
         raise typer.Exit(3)
 

@@ -173,7 +173,7 @@ def test_a_truncated_trials_csv_is_refused_by_plot_and_rebuilt_by_run(copy, refe
 def test_temporaries_of_a_killed_run_are_removed_on_resume(copy, reference):
     config, out, folder = copy
     as_interrupted(folder)
-    (folder / "tables").mkdir()
+    (folder / "tables").mkdir(exist_ok=True)
     leftovers = [folder / "figures" / ".estimate.tmp.png",  # runner figures
                  folder / "figures" / ".estimate.4242.tmp.pdf",  # reports.py figures
                  folder / "tables" / ".table.csv.4242.tmp",  # atomic_write
@@ -253,9 +253,10 @@ def test_the_reference_folder_holds_every_kind_of_file(reference):
     names = _files(reference[2])
     for expected in ("config.yaml", "manifest.json", "trials.csv", "timings.csv", "summary.csv",
                      "timings_summary.csv", "figures/estimate.png", ".lock", "index.md",
-                     "index.html", "parts/p000001-b0000001.timings.csv"):
+                     "index.html", "parts/p000001-b0000001.timings.csv",
+                     "tables/paper_vs_reproduced.csv"):
         assert expected in names
-    assert len(names) == 8 + 2 + 2 + 7
+    assert len(names) == 8 + 2 + 2 + 2 + 7  # files, figures, index, table, parts
 
 
 @pytest.mark.parametrize("state", ["complete", "interrupted"])

@@ -30,7 +30,8 @@ GAUSSIAN_METRICS = (
     Metric("estimate", "m", "the estimate of mu", better=None),
     Metric("covered", "1", "the 95 % interval covers mu", binary=True, better="higher"),
 )
-GAUSSIAN_FIGURES = {"estimate": FigureSpec("mean estimate per algorithm with its 95 % t band")}
+GAUSSIAN_FIGURES = {"estimate": FigureSpec("mean estimate per algorithm with its 95 % t band",
+                                          "Fig. 1")}
 
 
 def gaussian_batch(params, streams) -> list[list[dict]]:

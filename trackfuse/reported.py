@@ -33,11 +33,13 @@ class Reported:
 
 @dataclass(frozen=True)
 class Paper:
-    """A reproduced paper: short id, citation and its reported results."""
+    """A reproduced paper: short id, citation, its reported results and ``configs``, the
+    shipped configs (file stems) that reproduce its figures and tables as written."""
 
     key: str
     citation: str
     results: tuple[Reported, ...]
+    configs: tuple[str, ...] = ()
 
     def result(self, quantity: str) -> Reported:
         """The reported result whose ``quantity`` is ``quantity``."""
@@ -49,6 +51,7 @@ TWIN_SENSOR = Paper(
     citation=("Wang Yongcheng, Wang Hongfei, Yang Chengwu, \"Fusion algorithm for airborne "
               "twin-sensor synchronous angle-only tracking\", Control and Decision 20(10), "
               "2005, 1143-1146"),
+    configs=("twin_sensor_orbit", "twin_sensor_rmse_vs_bound"),
     results=(
         Reported("Fig. 1", "loss rate up to 9 false returns", 0.05, "fraction", 50,
                  "fused-gate PDAF: with a mean number of false returns within 9 the "
@@ -64,6 +67,7 @@ ESM_RADAR = Paper(
     citation=("Zhang Xiaoqiang, Wang Xing, Zhou Dongqing, Du Wenhong, Yu Yuan, \"An "
               "ESM-radar track correlation algorithm based on improved fuzzy comprehensive "
               "evaluation\", J. Air Force Eng. Univ. (Nat. Sci.) 18(1), 2017, 44-49"),
+    configs=("esm_radar_snake_cross", "esm_radar_separation", "esm_radar_range_error"),
     results=(
         Reported("Table 3", "improved: correct rate", 0.740, "fraction", 500,
                  "improved fuzzy comprehensive evaluation, 200 m separation: 130 / 370 / 0 "
@@ -97,6 +101,7 @@ PASSIVE_ASSOC = Paper(
     citation=("Liu Hang, Dou Lihua, Xin Bin, Dong Lingxun, \"Data association for passive "
               "sensor based on improved partheno-genetic algorithm\", Control and Decision "
               "23(4), 2008, 464-467"),
+    configs=("passive_association",),
     results=(
         Reported("Fig. 2", "accuracy against genetic operations", None, "fraction", 50,
                  "5, 7 and 10 targets all converge to a high correct association rate; a "

@@ -63,12 +63,14 @@ FILES = {
 @dataclass
 class Report:
     """What :func:`write_report` wrote: figure and table files, the index, and one message
-    per figure or table that could not be drawn (the data stay complete)."""
+    per figure or table that failed (the data stay complete), and the reason for each wanted
+    figure this run's config cannot draw (``not_drawn``)."""
 
     figures: list[Path] = field(default_factory=list)
     tables: list[Path] = field(default_factory=list)
     index: Path | None = None
     errors: list[str] = field(default_factory=list)
+    not_drawn: dict[str, str] = field(default_factory=dict)
 
 
 def markdown_table(table: pd.DataFrame, digits: int = 4) -> str:
@@ -83,6 +85,25 @@ def markdown_table(table: pd.DataFrame, digits: int = 4) -> str:
     lines += ["| " + " | ".join(cell(v) for v in row) + " |"
               for row in table.itertuples(index=False)]
     return "\n".join(lines) + "\n"
+
+
+def display_table(table: pd.DataFrame) -> pd.DataFrame:
+    """``table`` for reading: each numeric pair ``<q>_ci_low``/``<q>_ci_high`` (or a bare
+    ``ci_low``/``ci_high``) becomes one column ``<q> 95 % CI`` holding ``[low, high]`` (4
+    significant digits), placed after ``<q>``. The CSV files keep the numeric columns."""
+    shown = table.copy()
+    for low in [c for c in table.columns if str(c) == "ci_low" or str(c).endswith("_ci_low")]:
+        stem = str(low)[: -len("ci_low")]
+        high = f"{stem}ci_high"
+        stem = stem.rstrip("_")
+        if high not in shown.columns:
+            continue
+        text = [("" if pd.isna(lo) or pd.isna(hi) else f"[{lo:.4g}, {hi:.4g}]")
+                for lo, hi in zip(shown[low], shown[high], strict=True)]
+        at = list(shown.columns).index(low)
+        shown = shown.drop(columns=[low, high])
+        shown.insert(min(at, len(shown.columns)), f"{stem} 95 % CI".lstrip(), text)
+    return shown
 
 
 def save_figure(fig, folder: Path, name: str, formats: Sequence[str]) -> list[Path]:
@@ -123,7 +144,8 @@ def _write_tables(run: RunData, module: ModuleType, report: Report) -> dict[str,
         report.errors.append(f"tables: {type(err).__name__}: {err}")
         return {}
     for name, table in made.items():
-        for suffix, text in ((".csv", table.to_csv(index=False)), (".md", markdown_table(table))):
+        for suffix, text in ((".csv", table.to_csv(index=False)),
+                             (".md", markdown_table(display_table(table)))):
             atomic_write(folder / f"{name}{suffix}", text)
             report.tables.append(folder / f"{name}{suffix}")
     return made
@@ -138,7 +160,13 @@ def _write_figures(run: RunData, module: ModuleType, wanted: Collection[str],
     except Exception as err:  # noqa: BLE001
         report.errors.append(f"figures: {type(err).__name__}: {err}")
         return
+    for name in wanted:
+        if name not in made:
+            report.not_drawn[name] = "the experiment's report drew nothing for this config"
     for name, fig in made.items():
+        if isinstance(fig, str):
+            report.not_drawn[name] = fig
+            continue
         try:
             report.figures += save_figure(fig, folder, name, formats)
         except Exception as err:  # noqa: BLE001 - one figure's bug must not lose the others
@@ -212,11 +240,14 @@ def index_markdown(run: RunData, tables: dict[str, pd.DataFrame], report: Report
     lines = [f"# {run.config.get('title') or run.config['experiment']}", ""]
     lines += [f"- **{k}**: {v}" for k, v in _run_facts(run)] + [""]
     for name in _ordered_tables(tables):
-        lines += [f"## Table: {name}", "", markdown_table(tables[name])]
+        lines += [f"## Table: {name}", "", markdown_table(display_table(tables[name]))]
     captions = _captions(run)
     for name in _figure_names(report):
         lines += [f"## Figure: {name}", "", f"![{name}](figures/{name}.png)", "",
                   captions.get(name, ""), ""]
+    if report.not_drawn:
+        lines += ["## Not drawn", ""] + [f"- {n}: {why}" for n, why in report.not_drawn.items()]
+        lines += [""]
     if report.errors:
         lines += ["## Problems", ""] + [f"- {e}" for e in report.errors] + [""]
     lines += ["## Files", ""] + [f"- `{f}`: {d}" for f, d in _file_list(run, report)]
@@ -252,12 +283,16 @@ def index_html(run: RunData, tables: dict[str, pd.DataFrame], report: Report) ->
     parts.append("</dl>")
     for name in _ordered_tables(tables):
         parts.append(f"<h2>Table: {esc(name)}</h2>")
-        parts.append(tables[name].to_html(index=False, na_rep="", float_format="{:.4g}".format))
+        parts.append(display_table(tables[name]).to_html(index=False, na_rep="",
+                                                         float_format="{:.4g}".format))
     captions = _captions(run)
     for name in _figure_names(report):
         parts.append(f"<figure><img src='figures/{esc(name)}.png' alt='{esc(name)}'>"
                      f"<figcaption><b>{esc(name)}</b>: {esc(captions.get(name, ''))}"
                      "</figcaption></figure>")
+    if report.not_drawn:
+        parts.append("<h2>Not drawn</h2><ul>" + "".join(
+            f"<li>{esc(n)}: {esc(why)}</li>" for n, why in report.not_drawn.items()) + "</ul>")
     if report.errors:
         parts.append("<h2>Problems</h2><ul>"
                      + "".join(f"<li>{esc(e)}</li>" for e in report.errors) + "</ul>")

@@ -54,6 +54,7 @@ from trackfuse.results import (
     FAILED_ROW,
     INDEX_HTML,
     SUMMARY,
+    TIME_SUFFIX,
     TIMING_SUMMARY,
     TIMINGS,
     TRIALS,
@@ -71,6 +72,7 @@ from trackfuse.results import (
     sibling_manifests,
     split_timings,
 )
+from trackfuse.rowtable import Constant, RowTable, columns_csv
 from trackfuse.rundata import load
 from trackfuse.runlock import RunLock
 from trackfuse.seeding import batch_streams, trial_streams
@@ -196,6 +198,9 @@ def execute_batch(task: BatchTask) -> BatchResult:
     try:
         batch = task.experiment.run_trials(task.params,
                                            batch_streams(task.seed, span.point, trials))
+        if isinstance(batch, RowTable):
+            batch.check(len(trials))
+            return _table_result(task, batch, t0)
         if not isinstance(batch, list) or len(batch) != len(trials):
             raise TypeError("run_batch returned the wrong number of trials")
         per_trial: list[Any] = [_rows(r, "run_batch") for r in batch]
@@ -215,6 +220,26 @@ def execute_batch(task: BatchTask) -> BatchResult:
     trial_rows, timing_rows = split_timings(rows, keys)
     return BatchResult(span, rows_to_csv(trial_rows), len(trial_rows), rows_to_csv(timing_rows),
                        len(timing_rows), time.perf_counter() - t0)
+
+
+def _table_result(task: BatchTask, table: RowTable, t0: float) -> BatchResult:
+    """The CSV parts of a batch returned as a :class:`~trackfuse.rowtable.RowTable`: the
+    same trial rows, cell for cell, as the dict rows would give, and one timings row per
+    entry of the table's per-batch timing table (``trial`` is the batch's first trial,
+    ``trials`` its size)."""
+    span = task.span
+    swept = {k: Constant(v) for k, v in task.swept.items()}
+    metrics = {k: v for k, v in table.columns.items()
+               if k not in RESERVED_COLUMNS and k not in task.swept
+               and not k.endswith(TIME_SUFFIX)}
+    trials_csv = columns_csv({"point": Constant(span.point), "trial": span.first + table.trial,
+                              **swept, **metrics}, table.rows)
+    timed = len(next(iter(table.timings.values()), ()))
+    timings_csv = columns_csv({"point": Constant(span.point), "trial": Constant(span.first),
+                               "trials": Constant(span.trials), **swept, **table.timings},
+                              timed) if timed else rows_to_csv([])
+    return BatchResult(span, trials_csv, table.rows, timings_csv, timed,
+                       time.perf_counter() - t0)
 
 
 # -- the run, in the client ------------------------------------------------------------------
@@ -479,7 +504,7 @@ class Runner:
                                          self.config.experiment.binary_metrics)
         files[SUMMARY] = _write_record(path / SUMMARY, summary.to_csv(index=False))
         if timings["rows"]:
-            timing_summary, _ = summarize(path / TIMINGS, keys)
+            timing_summary, _ = summarize(path / TIMINGS, keys, suffix=TIME_SUFFIX)
             files[TIMING_SUMMARY] = _write_record(path / TIMING_SUMMARY,
                                                   timing_summary.to_csv(index=False))
         else:

@@ -22,12 +22,12 @@ _VALUE = "__value__"
 
 
 def summarize(path: Path, keys: Sequence[str], binary: Sequence[str] = (),
-              chunk_rows: int = CHUNK_ROWS) -> tuple[pd.DataFrame, int]:
+              chunk_rows: int = CHUNK_ROWS, suffix: str = "") -> tuple[pd.DataFrame, int]:
     """Return ``(summary, failed_rows)`` for the CSV at ``path``.
 
     ``keys`` are the grouping columns (``point``, swept keys, the experiment's row keys);
-    every other numeric column is a metric. ``binary`` metrics get Wilson intervals, the
-    rest Student-t intervals.
+    every other numeric column whose name ends in ``suffix`` is a metric. ``binary`` metrics
+    get Wilson intervals, the rest Student-t intervals.
     """
     partial: list[pd.DataFrame] = []
     failed = 0
@@ -42,14 +42,15 @@ def summarize(path: Path, keys: Sequence[str], binary: Sequence[str] = (),
             chunk = chunk[~bad]
         group = [k for k in keys if k in chunk]
         metrics = [c for c in chunk.columns if c not in group and c not in RUNNER_COLUMNS
-                   and pd.api.types.is_numeric_dtype(chunk[c])]
+                   and c.endswith(suffix) and pd.api.types.is_numeric_dtype(chunk[c])]
         if chunk.empty or not metrics:
             continue
         long = chunk.melt(id_vars=group, value_vars=metrics, var_name="metric",
                           value_name=_VALUE).dropna(subset=[_VALUE])
         grouped = long.groupby([*group, "metric"], sort=False, dropna=False)[_VALUE]
-        stats = grouped.agg(n="count", mean="mean", var=lambda v: v.var(ddof=0))
-        stats["m2"] = stats.pop("var") * stats["n"]
+        stats = grouped.agg(n="count", mean="mean", var="var")
+        var = stats.pop("var").to_numpy(float)
+        stats["m2"] = np.where(stats["n"].to_numpy() > 1, var * (stats["n"] - 1), 0.0)
         partial.append(stats.reset_index())
     if not partial:
         return pd.DataFrame(columns=[*keys, "metric", "n", "mean", "std", "ci_low", "ci_high",

@@ -289,14 +289,20 @@ def _pair_moments(l1: _Linearized, l2: _Linearized, B: np.ndarray, P: np.ndarray
     nu1, nu2 = l1.nu[..., None], l2.nu[..., None]
     nu_bar = np.concatenate([_wsum(r, l1.nu), _wsum(c, l2.nu)], axis=1)
     N12 = l1.nu.transpose(0, 2, 1) @ (B @ l2.nu)
-    NN = np.block([[_wouter(r, nu1, nu1), N12],
-                   [N12.transpose(0, 2, 1), _wouter(c, nu2, nu2)]])
+    NN = _blocks(_wouter(r, nu1, nu1), N12, _wouter(c, nu2, nu2))
     Gbar = np.concatenate([_wsum(r, l1.G), _wsum(c, l2.G)], axis=1)
     W = (B @ l2.G.reshape(n, m2, 6)).reshape(n, m1, 2, 3)
     C12 = _wouter(np.ones((n, m1)), G1P, W)
-    C = np.block([[_wouter(r, G1P, l1.G), C12],
-                  [C12.transpose(0, 2, 1), _wouter(c, G2P, l2.G)]])
+    C = _blocks(_wouter(r, G1P, l1.G), C12, _wouter(c, G2P, l2.G))
     return r.sum(axis=1), nu_bar, NN, Gbar, C
+
+
+def _blocks(A: np.ndarray, B: np.ndarray, D: np.ndarray) -> np.ndarray:
+    """``[[A, B], [B', D]]: (N, 4, 4)`` from 2x2 blocks ``(N, 2, 2)``."""
+    out = np.empty(A.shape[:-2] + (4, 4))
+    out[..., :2, :2], out[..., :2, 2:] = A, B
+    out[..., 2:, :2], out[..., 2:, 2:] = B.transpose(0, 2, 1), D
+    return out
 
 
 def pair_weights(X: np.ndarray, P: np.ndarray, r1: SensorReturns, r2: SensorReturns,
@@ -359,7 +365,7 @@ def _block_inverse(A: np.ndarray, B: np.ndarray, D: np.ndarray):
     Scinv, detSc = inv2(D - B.transpose(0, 2, 1) @ AinvB)
     TR = -AinvB @ Scinv
     TL = Ainv - TR @ AinvB.transpose(0, 2, 1)
-    return np.block([[TL, TR], [TR.transpose(0, 2, 1), Scinv]]), detA * detSc
+    return _blocks(TL, TR, Scinv), detA * detSc
 
 
 def _log_joint(l1, l2, S12inv, det12):

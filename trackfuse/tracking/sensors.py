@@ -38,8 +38,10 @@ from scipy import special, stats
 
 def azel(d: np.ndarray) -> np.ndarray:
     """Azimuth and elevation ``(..., 2)`` (rad) of relative positions ``d: (..., 3)`` (m)."""
-    rh = np.hypot(d[..., 0], d[..., 1])
-    return np.stack([np.arctan2(d[..., 1], d[..., 0]), np.arctan2(d[..., 2], rh)], axis=-1)
+    out = np.empty(d.shape[:-1] + (2,))
+    np.arctan2(d[..., 1], d[..., 0], out=out[..., 0])
+    np.arctan2(d[..., 2], np.hypot(d[..., 0], d[..., 1]), out=out[..., 1])
+    return out
 
 
 def azel_jacobian(d: np.ndarray) -> np.ndarray:
@@ -76,11 +78,14 @@ def modified_position_rows(z: np.ndarray, d_bar: np.ndarray) -> np.ndarray:
     rho = d_bar[..., 0] * c_th + d_bar[..., 1] * s_th
     inv_el = 1.0 / (rho * c_ph + d_bar[..., 2] * s_ph)
     inv_az = 1.0 / rho
-    zero = np.zeros(np.broadcast_shapes(z.shape[:-1], d_bar.shape[:-1]))
-    row_az = np.stack([-s_th * inv_az, c_th * inv_az, zero], axis=-1)
-    row_el = np.stack([-s_ph * c_th * inv_el, -s_ph * s_th * inv_el, c_ph * inv_el + zero],
-                      axis=-1)
-    return np.stack([row_az, row_el], axis=-2)
+    G = np.empty(np.broadcast_shapes(z.shape[:-1], d_bar.shape[:-1]) + (2, 3))
+    G[..., 0, 0] = -s_th * inv_az
+    G[..., 0, 1] = c_th * inv_az
+    G[..., 0, 2] = 0.0
+    G[..., 1, 0] = -s_ph * c_th * inv_el
+    G[..., 1, 1] = -s_ph * s_th * inv_el
+    G[..., 1, 2] = c_ph * inv_el
+    return G
 
 
 def gate_threshold(P_G: float, nz: int = 2) -> float:
@@ -115,8 +120,12 @@ def inv2(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
     a, b, c, d = S[..., 0, 0], S[..., 0, 1], S[..., 1, 0], S[..., 1, 1]
     det = a * d - b * c
+    inv = np.empty(S.shape)
     with np.errstate(divide="ignore", invalid="ignore"):
-        inv = np.stack([np.stack([d, -b], -1), np.stack([-c, a], -1)], -2) / det[..., None, None]
+        np.divide(d, det, out=inv[..., 0, 0])
+        np.divide(-b, det, out=inv[..., 0, 1])
+        np.divide(-c, det, out=inv[..., 1, 0])
+        np.divide(a, det, out=inv[..., 1, 1])
     return inv, det
 
 
@@ -126,8 +135,9 @@ def chol2(S: np.ndarray) -> np.ndarray:
         l11 = np.sqrt(S[..., 0, 0])
         l21 = S[..., 1, 0] / l11
         l22 = np.sqrt(S[..., 1, 1] - l21 * l21)
-    zero = np.zeros_like(l11)
-    return np.stack([np.stack([l11, zero], -1), np.stack([l21, l22], -1)], -2)
+    L = np.empty(S.shape)
+    L[..., 0, 0], L[..., 0, 1], L[..., 1, 0], L[..., 1, 1] = l11, 0.0, l21, l22
+    return L
 
 
 def ellipse_points(u: np.ndarray, centre: np.ndarray, S: np.ndarray, gamma: float) -> np.ndarray:

@@ -1,0 +1,53 @@
+"""The run report (trackfuse/reports.py): display of intervals, figures not drawn, and the
+page as a browser shows it."""
+
+from __future__ import annotations
+
+import pandas as pd
+import pytest
+from browser import chromium, decoded_images
+
+from trackfuse.harness import run_data
+from trackfuse.reports import display_table, write_report
+
+
+@pytest.fixture(scope="module")
+def toy_run(tmp_path_factory):
+    return run_data(tmp_path_factory.mktemp("reports"), "toy_gaussian",
+                    sweep={"mu": [0.0, 1.0]}, trials=20, seed=4)
+
+
+def test_each_interval_pair_becomes_one_column_after_its_estimate():
+    table = pd.DataFrame({"algorithm": ["a"], "rmse_km": [1.23456], "rmse_km_ci_low": [1.0],
+                          "rmse_km_ci_high": [1.5], "lost_pct": [2.0],
+                          "lost_pct_ci_low": [0.5], "lost_pct_ci_high": [7.25]})
+    shown = display_table(table)
+    assert list(shown.columns) == ["algorithm", "rmse_km", "rmse_km 95 % CI", "lost_pct",
+                                   "lost_pct 95 % CI"]
+    assert shown.loc[0, "lost_pct 95 % CI"] == "[0.5, 7.25]"
+
+
+def test_a_wanted_figure_the_report_cannot_draw_is_listed_with_its_reason(toy_run):
+    report = write_report(toy_run, wanted=["estimate", "not_a_figure_of_this_run"])
+    assert [p.name for p in report.figures] == ["estimate.png", "estimate.pdf"]
+    assert list(report.not_drawn) == ["not_a_figure_of_this_run"]
+    assert "## Not drawn" in (toy_run.path / "index.md").read_text()
+    assert "Not drawn" in (toy_run.path / "index.html").read_text()
+
+
+def test_the_headline_table_shows_its_interval_as_one_column(toy_run):
+    write_report(toy_run)
+    text = (toy_run.path / "tables" / "paper_vs_reproduced.md").read_text()
+    assert "ci_low" not in text.splitlines()[0] and "95 % CI" in text.splitlines()[0]
+    csv = pd.read_csv(toy_run.path / "tables" / "paper_vs_reproduced.csv")
+    assert {"ci_low", "ci_high"} <= set(csv.columns)
+
+
+@pytest.mark.skipif(chromium() is None, reason="no Chromium on this machine (.ci/run "
+                    "installs Debian's chromium package)")
+def test_the_run_page_loads_in_a_browser_with_every_image_decoded(toy_run, tmp_path):
+    write_report(toy_run)
+    shot = tmp_path / "index.png"
+    images = decoded_images(toy_run.path / "index.html", shot)
+    assert images == [("figures/estimate.png", True)]
+    assert shot.stat().st_size > 10_000

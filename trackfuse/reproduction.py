@@ -1,0 +1,255 @@
+"""The report of ``trackfuse reproduce``: per paper, what was reproduced and what was not.
+
+:func:`write_reproduction_report` reads finished run folders (each one's
+``tables/paper_vs_reproduced.csv``, in the :data:`trackfuse.reports.HEADLINE_COLUMNS` schema,
+its figures and its config) and writes :data:`REPORT_MD` and :data:`REPORT_HTML` into the
+output root. One section per paper: the citation, a count of verdicts, one row per paper
+item compared (the paper's value beside ours with its 95 % interval, the verdict and a
+one-line reason linking to ``docs/papers/``), then each main figure (a figure whose
+:class:`~trackfuse.experiments.base.FigureSpec` names a paper figure or table) beside what the
+paper itself shows. The page needs no network and no JavaScript; its images are the run
+folders' PNG files, linked by relative paths.
+"""
+
+from __future__ import annotations
+
+import html
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pandas as pd
+
+from trackfuse.reported import PAPERS, Paper
+from trackfuse.reports import HEADLINE_COLUMNS, HEADLINE_TABLE, VERDICTS
+from trackfuse.results import atomic_write
+from trackfuse.rundata import RunData, load
+
+REPORT_MD = "REPORT.md"
+REPORT_HTML = "report.html"
+
+
+@dataclass(frozen=True)
+class MainFigure:
+    """A run's figure that stands for a paper figure or table: PNG path, caption, paper item."""
+
+    png: Path
+    caption: str
+    paper_item: str
+    config: str
+
+
+@dataclass
+class PaperSection:
+    """Everything the report shows for one paper (an experiment with reported results):
+    ``figures`` drawn beside the paper's claims (from the paper's own configs, or from every
+    config when none of those ran), ``linked`` the other configs' main figures."""
+
+    key: str
+    citation: str
+    claims: dict[str, str]
+    rows: pd.DataFrame
+    figures: list[MainFigure] = field(default_factory=list)
+    linked: list[MainFigure] = field(default_factory=list)
+    configs: list[str] = field(default_factory=list)
+    problems: list[str] = field(default_factory=list)
+
+    def verdict_counts(self) -> dict[str, int]:
+        """How many compared items got each verdict (in :data:`VERDICTS` order)."""
+        counts = self.rows["verdict"].value_counts() if len(self.rows) else pd.Series()
+        return {v: int(counts.get(v, 0)) for v in VERDICTS}
+
+
+def _headline(run: RunData) -> pd.DataFrame:
+    """The run's headline rows with a ``config`` column (empty frame if it has none)."""
+    path = run.path / "tables" / f"{HEADLINE_TABLE}.csv"
+    if not path.exists():
+        return pd.DataFrame(columns=["config", *HEADLINE_COLUMNS])
+    rows = pd.read_csv(path, keep_default_na=False, na_values=[""])
+    missing = [c for c in HEADLINE_COLUMNS if c not in rows.columns]
+    if missing:
+        raise ValueError(f"{path}: headline table lacks columns {missing}")
+    rows = rows[list(HEADLINE_COLUMNS)].copy()
+    rows.insert(0, "config", _config_name(run))
+    return rows
+
+
+def _config_name(run: RunData) -> str:
+    source = str(run.manifest.get("config_file") or run.path.parent.name)
+    return Path(source).stem
+
+
+def _main_figures(run: RunData) -> list[MainFigure]:
+    found = []
+    for name, spec in run.experiment.figures.items():
+        png = run.path / "figures" / f"{name}.png"
+        if spec.paper and png.exists():
+            found.append(MainFigure(png, spec.caption, spec.paper, _config_name(run)))
+    return found
+
+
+def collect(folders: Sequence[Path],
+            papers: Mapping[str, Paper] = PAPERS) -> list[PaperSection]:
+    """One :class:`PaperSection` per paper among the complete runs in ``folders``, in the
+    order of ``papers`` (experiment name -> paper); other experiments' runs are skipped."""
+    sections: dict[str, PaperSection] = {}
+    for folder in folders:
+        run = load(folder)
+        key = str(run.config["experiment"])
+        paper = papers.get(key)
+        if paper is None:
+            continue
+        section = sections.setdefault(key, PaperSection(
+            key, paper.citation, {r.where: r.claim for r in paper.results},
+            pd.DataFrame(columns=["config", *HEADLINE_COLUMNS])))
+        try:
+            rows = _headline(run)
+        except ValueError as err:
+            section.problems.append(str(err))
+            rows = pd.DataFrame()
+        if len(rows):
+            section.rows = rows if section.rows.empty else pd.concat(
+                [section.rows, rows], ignore_index=True)
+        own = _config_name(run) in paper.configs
+        (section.figures if own else section.linked).extend(_main_figures(run))
+        section.configs.append(_config_name(run))
+    for section in sections.values():
+        if not section.figures:
+            section.figures, section.linked = section.linked, []
+    return [sections[k] for k in papers if k in sections]
+
+
+def _ours(row: pd.Series) -> str:
+    value = row["reproduced"]
+    if pd.isna(value):
+        return ""
+    text = f"{value:.4g}"
+    if not (pd.isna(row["ci_low"]) or pd.isna(row["ci_high"])):
+        text += f" [{row['ci_low']:.4g}, {row['ci_high']:.4g}]"
+    unit = "" if pd.isna(row["unit"]) else str(row["unit"])
+    return f"{text} {unit}".strip()
+
+
+def _summary_line(section: PaperSection) -> str:
+    counts = section.verdict_counts()
+    total = sum(counts.values())
+    parts = ", ".join(f"{n} {v}" for v, n in counts.items() if n)
+    return (f"{total} paper items compared over {len(section.configs)} configs: {parts}."
+            if total else "No paper item could be compared from these runs.")
+
+
+def _doc_link(docs: object, out: Path) -> tuple[str, str]:
+    """``(href, text)`` for the ``docs`` column: a link relative to ``out`` when the current
+    folder is a checkout holding that page, else no link and the path as text."""
+    target = "" if pd.isna(docs) else str(docs)
+    page, _, anchor = target.partition("#")
+    local = Path.cwd() / page
+    if target and local.is_file():
+        return os.path.relpath(local, out.resolve()) + (f"#{anchor}" if anchor else ""), target
+    return "", target
+
+
+def paper_claims(section: PaperSection, paper_items: str) -> str:
+    """What the paper states for the items named in ``paper_items`` ("Figs. 3-4, Table 3")."""
+    found = [f"{where}: {claim}" for where, claim in section.claims.items()
+             if where in paper_items]
+    return " ".join(found) or f"{paper_items} (the paper gives no number for it)"
+
+
+def report_markdown(sections: Sequence[PaperSection], out: Path) -> str:
+    """The whole report as Markdown; image and doc links relative to ``out``."""
+    lines = ["# trackfuse reproduce: paper reported vs reproduced", "",
+             "Each paper item is set against our estimate with its 95 % interval; "
+             "`agrees` means the paper's number lies inside our interval (or its claim "
+             "holds), `differs` that it does not, with the reason in one line.", ""]
+    for s in sections:
+        lines += [f"## {s.key}", "", f"*{s.citation}*", "", _summary_line(s), ""]
+        lines += ["| config | paper item | quantity | algorithm | paper | ours [95 % CI] "
+                  "| verdict | reason |", "|---|---|---|---|---|---|---|---|"]
+        for _, r in s.rows.iterrows():
+            link, text = _doc_link(r["docs"], out)
+            reason = (f"{r['reason']} ([{text}]({link}))" if link
+                      else f"{r['reason']} ({text})" if text else str(r["reason"]))
+            cells = [r["config"], r["paper_item"], r["quantity"], r["algorithm"],
+                     r["paper_value"], _ours(r), f"**{r['verdict']}**", reason]
+            lines.append("| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |")
+        lines.append("")
+        lines += [f"- problem: {p}" for p in s.problems] + ([""] if s.problems else [])
+        for f in s.figures:
+            rel = os.path.relpath(f.png, out)
+            lines += [f"### {f.paper_item} ({f.config})", "",
+                      f"Paper: {paper_claims(s, f.paper_item)}", "",
+                      f"![{f.paper_item}, {f.config}]({rel})", "", f"Ours: {f.caption}", ""]
+        if s.linked:
+            lines += ["Main figures of the other configs: " + ", ".join(
+                f"[{f.config}: {f.png.stem}]({os.path.relpath(f.png, out)})"
+                for f in s.linked), ""]
+    return "\n".join(lines) + "\n"
+
+
+_CSS = ("body{font-family:sans-serif;max-width:80em;margin:2em auto;padding:0 1em;"
+        "line-height:1.4}table{border-collapse:collapse;font-size:90%;margin:1em 0}"
+        "td,th{border:1px solid #ccc;padding:2px 6px;vertical-align:top}"
+        "th{background:#f3f3f3}.agrees{background:#e6f4ea}.differs{background:#fce8e6}"
+        ".pair{display:grid;grid-template-columns:1fr 2fr;gap:1em;margin:1.5em 0;"
+        "border-top:1px solid #ddd;padding-top:1em}img{max-width:100%}"
+        "section{margin-bottom:3em}")
+
+
+def _html_rows(section: PaperSection, out: Path) -> str:
+    esc = html.escape
+    head = ("<tr><th>config</th><th>paper item</th><th>quantity</th><th>algorithm</th>"
+            "<th>paper</th><th>ours [95 % CI]</th><th>verdict</th><th>reason</th></tr>")
+    body = []
+    for _, r in section.rows.iterrows():
+        link, text = _doc_link(r["docs"], out)
+        more = (f" (<a href='{esc(link)}'>{esc(text)}</a>)" if link
+                else f" ({esc(text)})" if text else "")
+        verdict = str(r["verdict"])
+        body.append(
+            f"<tr class='{esc(verdict.replace(' ', '-'))}'>" + "".join(
+                f"<td>{esc(str(c))}</td>" for c in (r["config"], r["paper_item"],
+                                                    r["quantity"], r["algorithm"],
+                                                    r["paper_value"], _ours(r)))
+            + f"<td><b>{esc(verdict)}</b></td><td>{esc(str(r['reason']))}{more}</td></tr>")
+    return f"<table>{head}{''.join(body)}</table>"
+
+
+def report_html(sections: Sequence[PaperSection], out: Path) -> str:
+    """The whole report as one HTML page (no JavaScript); images linked relative to ``out``."""
+    esc = html.escape
+    parts = ["<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
+             "<title>trackfuse reproduce: paper reported vs reproduced</title>"
+             f"<style>{_CSS}</style></head><body>"
+             "<h1>Paper reported vs reproduced</h1>"]
+    for s in sections:
+        parts.append(f"<section><h2>{esc(s.key)}</h2><p><i>{esc(s.citation)}</i></p>"
+                     f"<p>{esc(_summary_line(s))}</p>{_html_rows(s, out)}"
+                     + "".join(f"<p>problem: {esc(p)}</p>" for p in s.problems))
+        for f in s.figures:
+            rel = esc(os.path.relpath(f.png, out))
+            parts.append(
+                f"<div class='pair'><div><h3>{esc(f.paper_item)}: the paper</h3>"
+                f"<p>{esc(paper_claims(s, f.paper_item))}</p></div>"
+                f"<figure><img src='{rel}' alt='{esc(f.paper_item)}, {esc(f.config)}'>"
+                f"<figcaption>Ours ({esc(f.config)}): {esc(f.caption)}</figcaption>"
+                "</figure></div>")
+        if s.linked:
+            parts.append("<p>Main figures of the other configs: " + ", ".join(
+                f"<a href='{esc(os.path.relpath(f.png, out))}'>{esc(f.config)}: "
+                f"{esc(f.png.stem)}</a>" for f in s.linked) + "</p>")
+        parts.append("</section>")
+    parts.append("</body></html>")
+    return "\n".join(parts) + "\n"
+
+
+def write_reproduction_report(folders: Sequence[Path], out: Path,
+                              papers: Mapping[str, Paper] = PAPERS) -> Path:
+    """Write ``out/REPORT.md`` and ``out/report.html`` for the runs in ``folders``;
+    returns the HTML path."""
+    out.mkdir(parents=True, exist_ok=True)
+    sections = collect(folders, papers)
+    atomic_write(out / REPORT_MD, report_markdown(sections, out))
+    atomic_write(out / REPORT_HTML, report_html(sections, out))
+    return out / REPORT_HTML

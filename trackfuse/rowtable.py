@@ -1,0 +1,130 @@
+"""A batch's rows as columns: what a vectorized ``run_batch`` may return instead of dicts.
+
+A batch of 50 twin-sensor trials has 8,000 rows (8 algorithms x 20 scans per trial); built as
+one dict per row and written cell by cell through :func:`trackfuse.results.rows_to_csv`, those
+rows cost more than the filters that computed them. A :class:`RowTable` keeps them as one
+array per column and writes the CSV text column by column, with exactly the cells
+:func:`~trackfuse.results.format_value` writes (shortest round-trip ``repr`` for floats,
+``nan``, integers as integers, booleans as 0/1), so ``trials.csv`` is byte-identical to the
+one the dict rows give.
+
+A table is also a sequence of per-trial row lists (``table[i]`` is trial ``i``'s rows as
+dicts of Python scalars), so code written for ``run_batch -> list[list[dict]]`` keeps working.
+
+Timing measurements belong to the batch, not to a row (a vectorized batch measures one CPU
+time per algorithm for all its trials), so they are a separate small table, ``timings``: the
+runner writes one row per entry of it and batch to ``timings.csv`` (docs/runner.md).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from trackfuse.results import format_value
+
+_NEEDS_QUOTES = (",", '"', "\r", "\n")
+
+
+def csv_cell(text: str) -> str:
+    """``text`` as one CSV field, quoted the way :mod:`csv` (``QUOTE_MINIMAL``) quotes it."""
+    if any(c in text for c in _NEEDS_QUOTES):
+        return '"' + text.replace('"', '""') + '"'
+    return text
+
+
+def column_cells(values: np.ndarray | Sequence[Any]) -> list[str]:
+    """The CSV fields ``(R,)`` of one column, as :func:`~trackfuse.results.format_value`
+    formats each value (floats by ``repr``, which writes NaN as ``nan`` too)."""
+    a = np.asarray(values)
+    if a.dtype.kind == "b":
+        return np.where(a, "1", "0").tolist()
+    if a.dtype.kind == "f":
+        return list(map(repr, a.astype(float, copy=False).tolist()))
+    if a.dtype.kind in "iu":
+        return list(map(str, a.tolist()))
+    return [csv_cell(format_value(v)) for v in a.tolist()]
+
+
+@dataclass(frozen=True)
+class Constant:
+    """One value repeated on every row of :func:`columns_csv`."""
+
+    value: Any
+
+
+def columns_csv(columns: Mapping[str, np.ndarray | Sequence[Any] | Constant], rows: int) -> str:
+    """CSV text (header line first) of ``rows`` rows with ``columns`` in order, each
+    ``(rows,)`` values or a :class:`Constant`."""
+    cells: list[Sequence[str]] = []
+    for name, values in columns.items():
+        if isinstance(values, Constant):
+            cells.append([csv_cell(format_value(values.value))] * rows)
+            continue
+        column = column_cells(values)
+        if len(column) != rows:
+            raise ValueError(f"column {name!r} has {len(column)} rows, expected {rows}")
+        cells.append(column)
+    lines = [",".join(map(csv_cell, columns))]
+    lines.extend(map(",".join, zip(*cells, strict=True)))
+    return "\n".join(lines) + "\n"
+
+
+@dataclass(frozen=True)
+class RowTable(Sequence[list[dict[str, Any]]]):
+    """Rows of a batch of ``N`` trials as columns.
+
+    Attributes
+    ----------
+    trial : (R,) int, the position in the batch (``0..N-1``) of each row's trial,
+        non-decreasing, every trial with at least one row.
+    columns : name -> (R,) values (float, int, bool or str arrays), in column order: the
+        experiment's row keys (``algorithm``, ...) and metrics, never runner columns or
+        ``*_time_s`` columns.
+    timings : name -> (T,) values: the batch's timing table (e.g. ``algorithm`` and
+        ``cpu_time_s``), one row per timed unit of the whole batch; may be empty.
+    """
+
+    trial: np.ndarray
+    columns: dict[str, np.ndarray]
+    timings: dict[str, np.ndarray] = field(default_factory=dict)
+
+    @property
+    def trials(self) -> int:
+        """Number of trials ``N`` in the batch."""
+        return int(self.trial[-1]) + 1 if len(self.trial) else 0
+
+    @property
+    def rows(self) -> int:
+        """Number of rows ``R``."""
+        return len(self.trial)
+
+    def check(self, trials: int) -> None:
+        """Raise ``TypeError`` unless the table holds rows of exactly ``trials`` trials in
+        order and every column has one value per row."""
+        counts = np.bincount(np.asarray(self.trial, dtype=int), minlength=trials) \
+            if len(self.trial) and int(np.min(self.trial)) >= 0 else np.zeros(0, dtype=int)
+        if len(counts) != trials or not (counts > 0).all() or \
+                (np.diff(self.trial) < 0).any():
+            raise TypeError(f"run_batch returned a RowTable that does not hold the rows of "
+                            f"{trials} trials in order")
+        bad = [k for k, v in self.columns.items() if len(v) != len(self.trial)]
+        if bad:
+            raise TypeError(f"run_batch returned a RowTable whose columns {bad} do not have "
+                            "one value per row")
+
+    def __len__(self) -> int:
+        return self.trials
+
+    def __getitem__(self, i: int) -> list[dict[str, Any]]:  # type: ignore[override]
+        if not -self.trials <= i < self.trials:
+            raise IndexError(i)
+        at = np.flatnonzero(self.trial == i % self.trials)
+        values = [np.asarray(v)[at].tolist() for v in self.columns.values()]
+        return [dict(zip(self.columns, row, strict=True)) for row in zip(*values, strict=True)]
+
+    def __iter__(self) -> Iterator[list[dict[str, Any]]]:
+        return (self[i] for i in range(self.trials))
