@@ -119,7 +119,7 @@ def test_figures_for_the_three_studies(tmp_path):
                                        trials=2), ALL_FIGURES)
     assert isinstance(scale["convergence"], str) and "checkpoint" in scale["convergence"]
     drawn = [f for figs in (conv, noise, scale) for f in figs.values() if not isinstance(f, str)]
-    assert len(drawn) == 5
+    assert len(drawn) == 7  # convergence and at_optimum twice, scale twice, noise once
     for fig in drawn:
         assert fig._suptitle is not None and fig._suptitle.get_text()
         for xlabel, ylabel in axis_labels(fig):
