@@ -12,7 +12,7 @@ from trackfuse.config import load
 from trackfuse.experiments.esm_radar import EXPERIMENT
 from trackfuse.experiments.esm_radar.model import alpha_max, differences, manoeuvre_alpha, simulate
 from trackfuse.experiments.esm_radar.report import paper_vs_reproduced, printed_half_unit, verdict
-from trackfuse.reported import ESM_RADAR
+from trackfuse.rundata import RunData
 from trackfuse.seeding import trial_streams
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -129,44 +129,50 @@ def test_phase_config_validates_and_runs(tmp_path):
 
 
 def test_verdict_and_printed_precision():
-    assert verdict(0.74, 0.70, 0.78) == "inside"
-    assert verdict(0.74, 0.75, 0.80) == "outside"
-    assert verdict(0.07, 0.0636, 0.0636, printed_half_unit(0.07)) == "outside"
-    assert verdict(0.26, 0.2638, 0.2638, printed_half_unit(0.26)) == "inside"
+    assert verdict(0.74, 0.70, 0.78) == "agrees"
+    assert verdict(0.74, 0.75, 0.80) == "differs"
+    assert verdict(0.07, 0.0636, 0.0636, printed_half_unit(0.07)) == "differs"
+    assert verdict(0.26, 0.2638, 0.2638, printed_half_unit(0.26)) == "agrees"
     assert printed_half_unit(0.053) == pytest.approx(5e-4)
     assert printed_half_unit(5.2375) == pytest.approx(5e-5)
     assert printed_half_unit(130) == 0.5
 
 
-def _trials(counts, algorithm, n=500, sep=200.0):
+def _trials(counts, algorithm, n=500, point=0):
     chosen_ = np.repeat([1, 2, 3], counts)
     assert len(chosen_) == n
-    return pd.DataFrame({"point": 0, "trial": np.arange(n), "algorithm": algorithm,
-                         "target.separation": sep, "chosen": chosen_,
+    return pd.DataFrame({"point": point, "trial": np.arange(n), "algorithm": algorithm,
+                         "target.separation": [200.0, 1000.0][point], "chosen": chosen_,
                          "correct": (chosen_ == 2).astype(int)})
 
 
-def test_paper_vs_reproduced_table():
+def test_paper_vs_reproduced_table(tmp_path):
     trials = pd.concat([_trials([130, 370, 0], "improved"),
                         _trials([0, 500, 0], "traditional"),
-                        _trials([0, 500, 0], "improved", sep=1000.0).assign(point=1)])
-    config = {"params": dict(EXPERIMENT.defaults()),
+                        _trials([0, 500, 0], "improved", point=1),
+                        _trials([0, 500, 0], "traditional", point=1)])
+    config = {"experiment": "esm_radar", "params": dict(EXPERIMENT.defaults()),
               "sweep": {"target.separation": [200.0, 1000.0]}}
-    table = paper_vs_reproduced(trials, config)
-    mc = table[table["algorithm"].notna()]
-    assert set(mc["target.separation"]) == {200.0}  # only the paper's setting is compared
-    improved = mc[mc["algorithm"] == "improved"]
-    assert len(improved) == 4 and (improved["verdict"] == "inside").all()
-    rate = improved[improved["quantity"] == "improved: correct rate"].iloc[0]
-    assert rate["paper"] == ESM_RADAR.result("improved: correct rate").value == rate["ours"]
-    trad = mc[mc["algorithm"] == "traditional"].set_index("quantity")
-    assert trad.loc["traditional: correct rate", "verdict"] == "outside"  # 1.0 vs 0.552
-    assert trad.loc["traditional: runs to radar track 3", "verdict"] == "inside"  # 0 vs 0
-    exact = table[table["algorithm"].isna()].set_index("quantity")
-    assert exact.loc["AHP lambda_max", "verdict"] == "inside"
-    assert exact.loc["AHP lambda_max", "ours"] == pytest.approx(
+    run = RunData(tmp_path, config, {})
+    run.__dict__["trials"] = trials
+    table = paper_vs_reproduced(run)
+    t3 = table[table["paper_item"] == "Table 3"].set_index("algorithm")
+    assert len(t3) == 2  # only the paper's setting (200 m) is compared
+    assert t3.loc["improved", "reproduced"] == 0.740 == t3.loc["improved", "paper_value"]
+    assert t3.loc["improved", "verdict"] == "agrees"
+    assert t3.loc["traditional", "verdict"] == "differs"  # 1.0 against 0.552
+    assert t3.loc["traditional", "trials"] == 500
+    ahp_rows = table[table["paper_item"] == "Table 1"].set_index("quantity")
+    assert ahp_rows.loc["lambda_max", "verdict"] == "agrees"
+    assert ahp_rows.loc["lambda_max", "reproduced"] == pytest.approx(
         ahp.lambda_max(ahp.PAPER_001_JUDGEMENT))
-    assert exact.loc["AHP CR", "verdict"] == "inside"
-    assert exact.loc["AHP weight: tdoa", "verdict"] == "outside"  # 0.0636 printed as 0.07
-    assert (exact.loc[["AHP weight: range", "AHP weight: speed", "AHP weight: angle",
-                       "AHP weight: phase"], "verdict"] == "inside").all()
+    assert ahp_rows.loc["CR", "verdict"] == "agrees"
+    assert ahp_rows.loc["weight: tdoa", "verdict"] == "differs"  # 0.0636 printed as 0.07
+    assert (ahp_rows.loc[["weight: range", "weight: speed", "weight: angle",
+                          "weight: phase"], "verdict"] == "agrees").all()
+    # Fig. 3: improved 0.74 vs traditional 1.0 at 200 m, both 1.0 at 1000 m
+    close = table[table["quantity"].str.startswith("improved - traditional at the closest")]
+    assert close["verdict"].tolist() == ["differs"] and close["reproduced"].iloc[0] == -0.26
+    trend = table[table["quantity"].str.startswith("rate at 200 m minus at 1000 m")]
+    assert trend.set_index("algorithm")["verdict"].to_dict() == {"improved": "agrees",
+                                                                  "traditional": "differs"}

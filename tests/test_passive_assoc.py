@@ -12,8 +12,10 @@ from trackfuse import harness
 from trackfuse.experiments import get
 from trackfuse.experiments.passive_assoc import EXPERIMENT, report
 from trackfuse.experiments.passive_assoc.model import ALGORITHMS, VARIANTS, score, sigma_of
-from trackfuse.experiments.passive_assoc.report import LABELS, gap_interval
+from trackfuse.experiments.passive_assoc.report import gap_interval
+from trackfuse.plots.algorithms import LOOKS
 from trackfuse.reported import PASSIVE_ASSOC
+from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS
 from trackfuse.seeding import trial_streams
 from trackfuse.stats import t_interval
 
@@ -108,18 +110,22 @@ def axis_labels(fig):
 def test_figures_for_the_three_studies(tmp_path):
     p = params(algorithms=["exact", "pga_paper", "pga_evict"])
     conv = report.figures(small_run(tmp_path, p, "targets.n", [5, 7]), ALL_FIGURES)
-    assert set(conv) == {"convergence", "at_optimum"}
+    assert isinstance(conv["noise"], str)  # one-line reason: sigma is not swept
     noise = report.figures(small_run(tmp_path, p, "noise.sigma", [0.002, 0.0707]), ALL_FIGURES)
-    assert "noise" in noise
+    assert isinstance(noise["scale"], str)  # N is not swept
     scale_p = params(**{"scene.mode": "random", "pga.checkpoints": [200]},
                      algorithms=["exact", "pga_evict"])
     scale = report.figures(small_run(tmp_path, scale_p, "targets.n", [5, 10, 20],
                                        trials=2), ALL_FIGURES)
-    assert set(scale) == {"scale"}
-    for fig in [*conv.values(), *noise.values(), *scale.values()]:
+    assert isinstance(scale["convergence"], str) and "checkpoint" in scale["convergence"]
+    drawn = [f for figs in (conv, noise, scale) for f in figs.values() if not isinstance(f, str)]
+    assert len(drawn) == 7  # convergence and at_optimum twice, scale twice, noise once
+    for fig in drawn:
         assert fig._suptitle is not None and fig._suptitle.get_text()
         for xlabel, ylabel in axis_labels(fig):
-            assert "(" in xlabel and "(" in ylabel  # every axis names its unit
+            assert "(" in xlabel  # every axis names its unit
+            assert "(" in (ylabel or fig._supylabel.get_text())
+    assert scale["scale"].axes[0].get_xscale() == "linear"  # 3 values: no log axis
     table = report.tables(small_run(tmp_path, p, "targets.n", [5]))["final"]
     assert set(table["algorithm"]) == {"exact", "pga_paper", "pga_evict"}
     assert (table.loc[table["algorithm"] == "exact", "at_opt"] == 1).all()
@@ -137,8 +143,9 @@ def test_ci_config_runs_through_the_cli(tmp_path, name):
     assert not any(c.endswith("_time_s") for c in trials.columns)
 
 
-def test_every_algorithm_has_a_legend_label():
-    assert set(ALGORITHMS) <= set(LABELS)
+def test_every_algorithm_has_its_own_look():
+    assert set(ALGORITHMS) <= set(LOOKS)
+    assert len({(LOOKS[a].colour, LOOKS[a].marker) for a in ALGORITHMS}) == len(ALGORITHMS)
 
 
 def test_set_ops_beyond_the_default_checkpoints_scores_the_budget():
@@ -168,25 +175,30 @@ def test_gap_interval_is_a_bootstrap_interval_that_cannot_go_below_zero():
 def test_tables_report_recall_whole_solution_and_the_paper_claims(tmp_path):
     p = params(algorithms=["exact", "pga_paper", "pga_evict"])
     out = report.tables(small_run(tmp_path, p, "targets.n", [5, 7], trials=6))
-    assert set(out) == {"checkpoints", "final", "paper_vs_reproduced"}
+    assert set(out) == {"checkpoints", "final", "paper_vs_reproduced", "versus_exact"}
     cp = out["checkpoints"]
     assert set(cp["ops"]) == {0, 50, 200}
     for metric in ("accuracy", "recall", "correct", "at_opt", "gap"):
-        assert (cp[f"{metric}_lo"] <= cp[metric] + 1e-9).all()
-        assert (cp[metric] <= cp[f"{metric}_hi"] + 1e-9).all()
-    assert (cp["gap_lo"] >= 0).all()
+        assert (cp[f"{metric}_ci_low"] <= cp[metric] + 1e-9).all()
+        assert (cp[metric] <= cp[f"{metric}_ci_high"] + 1e-9).all()
+    assert (cp["gap_ci_low"] >= 0).all()
+    assert not any(c.endswith(("_lo", "_hi")) for t in out.values() for c in t.columns)
     assert (out["final"].loc[out["final"]["algorithm"] != "exact", "ops"] == 200).all()
+    vs = out["versus_exact"]  # 2 points x 2 variants x 3 metrics
+    assert len(vs) == 12 and (vs["value_ci_low"] <= vs["value"] + 1e-9).all()
     pvr = out["paper_vs_reproduced"]
-    fig2 = pvr[pvr["where"] == "Fig. 2"]
-    # 2 points x 2 variants x (accuracy, recall, whole solution, at J*, gap)
-    assert len(fig2) == 20 and set(fig2["algorithm"]) == {"pga_paper", "pga_evict"}
-    assert set(fig2["claim"]) <= set(PASSIVE_ASSOC.results[0].claim.split("; "))
-    at_opt = fig2[fig2["quantity"] == "runs at the exact optimum J*"]
+    assert tuple(pvr.columns) == HEADLINE_COLUMNS and set(pvr["verdict"]) <= set(VERDICTS)
+    fig2 = pvr[pvr["paper_item"] == "Fig. 2"]
+    # 2 points x 2 variants x (accuracy, runs at J*)
+    assert len(fig2) == 8 and set(fig2["algorithm"]) == {"pga_paper", "pga_evict"}
+    assert set(fig2["paper_value"]) <= set(PASSIVE_ASSOC.results[0].claim.split("; "))
+    at_opt = fig2[fig2["quantity"].str.startswith("runs at the exact optimum J*")]
     for _, r in at_opt.iterrows():
-        assert r["verdict"].startswith("holds") == (r["ours"] == 1.0)
-    assert pvr["verdict"].str.len().gt(0).all()
-    assert pvr.iloc[-1]["verdict"].startswith("refuted")
+        assert (r["verdict"] == "agrees") == (r["reproduced"] == 1.0)
+        assert r["ci_low"] <= r["reproduced"] <= r["ci_high"]
+    assert pvr["reason"].str.len().gt(0).all()
+    assert pvr.iloc[-1]["verdict"] == "differs" and pvr.iloc[-1]["paper_item"] == "Sec. 1"
     # a scene that is not the paper's is not compared with its Fig. 2
     q = params(**{"scene.mode": "random"}, algorithms=["exact", "pga_paper"])
     other = report.tables(small_run(tmp_path, q, "targets.n", [5], trials=3))
-    assert list(other["paper_vs_reproduced"]["where"]) == ["Sec. 1"]
+    assert list(other["paper_vs_reproduced"]["paper_item"]) == ["Sec. 1"]

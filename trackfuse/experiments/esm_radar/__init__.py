@@ -12,14 +12,23 @@ from trackfuse.experiments.esm_radar.model import PARAMS, ROW_METRICS, run_batch
 
 FIGURES = {
     "correct_rate": FigureSpec(
-        "correct-association rate per algorithm with 95 % Wilson bands against the swept "
-        "axis (bars per algorithm when nothing numeric is swept)", "Figs. 3-4, Table 3"),
+        "correct-association rate (%) of the paper's method, its baseline and ours with 95 % "
+        "Wilson intervals: one row per method beside the paper's Table 3 values when nothing "
+        "numeric is swept, curves against separation (Fig. 3) or radar range error (Fig. 4) "
+        "otherwise", "Table 3, Figs. 3-4"),
+    "correct_rate_ablations": FigureSpec(
+        "the same for the ablations of the paper's method (static weights, 3 factors, L2 "
+        "membership, traditional on 5 factors)", ""),
+    "correct_rate_references": FigureSpec(
+        "the same for the chi-square maximum-likelihood references beside the paper's two "
+        "methods", ""),
     "trajectory": FigureSpec(
-        "true tracks and the ESM TDOA-DF location track of one trial, and the manoeuvre "
-        "index and range weight of the improved algorithm per scan", "Figs. 1-2"),
+        "true tracks and the ESM TDOA-DF location of one saved trial, its manoeuvre index "
+        "and range weight per scan, and the ESM range error per scan over all trials",
+        "Figs. 1-2"),
     "manoeuvre": FigureSpec(
-        "mean manoeuvre index against time with and without the snake, for the default "
-        "detector and the paper's literal index, 95 % t bands", ""),
+        "mean manoeuvre index and mean range weight of the paper's method per scan, 95 % t "
+        "bands, one curve per setting of the ESM track", ""),
 }
 
 EXPERIMENT = Experiment(

@@ -51,12 +51,19 @@ by all algorithms or specific to one: ``range_weight_mean``/``range_weight_min``
 factor's weight over the scans; 0 if the algorithm does not weight range), ``alpha_mean`` and
 ``alpha_peak`` (the manoeuvre index over the scans where it is defined), ``esm_invalid``
 (TDOA-DF samples carried forward) and ``esm_range_sigma_m`` (mean 1-sigma of the TDOA-DF
-range). Per-scan weights and manoeuvre indices are drawn in the ``trajectory`` and
-``manoeuvre`` figures.
+range).
 
-Figures (``correct_rate``: the paper's Figs. 3-4; ``trajectory``: its Figs. 1-2;
-``manoeuvre``: the index with and without the snake) and tables (``table3``: its Table 3;
-``ahp``: its Table 1; ``ablation``; ``paper_vs_reproduced``) are built by
+Per-scan columns (text: one value per ESM scan joined by ``;``, ``nan`` where undefined;
+:data:`SCAN_SERIES`, read back with :func:`decode_series`): on the first row of each trial,
+the ESM track's ``alpha_per_scan`` (manoeuvre index), ``esm_range_error_per_scan_m`` and
+``esm_bearing_error_per_scan_mrad`` (TDOA-DF location of target 2, measured minus true);
+on the rows of the dynamic-weight algorithms, ``range_weight_per_scan``. Empty elsewhere.
+They let the report draw the per-scan figures from ``trials.csv`` without re-simulating.
+
+Figures (``correct_rate``: the paper's Table 3 and Figs. 3-4, with ``correct_rate_ablations``
+and ``correct_rate_references`` beside them; ``trajectory``: its Figs. 1-2; ``manoeuvre``:
+the index and range weight per scan) and tables (``table3``: its Table 3; ``ahp``: its
+Table 1; ``ablation``; ``paper_vs_reproduced``) are built by
 :mod:`trackfuse.experiments.esm_radar.report`.
 """
 
@@ -303,6 +310,20 @@ def alpha_max(params: Mapping[str, Any]) -> tuple[float, str]:
     return params["alpha.max"], mode
 
 
+def scenario(params: Mapping[str, Any]) -> SnakeCross:
+    """The noise-free three-target scenario of ``params`` (``target.*``, ``snake.*``,
+    ``crossing.time``)."""
+    return SnakeCross(separation=params["target.separation"],
+                      amplitude=params["snake.amplitude"],
+                      snake_period=params["snake.period"], speed=params["snake.speed"],
+                      t_cross=params["crossing.time"])
+
+
+def esm_times(params: Mapping[str, Any]) -> np.ndarray:
+    """ESM sample times (K,) in s: ``esm.offset + esm.period * k``, k = 0..K-1."""
+    return params["esm.offset"] + params["esm.period"] * np.arange(params["scan.count"])
+
+
 def simulate(params: Mapping[str, Any], streams: Sequence[TrialStreams]) -> Simulated:
     """Draw and align the sensor data of one trial per :class:`TrialStreams`.
 
@@ -311,15 +332,12 @@ def simulate(params: Mapping[str, Any], streams: Sequence[TrialStreams]) -> Simu
     draws have fixed shapes, so the data never depend on the algorithms run, and sweep
     points of separation or sensor accuracy compare on the same noise.
     """
-    scen = SnakeCross(separation=params["target.separation"],
-                      amplitude=params["snake.amplitude"],
-                      snake_period=params["snake.period"], speed=params["snake.speed"],
-                      t_cross=params["crossing.time"])
+    scen = scenario(params)
     A1 = np.zeros(2)
     A2 = np.array([params["geometry.baseline"], 0.0])
     dl, model = params["phase.d_over_lambda"], params["radar.factor_model"]
-    K, TE, TR = params["scan.count"], params["esm.period"], params["radar.period"]
-    t = params["esm.offset"] + TE * np.arange(K)
+    K, TR = params["scan.count"], params["radar.period"]
+    t = esm_times(params)
     M = int(np.floor(t[-1] / TR + 1e-9)) + 2
     p_k, v_k = scen.states(t)
     p_m, v_m = scen.states(TR * np.arange(M))
@@ -491,7 +509,8 @@ def evaluate(variant: Variant, diff: Differences, alpha: np.ndarray,
     Returns
     -------
     dict of (N,) arrays: ``chosen`` (0-based track), ``margin``, ``range_weight_mean``,
-    ``range_weight_min``; and ``weights`` (N, K, F) for fuzzy variants.
+    ``range_weight_min``; and, for fuzzy variants, ``weights`` (N, K, F) and
+    ``range_weights`` (N, K), the range factor's weight per scan (0 without range).
     """
     names = factor_names(variant, params)
     idx = [FACTORS.index(f) for f in names]
@@ -522,45 +541,88 @@ def evaluate(variant: Variant, diff: Differences, alpha: np.ndarray,
     j, margin = decide_vote(b) if decision == "vote" else decide_mean(b)
     a_range = a[..., 0] if names[0] == "range" else np.zeros((N, K))
     return {"chosen": j, "margin": margin, "range_weight_mean": a_range.mean(axis=-1),
-            "range_weight_min": a_range.min(axis=-1), "weights": a}
+            "range_weight_min": a_range.min(axis=-1), "weights": a, "range_weights": a_range}
+
+
+#: Per-scan columns (``;``-separated, one value per ESM scan, ``nan`` where undefined) and
+#: the format of their values. The ESM-track series are written once per trial, on its first
+#: row; ``range_weight_per_scan`` on the rows of algorithms with dynamic weights.
+SCAN_SERIES = {
+    "alpha_per_scan": ".3g",                   # manoeuvre index alpha(k), 1
+    "esm_range_error_per_scan_m": ".0f",       # TDOA-DF range minus true range of T2, m
+    "esm_bearing_error_per_scan_mrad": ".1f",  # ESM bearing minus true bearing of T2, mrad
+    "range_weight_per_scan": ".3g",            # range factor's weight a_1(k), 1
+}
+
+
+def encode_series(values: np.ndarray, fmt: str) -> str:
+    """One per-scan CSV cell: ``values`` (K,) formatted with ``fmt``, joined by ``;``."""
+    return ";".join("nan" if not np.isfinite(v) else format(v, fmt) for v in values)
+
+
+def decode_series(cells: Sequence[str]) -> np.ndarray:
+    """The (N, K) array of N per-scan cells written by :func:`encode_series`."""
+    return np.array([[float(v) for v in str(cell).split(";")] for cell in cells])
+
+
+def esm_errors(sim: Simulated) -> tuple[np.ndarray, np.ndarray]:
+    """ESM TDOA-DF range error (m) and bearing error (rad, wrapped) of target 2 per scan,
+    measured minus true, each (N, K); NaN where no ESM range was ever computed."""
+    truth = sim.truth_p[:, TRUE_TRACK]                                  # (K, 2), A1 at 0
+    r_true = np.hypot(truth[:, 0], truth[:, 1])
+    theta_true = np.arctan2(truth[:, 1], truth[:, 0])
+    return sim.x_esm[..., 0] - r_true, wrap(sim.x_esm[..., 2] - theta_true)
+
+
+def _esm_track_columns(sim: Simulated) -> list[dict[str, Any]]:
+    """Per-trial columns of the ESM track shared by every algorithm: summaries and the
+    per-scan series of :data:`SCAN_SERIES` (first row of each trial only)."""
+    alpha = np.nan_to_num(sim.alpha, nan=0.0)
+    defined = np.isfinite(sim.alpha).sum(axis=-1)
+    alpha_mean = np.divide(alpha.sum(axis=-1), defined, out=np.zeros(len(alpha)),
+                           where=defined > 0)
+    invalid = (~sim.esm_valid).sum(axis=-1)
+    sigma = np.sqrt(sim.P_esm[..., 0, 0]).mean(axis=-1)
+    dr, dtheta = esm_errors(sim)
+    return [{"alpha_mean": float(alpha_mean[i]), "alpha_peak": float(alpha[i].max()),
+             "esm_invalid": int(invalid[i]), "esm_range_sigma_m": float(sigma[i]),
+             "series": {
+                 "alpha_per_scan": encode_series(sim.alpha[i], SCAN_SERIES["alpha_per_scan"]),
+                 "esm_range_error_per_scan_m": encode_series(
+                     dr[i], SCAN_SERIES["esm_range_error_per_scan_m"]),
+                 "esm_bearing_error_per_scan_mrad": encode_series(
+                     1e3 * dtheta[i], SCAN_SERIES["esm_bearing_error_per_scan_mrad"])}}
+            for i in range(len(alpha))]
+
+
+def _row(name: str, res: dict[str, np.ndarray], i: int, esm: dict[str, Any],
+         first: bool) -> dict[str, Any]:
+    """The row of algorithm ``name`` in trial ``i`` (see the module docstring)."""
+    j = int(res["chosen"][i])
+    dynamic = ALGORITHMS[name].dynamic and "range_weights" in res
+    row = {"algorithm": name, "chosen": j + 1, "correct": int(j == TRUE_TRACK),
+           "decided": int(j >= 0), "margin": float(res["margin"][i]),
+           "range_weight_mean": float(res["range_weight_mean"][i]),
+           "range_weight_min": float(res["range_weight_min"][i]),
+           **{k: v for k, v in esm.items() if k != "series"}}
+    row.update({k: (v if first else "") for k, v in esm["series"].items()})
+    row["range_weight_per_scan"] = (encode_series(res["range_weights"][i],
+                                                  SCAN_SERIES["range_weight_per_scan"])
+                                    if dynamic else "")
+    return row
 
 
 def run_batch(params: Mapping[str, Any],
               streams: Sequence[TrialStreams]) -> list[list[dict]]:
     """Vectorized trials: one row list per trial, one row per algorithm."""
     sim = simulate(params, streams)
-    alpha = np.nan_to_num(sim.alpha, nan=0.0)
-    defined = np.isfinite(sim.alpha).sum(axis=-1)
-    shared = {
-        "alpha_mean": np.divide(alpha.sum(axis=-1), defined, out=np.zeros(len(streams)),
-                                where=defined > 0),
-        "alpha_peak": alpha.max(axis=-1),
-        "esm_invalid": (~sim.esm_valid).sum(axis=-1),
-        "esm_range_sigma_m": np.sqrt(sim.P_esm[..., 0, 0]).mean(axis=-1),
-    }
+    esm = _esm_track_columns(sim)
     diff = differences(sim)
     results = {name: evaluate(ALGORITHMS[name], diff, sim.alpha, params)
                for name in params["algorithms"]}
-    rows: list[list[dict]] = []
-    for i in range(len(streams)):
-        trial = []
-        for name, res in results.items():
-            j = int(res["chosen"][i])
-            trial.append({
-                "algorithm": name,
-                "chosen": j + 1,
-                "correct": int(j == TRUE_TRACK),
-                "decided": int(j >= 0),
-                "margin": float(res["margin"][i]),
-                "range_weight_mean": float(res["range_weight_mean"][i]),
-                "range_weight_min": float(res["range_weight_min"][i]),
-                "alpha_mean": float(shared["alpha_mean"][i]),
-                "alpha_peak": float(shared["alpha_peak"][i]),
-                "esm_invalid": int(shared["esm_invalid"][i]),
-                "esm_range_sigma_m": float(shared["esm_range_sigma_m"][i]),
-            })
-        rows.append(trial)
-    return rows
+    return [[_row(name, res, i, esm[i], first=k == 0)
+             for k, (name, res) in enumerate(results.items())]
+            for i in range(len(streams))]
 
 
 def run_trial(params: Mapping[str, Any], streams: TrialStreams) -> list[dict]:

@@ -2,53 +2,50 @@
 
 Zhang Xiaoqiang et al., "An ESM-radar track correlation algorithm based on improved fuzzy
 comprehensive evaluation", J. Air Force Eng. Univ. (Nat. Sci.) 18(1), 2017, 44-49. The
-experiment itself (scenario, algorithms, rows) is :mod:`trackfuse.experiments.esm_radar.model`.
+experiment itself (scenario, algorithms, rows) is :mod:`trackfuse.experiments.esm_radar.model`;
+this module imports it, never the reverse, and reads saved runs only: every curve and table
+entry comes from ``trials.csv`` or ``summary.csv``. Only the noise-free geometry (true
+tracks, sensor positions) and the static AHP weights are recomputed, from the config alone.
 
 Figures, returned by :func:`figures`:
 
-=============  ============================================================================
-correct_rate   correct-association rate per algorithm with 95 % Wilson bands, against the
-               first numeric swept axis (paper Fig. 3: separation; Fig. 4: radar range
-               error), one panel per value of the other swept keys; a bar chart per panel
-               when nothing numeric is swept (Table 3 setting: one panel per radar-factor
-               model). Drawn from ``summary.csv`` alone.
-trajectory     paper Figs. 1-2: true tracks and the ESM TDOA-DF location track, and the
-               per-scan manoeuvre index and range weight of ``improved``. *Recomputed* from
-               the config and seed: trial 0 of point 0 is re-simulated with the runner's
-               streams ``trial_streams(seed, 0, 0)`` (milliseconds); the title says
-               whether the recomputed decision matches the saved row of ``trials.csv``.
-manoeuvre      mean manoeuvre index against time with 95 % t bands, with the snake and
-               without it (same noise), for the default detector and the paper's literal
-               index. *Recomputed* for the first 200 trials of point 0 (W001-4).
-=============  ============================================================================
+========================  ==================================================================
+correct_rate              the paper's main result: correct-association rate (%) of its
+                          method (``improved``), its baseline (``traditional``) and our
+                          improvement (``improved_gauss``), 95 % Wilson intervals, one panel
+                          per value of the other swept keys. Table 3 layout (one row per
+                          method, the paper's 74.0 % and 55.2 % beside ours) when nothing
+                          numeric is swept; Fig. 3 (separation) or Fig. 4 (radar range
+                          error) layout otherwise, the paper's Table 3 values marked at their
+                          setting. Chance between T1 and T2 is 1/2 (track 3 is never chosen).
+correct_rate_ablations    the same for the ablations (``traditional_5f``, ``improved_static``,
+                          ``improved_3f``, ``improved_l2``) beside ``improved``.
+correct_rate_references   the same for the chi-square ML references beside the paper's two.
+trajectory                paper Figs. 1-2: true tracks and the ESM TDOA-DF location track of
+                          one saved trial, its per-scan manoeuvre index and range weight, and
+                          the RMS ESM range error per scan over all trials.
+manoeuvre                 mean manoeuvre index and mean range weight of ``improved`` per scan
+                          with 95 % t bands, one curve per setting of the ESM track.
+========================  ==================================================================
 
-Tables, returned by :func:`tables`:
+A figure that a run cannot draw (e.g. no algorithm of its group was run) is returned as a
+one-line reason string.
 
-===================  ======================================================================
-table3               paper Table 3: counts per chosen radar track (and "no decision"),
-                     correct rate with its Wilson interval and wrong-decision rate, per
-                     point and algorithm. From ``trials.csv``.
-ablation             every algorithm against ``improved`` on the same trials (paired, exact
-                     McNemar test); only when ``improved`` was run. From ``trials.csv``.
-ahp                  paper Table 1 AHP weights and consistency, computed from the judgement
-                     matrix (no run data), beside the paper's printed numbers.
-paper_vs_reproduced  what paper 001 reports (:data:`trackfuse.reported.ESM_RADAR`) against
-                     this run: Table 3 at the paper's setting with our Wilson intervals, and
-                     the AHP numbers; a verdict per number (paper value inside our interval
-                     or not).
-===================  ======================================================================
-
-The science (simulation, algorithms, AHP weight subsets) is
-:mod:`trackfuse.experiments.esm_radar.model`; this module imports it, never the reverse.
+Tables, returned by :func:`tables`: ``table3`` (counts per chosen radar track, correct
+rate with its Wilson interval), ``ablation`` (every algorithm against ``improved`` on the
+same trials, exact McNemar test), ``ahp`` (paper Table 1) and ``paper_vs_reproduced``
+(:data:`trackfuse.reports.HEADLINE_COLUMNS`, see :func:`paper_vs_reproduced`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Collection, Mapping
+from collections.abc import Callable, Collection, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
+import matplotlib
 import numpy as np
 import pandas as pd
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 from scipy.stats import binomtest
 
 from trackfuse.association import ahp
@@ -57,29 +54,34 @@ from trackfuse.experiments.esm_radar.model import (
     ALGORITHMS,
     N_TRACKS,
     THREE,
+    TRUE_TRACK,
     alpha_max,
-    differences,
-    evaluate,
+    decode_series,
+    esm_times,
     factor_names,
-    manoeuvre_alpha,
-    simulate,
+    scenario,
     static_weights,
 )
+from trackfuse.plots.algorithms import line_kwargs, look
 from trackfuse.plots.style import band, new_figure, reference_line
 from trackfuse.reported import ESM_RADAR, ESM_RADAR_WEIGHTS
+from trackfuse.reports import HEADLINE_COLUMNS
 from trackfuse.rundata import RunData, swept_keys
-from trackfuse.seeding import trial_streams
-from trackfuse.stats import t_interval, wilson_interval
+from trackfuse.stats import proportion_difference_interval, t_interval, wilson_interval
 
 if TYPE_CHECKING:
+    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
+DOCS = "docs/papers/esm_radar.md"
 
 # --------------------------------------------------------------------------- tables
 
+
 def table3(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
     """Counts per chosen radar track (and "no decision"), correct rate with its Wilson 95 %
-    interval, and the rate of wrong decisions, per point and algorithm."""
+    interval (``correct_rate_ci_low``/``_ci_high``), and the rate of wrong decisions, per
+    point and algorithm."""
 
     keys = swept_keys(config)
     out = []
@@ -92,8 +94,8 @@ def table3(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
             row[f"radar_track_{track}"] = int((g["chosen"] == track).sum())
         row["no_decision"] = int((g["chosen"] == 0).sum())
         wrong = int(((g["chosen"] != 0) & (g["correct"] == 0)).sum())
-        row.update(n=n, correct_rate=k / n, ci_low=float(lo), ci_high=float(hi),
-                   wrong_rate=wrong / n)
+        row.update(n=n, correct_rate=k / n, correct_rate_ci_low=float(lo),
+                   correct_rate_ci_high=float(hi), wrong_rate=wrong / n)
         out.append(row)
     return pd.DataFrame(out).sort_values(["point"], kind="stable").reset_index(drop=True)
 
@@ -120,8 +122,7 @@ def ablation(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
         ref = g["improved"].to_numpy()
         for name in order:
             x = g[name].to_numpy()
-            n = len(x)
-            lo, hi = wilson_interval(x.sum(), n)
+            lo, hi = wilson_interval(x.sum(), len(x))
             only_v = int(((x == 1) & (ref == 0)).sum())
             only_i = int(((x == 0) & (ref == 1)).sum())
             p = binomtest(only_v, only_v + only_i).pvalue if only_v + only_i else 1.0
@@ -133,8 +134,8 @@ def ablation(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
                 "factors": len(factor_names(v, params)), "membership": member,
                 "weights": "-" if v.membership.startswith("chi2") else
                 ("dynamic" if v.dynamic else "static"),
-                "correct_rate": x.mean(), "ci_low": float(lo), "ci_high": float(hi),
-                "gain_vs_improved": x.mean() - ref.mean(),
+                "correct_rate": x.mean(), "correct_rate_ci_low": float(lo),
+                "correct_rate_ci_high": float(hi), "gain_vs_improved": x.mean() - ref.mean(),
                 "n_variant_only": only_v, "n_improved_only": only_i, "mcnemar_p": float(p),
             })
     return pd.DataFrame(out)
@@ -165,9 +166,13 @@ def ahp_table() -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
+# --------------------------------------------------------------------------- headline
+
 #: Paper 001's Table 3 setting, by param key: T1-T2 separation (m) and the radar range sd
 #: coefficient of its Table 2. Points of a run at other values are not compared with it.
 PAPER_TABLE3_SETTING = {"target.separation": 200.0, "radar.sigma_range_coef": 0.01}
+#: The paper's method and its baseline, compared in every claim.
+PAPER_PAIR = ("improved", "traditional")
 
 
 def printed_half_unit(value: float) -> float:
@@ -178,82 +183,198 @@ def printed_half_unit(value: float) -> float:
 
 
 def verdict(paper: float, low: float, high: float, tolerance: float = 0.0) -> str:
-    """``inside`` if the paper's value lies in ``[low - tolerance, high + tolerance]``."""
-    return "inside" if low - tolerance <= paper <= high + tolerance else "outside"
+    """``agrees`` if the paper's value lies in ``[low - tolerance, high + tolerance]``, else
+    ``differs`` (one of :data:`trackfuse.reports.VERDICTS`)."""
+    return "agrees" if low - tolerance <= paper <= high + tolerance else "differs"
 
 
-def _comparison(quantity: str, where: str, paper: float, ours: float, low: float,
-                high: float, tolerance: float, note: str = "") -> dict[str, Any]:
-    return {"where": where, "quantity": quantity, "paper": paper, "ours": ours,
-            "ci_low": low, "ci_high": high, "tolerance": tolerance,
-            "verdict": verdict(paper, low, high, tolerance), "note": note}
+def _headline(item: str, quantity: str, algorithm: str, paper: Any, ours: float,
+              low: float, high: float, unit: str, trials: int | None, agrees: bool | str,
+              reason: str, anchor: str) -> dict[str, Any]:
+    """One row of the headline table (:data:`HEADLINE_COLUMNS`)."""
+    word = agrees if isinstance(agrees, str) else ("agrees" if agrees else "differs")
+    return dict(zip(HEADLINE_COLUMNS, (item, quantity, algorithm, paper, float(ours),
+                                       float(low), float(high), unit, trials, word, reason,
+                                       f"{DOCS}#{anchor}"), strict=True))
 
 
-def _table3_comparisons(row: pd.Series) -> list[dict[str, Any]]:
-    """Paper Table 3 against one ``table3`` row (one algorithm at one point)."""
-    method, n = row["algorithm"], int(row["n"])
-    rep = ESM_RADAR.result(f"{method}: correct rate")
-    out = [_comparison(rep.quantity, rep.where, rep.value, row["correct_rate"],
-                       row["ci_low"], row["ci_high"], 0.0,
-                       "ours: 95 % Wilson interval")]
-    for track in (1, 2, 3):
-        rep = ESM_RADAR.result(f"{method}: runs to radar track {track}")
-        count = int(row[f"radar_track_{track}"])
-        lo, hi = (n * float(v) for v in wilson_interval(count, n))
-        out.append(_comparison(rep.quantity, rep.where, rep.value, count, lo, hi, 0.0,
-                               f"ours: n x 95 % Wilson interval, n = {n}"))
+def _setting_words(point: Mapping[str, Any], keys: Sequence[str]) -> str:
+    """The swept settings of a point in words (``radar TDOA/phase derived``, ...)."""
+    return "; ".join(_value_words(k, point[k]) for k in keys)
+
+
+def _table3_rows(run: RunData) -> list[dict[str, Any]]:
+    """Paper Table 3 correct rates against every point of the run at the paper's setting."""
+    trials, out = run.trials, []
+    keys = [k for k in swept_keys(run.config) if k not in PAPER_TABLE3_SETTING]
+    for point, params in enumerate(run.points):
+        if not all(np.isclose(float(params[k]), v) for k, v in PAPER_TABLE3_SETTING.items()):
+            continue
+        at = trials[trials["point"] == point]
+        for name in (n for n in PAPER_PAIR if n in set(at["algorithm"])):
+            x = at.loc[at["algorithm"] == name, "correct"].to_numpy()
+            lo, hi = (float(v) for v in wilson_interval(x.sum(), len(x)))
+            paper = ESM_RADAR.result(f"{name}: correct rate").value
+            side = "inside" if lo <= paper <= hi else ("above" if paper > hi else "below")
+            why = ("; the radar's own TDOA decides (W001-2)" if side == "below"
+                   and params["radar.factor_model"] == "table" else "")
+            out.append(_headline(
+                "Table 3", "correct association rate at 200 m separation, radar range sd 1 %"
+                + (f" ({_setting_words(params, keys)})" if keys else ""), name, paper,
+                x.mean(), lo, hi, "fraction", len(x), lo <= paper <= hi,
+                f"paper's {paper:.3f} {side} our 95 % Wilson interval{why}", "table-3"))
     return out
 
 
-def _ahp_comparisons() -> list[dict[str, Any]]:
-    """Paper Table 1 numbers against the exact root-method computation (no interval)."""
+def _ahp_rows() -> list[dict[str, Any]]:
+    """Paper Table 1 numbers against the exact root-method computation: agrees when equal
+    to the printed precision (no interval: ``ci_low = ci_high`` = the exact value)."""
     B = ahp.PAPER_001_JUDGEMENT
     lam = ahp.lambda_max(B)
     ours = {"AHP lambda_max": lam, "AHP CI": ahp.consistency_index(lam, len(FACTORS)),
             "AHP CR": ahp.consistency_ratio(B)}
+    ours.update({f"AHP weight: {f}": w for f, w in zip(FACTORS, ahp.weights(B, "root"),
+                                                       strict=True)})
+    printed = dict(zip([f"AHP weight: {f}" for f in FACTORS], ESM_RADAR_WEIGHTS, strict=True))
     out = []
     for quantity, value in ours.items():
-        rep = ESM_RADAR.result(quantity)
-        note = ("exact; tolerance = half a unit of the paper's last printed digit"
-                + ("; the paper's CI is (5.2375 - 5)/4 from its rounded lambda_max"
-                   if quantity == "AHP CI" else ""))
-        out.append(_comparison(quantity, rep.where, rep.value, value, value, value,
-                               printed_half_unit(rep.value), note))
-    for f, w, printed in zip(FACTORS, ahp.weights(B, "root"), ESM_RADAR_WEIGHTS, strict=True):
-        out.append(_comparison(f"AHP weight: {f}", "Table 1", printed, w, w, w,
-                               printed_half_unit(printed), "root method, exact"))
+        paper = printed[quantity] if quantity in printed else ESM_RADAR.result(quantity).value
+        half = printed_half_unit(paper)
+        agrees = verdict(paper, value, value, half) == "agrees"
+        reason = (f"exact value equals the printed one to +-{half:g}" if agrees else
+                  f"exact {value:.6g} is not {paper:g} to +-{half:g}"
+                  + (": the paper's CI uses its rounded lambda_max" if quantity == "AHP CI"
+                     else ": the printed set looks adjusted to sum to 1"))
+        out.append(_headline("Table 1", quantity.removeprefix("AHP "), "", paper, value, value,
+                             value, "1", None, agrees, reason, "table-1-ahp-weights"))
     return out
 
 
-def paper_vs_reproduced(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
-    """What paper 001 reports against what this run reproduces, with a verdict per number.
+def _paired(a: np.ndarray, b: np.ndarray) -> tuple[float, float, float]:
+    """``mean(b) - mean(a)`` of two 0/1 arrays of the same trials, with Newcombe's paired
+    95 % interval."""
+    n = len(a)
+    lo, hi = proportion_difference_interval(a.sum(), n, b.sum(), n, both=np.sum(a * b))
+    return float(b.mean() - a.mean()), float(lo), float(hi)
 
-    Rows: Table 3 (correct rate and runs per radar track, improved and traditional) for
-    every point of the run at the paper's setting (:data:`PAPER_TABLE3_SETTING`), with our
-    95 % Wilson interval; and the AHP numbers of Table 1, computed exactly, with a
-    tolerance of half a unit in the paper's last printed digit. ``verdict`` says whether the
-    paper's value lies inside our interval (widened by the tolerance). Values come from
-    :data:`trackfuse.reported.ESM_RADAR`.
-    """
-    keys = swept_keys(config)
-    t3 = table3(trials, config)
+
+def _correct_by_point(trials: pd.DataFrame, name: str) -> pd.DataFrame:
+    """``correct`` of ``name`` as a (trial x point) frame: trials share their common random
+    numbers across points, so columns are paired."""
+    rows = trials[trials["algorithm"] == name]
+    return rows.pivot(index="trial", columns="point", values="correct").sort_index()
+
+
+def _sweep_groups(run: RunData, x: str) -> list[tuple[str, list[tuple[float, int]]]]:
+    """Points of the run grouped by the swept keys other than ``x``: ``(words, [(x value,
+    point), ...] sorted by x)`` per group."""
+    others = [k for k in swept_keys(run.config) if k != x]
+    groups: dict[tuple, list[tuple[float, int]]] = {}
+    for point, params in enumerate(run.points):
+        groups.setdefault(tuple(params[k] for k in others), []).append((float(params[x]), point))
+    return [(_setting_words(dict(zip(others, key, strict=True)), others), sorted(members))
+            for key, members in groups.items()]
+
+
+def _fmt_x(x: str, value: float) -> str:
+    """A swept value in words with its unit (``200 m``, ``1 %``)."""
+    return f"{100 * value:g} %" if x == "radar.sigma_range_coef" else f"{value:g} m"
+
+
+def _gap_rows(item: str, anchor: str, x: str, setting: str, imp: pd.DataFrame,
+              trad: pd.DataFrame, xs: list[tuple[float, int]]) -> list[dict[str, Any]]:
+    """Claims on the gap improved - traditional along ``x``: higher at the first value
+    (Fig. 3 only), narrowing (Fig. 3 only) and higher at every value."""
+    gaps = [(xv, *_paired(trad[p].to_numpy(), imp[p].to_numpy())) for xv, p in xs]
+    n, where = len(imp), f" ({setting})" if setting else ""
     out = []
-    for _, row in t3[t3["algorithm"].isin(["improved", "traditional"])].iterrows():
-        setting = {k: (row[k] if k in keys else config["params"][k])
-                   for k in PAPER_TABLE3_SETTING}
-        if not all(np.isclose(float(setting[k]), v) for k, v in PAPER_TABLE3_SETTING.items()):
+    if x == "target.separation":
+        x0, d0, lo0, hi0 = gaps[0]
+        out.append(_headline(item, f"improved - traditional at the closest separation, "
+                             f"{_fmt_x(x, x0)}{where}", "improved", "clearly higher (> 0)", d0,
+                             lo0, hi0, "fraction", n, lo0 > 0,
+                             "paired Newcombe interval above 0" if lo0 > 0 else
+                             "paired Newcombe interval includes or is below 0", anchor))
+        xp, dp, _, _ = max(gaps, key=lambda g: g[1])
+        x1, d1, lo1, hi1 = gaps[-1]
+        out.append(_headline(item, f"improved - traditional at the widest separation, "
+                             f"{_fmt_x(x, x1)}{where}", "improved", "gap narrows as separation "
+                             "grows", d1, lo1, hi1, "fraction", n, hi1 < dp,
+                             f"largest gap {dp:.3f} at {_fmt_x(x, xp)}", anchor))
+    low = [g for g in gaps if not g[2] > 0]
+    xm, dm, lom, him = min(gaps, key=lambda g: g[1])
+    claim = ("always higher as separation varies" if x == "target.separation"
+             else "higher throughout")
+    out.append(_headline("Abstract" if x == "target.separation" else item,
+                         f"smallest improved - traditional over the {len(gaps)} values, at "
+                         f"{_fmt_x(x, xm)}{where}", "improved", claim, dm, lom, him, "fraction",
+                         n, not low, "paired interval above 0 at every value" if not low else
+                         "not significantly higher at " + ", ".join(_fmt_x(x, g[0]) for g in low),
+                         anchor))
+    return out
+
+
+def _trend_rows(item: str, anchor: str, x: str, setting: str, rates: dict[str, pd.DataFrame],
+                xs: list[tuple[float, int]]) -> list[dict[str, Any]]:
+    """"Both degrade" claims: rate at the hardest end minus rate at the easiest end of
+    ``x`` per algorithm (paired over the trials); agrees when the interval is below 0."""
+    hard, easy = (xs[0], xs[-1]) if x == "target.separation" else (xs[-1], xs[0])
+    out = []
+    for name, r in rates.items():
+        d, lo, hi = _paired(r[easy[1]].to_numpy(), r[hard[1]].to_numpy())
+        out.append(_headline(item, f"rate at {_fmt_x(x, hard[0])} minus at "
+                             f"{_fmt_x(x, easy[0])}" + (f" ({setting})" if setting else ""),
+                             name, "declines (< 0)", d, lo, hi, "fraction", len(r), hi < 0,
+                             "paired interval below 0" if hi < 0 else
+                             "paired interval includes or is above 0", anchor))
+    return out
+
+
+#: Swept key -> (paper figure, docs anchor) of the paper's curves against it.
+PAPER_CURVES = {"target.separation": ("Fig. 3", "fig-3-separation"),
+                "radar.sigma_range_coef": ("Fig. 4", "fig-4-radar-range-error")}
+
+
+def _curve_rows(run: RunData) -> list[dict[str, Any]]:
+    """Fig. 3 / Fig. 4 / abstract claims, for each such axis swept over at least 2 values
+    with both of the paper's methods run."""
+    trials, out = run.trials, []
+    if not set(PAPER_PAIR) <= set(trials["algorithm"]):
+        return out
+    rates = {name: _correct_by_point(trials, name) for name in PAPER_PAIR}
+    for x, (item, anchor) in PAPER_CURVES.items():
+        if len(run.sweep.get(x, [])) < 2:
             continue
-        point = {k: row[k] for k in ["point", *keys, "algorithm"]}
-        out += [{**point, **c} for c in _table3_comparisons(row)]
-    out += _ahp_comparisons()
-    return pd.DataFrame(out)
+        for setting, xs in _sweep_groups(run, x):
+            out += _trend_rows(item, anchor, x, setting, rates, xs)
+            out += _gap_rows(item, anchor, x, setting, rates["improved"],
+                             rates["traditional"], xs)
+    return out
+
+
+def paper_vs_reproduced(run: RunData) -> pd.DataFrame:
+    """What paper 001 reports against this run, in :data:`HEADLINE_COLUMNS`.
+
+    * Table 3: correct rate of ``improved`` and ``traditional`` at every point at the paper's
+      setting (:data:`PAPER_TABLE3_SETTING`), 95 % Wilson interval; agrees when the paper's
+      0.740 / 0.552 lies inside it.
+    * Table 1: lambda_max, CI, CR and the five AHP weights, computed exactly; agrees when
+      equal to the paper's printed precision.
+    * Fig. 3 / Fig. 4 / abstract, when separation or radar range error is swept: the claims
+      as paired differences over the same trials (Newcombe's paired interval; trials share
+      their random numbers across sweep points), agreeing when the interval has the claimed
+      sign (:func:`_trend_rows`, :func:`_gap_rows`).
+    """
+    rows = _table3_rows(run) + _ahp_rows() + _curve_rows(run)
+    table = pd.DataFrame(rows, columns=list(HEADLINE_COLUMNS))
+    return table.astype({"trials": "Int64"})
 
 
 def tables(run: RunData) -> dict[str, pd.DataFrame]:
-    """The Table 3 analogue, the ablation table and the AHP weights (from ``trials.csv``)."""
+    """The Table 3 analogue, the ablation table, the AHP weights and the headline table."""
     trials, config = run.trials, run.config
-    out = {"table3": table3(trials, config), "ahp": ahp_table(),
-           "paper_vs_reproduced": paper_vs_reproduced(trials, config)}
+    out = {"paper_vs_reproduced": paper_vs_reproduced(run), "table3": table3(trials, config),
+           "ahp": ahp_table()}
     abl = ablation(trials, config)
     if not abl.empty:
         out["ablation"] = abl
@@ -262,200 +383,412 @@ def tables(run: RunData) -> dict[str, pd.DataFrame]:
 
 # --------------------------------------------------------------------------- figures
 
-#: x-axis label of each numeric swept key (the key itself for any other).
-AXIS_LABELS = {
-    "target.separation": "T1-T2 separation (m)",
-    "radar.sigma_range_coef": "radar range error sd (fraction of range R)",
-    "phase.d_over_lambda": "interferometer spacing d/λ",
-    "snake.amplitude": "snake amplitude (m)",
-    "alpha.max": "α_max",
+#: Axis label of each numeric swept key (unit included) and how its values are scaled.
+AXES = {
+    "target.separation": ("T1-T2 separation (m)", 1.0),
+    "radar.sigma_range_coef": ("radar range error sd (% of range)", 100.0),
+    "phase.d_over_lambda": ("interferometer spacing d/λ (1)", 1.0),
+    "snake.amplitude": ("snake amplitude (m)", 1.0),
+    "alpha.max": ("α_max (1)", 1.0),
 }
+#: Words for the values of categorical keys.
+WORDS = {("radar.factor_model", "table"): "radar TDOA/phase with their own noise",
+         ("radar.factor_model", "derived"): "radar TDOA/phase derived from its position"}
+#: Paper figure drawn by ``correct_rate`` for each numeric swept key.
+PAPER_FIGURE = {"target.separation": "Fig. 3", "radar.sigma_range_coef": "Fig. 4"}
+#: The algorithms of each correct-rate figure: the paper's pair and ours, the ablations
+#: (beside the paper's method), the chi-square references (beside the paper's pair).
+GROUPS = {"correct_rate": ("improved", "traditional", "improved_gauss"),
+          "correct_rate_ablations": ("improved", "traditional_5f", "improved_static",
+                                     "improved_3f", "improved_l2"),
+          "correct_rate_references": ("improved", "traditional", "chi2", "chi2_lrt", "chi2_5f")}
+GROUP_TITLES = {"correct_rate": "paper's methods and ours",
+                "correct_rate_ablations": "ablations",
+                "correct_rate_references": "chi-square ML references"}
+CHANCE = 0.5  # T1 or T2 at random: track 3 is never chosen
 
-#: One colour per algorithm in every figure; the ML references are dashed (grey/black).
-COLOURS = {
-    "traditional": "tab:blue", "traditional_5f": "tab:cyan", "improved": "tab:orange",
-    "improved_static": "tab:green", "improved_3f": "tab:red", "improved_l2": "tab:olive",
-    "improved_gauss": "tab:purple", "chi2": "black", "chi2_lrt": "tab:brown",
-    "chi2_5f": "tab:gray",
-}
+
+def _value_words(key: str, value: Any) -> str:
+    """A swept value in words (``separation 200 m``, ``radar range sd 1 %``)."""
+    if (key, value) in WORDS:
+        return WORDS[key, value]
+    if key in AXES:
+        label, scale = AXES[key]
+        name, _, unit = label.rpartition(" (")
+        unit = unit.rstrip(")")
+        return f"{name} {scale * float(value):g}" + ("" if unit == "1" else
+                                                      f" {unit.replace('% of range', '%')}")
+    return f"{key} = {value}"
 
 
-def _algorithm_line_style(name: str) -> dict[str, Any]:
-    style = {"color": COLOURS[name]}
-    if name.startswith("chi2"):
-        style["linestyle"] = "--"
-    return style
+def _numeric_axis(config: Mapping[str, Any], summary: pd.DataFrame) -> str | None:
+    """The first numeric swept key with at least two values, else None."""
+    for key in swept_keys(config):
+        if pd.api.types.is_numeric_dtype(summary[key]) and len(config["sweep"][key]) > 1:
+            return key
+    return None
 
 
-def _correct_rate_figure(summary: pd.DataFrame, config: Mapping[str, Any]) -> Figure:
-    """Correct-association rate (fraction) with Wilson bands, from the ``correct`` rows of
-    the summary: curves against the first numeric swept key, else bars per algorithm."""
+def _set_x_axis(ax: Axes, key: str, values: np.ndarray) -> None:
+    """Label the x axis; a log axis only for a wide grid (>= 4 values spanning >= 10x),
+    ticked with plain numbers, else linear with a tick at every value (<= 9 values)."""
+    label, _ = AXES.get(key, (key, 1.0))
+    ax.set_xlabel(label)
+    values = np.unique(values)
+    if len(values) >= 4 and values.min() > 0 and values.max() / values.min() >= 10:
+        ax.set_xscale("log")
+        ticks = [v for m in (1, 2, 5) for v in m * 10.0 ** np.arange(-3, 7)
+                 if values.min() <= v <= values.max()]
+        ax.set_xticks(sorted(ticks))
+        ax.xaxis.set_minor_formatter(NullFormatter())
+    elif len(values) <= 9:
+        ax.set_xticks(values)
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
 
-    s = summary[summary["metric"] == "correct"]
-    sweep = swept_keys(config)
-    numeric = [k for k in sweep if pd.api.types.is_numeric_dtype(s[k])]
-    x = numeric[0] if numeric else None
-    panel_keys = [k for k in sweep if k != x]
-    combos = (list(dict.fromkeys(map(tuple, s[panel_keys].to_numpy()))) if panel_keys
-              else [()])
-    algorithms = list(dict.fromkeys(s["algorithm"]))
-    params = config["params"]
-    ncols = min(len(combos), 3)
-    fig, axes = new_figure(ncols=ncols, nrows=-(-len(combos) // ncols), width=5.0, height=3.6)
-    axes = np.atleast_1d(axes)
-    for ax in axes[len(combos):]:
-        ax.set_visible(False)
-    for ax, combo in zip(axes, combos, strict=False):
-        mask = np.ones(len(s), dtype=bool)
-        for key, value in zip(panel_keys, combo, strict=True):
-            mask &= (s[key] == value).to_numpy()
-        sp = s[mask]
-        setting = (", ".join(f"{k} = {v}" for k, v in zip(panel_keys, combo, strict=True))
-                   or f"radar factors: {params['radar.factor_model']}")
-        if x is not None:
-            for name in algorithms:
-                g = sp[sp["algorithm"] == name].sort_values(x)
-                band(ax, g[x], g["mean"], g["ci_low"], g["ci_high"], label=name,
-                     **_algorithm_line_style(name))
-            ax.set_xlabel(AXIS_LABELS.get(x, x))
-            if x == "target.separation":
-                ax.set_xscale("log")
+
+def _panels(summary: pd.DataFrame, keys: Sequence[str]) -> list[tuple[str, pd.DataFrame]]:
+    """(title, rows) per combination of ``keys`` in the summary (one panel each)."""
+    if not keys:
+        return [("", summary)]
+    return [("; ".join(_value_words(k, v) for k, v in zip(keys, np.atleast_1d(key),
+                                                          strict=True)), g)
+            for key, g in summary.groupby(list(keys), sort=False)]
+
+
+def _paper_setting_x(run: RunData, x: str | None) -> float | None:
+    """x value (scaled) at which the paper's Table 3 numbers apply, or None if the run's
+    fixed parameters are not at the Table 3 setting."""
+    fixed = {k: v for k, v in PAPER_TABLE3_SETTING.items() if k != x}
+    if not all(np.isclose(float(run.params[k]), v) for k, v in fixed.items()
+               if k not in run.sweep):
+        return None
+    if x is None:
+        return 0.0
+    if x not in PAPER_TABLE3_SETTING:
+        return None
+    return AXES[x][1] * PAPER_TABLE3_SETTING[x]
+
+
+def _paper_markers(ax: Axes, at: float, names: Sequence[str], horizontal: bool,
+                   rows: dict[str, float] | None = None) -> None:
+    """The paper's Table 3 rates (%) as open stars in each method's colour: at x = ``at``
+    (curves) or beside the method's row ``rows[name]`` (dot plot)."""
+    for name in (n for n in PAPER_PAIR if n in names):
+        value = 100 * ESM_RADAR.result(f"{name}: correct rate").value
+        xy = (value, rows[name] - 0.3) if horizontal and rows else (at, value)
+        ax.plot(*xy, linestyle="none", marker="*", markersize=13, markerfacecolor="white",
+                markeredgecolor=look(name).colour, markeredgewidth=1.6, zorder=5,
+                label=f"paper's Table 3: {name} {value:.1f} %")
+
+
+def _curve_panel(ax: Axes, rows: pd.DataFrame, x: str, names: Sequence[str],
+                 paper_x: float | None) -> None:
+    """Correct rate (%) of ``names`` against ``x``; bands for the emphasised methods."""
+    scale = AXES.get(x, (x, 1.0))[1]
+    for name in names:
+        g = rows[rows["algorithm"] == name].sort_values(x)
+        xs, kw = scale * g[x].to_numpy(float), line_kwargs(name)
+        if look(name).emphasised:
+            band(ax, xs, 100 * g["mean"], 100 * g["ci_low"], 100 * g["ci_high"], **kw)
         else:
-            g = sp.set_index("algorithm").loc[algorithms]
-            pos = np.arange(len(algorithms))
-            ax.bar(pos, g["mean"], color=[COLOURS[a] for a in algorithms], alpha=0.75,
-                   hatch=["//" if a.startswith("chi2") else "" for a in algorithms])
-            ax.errorbar(pos, g["mean"], yerr=[g["mean"] - g["ci_low"], g["ci_high"] - g["mean"]],
-                        fmt="none", color="k", capsize=3)
-            ax.set_xticks(pos, algorithms, rotation=35, ha="right")
-            ax.set_xlabel("algorithm")
-        reference_line(ax, 1 / N_TRACKS, "chance (1/3)", color="0.5")
-        ax.set_ylim(0, 1.02)
-        ax.set_ylabel("correct association rate (fraction)")
-        ax.set_title(f"{setting}; 95 % Wilson bands", fontsize=8)
+            ax.plot(xs, 100 * g["mean"], **kw)
+    if paper_x is not None:
+        _paper_markers(ax, paper_x, names, horizontal=False)
+    _set_x_axis(ax, x, scale * rows[x].to_numpy(float))
+    reference_line(ax, 100 * CHANCE, "chance between T1 and T2 (50 %)", color="0.5")
+    ax.set_ylabel("correct association rate (%)")
+
+
+def _dot_panel(ax: Axes, rows: pd.DataFrame, names: Sequence[str], paper: bool) -> None:
+    """Table 3 layout: one row per method, our rate (%) with its Wilson interval and the
+    paper's value beside it (open star)."""
+    ys = {name: len(names) - 1 - i for i, name in enumerate(names)}
+    for name in names:
+        g = rows[rows["algorithm"] == name].iloc[0]
+        lk = look(name)
+        ax.errorbar(100 * g["mean"], ys[name], xerr=[[100 * (g["mean"] - g["ci_low"])],
+                                                     [100 * (g["ci_high"] - g["mean"])]],
+                    fmt=lk.marker or "o", color=lk.colour, markersize=7, capsize=4,
+                    linewidth=2.0 if lk.emphasised else 1.0)
+    ax.plot([], [], marker="o", color="k", label="this run: rate, 95 % Wilson interval")
+    if paper:
+        _paper_markers(ax, 0.0, names, horizontal=True, rows=ys)
+    ax.axvline(100 * CHANCE, color="0.5", linestyle="--", linewidth=1.0,
+               label="chance between T1 and T2 (50 %)")
+    ax.set_yticks(list(ys.values()), [look(n).label for n in names])
+    ax.set_ylim(-0.8, len(names) - 0.4)
+    ax.set_xlabel("correct association rate (%), 95 % Wilson interval")
+
+
+def _rate_title(run: RunData, group: str, x: str | None) -> str:
+    """Two-line suptitle: the paper item redrawn (or none), the trials and fixed settings."""
+    what = "correct association rate" + (f" vs {AXES.get(x, (x,))[0].split(' (')[0]}"
+                                         if x else "")
+    item = PAPER_FIGURE.get(x, "Table 3" if x is None else "")
+    paper = group == "correct_rate" and item
+    head = (f"Paper 001 {item} redrawn: {what}" if paper else
+            f"Paper 001, {GROUP_TITLES[group]}: {what}")
+    fixed = [_value_words(k, run.params[k]) for k in PAPER_TABLE3_SETTING if k not in run.sweep]
+    return (head + f"\n{run.config['trials']} trials per point; " + "; ".join(fixed)
+            + ("" if paper else "; not a figure of the paper"))
+
+
+def _rate_figure(run: RunData, group: str) -> Figure | str:
+    """One correct-rate figure (``group`` of :data:`GROUPS`), from ``summary.csv``."""
+    s = run.summary[run.summary["metric"] == "correct"]
+    names = [n for n in GROUPS[group] if n in set(s["algorithm"])]
+    if group != "correct_rate":
+        names = names if set(names) - set(PAPER_PAIR) else []
+    if not names:
+        return (f"none of {', '.join(GROUPS[group])} was run"
+                if group == "correct_rate" else
+                f"no algorithm of this group ({', '.join(GROUPS[group][1:])}) was run")
+    x = _numeric_axis(run.config, s)
+    panels = _panels(s, [k for k in swept_keys(run.config) if k != x])
+    if len(panels) > 9:
+        return f"{len(panels)} panels (more than 9 combinations of the other swept keys)"
+    ncols = min(len(panels), 3 if x else 2)
+    height = 3.4 if x else 0.5 * len(names) + 1.6
+    fig, axes = new_figure(ncols=ncols, nrows=-(-len(panels) // ncols), width=4.6 if x else 5.2,
+                           height=height)
+    axes = np.atleast_1d(axes)
+    paper_x = _paper_setting_x(run, x) if group == "correct_rate" else None
+    for ax, (title, rows) in zip(axes, panels, strict=False):
+        if x:
+            _curve_panel(ax, rows, x, names, paper_x)
+        else:
+            _dot_panel(ax, rows, names, paper_x is not None)
+        ax.set_title(title, fontsize=8)
+    for ax in axes[len(panels):]:
+        ax.set_visible(False)
+    _share_rate_axis(axes[:len(panels)], "y" if x else "x", s)
     handles, labels = axes[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncols=min(len(labels), 5),
-               fontsize=7)
-    timing = ""
-    if params["esm.period"] != params["radar.period"] or params["esm.offset"]:
-        timing = (f", ESM/radar periods {params['esm.period']:g}/{params['radar.period']:g} s"
-                  f" ({'interpolated' if params['time_align'] else 'latest radar sample'})")
-    fig.suptitle(f"ESM-radar association (paper 001), {config['trials']} trials/point"
-                 + (f", separation {params['target.separation']:g} m"
-                    if "target.separation" not in sweep else "")
-                 + timing)
+    _legend_below(fig, handles, labels)
+    fig.suptitle(_rate_title(run, group, x))
     return fig
 
 
-def _trajectory_figure(run: RunData) -> Figure:
-    """Paper 001 Figs. 1-2: re-simulate trial 0 of point 0 and draw its tracks (km) and the
-    per-scan manoeuvre index and range weight of ``improved`` against time (s)."""
+def _legend_below(fig: Figure, handles: list, labels: list[str]) -> None:
+    """One legend below the panels, as many columns as fit (one per 3.4 inches)."""
+    ncols = max(1, min(len(labels), int(fig.get_figwidth() / 3.4)))
+    fig.legend(handles, labels, loc="outside lower center", ncols=ncols)
 
-    trials, config, params = run.trials, run.config, run.point_params(0)
-    sim = simulate(params, [trial_streams(int(config["seed"]), 0, 0)])
-    fig, (ax, ax2) = new_figure(ncols=2, width=5.0, height=4.0)
-    names = ("T1 (snake)", "T2 (snake, ESM target)", "T3 (crossing)")
-    for j in range(N_TRACKS):
-        ax.plot(sim.truth_p[:, j, 0] / 1e3, sim.truth_p[:, j, 1] / 1e3, label=names[j])
-    r, th = sim.x_esm[0, :, 0], sim.x_esm[0, :, 2]
-    ax.plot(r * np.cos(th) / 1e3, r * np.sin(th) / 1e3, ".", color="tab:red", ms=3,
-            label="ESM TDOA-DF location")
-    ax.plot([0, params["geometry.baseline"] / 1e3], [0, 0], "k^", label="A1, A2")
+
+def _share_rate_axis(axes: Sequence[Axes], which: str, summary: pd.DataFrame) -> None:
+    """One rate range (%) for every panel, from just below the lowest interval (and below
+    chance) to 101 %; with shared y the inner panels drop their tick labels."""
+    low = min(40.0, 10 * np.floor((100 * summary["ci_low"].min() - 2) / 10))
+    for i, ax in enumerate(axes):
+        (ax.set_ylim if which == "y" else ax.set_xlim)(low, 101)
+        if which == "x" and i % 2:
+            ax.tick_params(labelleft=False)
+
+
+# --------------------------------------------------------------------------- per-scan figures
+
+#: Colours of the true tracks T1, T2, T3 and of the ESM location (no algorithm's colour).
+TARGET_COLOURS, ESM_COLOUR = ("#56B4E9", "#000000", "#888888"), "#CC79A7"
+#: Swept keys that change the ESM track or its manoeuvre index (prefixes).
+ESM_TRACK_KEYS = ("target.", "snake.", "crossing.", "esm.", "geometry.", "scan.", "alpha.",
+                  "noise.")
+NO_SERIES = ("trials.csv has no per-scan columns (alpha_per_scan, ...): the run predates "
+             "them; run it again to draw this figure")
+
+
+def _esm_rows(trials: pd.DataFrame) -> pd.DataFrame:
+    """The first row of every trial, which carries the ESM track's per-scan series."""
+    if "alpha_per_scan" not in trials:
+        return trials.iloc[:0]
+    return trials[trials["alpha_per_scan"].notna()].sort_values(["point", "trial"])
+
+
+def _weight_series(trials: pd.DataFrame, point: int, trial_ids: Sequence[int]
+                   ) -> tuple[str, np.ndarray] | None:
+    """``(algorithm, (N, K) range weights)`` of ``improved`` (else the first dynamic-weight
+    algorithm) at ``point`` for ``trial_ids``, or None if no such rows."""
+    if "range_weight_per_scan" not in trials:
+        return None
+    rows = trials[(trials["point"] == point) & trials["range_weight_per_scan"].notna()
+                  & trials["trial"].isin(trial_ids)]
+    if rows.empty:
+        return None
+    names = list(dict.fromkeys(rows["algorithm"]))
+    name = "improved" if "improved" in names else names[0]
+    cells = rows[rows["algorithm"] == name].sort_values("trial")["range_weight_per_scan"]
+    return name, decode_series(cells)
+
+
+def _truth(params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    """ESM times (K,) in s and true positions (K, 3, 2) in m, from the config alone."""
+    t = esm_times(params)
+    return t, scenario(params).states(t)[0]
+
+
+def _tracks_panel(ax: Axes, params: Mapping[str, Any], row: pd.Series) -> None:
+    """True tracks (km) and the ESM TDOA-DF location of target 2 in one saved trial."""
+    t, p = _truth(params)
+    for j, name in enumerate(("T1 (weaving)", "T2 (weaving, the ESM's target)",
+                              "T3 (crossing)")):
+        ax.plot(p[:, j, 0] / 1e3, p[:, j, 1] / 1e3, color=TARGET_COLOURS[j],
+                linestyle=("-", "-", "--")[j], label=name)
+    truth = p[:, TRUE_TRACK]
+    r = np.hypot(truth[:, 0], truth[:, 1]) + decode_series([row["esm_range_error_per_scan_m"]])[0]
+    th = np.arctan2(truth[:, 1], truth[:, 0]) \
+        + 1e-3 * decode_series([row["esm_bearing_error_per_scan_mrad"]])[0]
+    ax.plot(r * np.cos(th) / 1e3, r * np.sin(th) / 1e3, ".", color=ESM_COLOUR,
+            markersize=4, label=f"ESM TDOA-DF location (trial {int(row['trial'])})")
     ax.set_xlabel("x (km)")
     ax.set_ylabel("y (km)")
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.legend(fontsize=7, loc="upper left")
-    ax.set_title(f"tracks, separation {params['target.separation']:g} m; mean ESM range sd "
-                 f"{np.sqrt(sim.P_esm[0, :, 0, 0]).mean() / 1e3:.1f} km", fontsize=8)
+    ax.set_title(f"separation {params['target.separation']:g} m; sensors at (0, 0) and "
+                 f"({params['geometry.baseline'] / 1e3:g} km, 0)", fontsize=8)
 
-    res = evaluate(ALGORITHMS["improved"], differences(sim), sim.alpha, params)
-    ax2.plot(sim.t, sim.alpha[0], color="tab:purple",
-             label=f"manoeuvre index α(k), {params['alpha.index']}")
+
+def _index_panel(ax: Axes, run: RunData, row: pd.Series, params: Mapping[str, Any]) -> None:
+    """One trial's manoeuvre index (log) and, on a twin axis, its range weight per scan."""
+    t = esm_times(params)
+    ax.plot(t, decode_series([row["alpha_per_scan"]])[0], color="0.2",
+            label=f"manoeuvre index α(k) ({params['alpha.index']})")
     a_max, mode = alpha_max(params)
     if mode == "fixed":
-        ax2.axhline(a_max, color="tab:purple", linestyle=":", linewidth=1.0, label="α_max")
-    ax2.set_yscale("log")
-    ax2.set_xlabel("time (s)")
-    ax2.set_ylabel("manoeuvre index α (dimensionless, log)")
-    ax3 = ax2.twinx()
-    ax3.plot(sim.t, res["weights"][0, :, 0], color="tab:green", label="range weight a₁(k)")
-    ax3.set_ylabel("range weight a₁ (fraction)")
-    a1 = static_weights(FACTORS, params["weights"])[0]
-    ax3.axhline(a1, color="tab:green", linestyle=":", linewidth=1.0, label="static AHP a₁")
-    ax3.set_ylim(0, 0.6)
-    h1, l1 = ax2.get_legend_handles_labels()
-    h2, l2 = ax3.get_legend_handles_labels()
-    ax2.legend(h1 + h2, l1 + l2, fontsize=7, loc="lower left")
-    saved = trials[(trials["point"] == 0) & (trials["trial"] == 0)
-                   & (trials["algorithm"] == "improved")]
-    chosen = int(res["chosen"][0]) + 1
-    check = ("" if saved.empty else
-             " (matches saved row)" if int(saved["chosen"].iloc[0]) == chosen
-             else " (DIFFERS from saved row)")
-    ax2.set_title(f"improved: chose radar track {chosen}{check}; per-scan diagnostics",
-                  fontsize=8)
-    fig.suptitle("Paper 001 Figs. 1-2 analogue: one trial (point 0, trial 0), recomputed "
-                 "from config and seed")
+        ax.axhline(a_max, color="0.2", linestyle=":", linewidth=1.0, label="α_max")
+    ax.set_yscale("log")
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("manoeuvre index α (1, log scale)")
+    weights = _weight_series(run.trials, int(row["point"]), [int(row["trial"])])
+    if weights is not None:
+        name, a1 = weights
+        twin = ax.twinx()
+        twin.plot(t, a1[0], color=look(name).colour, linewidth=2.0,
+                  label=f"range weight a₁(k), {name}")
+        twin.axhline(static_weights(FACTORS, params["weights"])[0], color=look(name).colour,
+                     linestyle=":", linewidth=1.0, label="static AHP range weight")
+        twin.set_ylim(0, 0.7)
+        twin.set_ylabel("range weight a₁ (1)")
+        twin.grid(False)
+    ax.set_title("one trial: index and range weight per scan", fontsize=8)
+
+
+def _range_error_panel(ax: Axes, esm: pd.DataFrame, params: Mapping[str, Any]) -> None:
+    """RMS and median absolute ESM range error (m, log) per scan over the saved trials."""
+    t = esm_times(params)
+    err = decode_series(esm["esm_range_error_per_scan_m"])
+    ax.plot(t, np.sqrt(np.nanmean(err**2, axis=0)), color="0.2", label="RMS ESM range error")
+    ax.plot(t, np.nanmedian(np.abs(err), axis=0), color="0.2", linestyle="--",
+            label="median |ESM range error|")
+    ax.axhline(params["target.separation"], color="0.5", linewidth=1.0,
+               label="T1-T2 separation")
+    ax.set_yscale("log")
+    ax.yaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    ax.yaxis.set_minor_formatter(NullFormatter())
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("ESM TDOA-DF range error (m, log scale)")
+    ax.set_title(f"all {len(esm)} trials of this point", fontsize=8)
+
+
+def _trajectory_figure(run: RunData) -> Figure | str:
+    """Paper 001 Figs. 1-2 from ``trials.csv``: the first saved trial of point 0."""
+    esm = _esm_rows(run.trials)
+    if esm.empty:
+        return NO_SERIES
+    row = esm.iloc[0]
+    point = int(row["point"])
+    params = run.point_params(point)
+    fig, axes = new_figure(ncols=3, width=4.3, height=4.2)
+    _tracks_panel(axes[0], params, row)
+    _index_panel(axes[1], run, row, params)
+    _range_error_panel(axes[2], esm[esm["point"] == point], params)
+    handles, labels = [], []
+    for ax in fig.axes:
+        h, lab = ax.get_legend_handles_labels()
+        handles += h
+        labels += lab
+    _legend_below(fig, handles, labels)
+    where = _setting_words(params, swept_keys(run.config))
+    fig.suptitle("Paper 001 Figs. 1-2 redrawn: true tracks and the ESM TDOA-DF location of "
+                 "target 2\n" + (f"{where}; " if where else "")
+                 + f"one saved trial (left, middle); error over all "
+                 f"{len(esm[esm['point'] == point])} trials of this point (right)")
     return fig
 
 
-#: Trials re-simulated for the manoeuvre-index figure.
-MANOEUVRE_TRIALS = 200
+def _series_band(ax: Axes, t: np.ndarray, values: np.ndarray, label: str, colour: str,
+                 shade: bool) -> None:
+    """Mean over trials of ``values`` (N, K) against ``t`` with its 95 % t band (scans
+    where every trial is defined)."""
+    ok = np.isfinite(values).all(axis=0)
+    v = values[:, ok]
+    mean = v.mean(axis=0)
+    if shade and len(v) > 1:
+        lo, hi = t_interval(mean, v.std(axis=0, ddof=1), len(v))
+        band(ax, t[ok], mean, lo, hi, label=label, marker="", color=colour)
+    else:
+        ax.plot(t[ok], mean, label=label, color=colour)
 
 
-def _index_band(ax, t: np.ndarray, alpha: np.ndarray, label: str, **kw) -> None:
-    """Mean of ``alpha`` (N, K) over trials against ``t`` with its 95 % t band, where
-    defined (NaN marks start-up scans)."""
-    ok = np.isfinite(alpha).all(axis=0)
-    a = alpha[:, ok]
-    n = a.shape[0]
-    lo, hi = t_interval(a.mean(axis=0), a.std(axis=0, ddof=1), n)
-    band(ax, t[ok], a.mean(axis=0), lo, hi, label=label, marker="", **kw)
+def _esm_groups(run: RunData, esm: pd.DataFrame) -> list[tuple[str, int, pd.DataFrame]]:
+    """``(words, point, first rows)`` per setting of the swept keys that change the ESM
+    track (:data:`ESM_TRACK_KEYS`), at its first point."""
+    keys = [k for k in swept_keys(run.config) if k.startswith(ESM_TRACK_KEYS)]
+    seen: dict[tuple, int] = {}
+    for point, params in enumerate(run.points):
+        seen.setdefault(tuple(params[k] for k in keys), point)
+    return [(_setting_words(run.point_params(p), keys)
+             or _value_words("snake.amplitude", run.point_params(p)["snake.amplitude"]), p,
+             esm[esm["point"] == p]) for p in seen.values()]
 
 
-def _manoeuvre_figure(run: RunData) -> Figure:
-    """Mean manoeuvre index against time (s), with and without the snake, for the default
-    detector and the paper's literal index. *Recomputed*: the first
-    :data:`MANOEUVRE_TRIALS` trials of point 0 are re-simulated with the runner's streams at
-    the point's snake amplitude (the schema default if it is 0) and at amplitude 0 (same
-    noise)."""
-
-    config, params = run.config, run.point_params(0)
-    amplitude = params["snake.amplitude"] or run.experiment.defaults()["snake.amplitude"]
-    n = min(int(config["trials"]), MANOEUVRE_TRIALS)
-    streams = [trial_streams(int(config["seed"]), 0, t) for t in range(n)]
-    sims = {a: simulate(dict(params, **{"snake.amplitude": a}), streams)
-            for a in (amplitude, 0.0)}
-    nis_params = dict(params, **{"alpha.index": "nis_tdoa", "alpha.max_mode": "chi2"})
-    panels = (("nis_tdoa", "windowed NIS of the range difference c·Δt (default)",
-               alpha_max(nis_params)[0],
-               f"α_max (χ² quantile, 1 - {params['alpha.false_alarm']:g})"),
-              ("literal", "paper eq. 8-13: V²/R on the TDOA-DF range", params["alpha.max"],
-               "α_max ('fixed' mode value)"))
-    fig, axes = new_figure(ncols=2, width=5.0, height=3.8)
-    for ax, (index, title, a_max, a_label) in zip(axes, panels, strict=True):
-        for a, colour in zip(sims, ("tab:red", "tab:blue"), strict=True):
-            sim = sims[a]
-            _index_band(ax, sim.t, manoeuvre_alpha(params, sim.x_esm, sim.P_esm, index),
-                        f"snake amplitude {a:g} m", color=colour)
-        if index == "nis_tdoa":
-            reference_line(ax, 1.0, "no-manoeuvre expectation E[α] = 1", color="0.5")
-        ax.axhline(a_max, color="k", linestyle=":", linewidth=1.0, label=a_label)
-        ax.set_yscale("log")
-        ax.set_xlabel("time (s)")
-        ax.set_ylabel("manoeuvre index α (dimensionless)")
-        ax.set_title(title, fontsize=8)
-        ax.legend(fontsize=7, loc="upper left")
-    fig.suptitle(f"Manoeuvre index, mean over {n} trials with 95 % t bands (seed "
-                 f"{config['seed']}, point 0, separation {params['target.separation']:g} m), "
-                 "recomputed")
+def _manoeuvre_figure(run: RunData) -> Figure | str:
+    """Mean manoeuvre index and mean range weight per scan, from ``trials.csv``."""
+    esm = _esm_rows(run.trials)
+    if esm.empty:
+        return NO_SERIES
+    groups = _esm_groups(run, esm)
+    if len(groups) > 9:
+        return f"{len(groups)} settings of the ESM track (more than 9 curves per panel)"
+    fig, (ax, ax2) = new_figure(ncols=2, width=5.0, height=3.8 + 0.15 * len(groups))
+    colours = ["0.2"] if len(groups) == 1 else [
+        matplotlib.colormaps["viridis"](i / (len(groups) - 1) * 0.9) for i in range(len(groups))]
+    weight_name = ""
+    for (words, point, rows), colour in zip(groups, colours, strict=True):
+        params, shade = run.point_params(point), len(groups) <= 3
+        t = esm_times(params)
+        _series_band(ax, t, decode_series(rows["alpha_per_scan"]), words, colour, shade)
+        weights = _weight_series(run.trials, point, rows["trial"].tolist())
+        if weights is not None:
+            weight_name = weights[0]
+            _series_band(ax2, t, weights[1], words, colour, shade)
+    params = run.point_params(groups[0][1])
+    if params["alpha.index"] == "nis_tdoa":
+        ax.axhline(1.0, color="0.5", linestyle="--", linewidth=1.0,
+                   label="no-manoeuvre expectation E[α] = 1")
+    a_max, mode = alpha_max(params)
+    if mode == "fixed":
+        ax.axhline(a_max, color="k", linestyle=":", linewidth=1.0, label="α_max")
+    ax.set_yscale("log")
+    ax2.axhline(static_weights(FACTORS, params["weights"])[0], color="k", linestyle=":",
+                linewidth=1.0, label="static AHP range weight")
+    ax2.set_ylim(0, 0.7)
+    weight_title = (f"range weight of {look(weight_name).label}" if weight_name
+                    else "no dynamic-weight algorithm was run")
+    for a, ylabel, title in ((ax, "manoeuvre index α (1, log scale)", "manoeuvre index"),
+                             (ax2, "range weight a₁ (1)", weight_title)):
+        a.set_xlabel("time (s)")
+        a.set_ylabel(ylabel)
+        a.set_title(title, fontsize=8)
+        a.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncols=2, fontsize=7)
+    n = len(groups[0][2])
+    fig.suptitle(f"Manoeuvre index ({params['alpha.index']}) and range weight per scan "
+                 f"(no paper figure)\nmean over {n} trials with 95 % t bands")
     return fig
 
 
-def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure]:
-    """The ``wanted`` figures among ``correct_rate`` (from the summary), ``trajectory`` and
-    ``manoeuvre`` (recomputed)."""
-    drawers = {"correct_rate": lambda: _correct_rate_figure(run.summary, run.config),
-               "trajectory": lambda: _trajectory_figure(run),
-               "manoeuvre": lambda: _manoeuvre_figure(run)}
+def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure | str]:
+    """The ``wanted`` figures among :data:`GROUPS` (from ``summary.csv``), ``trajectory``
+    and ``manoeuvre`` (from the per-scan columns of ``trials.csv``); a one-line reason
+    string for a wanted figure this run cannot draw."""
+    drawers: dict[str, Callable[[], Figure | str]] = {
+        **{g: (lambda g=g: _rate_figure(run, g)) for g in GROUPS},
+        "trajectory": lambda: _trajectory_figure(run),
+        "manoeuvre": lambda: _manoeuvre_figure(run)}
     return {name: draw() for name, draw in drawers.items() if name in wanted}

@@ -1,0 +1,199 @@
+"""The ``esm_radar`` report: figures of every shipped config from a small real run, the
+headline table, and the per-scan columns the per-scan figures read instead of re-simulating."""
+
+import re
+from pathlib import Path
+
+import matplotlib.figure
+import numpy as np
+import pytest
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+from trackfuse import harness
+from trackfuse.config import load
+from trackfuse.experiments.esm_radar import EXPERIMENT, model, report
+from trackfuse.plots.style import text_overlaps
+from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS
+from trackfuse.rundata import RunData
+
+ROOT = Path(__file__).resolve().parents[1]
+CONFIGS = sorted(ROOT.glob("configs/esm_radar_*.yaml"))
+UNIT = re.compile(r"\(.+\)")
+
+
+@pytest.fixture(scope="module", params=CONFIGS, ids=lambda p: p.stem)
+def shipped_run(request, tmp_path_factory) -> RunData:
+    """A shipped config run by the real runner with 6 trials per point."""
+    cfg = load(request.param)
+    return harness.run_data(tmp_path_factory.mktemp(request.param.stem), "esm_radar",
+                            cfg.params, cfg.sweep, trials=6, seed=cfg.seed,
+                            sweep_mode=cfg.sweep_mode)
+
+
+def drawn(fig: matplotlib.figure.Figure) -> matplotlib.figure.Figure:
+    FigureCanvasAgg(fig)
+    fig.canvas.draw()
+    return fig
+
+
+def categorical(axis) -> bool:
+    """An axis ticked with names (methods) rather than numbers: no unit to state."""
+    fmt = axis.get_major_formatter()
+    texts = [fmt(v, i) for i, v in enumerate(axis.get_majorticklocs())]
+    return any(re.search(r"[a-df-z]", t) for t in texts)
+
+
+def inside_canvas(fig) -> bool:
+    """Every drawn artist (titles, legends, labels) lies inside the saved figure."""
+    box = fig.get_tightbbox(fig.canvas.get_renderer())
+    return box.x0 >= -0.01 and box.y0 >= -0.01 and box.x1 <= fig.get_figwidth() + 0.01 \
+        and box.y1 <= fig.get_figheight() + 0.01
+
+
+def test_every_figure_of_every_shipped_config_is_drawn_cleanly(shipped_run):
+    figs = report.figures(shipped_run, list(EXPERIMENT.figures))
+    assert set(figs) == set(EXPERIMENT.figures)
+    for name, fig in figs.items():
+        assert isinstance(fig, matplotlib.figure.Figure), (name, fig)
+        drawn(fig)
+        assert text_overlaps(fig) == [], name
+        assert inside_canvas(fig), name
+        assert fig.get_suptitle().count("\n") <= 1, name
+        for ax in (a for a in fig.axes if a.has_data()):
+            if not categorical(ax.yaxis):
+                assert UNIT.search(ax.get_ylabel()), (name, ax.get_ylabel())
+            if ax.get_xlabel():
+                assert UNIT.search(ax.get_xlabel()), (name, ax.get_xlabel())
+            else:  # a twin axis shares its host's x label
+                assert ax.get_shared_x_axes().get_siblings(ax) != [ax], name
+
+
+def _lines(fig, prefix: str) -> list:
+    return [ln for ax in fig.axes for ln in ax.get_lines() if ln.get_label().startswith(prefix)]
+
+
+def test_main_figure_draws_our_rates_the_papers_values_and_chance(shipped_run):
+    fig = report.figures(shipped_run, ["correct_rate"])["correct_rate"]
+    paper = {ln.get_label(): ln for ln in _lines(fig, "paper's Table 3")}
+    if "phase.d_over_lambda" not in shipped_run.sweep:  # runs at the Table 3 setting
+        assert set(paper) == {"paper's Table 3: improved 74.0 %",
+                              "paper's Table 3: traditional 55.2 %"}
+        for label, value in (("improved", 74.0), ("traditional", 55.2)):
+            xy = paper[f"paper's Table 3: {label} {value} %"].get_xydata()
+            assert np.isclose(xy, value).any(axis=1).all()
+    else:  # the paper gives no d/lambda, so no value of its belongs on this axis
+        assert not paper
+    chance = _lines(fig, "chance between T1 and T2 (50 %)")
+    assert chance and all(50.0 in np.ravel(ln.get_xydata()) for ln in chance)
+    labels = {ln.get_label() for ax in fig.axes for ln in ax.get_lines()}
+    assert not any(lab.startswith("chi-square") for lab in labels)  # references elsewhere
+
+
+def test_curves_are_the_summary_means(tmp_path):
+    run = harness.run_data(tmp_path, "esm_radar", {"algorithms": ["traditional", "improved"]},
+                           {"target.separation": [100.0, 300.0, 1000.0, 2000.0]}, trials=10,
+                           seed=3)
+    fig = report.figures(run, ["correct_rate"])["correct_rate"]
+    (line,) = _lines(fig, "improved fuzzy evaluation (paper)")
+    s = run.summary.query("metric == 'correct' and algorithm == 'improved'")
+    np.testing.assert_allclose(line.get_ydata(), 100 * s.sort_values("target.separation")["mean"])
+    assert fig.axes[0].get_xscale() == "log"
+    ticks = [t.get_text() for t in fig.axes[0].get_xticklabels() if t.get_text()]
+    assert "100" in ticks and "1000" in ticks  # plain numbers, not only powers of ten
+
+
+def test_groups_without_their_algorithms_give_a_reason(tmp_path):
+    run = harness.run_data(tmp_path, "esm_radar", {"algorithms": ["traditional", "improved"]},
+                           None, trials=4, seed=1)
+    figs = report.figures(run, list(EXPERIMENT.figures))
+    assert isinstance(figs["correct_rate_references"], str)
+    assert isinstance(figs["correct_rate_ablations"], str)
+    assert isinstance(figs["correct_rate"], matplotlib.figure.Figure)
+
+
+def test_headline_table_schema_verdicts_and_docs_links(shipped_run):
+    table = report.tables(shipped_run)["paper_vs_reproduced"]
+    assert tuple(table.columns) == HEADLINE_COLUMNS
+    assert set(table["verdict"]) <= set(VERDICTS)
+    assert (table["reason"].str.len() > 0).all() and not table["reason"].str.contains("\n").any()
+    t3 = table[table["paper_item"] == "Table 3"]
+    assert set(t3["algorithm"]) == {"improved", "traditional"}
+    assert ((t3["ci_low"] <= t3["reproduced"]) & (t3["reproduced"] <= t3["ci_high"])).all()
+    inside = (t3["ci_low"] <= t3["paper_value"]) & (t3["paper_value"] <= t3["ci_high"])
+    assert ((t3["verdict"] == "agrees") == inside).all()
+    headings = re.findall(r"^#+ (.+)$", (ROOT / report.DOCS).read_text(), flags=re.M)
+    anchors = {re.sub(r"[^\w\- ]", "", h.strip().lower()).replace(" ", "-") for h in headings}
+    for link in set(table["docs"]):
+        page, _, anchor = link.partition("#")
+        assert page == report.DOCS and anchor in anchors, link
+
+
+def test_curve_claims_follow_the_paired_intervals(tmp_path):
+    """With radar factors of their own noise the improved method is higher than the
+    traditional one at 300 m by a wide margin, and both are near 1 at 3 km."""
+    run = harness.run_data(tmp_path, "esm_radar", {"algorithms": ["traditional", "improved"]},
+                           {"target.separation": [300.0, 3000.0]}, trials=40, seed=2)
+    table = report.paper_vs_reproduced(run).set_index("quantity")
+    close = table.loc[table.index.str.startswith("improved - traditional at the closest")]
+    assert close["verdict"].iloc[0] == "agrees" and close["ci_low"].iloc[0] > 0
+    always = table[table["paper_item"] == "Abstract"].iloc[0]
+    assert always["verdict"] == "differs"  # equal (both ~1) at 3 km
+    assert always["ci_low"] <= 0 <= always["ci_high"]
+
+
+# --------------------------------------------------------------------------- per-scan columns
+
+
+def test_per_scan_columns_are_written_once_per_trial_and_decode(tmp_path):
+    run = harness.run_data(tmp_path, "esm_radar",
+                           {"algorithms": ["chi2", "improved", "improved_static"]}, None,
+                           trials=5, seed=4)
+    t = run.trials
+    first = t[t["algorithm"] == "chi2"]
+    assert first["alpha_per_scan"].notna().all()
+    assert t.loc[t["algorithm"] != "chi2", "alpha_per_scan"].isna().all()
+    assert t.loc[t["algorithm"] != "improved", "range_weight_per_scan"].isna().all()
+    imp = t[t["algorithm"] == "improved"]
+    a1 = model.decode_series(imp["range_weight_per_scan"])
+    assert a1.shape == (5, EXPERIMENT.defaults()["scan.count"])
+    np.testing.assert_allclose(a1.mean(axis=1), imp["range_weight_mean"], atol=2e-3)
+    alpha = model.decode_series(first["alpha_per_scan"])
+    np.testing.assert_allclose(np.nanmax(alpha, axis=1), first["alpha_peak"], rtol=5e-3)
+
+
+def test_trajectory_places_the_esm_track_on_the_truth_without_noise(tmp_path):
+    run = harness.run_data(tmp_path, "esm_radar", {"noise.scale": 0.0}, None, trials=2,
+                           seed=4)
+    errors = model.decode_series(run.trials["esm_range_error_per_scan_m"].dropna())
+    assert np.all(np.abs(errors) <= 0.5)  # written to the metre
+    fig = report.figures(run, ["trajectory"])["trajectory"]
+    (esm,) = _lines(fig, "ESM TDOA-DF location")
+    t = model.esm_times(run.point_params(0))
+    truth = model.scenario(run.point_params(0)).states(t)[0][:, model.TRUE_TRACK] / 1e3
+    np.testing.assert_allclose(esm.get_xydata(), truth, atol=1e-3)
+
+
+def test_per_scan_figures_never_simulate(shipped_run, monkeypatch):
+    """trajectory and manoeuvre read the run folder only: the report module holds no
+    reference to the simulator, and drawing works with the simulator disabled."""
+    for name in ("simulate", "run_batch", "run_trial", "evaluate", "differences",
+                 "trial_streams", "manoeuvre_alpha"):
+        assert not hasattr(report, name), name
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the report re-ran the simulation")
+
+    for name in ("simulate", "run_batch", "evaluate", "manoeuvre_alpha"):
+        monkeypatch.setattr(model, name, refuse)
+    figs = report.figures(shipped_run, ["trajectory", "manoeuvre"])
+    assert all(isinstance(f, matplotlib.figure.Figure) for f in figs.values())
+
+
+def test_runs_without_per_scan_columns_say_why(tmp_path):
+    run = harness.run_data(tmp_path, "esm_radar", {"algorithms": ["improved"]}, None,
+                           trials=2, seed=1)
+    old = run.trials.drop(columns=[c for c in run.trials if c.endswith("_per_scan")
+                                   or "_per_scan_" in c])
+    run.__dict__["trials"] = old
+    figs = report.figures(run, ["trajectory", "manoeuvre"])
+    assert figs == {"trajectory": report.NO_SERIES, "manoeuvre": report.NO_SERIES}

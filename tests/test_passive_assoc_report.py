@@ -1,0 +1,115 @@
+"""The ``passive_assoc`` report on every shipped config: figures drawn from a small real run
+(no text overlap, inside the canvas, units, the paper's layout) and the headline table."""
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+from trackfuse import harness
+from trackfuse.config import load
+from trackfuse.experiments.passive_assoc import EXPERIMENT, report
+from trackfuse.plots.algorithms import look
+from trackfuse.plots.style import text_overlaps
+from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS
+from trackfuse.rundata import RunData
+
+ROOT = Path(__file__).resolve().parents[1]
+CONFIGS = sorted(ROOT.glob("configs/passive_*.yaml"))
+UNIT = re.compile(r"\(.+\)")
+#: Small versions of the shipped configs: fewer runs, a smaller operation budget (checkpoints
+#: above it are ignored, the budget itself is scored), and the scale study's points above
+#: 50 targets left out.
+SMALL = {"pga.ops": 200}
+
+
+@pytest.fixture(scope="module", params=CONFIGS, ids=lambda p: p.stem)
+def shipped_run(request, tmp_path_factory) -> RunData:
+    cfg = load(request.param)
+    params = {**cfg.params, **SMALL}
+    sweep = {k: [v for v in vals if not (k == "targets.n" and v > 50)]
+             for k, vals in cfg.sweep.items()}
+    return harness.run_data(tmp_path_factory.mktemp(request.param.stem), "passive_assoc",
+                            params, sweep, trials=3, seed=cfg.seed, sweep_mode=cfg.sweep_mode)
+
+
+def drawn(fig):
+    FigureCanvasAgg(fig)
+    fig.canvas.draw()
+    return fig
+
+
+def inside_canvas(fig) -> bool:
+    box = fig.get_tightbbox(fig.canvas.get_renderer())
+    return box.x0 >= -0.01 and box.y0 >= -0.01 and box.x1 <= fig.get_figwidth() + 0.01 \
+        and box.y1 <= fig.get_figheight() + 0.01
+
+
+def test_every_figure_of_every_shipped_config_is_drawn_or_explained(shipped_run):
+    figs = report.figures(shipped_run, list(EXPERIMENT.figures))
+    assert set(figs) == set(EXPERIMENT.figures)  # nothing silently left out
+    swept = shipped_run.sweep
+    assert isinstance(figs["noise"], str) == ("noise.sigma" not in swept)
+    assert isinstance(figs["scale"], str) == ("targets.n" not in swept)
+    for name, fig in figs.items():
+        if isinstance(fig, str):
+            assert fig and "\n" not in fig
+            continue
+        drawn(fig)
+        assert text_overlaps(fig) == [], name
+        assert inside_canvas(fig), name
+        assert fig.get_suptitle().count("\n") <= 1, name
+        supy = fig._supylabel.get_text() if fig._supylabel else ""
+        for ax in (a for a in fig.axes if a.has_data()):
+            assert UNIT.search(ax.get_xlabel()), (name, ax.get_xlabel())
+            row = [a.get_ylabel() for a in fig.axes
+                   if np.isclose(a.get_position().y0, ax.get_position().y0)]
+            assert UNIT.search(ax.get_ylabel() or supy or " ".join(row)), (name, row)
+
+
+def test_fig2_layout_one_column_per_target_count(shipped_run):
+    fig = report.figures(shipped_run, ["convergence"])["convergence"]
+    if isinstance(fig, str):
+        assert "checkpoint" in fig  # the noise study scores one checkpoint only
+        return
+    targets = shipped_run.sweep["targets.n"]
+    panels = [ax for ax in fig.axes if ax.has_data()]
+    assert len(panels) == len(shipped_run.points)
+    titles = [ax.get_title() for ax in panels[:len(targets)]]
+    assert [int(re.match(r"N = (\d+)", t).group(1)) for t in titles] == targets
+    paper = look("pga_paper")
+    for ax in panels:
+        lines = {ln.get_label(): ln for ln in ax.get_lines()}
+        assert lines[paper.label].get_linewidth() > 1.5  # the paper's PGA emphasised
+        assert lines[paper.label].get_color() == paper.colour
+        assert any(lab.startswith(look("exact").label) for lab in lines)
+        assert ax.get_ylim() == panels[0].get_ylim()  # one scale for every panel
+
+
+def test_scale_axis_is_linear_for_few_targets(tmp_path):
+    run = harness.run_data(tmp_path, "passive_assoc", {"pga.ops": 50,
+                           "pga.checkpoints": [50], "algorithms": ["exact", "pga_paper"]},
+                           {"targets.n": [5, 7, 10]}, trials=2, seed=1)
+    fig = report.figures(run, ["scale"])["scale"]
+    for ax in fig.axes:
+        assert ax.get_xscale() == "linear"
+        np.testing.assert_array_equal(ax.get_xticks(), [5, 7, 10])
+
+
+def test_headline_table_schema_verdicts_and_docs_links(shipped_run):
+    table = report.tables(shipped_run)["paper_vs_reproduced"]
+    assert tuple(table.columns) == HEADLINE_COLUMNS
+    assert set(table["verdict"]) <= set(VERDICTS)
+    assert not table["reason"].str.contains("\n").any()
+    fig2 = table[table["paper_item"] == "Fig. 2"]
+    assert ((fig2["ci_low"] <= fig2["reproduced"] + 1e-9)
+            & (fig2["reproduced"] <= fig2["ci_high"] + 1e-9)).all()
+    if shipped_run.params["scene.mode"] == "paper" and "exact" in shipped_run.params["algorithms"]:
+        assert len(fig2) > 0
+    headings = re.findall(r"^#+ (.+)$", (ROOT / report.DOCS).read_text(), flags=re.M)
+    anchors = {re.sub(r"[^\w\- ]", "", h.strip().lower()).replace(" ", "-") for h in headings}
+    for link in set(table["docs"]):
+        page, _, anchor = link.partition("#")
+        assert page == report.DOCS and anchor in anchors, link
