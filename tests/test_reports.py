@@ -3,10 +3,13 @@ page as a browser shows it."""
 
 from __future__ import annotations
 
+import os
+
 import pandas as pd
 import pytest
 from browser import chromium, decoded_images
 
+from trackfuse import reports
 from trackfuse.harness import run_data
 from trackfuse.reports import display_table, write_report
 
@@ -51,3 +54,17 @@ def test_the_run_page_loads_in_a_browser_with_every_image_decoded(toy_run, tmp_p
     images = decoded_images(toy_run.path / "index.html", shot)
     assert images == [("figures/estimate.png", True)]
     assert shot.stat().st_size > 10_000
+
+
+@pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2, reason="needs two cores")
+def test_figures_drawn_in_two_processes_are_the_bytes_drawn_in_one(tmp_path, monkeypatch):
+    run = run_data(tmp_path, "twin_sensor", {"algorithms": ["mspda_parallel/mgekf"]},
+                   sweep={"clutter.mean": [0.0, 9.0]}, trials=2, seed=1)
+    assert reports.drawing_processes(6) == 2
+    two = write_report(run)
+    files = {p.name: p.read_bytes() for p in two.figures}
+    monkeypatch.setattr(reports, "drawing_processes", lambda figures: 1)
+    one = write_report(run)
+    assert [p.name for p in one.figures] == [p.name for p in two.figures]
+    assert len(files) >= 6 and one.not_drawn == two.not_drawn
+    assert {p.name: p.read_bytes() for p in one.figures} == files

@@ -21,8 +21,11 @@ from __future__ import annotations
 
 import html
 import importlib
+import multiprocessing
 import os
+import threading
 from collections.abc import Collection, Sequence
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
@@ -36,6 +39,8 @@ from trackfuse.rundata import RunData
 PNG_DPI = 200
 #: zlib level of PNG files: 1 halves the encoding time of level 6 for files ~1.3x larger.
 PNG_COMPRESSION = 1
+#: At most this many processes draw one run's figures (one per core when fewer).
+MAX_DRAWING_PROCESSES = 4
 HEADLINE_TABLE = "paper_vs_reproduced"
 #: Columns of every experiment's headline table, one row per paper item compared:
 #: ``paper_item`` the paper's figure or table ("Table 3"); ``quantity`` in words;
@@ -154,26 +159,74 @@ def _write_tables(run: RunData, module: ModuleType, report: Report) -> dict[str,
     return made
 
 
-def _write_figures(run: RunData, module: ModuleType, wanted: Collection[str],
-                   formats: Sequence[str], report: Report) -> None:
-    folder = run.path / "figures"
-    folder.mkdir(exist_ok=True)
+def _draw(run: RunData, module: ModuleType, names: Sequence[str],
+          formats: Sequence[str]) -> Report:
+    """Draw and save the figures ``names`` (the report's ``figures``, ``errors`` and
+    ``not_drawn`` parts for them)."""
+    part = Report()
     try:
-        made = module.figures(run, wanted)
+        made = module.figures(run, names)
     except Exception as err:  # noqa: BLE001
-        report.errors.append(f"figures: {type(err).__name__}: {err}")
-        return
-    for name in wanted:
+        part.errors.append(f"figures: {type(err).__name__}: {err}")
+        return part
+    for name in names:
         if name not in made:
-            report.not_drawn[name] = "the experiment's report drew nothing for this config"
+            part.not_drawn[name] = "the experiment's report drew nothing for this config"
     for name, fig in made.items():
         if isinstance(fig, str):
-            report.not_drawn[name] = fig
+            part.not_drawn[name] = fig
             continue
         try:
-            report.figures += save_figure(fig, folder, name, formats)
+            part.figures += save_figure(fig, run.path / "figures", name, formats)
         except Exception as err:  # noqa: BLE001 - one figure's bug must not lose the others
-            report.errors.append(f"figure {name}: {type(err).__name__}: {err}")
+            part.errors.append(f"figure {name}: {type(err).__name__}: {err}")
+    return part
+
+
+#: What a forked drawing process needs, set by the parent just before it forks.
+_FORK_STATE: tuple[RunData, ModuleType, Sequence[str]] | None = None
+
+
+def _draw_in_fork(names: Sequence[str]) -> Report:
+    assert _FORK_STATE is not None
+    run, module, formats = _FORK_STATE
+    return _draw(run, module, names, formats)
+
+
+def drawing_processes(figures: int) -> int:
+    """Processes to draw ``figures`` figures with: up to one per available core, and 1 where
+    forking is unavailable or unsafe (another thread is running)."""
+    if "fork" not in multiprocessing.get_all_start_methods() or threading.active_count() > 1:
+        return 1
+    return max(1, min(figures, len(os.sched_getaffinity(0)), MAX_DRAWING_PROCESSES))
+
+
+def _write_figures(run: RunData, module: ModuleType, wanted: Sequence[str],
+                   formats: Sequence[str], report: Report) -> None:
+    """Draw ``wanted`` in :func:`drawing_processes` forked processes (each saves its own
+    files, so the bytes do not depend on the split) and merge their parts in order."""
+    global _FORK_STATE
+    (run.path / "figures").mkdir(exist_ok=True)
+    processes = drawing_processes(len(wanted))
+    groups = [list(wanted[i::processes]) for i in range(processes)]
+    if processes == 1:
+        parts = [_draw(run, module, groups[0], formats)]
+    else:
+        run.trials, run.summary  # noqa: B018 - read once here, inherited by the forks
+        _FORK_STATE = (run, module, formats)
+        try:
+            with ProcessPoolExecutor(processes, multiprocessing.get_context("fork")) as pool:
+                parts = list(pool.map(_draw_in_fork, groups))
+        finally:
+            _FORK_STATE = None
+    position = {name: i for i, name in enumerate(wanted)}
+    for part in parts:
+        report.errors += part.errors
+        report.not_drawn.update(part.not_drawn)
+        report.figures += part.figures
+    order = {f".{fmt}": i for i, fmt in enumerate(formats)}
+    report.figures.sort(key=lambda p: (position.get(p.stem, len(position)), order[p.suffix]))
+    report.not_drawn = {n: report.not_drawn[n] for n in wanted if n in report.not_drawn}
 
 
 def write_report(run: RunData, wanted: Collection[str] | None = None,
@@ -194,7 +247,7 @@ def write_report(run: RunData, wanted: Collection[str] | None = None,
     tables: dict[str, pd.DataFrame] = {}
     if module is not None:
         tables = _write_tables(run, module, report)
-        _write_figures(run, module, wanted, formats, report)
+        _write_figures(run, module, list(wanted), formats, report)
     md = index_markdown(run, tables, report)
     atomic_write(run.path / INDEX_MD, md)
     atomic_write(run.path / INDEX_HTML, index_html(run, tables, report))
