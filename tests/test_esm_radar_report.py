@@ -12,7 +12,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from trackfuse import harness
 from trackfuse.config import load
 from trackfuse.experiments.esm_radar import EXPERIMENT, model, report
-from trackfuse.plots.style import text_overlaps
+from trackfuse.plots.style import inside_canvas, text_overlaps
 from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS
 from trackfuse.rundata import RunData
 
@@ -41,13 +41,6 @@ def categorical(axis) -> bool:
     fmt = axis.get_major_formatter()
     texts = [fmt(v, i) for i, v in enumerate(axis.get_majorticklocs())]
     return any(re.search(r"[a-df-z]", t) for t in texts)
-
-
-def inside_canvas(fig) -> bool:
-    """Every drawn artist (titles, legends, labels) lies inside the saved figure."""
-    box = fig.get_tightbbox(fig.canvas.get_renderer())
-    return box.x0 >= -0.01 and box.y0 >= -0.01 and box.x1 <= fig.get_figwidth() + 0.01 \
-        and box.y1 <= fig.get_figheight() + 0.01
 
 
 def test_every_figure_of_every_shipped_config_is_drawn_cleanly(shipped_run):

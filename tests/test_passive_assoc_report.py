@@ -12,7 +12,7 @@ from trackfuse import harness
 from trackfuse.config import load
 from trackfuse.experiments.passive_assoc import EXPERIMENT, report
 from trackfuse.plots.algorithms import look
-from trackfuse.plots.style import text_overlaps
+from trackfuse.plots.style import inside_canvas, text_overlaps
 from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS
 from trackfuse.rundata import RunData
 
@@ -39,12 +39,6 @@ def drawn(fig):
     FigureCanvasAgg(fig)
     fig.canvas.draw()
     return fig
-
-
-def inside_canvas(fig) -> bool:
-    box = fig.get_tightbbox(fig.canvas.get_renderer())
-    return box.x0 >= -0.01 and box.y0 >= -0.01 and box.x1 <= fig.get_figwidth() + 0.01 \
-        and box.y1 <= fig.get_figheight() + 0.01
 
 
 def test_every_figure_of_every_shipped_config_is_drawn_or_explained(shipped_run):

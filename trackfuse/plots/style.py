@@ -153,3 +153,13 @@ def text_overlaps(fig, tolerance_px: float = 1.0) -> list[tuple[str, str]]:
             if dx > tolerance_px and dy > tolerance_px:
                 found.append((text_a, text_b))
     return found
+
+
+def inside_canvas(fig) -> bool:
+    """Whether every drawn artist (titles, legends, labels) lies inside the saved figure
+    (to 0.01 inch): a legend or label pushed off the canvas is cut when saved."""
+    if not hasattr(fig.canvas, "get_renderer"):
+        FigureCanvasAgg(fig)
+    box = fig.get_tightbbox(fig.canvas.get_renderer())
+    return (box.x0 >= -0.01 and box.y0 >= -0.01 and box.x1 <= fig.get_figwidth() + 0.01
+            and box.y1 <= fig.get_figheight() + 0.01)
