@@ -64,12 +64,19 @@ if TYPE_CHECKING:
 PREFIX = "stonesoup_"
 STONESOUP_FILTERS = ("ekf", "ukf", "pf")
 STONESOUP_ALGORITHMS = tuple(f"{PREFIX}pda/{f}" for f in STONESOUP_FILTERS)
+NO_CLUTTER_DENSITY = 1e-200
+"""Clutter density (1/rad^2) given to Stone Soup for none: the limit ``lambda -> 0+`` (all
+weight on a validated return). Not smaller: Stone Soup's hypothesis normalisation multiplies
+a ``Probability`` by a float, which leaves log space and overflows to NaN near 1e-300."""
 STONESOUP_PARAMS = (
     Param("stonesoup.particles", 500, "Particles of the Stone Soup particle filter "
           "(stonesoup_pda/pf)", "particles", kind=int, low=10, high=1_000_000),
     Param("stonesoup.process_noise", "ours", "Process noise of the Stone Soup filters: our "
           "discrete white-noise acceleration Q (paired with ours) or Stone Soup's "
           "ConstantVelocity (continuous white noise)", kind=str, choices=("ours", "cv")),
+    Param("stonesoup.jacobian", "numerical", "Measurement Jacobian of the Stone Soup EKF: its "
+          "own finite difference or the analytic one (docs/stonesoup.md)", kind=str,
+          choices=("numerical", "analytic")),
 )
 
 
@@ -103,6 +110,7 @@ class _Filter:
     random_state: np.random.RandomState
     resampler: ss.SeededSystematicResampler | None
     particles: int
+    exact_jacobian: bool
 
 
 def run_stonesoup(algorithm: str, params: dict[str, Any], sc: Scenario, b: Batch,
@@ -134,15 +142,16 @@ def _components(kind: str, params: dict[str, Any], sc: Scenario,
             [ConstantVelocity(float(params["filter.q"]))] * 3)
         transition.random_state = rs
     static = ss.transition_model(np.eye(6), np.zeros((6, 6)), rs)
+    exact = params["stonesoup.jacobian"] == "analytic"
     if kind == "ekf":
         return _Filter(ExtendedKalmanPredictor(transition), ExtendedKalmanUpdater(None),
-                       ExtendedKalmanPredictor(static), rs, None, 0)
+                       ExtendedKalmanPredictor(static), rs, None, 0, exact)
     if kind == "ukf":
         return _Filter(UnscentedKalmanPredictor(transition), UnscentedKalmanUpdater(None),
-                       UnscentedKalmanPredictor(static), rs, None, 0)
+                       UnscentedKalmanPredictor(static), rs, None, 0, exact)
     return _Filter(ParticlePredictor(transition), ParticleUpdater(None),
                    ParticlePredictor(static), rs, ss.SeededSystematicResampler(rs),
-                   int(params["stonesoup.particles"]))
+                   int(params["stonesoup.particles"]), exact)
 
 
 def _track(flt: _Filter, sc: Scenario, b: Batch, n: int, out: Estimates) -> None:
@@ -154,8 +163,8 @@ def _track(flt: _Filter, sc: Scenario, b: Batch, n: int, out: Estimates) -> None
     S = sc.R.shape[0]
     for k in range(1, sc.K + 1):
         when = ss.timestamp(sc.times[k])
-        models = [ss.angle_model(sc.sensor_pos[k, s], sc.R[s], flt.random_state)
-                  for s in range(S)]
+        models = [ss.angle_model(sc.sensor_pos[k, s], sc.R[s], flt.random_state,
+                                 flt.exact_jacobian) for s in range(S)]
         prediction = flt.predictor.predict(state, timestamp=when)
         gates = [ss.measurement_gate(flt.updater.predict_measurement(prediction, m))
                  for m in models]
@@ -194,5 +203,4 @@ def _returns(sc: Scenario, b: Batch, n: int, k: int, s: int, centre: np.ndarray,
         lam = sc.clutter_mean / float(gate_volume(S, sc.gamma))
     else:
         clutter, lam = draws, sc.window_density
-    # lambda = 0 (no clutter) is the limit lambda -> 0+: all weight on a validated return
-    return np.concatenate([target, clutter]), max(lam, float(np.finfo(float).tiny))
+    return np.concatenate([target, clutter]), max(lam, NO_CLUTTER_DENSITY)
