@@ -7,8 +7,10 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from trackfuse.interop import stonesoup as ss
@@ -163,3 +165,23 @@ def test_algorithm_random_state_depends_on_seed_trial_and_algorithm_only():
     for other in (first(2, 0, 2, "stonesoup_pda/pf"), first(1, 0, 3, "stonesoup_pda/pf"),
                   first(1, 0, 2, "stonesoup_pda/ekf")):
         assert not np.isin(ref, other).any()
+
+
+def test_the_stonesoup_plugin_example_runs_through_the_cli(tmp_path):
+    from conftest import ROOT, cli_env
+    example = ROOT / "examples" / "stonesoup_plugin"
+    env = cli_env()
+    env["PYTHONPATH"] = f"{example}:{env['PYTHONPATH']}"
+    proc = subprocess.run([sys.executable, "-m", "trackfuse", "run", "clutter.yaml", "--out",
+                           str(tmp_path), "--workers", "1", "--trials", "12", "--no-progress"],
+                          cwd=example, env=env, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    report = Path(proc.stdout.strip().splitlines()[-1].removeprefix("report: "))
+    assert (report.parent / "figures" / "lost.png").exists()
+    trials = pd.read_csv(report.parent / "trials.csv")
+    assert set(trials["algorithm"]) == {"pda", "nn"}
+    # paired: both trackers see the same detections; without clutter, PDA (no clutter
+    # density) and nearest neighbour make the same update on most trials
+    zero = trials[trials["clutter_mean"] == 0].pivot(index="trial", columns="algorithm",
+                                                     values="final_pos_sq_err_m2")
+    assert len(zero) == 12 and np.isclose(zero["pda"], zero["nn"], rtol=1e-9).mean() > 0.5
