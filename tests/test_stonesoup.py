@@ -60,12 +60,26 @@ def test_angle_model_measures_our_azimuth_and_elevation_and_our_gate():
     R = np.diag([0.01**2, 0.02**2])
     for _ in range(5):
         x, P = _state(rng)
-        model = ss.angle_model(sensor, R)
+        model = ss.angle_model(sensor, R, exact_jacobian=True)
         prior = ss.gaussian_prior(x, P, 0.0)
         centre, S = ss.measurement_gate(ExtendedKalmanUpdater(model).predict_measurement(prior))
         np.testing.assert_allclose(centre, azel(x[:3] - sensor), rtol=0, atol=1e-12)
         H = azel_jacobian(x[:3] - sensor)
-        np.testing.assert_allclose(S, H @ P @ H.T + R, rtol=1e-5)
+        np.testing.assert_allclose(S, H @ P @ H.T + R, rtol=1e-12, atol=1e-20)
+
+
+def test_stonesoup_finite_difference_jacobian_is_off_for_a_negative_coordinate():
+    """The reason for ElevationBearingExactJacobian (docs/stonesoup.md): Stone Soup's step
+    ``1e8 * spacing(x)`` is negative for ``x < 0`` and floored to 1e-8 m."""
+    x = np.array([-23838.8, 97849.1 + 2e3, 32922.6 + 2.5e3, 0.0, 0.0, 0.0])
+    sensor = np.array([1.5e5, 2e3, 2.5e3])
+    prior = ss.gaussian_prior(x, np.eye(6), 0.0)
+    exact = ss.angle_model(sensor, np.eye(2), exact_jacobian=True).jacobian(prior)
+    numerical = np.asarray(ss.angle_model(sensor, np.eye(2)).jacobian(prior), dtype=float)
+    np.testing.assert_allclose(exact, azel_jacobian(x[:3] - sensor)[::-1][:, ss.TO_STONESOUP],
+                               rtol=1e-12)
+    dx = ss.TO_STONESOUP.tolist().index(0)  # Stone Soup column of our x
+    assert np.abs(numerical[:, dx] / exact[:, dx] - 1).max() > 1e-3
 
 
 def test_detections_keep_order_and_put_elevation_first():
