@@ -6,9 +6,9 @@ Measures the batched implementation at clutter mean 10 for
 for the experiment's default ``in_gate`` clutter and for ``window`` clutter (a fixed box of
 +-0.03 rad about the line of sight, roughly the gate size, so about 10 false returns fall in
 the gate; those returns do not depend on the filter, so every tracker sees the same data).
-When Stone Soup is importable (the optional ``bench`` extra) it runs Stone Soup's EKF + PDA on
-the one-sensor window scenario, on exactly the same simulated returns, in this process, and
-prints the ratio.
+When Stone Soup is importable (the optional ``stonesoup`` extra) it runs Stone Soup's EKF + PDA
+(the ``stonesoup_pda/ekf`` algorithm, :mod:`trackfuse.interop.stonesoup`) on the one-sensor
+window scenario, on exactly the same simulated returns, in this process, and prints the ratio.
 
 Usage: ``python benchmarks/twin_sensor_speed.py [--trials 2000] [--batch 500] [--profile]``
 """
@@ -21,10 +21,7 @@ import io
 import pstats
 import time
 
-import numpy as np
-
 from trackfuse.experiments.twin_sensor import EXPERIMENT
-from trackfuse.experiments.twin_sensor.model import build_scenario, simulate
 from trackfuse.seeding import trial_streams
 
 
@@ -47,65 +44,9 @@ def ours(p: dict, trials: int, batch: int) -> float:
 
 
 def stonesoup_rate(p: dict, trials: int) -> float:
-    """Trials per second of Stone Soup's EKF + PDA on the same one-sensor window data."""
-    from datetime import datetime, timedelta
-
-    from stonesoup.dataassociator.probability import PDA
-    from stonesoup.functions import gm_reduce_single
-    from stonesoup.hypothesiser.probability import PDAHypothesiser
-    from stonesoup.models.measurement.nonlinear import CartesianToElevationBearing
-    from stonesoup.models.transition.linear import (
-        CombinedLinearGaussianTransitionModel,
-        ConstantVelocity,
-    )
-    from stonesoup.predictor.kalman import ExtendedKalmanPredictor
-    from stonesoup.types.array import StateVectors
-    from stonesoup.types.detection import Detection
-    from stonesoup.types.state import GaussianState
-    from stonesoup.types.track import Track
-    from stonesoup.types.update import GaussianStateUpdate
-    from stonesoup.updater.kalman import ExtendedKalmanUpdater
-
-    sc = build_scenario(p)
-    order = [0, 3, 1, 4, 2, 5]  # Stone Soup orders states (x, vx, y, vy, z, vz)
-    transition = CombinedLinearGaussianTransitionModel(
-        [ConstantVelocity(float(p["filter.q"]))] * 3)
-    predictor = ExtendedKalmanPredictor(transition)
-    R = np.diag(np.diag(sc.R[0])[::-1])  # (elevation, bearing)
-    density = sc.window_density
-    data = [simulate(sc, trial_streams(1, 0, t)) for t in range(trials)]
-    t0 = datetime(2005, 10, 1)
-    start = time.perf_counter()
-    for d in data:
-        prior = GaussianState(d.x0[order][:, None], sc.P0[np.ix_(order, order)], timestamp=t0)
-        track = Track([prior])
-        offset = 0
-        for k in range(1, sc.K + 1):
-            when = t0 + timedelta(seconds=float(sc.times[k]))
-            model = CartesianToElevationBearing(ndim_state=6, mapping=(0, 2, 4), noise_covar=R,
-                                                translation_offset=sc.sensor_pos[k, 0][:, None])
-            updater = ExtendedKalmanUpdater(model)
-            hyp = PDAHypothesiser(predictor, updater, clutter_spatial_density=density,
-                                  prob_detect=float(sc.P_D[0]), prob_gate=sc.P_G)
-            dets = set()
-            if d.detected[k - 1, 0]:
-                dets.add(Detection(d.z_target[k - 1, 0, ::-1][:, None], timestamp=when,
-                                   measurement_model=model))
-            n = int(d.n_clutter[k - 1, 0])
-            for z in d.clutter[offset:offset + n]:
-                dets.add(Detection(z[::-1][:, None], timestamp=when, measurement_model=model))
-            offset += n
-            hypotheses = PDA(hyp).associate({track}, dets, when)[track]
-            means, covars, weights = [], [], []
-            for h in hypotheses:
-                state = h.prediction if not h else updater.update(h)
-                means.append(state.state_vector)
-                covars.append(state.covar)
-                weights.append(float(h.probability))
-            mean, covar = gm_reduce_single(StateVectors(means), np.stack(covars, axis=2),
-                                           np.asarray(weights))
-            track.append(GaussianStateUpdate(mean, covar, hypotheses, when))
-    return trials / (time.perf_counter() - start)
+    """Trials per second of Stone Soup's EKF + PDA (``stonesoup_pda/ekf``, run through
+    ``trackfuse.interop.stonesoup``) on the same data as ``ours``; per-trial, so no batching."""
+    return ours({**p, "algorithms": ["stonesoup_pda/ekf"]}, trials, trials)
 
 
 def main() -> None:
@@ -126,7 +67,7 @@ def main() -> None:
     try:
         import stonesoup  # noqa: F401
     except ImportError:
-        print("  Stone Soup not installed (pip install '.[bench]'): comparison skipped")
+        print("  Stone Soup not installed (pip install '.[stonesoup]'): comparison skipped")
     else:
         ss = stonesoup_rate(params(1, "mspda_parallel/ekf", "window"), args.stonesoup_trials)
         mine = rates["(a) 1 sensor, EKF + PDAF", "window"]

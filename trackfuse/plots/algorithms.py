@@ -66,6 +66,11 @@ LOOKS: dict[str, Look] = {
     "pga_repair_joint": Look("PGA + re-pair, joint evaluation", GREYS[1], "<", "variant"),
     "pga_staged": Look("PGA, staged, no re-pair", GREYS[2], ">", "variant"),
     "exact": Look("exact optimum (assignment)", BLACK, "", "reference"),
+    # Stone Soup's filters in twin_sensor (docs/stonesoup.md): one look per filter
+    "stonesoup_pda/ekf": Look("Stone Soup EKF + PDA", SKY, "v", "paper_baseline"),
+    "stonesoup_pda/ukf": Look("Stone Soup UKF + PDA", ORANGE, "D", "paper_baseline"),
+    "stonesoup_pda/pf": Look("Stone Soup particle filter + PDA", "#882255", "P",
+                             "paper_baseline"),
 }
 
 FILTER_LABELS = {"mgekf": "MGEKF", "ekf": "EKF"}
@@ -73,6 +78,8 @@ FILTER_LABELS = {"mgekf": "MGEKF", "ekf": "EKF"}
 
 def look(name: str) -> Look:
     """The look of ``name``; ``association/filter`` names take the association's look."""
+    if name in LOOKS:  # a look of its own for one association/filter pair
+        return LOOKS[name]
     base, _, filt = name.partition("/")
     found = LOOKS.get(base, Look(base, GREYS[1], ".", "variant"))
     if filt:

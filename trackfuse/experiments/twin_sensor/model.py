@@ -86,6 +86,13 @@ import numpy as np
 
 from trackfuse.chi2 import chi2_quantile
 from trackfuse.experiments.base import Metric, Param
+from trackfuse.experiments.twin_sensor.stonesoup import (
+    STONESOUP_ALGORITHMS,
+    STONESOUP_PARAMS,
+    Estimates,
+    is_stonesoup,
+    run_stonesoup,
+)
 from trackfuse.rowtable import RowTable
 from trackfuse.seeding import TrialStreams
 from trackfuse.tracking.initialization import los_prior_covariance, range_cue_sd
@@ -175,7 +182,7 @@ PARAMS = (
     Param("pda.density", "parametric", "Clutter density: true value or m_s / V_s", kind=str,
           choices=("parametric", "nonparametric")),
     Param("algorithms", list(ALGORITHMS), "Algorithm variants run on the same data, as "
-          "association/filter", kind=list, choices=ALGORITHMS),
+          "association/filter", kind=list, choices=ALGORITHMS + STONESOUP_ALGORITHMS),
     Param("loss.window", 3, "Consecutive scans with the target outside every gate that mean "
           "a lost track (gate rule)", "scans", kind=int, low=1, high=1000),
     Param("loss.angle_sigmas", 3.0, "Angle rule: a scan counts as off-target when the "
@@ -185,6 +192,7 @@ PARAMS = (
           "(angle rule)", "scans", kind=int, low=1, high=1000),
     Param("loss.nees_quantile", 0.999, "Chi-square (3 dof) quantile above which the final "
           "position NEES marks the filter inconsistent", "1", low=0.5, high=0.999999),
+    *STONESOUP_PARAMS,
 )
 
 
@@ -471,37 +479,78 @@ def run_filter(sc: Scenario, b: Batch, options: PDAOptions,
     X = b.x0.copy()
     P = np.broadcast_to(sc.P0, (N, 6, 6)).copy()
     out = {k: np.empty((N, sc.K)) for k in METRICS}
-    outside_run, off_run = np.zeros(N, dtype=int), np.zeros(N, dtype=int)
-    lost_gate, lost_angle = np.zeros(N, dtype=bool), np.zeros(N, dtype=bool)
-    diverged = np.zeros(N, dtype=bool)
+    status = TrackStatus.start(N)
     for k in range(1, sc.K + 1):
         Xp = X @ sc.F.T
         Pp = sc.F @ P @ sc.F.T + sc.Q_filter
         returns, inside = _scan_returns(sc, b, k, Xp, Pp)
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             X, P, m = pda_update(Xp, Pp, returns, options)
-        P = 0.5 * (P + P.transpose(0, 2, 1))
-        diverged |= ~(np.isfinite(X).all(axis=1) & np.isfinite(P).all(axis=(1, 2)))
-        X[diverged], P[diverged] = np.nan, np.nan
-        outside_run = np.where(inside, 0, outside_run + 1)
-        lost_gate |= (outside_run >= rules.gate_window) | diverged
-        off = angle_off_target(X, sc.sensor_pos[k, 0], b.los[:, k - 1, 0], sc.noise_sd[0],
-                               rules.angle_sigmas)
-        off_run = np.where(off, off_run + 1, 0)
-        lost_angle |= (off_run >= rules.angle_window) | diverged
-        x_true, e = b.x_true[:, k], X - b.x_true[:, k]
-        p_plat = sc.platform[k]
-        range_err = (np.linalg.norm(X[:, :3] - p_plat, axis=1)
-                     - np.linalg.norm(x_true[:, :3] - p_plat, axis=1))
-        nees_pos = _nees(e[:, :3], P[:, :3, :3])
-        with np.errstate(invalid="ignore"):
-            inconsistent = (nees_pos > rules.nees_limit) | diverged
-        scan = {"range_err_m": range_err, "range_sq_err_m2": range_err**2,
-                "pos_sq_err_m2": (e[:, :3] ** 2).sum(axis=1), "nees": _nees(e, P),
-                "nees_pos": nees_pos, "n_valid": m.mean(axis=1), "lost_gate": lost_gate,
-                "lost_angle": lost_angle, "inconsistent_nees": inconsistent}
-        for key, value in scan.items():
-            out[key][:, k - 1] = value
+        X, P = score_scan(sc, b, k, X, P, m, inside, rules, status, out)
+    return out
+
+
+@dataclass
+class TrackStatus:
+    """Running loss state of one algorithm over ``N`` trials, carried from scan to scan:
+    consecutive scans outside every gate and off target (``(N,)`` int), the permanent loss
+    flags and the divergence flag (``(N,)`` bool)."""
+
+    outside_run: np.ndarray
+    off_run: np.ndarray
+    lost_gate: np.ndarray
+    lost_angle: np.ndarray
+    diverged: np.ndarray
+
+    @classmethod
+    def start(cls, N: int) -> TrackStatus:
+        """The status before the first scan."""
+        return cls(np.zeros(N, dtype=int), np.zeros(N, dtype=int), np.zeros(N, dtype=bool),
+                   np.zeros(N, dtype=bool), np.zeros(N, dtype=bool))
+
+
+def score_scan(sc: Scenario, b: Batch, k: int, X: np.ndarray, P: np.ndarray, m: np.ndarray,
+               inside: np.ndarray, rules: LossRules, status: TrackStatus,
+               out: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Score scan ``k`` of one algorithm: posterior ``X: (N, 6)``, ``P: (N, 6, 6)``, validated
+    returns ``m: (N, S)``, target-in-gate ``inside: (N,)``. Writes column ``k - 1`` of every
+    metric in ``out``, updates ``status`` and returns ``X, P`` (NaN where diverged)."""
+    P = 0.5 * (P + P.transpose(0, 2, 1))
+    status.diverged |= ~(np.isfinite(X).all(axis=1) & np.isfinite(P).all(axis=(1, 2)))
+    X[status.diverged], P[status.diverged] = np.nan, np.nan
+    status.outside_run = np.where(inside, 0, status.outside_run + 1)
+    status.lost_gate |= (status.outside_run >= rules.gate_window) | status.diverged
+    off = angle_off_target(X, sc.sensor_pos[k, 0], b.los[:, k - 1, 0], sc.noise_sd[0],
+                           rules.angle_sigmas)
+    status.off_run = np.where(off, status.off_run + 1, 0)
+    status.lost_angle |= (status.off_run >= rules.angle_window) | status.diverged
+    x_true, e = b.x_true[:, k], X - b.x_true[:, k]
+    p_plat = sc.platform[k]
+    range_err = (np.linalg.norm(X[:, :3] - p_plat, axis=1)
+                 - np.linalg.norm(x_true[:, :3] - p_plat, axis=1))
+    nees_pos = _nees(e[:, :3], P[:, :3, :3])
+    with np.errstate(invalid="ignore"):
+        inconsistent = (nees_pos > rules.nees_limit) | status.diverged
+    scan = {"range_err_m": range_err, "range_sq_err_m2": range_err**2,
+            "pos_sq_err_m2": (e[:, :3] ** 2).sum(axis=1), "nees": _nees(e, P),
+            "nees_pos": nees_pos, "n_valid": m.mean(axis=1), "lost_gate": status.lost_gate,
+            "lost_angle": status.lost_angle, "inconsistent_nees": inconsistent}
+    for key, value in scan.items():
+        out[key][:, k - 1] = value
+    return X, P
+
+
+def score_estimates(sc: Scenario, b: Batch, est: Estimates,
+                    rules: LossRules) -> dict[str, np.ndarray]:
+    """Every metric of :data:`METRICS` as ``(N, K)`` for another library's per-scan
+    estimates (:class:`~trackfuse.experiments.twin_sensor.stonesoup.Estimates`), scored
+    exactly as :func:`run_filter` scores ours."""
+    N = b.x0.shape[0]
+    out = {k: np.empty((N, sc.K)) for k in METRICS}
+    status = TrackStatus.start(N)
+    for k in range(1, sc.K + 1):
+        score_scan(sc, b, k, est.X[:, k - 1].copy(), est.P[:, k - 1].copy(),
+                   est.n_valid[:, k - 1], est.inside[:, k - 1], rules, status, out)
     return out
 
 
@@ -533,9 +582,14 @@ def run_batch(params: dict[str, Any], streams: Sequence[TrialStreams]) -> RowTab
     for name in names:
         assoc, filt = name.split("/")
         t0 = time.process_time()
-        options = PDAOptions(assoc, FILTERS[filt], str(params["pda.joint_cov"]),
-                             str(params["pda.density"]), str(params["filter.mg_at"]), sc.P_G)
-        results.append(run_filter(sc, batch, options, rules))
+        if is_stonesoup(name):  # Stone Soup's filters, scored by our metrics
+            results.append(score_estimates(
+                sc, batch, run_stonesoup(name, params, sc, batch, streams), rules))
+        else:
+            options = PDAOptions(assoc, FILTERS[filt], str(params["pda.joint_cov"]),
+                                 str(params["pda.density"]), str(params["filter.mg_at"]),
+                                 sc.P_G)
+            results.append(run_filter(sc, batch, options, rules))
         cpu.append((time.process_time() - t0) / (N * K))
     A = len(names)
     columns: dict[str, np.ndarray] = {

@@ -1,0 +1,258 @@
+"""Stone Soup adapter: our simulated angle returns in, our estimate arrays out.
+
+trackfuse and Stone Soup describe the same things in different orders and types:
+
+====================  =================================  ====================================
+quantity              trackfuse                          Stone Soup
+====================  =================================  ====================================
+CV state              ``(x, y, z, vx, vy, vz)`` ``(6,)``  ``(x, vx, y, vy, z, vz)`` ``(6, 1)``
+angle return          ``(azimuth, elevation)`` rad       ``(Elevation, Bearing)`` ``(2, 1)``
+angle noise ``R``     ``diag(s_az^2, s_el^2)``           ``diag(s_el^2, s_az^2)``
+sensor position       ``sensor_pos[k, s]: (3,)`` m        ``translation_offset: (3, 1)``
+time                  ``times[k]`` s from 0              ``datetime``
+====================  =================================  ====================================
+
+The functions here convert between them, so the same simulated returns (target return,
+clutter, detections) reach a Stone Soup tracker and ours, and Stone Soup track states come
+back as our ``(6,)`` estimates and ``(6, 6)`` covariances for our metric rows. Elevation is
+``asin(dz / r) = atan2(dz, rh)`` in both (``trackfuse.tracking.sensors.azel``).
+
+Randomness: Stone Soup draws process noise for particles (transition model), measurement
+noise for particle measurement predictions (measurement model) and resampling offsets
+(``stonesoup.resampler``) from ``numpy.random``'s global state unless a model is given its
+own ``random_state``. :func:`algorithm_random_state` derives a dedicated generator from a
+trial's common stream; giving it to every model and to :class:`SeededSystematicResampler`
+makes a Stone Soup particle filter a pure function of the trial, whatever the executor,
+worker count, thread or resume (``docs/stonesoup.md``).
+
+Stone Soup is an optional extra (``pip install 'trackfuse[stonesoup]'``): this module imports
+without it, and :func:`require_stonesoup` raises a one-line error naming the extra.
+"""
+
+from __future__ import annotations
+
+import zlib
+from collections.abc import Sequence
+from datetime import datetime, timedelta
+
+import numpy as np
+from scipy.special import logsumexp
+
+from trackfuse.tracking.sensors import azel_jacobian
+
+try:
+    from stonesoup.models.measurement.nonlinear import CartesianToElevationBearing
+    from stonesoup.models.transition.linear import LinearGaussianTimeInvariantTransitionModel
+    from stonesoup.types.array import CovarianceMatrix, StateVector, StateVectors
+    from stonesoup.types.detection import Detection
+    from stonesoup.types.state import GaussianState, ParticleState
+    from stonesoup.types.update import Update
+except ModuleNotFoundError as error:  # the optional extra is not installed
+    if not (error.name or "").startswith("stonesoup"):
+        raise
+    STONESOUP_MISSING: str | None = (
+        "Stone Soup is not installed: pip install 'trackfuse[stonesoup]' (needed by the "
+        "stonesoup_* algorithms and trackfuse.interop.stonesoup)")
+else:
+    STONESOUP_MISSING = None
+
+    class ElevationBearingExactJacobian(CartesianToElevationBearing):
+        """``CartesianToElevationBearing`` with the analytic Jacobian
+        (:func:`trackfuse.tracking.sensors.azel_jacobian`; no rotation offset).
+
+        Stone Soup's default Jacobian is a forward difference with step
+        ``1e8 * numpy.spacing(x)``, floored at ``1e-8``: for a negative or near-zero
+        coordinate the step is 1e-8 m, and at 100 km ranges the angle difference it makes is
+        about a hundred floating-point spacings, so that column is about 1 % wrong
+        (``docs/stonesoup.md``).
+        """
+
+        def jacobian(self, state, **kwargs) -> np.ndarray:
+            """``H: (2, 6)`` (rad/m), rows (elevation, bearing), Stone Soup state order."""
+            d = (np.asarray(state.state_vector, dtype=float)[list(self.mapping), 0]
+                 - np.asarray(self.translation_offset, dtype=float)[:, 0])
+            return azel_jacobian(d)[::-1][:, TO_STONESOUP]
+
+TO_STONESOUP = np.array([0, 3, 1, 4, 2, 5])
+"""Stone Soup state component ``i`` is our component ``TO_STONESOUP[i]``."""
+FROM_STONESOUP = np.argsort(TO_STONESOUP)
+"""Our state component ``j`` is Stone Soup's component ``FROM_STONESOUP[j]``."""
+EPOCH = datetime(2000, 1, 1)
+"""The ``datetime`` of our ``t = 0`` (any fixed instant: only differences matter)."""
+_STREAM_KEY = 0x5705  # spawn-key branch of Stone Soup's randomness (far above spawn counters)
+
+
+def require_stonesoup() -> None:
+    """Raise ``ImportError`` with a one-line message when Stone Soup is not installed."""
+    if STONESOUP_MISSING is not None:
+        raise ImportError(STONESOUP_MISSING)
+
+
+def timestamp(t: float) -> datetime:
+    """The Stone Soup timestamp of our time ``t`` (s)."""
+    return EPOCH + timedelta(seconds=float(t))
+
+
+def state_to_stonesoup(x: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Our ``x: (6,)``, ``P: (6, 6)`` reordered to Stone Soup's ``(6, 1)``, ``(6, 6)``."""
+    return x[TO_STONESOUP][:, None], P[np.ix_(TO_STONESOUP, TO_STONESOUP)]
+
+
+def state_from_stonesoup(x: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Stone Soup's ``x: (6, 1)`` or ``(6,)``, ``P: (6, 6)`` back in our order."""
+    x = np.asarray(x, dtype=float).reshape(6)
+    return x[FROM_STONESOUP], np.asarray(P, dtype=float)[np.ix_(FROM_STONESOUP, FROM_STONESOUP)]
+
+
+def estimate(state) -> tuple[np.ndarray, np.ndarray]:
+    """Mean ``(6,)`` and covariance ``(6, 6)`` of a Stone Soup Gaussian or particle state,
+    in our order (a particle state gives its weighted mean and covariance)."""
+    return state_from_stonesoup(state.mean, state.covar)
+
+
+def gaussian_prior(x: np.ndarray, P: np.ndarray, t: float) -> GaussianState:
+    """Stone Soup Gaussian state from our ``x: (6,)``, ``P: (6, 6)`` at time ``t`` (s)."""
+    xs, Ps = state_to_stonesoup(x, P)
+    return GaussianState(xs, Ps, timestamp=timestamp(t))
+
+
+def particle_prior(x: np.ndarray, P: np.ndarray, t: float, count: int,
+                   random_state: np.random.RandomState) -> ParticleState:
+    """``count`` equally weighted particles drawn from ``N(x, P)`` (our order) at ``t`` (s)."""
+    draws = x[:, None] + np.linalg.cholesky(P) @ random_state.standard_normal((6, count))
+    return ParticleState(StateVectors(draws[TO_STONESOUP]),
+                         log_weight=np.full(count, -np.log(count)), timestamp=timestamp(t))
+
+
+def transition_model(F: np.ndarray, Q: np.ndarray,
+                     random_state: np.random.RandomState | None = None):
+    """Stone Soup linear-Gaussian transition with our ``F, Q: (6, 6)`` for one scan period.
+
+    Time-invariant: every prediction applies one period, so predict only at scan times.
+    """
+    model = LinearGaussianTimeInvariantTransitionModel(
+        transition_matrix=F[np.ix_(TO_STONESOUP, TO_STONESOUP)],
+        covariance_matrix=Q[np.ix_(TO_STONESOUP, TO_STONESOUP)])
+    model.random_state = random_state
+    return model
+
+
+def angle_model(sensor: np.ndarray, R: np.ndarray,
+                random_state: np.random.RandomState | None = None,
+                exact_jacobian: bool = False):
+    """Stone Soup azimuth/elevation model of a sensor at ``sensor: (3,)`` (m) with our
+    ``R: (2, 2)`` (rad^2, azimuth first); ``exact_jacobian`` gives it the analytic Jacobian
+    (:class:`ElevationBearingExactJacobian`) instead of Stone Soup's finite difference."""
+    kind = ElevationBearingExactJacobian if exact_jacobian else CartesianToElevationBearing
+    model = kind(ndim_state=6, mapping=(0, 2, 4),
+                 noise_covar=R[::-1, ::-1].copy(), translation_offset=StateVector(sensor))
+    model.random_state = random_state
+    return model
+
+
+def detections(z: np.ndarray, t: float, model) -> list:
+    """Stone Soup detections of the angle returns ``z: (M, 2)`` (rad, azimuth first) at ``t``
+    (s), in the order given. A list, not a set: a set's order follows memory addresses, and
+    the order fixes the floating-point sums of the association weights."""
+    when = timestamp(t)
+    return [Detection(StateVector(zi[::-1]), timestamp=when, measurement_model=model)
+            for zi in np.asarray(z, dtype=float).reshape(-1, 2)]
+
+
+def measurement_gate(prediction) -> tuple[np.ndarray, np.ndarray]:
+    """Centre ``(2,)`` (rad, azimuth first) and innovation covariance ``S: (2, 2)`` of a
+    Stone Soup measurement prediction (``updater.predict_measurement``; for particles, their
+    weighted mean and covariance)."""
+    centre = np.asarray(prediction.mean, dtype=float).reshape(2)[::-1].copy()
+    return centre, np.asarray(prediction.covar, dtype=float)[::-1, ::-1].copy()
+
+
+def algorithm_random_state(common: np.random.Generator, algorithm: str) -> np.random.RandomState:
+    """A ``RandomState`` for Stone Soup components, from a trial's common stream.
+
+    A child of the stream's seed sequence under a fixed spawn-key branch and the algorithm's
+    name: a function of (root seed, trial, algorithm) only, independent of how often the
+    stream has been used or spawned, and it leaves the trial's own draws unchanged.
+    """
+    seq = common.bit_generator.seed_seq
+    key = (*seq.spawn_key, _STREAM_KEY, zlib.crc32(algorithm.encode()))
+    return np.random.RandomState(np.random.PCG64(np.random.SeedSequence(seq.entropy,
+                                                                        spawn_key=key)))
+
+
+class SeededSystematicResampler:
+    """Systematic resampling (Kitagawa 1996) drawing from its own ``random_state``.
+
+    A drop-in for ``stonesoup.resampler.particle.SystematicResampler`` (same
+    ``resample(particles, nparts=None)`` call), which draws its offset from the global
+    ``numpy.random`` state. Resamples only when the effective sample size ``1 / sum w^2``
+    falls below ``ess_fraction`` times the particle count (``ess_fraction = 1``: always).
+    """
+
+    def __init__(self, random_state: np.random.RandomState, ess_fraction: float = 0.5):
+        self.random_state = random_state
+        self.ess_fraction = ess_fraction
+
+    def resample(self, particles, nparts: int | None = None):
+        """The resampled particle state (or ``particles`` unchanged when the ESS is high)."""
+        n = len(particles) if nparts is None else nparts
+        log_w = np.asarray(particles.log_weight, dtype=float)
+        weights = np.exp(log_w - logsumexp(log_w))
+        if nparts is None and 1.0 / np.sum(weights**2) >= self.ess_fraction * len(weights):
+            return particles
+        cdf = np.cumsum(weights)
+        cdf[-1] = 1.0
+        u = (self.random_state.uniform() + np.arange(n)) / n
+        resampled = particles[np.searchsorted(cdf, u)]
+        resampled.log_weight = np.full(n, -np.log(n))
+        return resampled
+
+
+def gaussian_pda_update(hypotheses: Sequence, updater):
+    """PDA update of a Gaussian (Kalman-family) prediction: every hypothesis updated by
+    ``updater`` (the missed detection keeps the prediction), then the mixture collapsed with
+    the hypothesis probabilities ``beta_h``::
+
+        x = sum_h beta_h x_h,    P = sum_h beta_h [P_h + (x_h - x)(x_h - x)']
+
+    as ``stonesoup.updater.probability.PDAUpdater(gm_method=True)`` does, for any updater
+    (EKF, UKF). :func:`collapse` evaluates ``stonesoup.functions.gm_reduce_single``'s sums in
+    floats: fed ``Probability`` weights, Stone Soup's own sums run on Python objects and took
+    half the time of a Stone Soup EKF + PDA scan.
+    """
+    states = [updater.update(h) if h else h.prediction for h in hypotheses]
+    beta = np.array([float(h.probability) for h in hypotheses])
+    mean, covar = collapse(np.stack([np.asarray(s.state_vector, dtype=float)[:, 0]
+                                     for s in states]),
+                           np.stack([np.asarray(s.covar, dtype=float) for s in states]), beta)
+    prediction = hypotheses[0].prediction
+    return Update.from_state(prediction, StateVector(mean), CovarianceMatrix(covar),
+                             hypothesis=hypotheses, timestamp=prediction.timestamp)
+
+
+def collapse(x: np.ndarray, P: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Moment-matched single Gaussian ``(n,)``, ``(n, n)`` of the mixture of means
+    ``x: (H, n)``, covariances ``P: (H, n, n)`` and weights ``(H,)`` (normalised here)."""
+    w = weights / weights.sum()
+    mean = w @ x
+    d = x - mean
+    return mean, np.einsum("h,hij->ij", w, P) + (w[:, None] * d).T @ d
+
+
+def particle_pda_update(hypotheses: Sequence, updater, resampler: SeededSystematicResampler):
+    """PDA update of a particle prediction: particle weights ``sum_h beta_h w_h``, with
+    ``w_h`` the weights updated by ``updater`` (a ``ParticleUpdater`` without resampler) on
+    hypothesis ``h``'s detection (the prior weights for the missed detection), then
+    ``resampler``. With exact ``beta_h`` this is Bayes' rule for the PDA likelihood
+    ``(1 - P_D P_G) + P_D / lambda sum_j p(z_j | x)``; Stone Soup's ``PDAHypothesiser``
+    gives ``beta_h`` from a Gaussian fit of the particle measurement prediction."""
+    prediction = hypotheses[0].prediction
+    terms = []
+    for h in hypotheses:
+        log_w = updater.update(h).log_weight if h else prediction.log_weight
+        terms.append(h.probability.log_value + np.asarray(log_w, dtype=float))
+    combined = logsumexp(np.stack(terms), axis=0)
+    combined -= logsumexp(combined)
+    update = Update.from_state(prediction, log_weight=combined, hypothesis=hypotheses,
+                               timestamp=prediction.timestamp)
+    return resampler.resample(update)
