@@ -106,7 +106,7 @@ def test_manifest_records_the_repository_run_from_and_the_executor_used(write_co
     assert manifest["git"] == {"repository": str(repo.resolve()), "commit": head,
                                "dirty": True}
     assert manifest["executor"] == "serial" and manifest["executor_requested"] == "process"
-    assert manifest["versions"]["matplotlib"]
+    assert manifest["versions"]["matplotlib"] and "stonesoup" in manifest["versions"]
     assert manifest["code_fingerprint"]["sha256"] == code_fingerprint(GAUSSIAN).digest
 
 

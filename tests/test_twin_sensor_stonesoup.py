@@ -4,6 +4,7 @@ across executors, worker counts, resume and numpy's global random state."""
 
 from __future__ import annotations
 
+import importlib.util
 import json
 
 import numpy as np
@@ -11,7 +12,7 @@ import pytest
 
 pytest.importorskip("stonesoup")
 
-from trackfuse.config import build  # noqa: E402
+from trackfuse.config import ConfigError, build  # noqa: E402
 from trackfuse.experiments.twin_sensor import EXPERIMENT, model  # noqa: E402
 from trackfuse.experiments.twin_sensor.stonesoup import STONESOUP_ALGORITHMS  # noqa: E402
 from trackfuse.results import RunFolder  # noqa: E402
@@ -109,3 +110,16 @@ def test_rows_identical_across_executors_workers_and_resume(tmp_path, monkeypatc
     assert 0 < resumed.computed_trials < 8
     assert (resumed.folder / "trials.csv").read_bytes() == reference
     assert json.loads((resumed.folder / "manifest.json").read_text())["sessions"] == 2
+
+
+def test_a_stonesoup_algorithm_without_stonesoup_is_one_config_error(monkeypatch):
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a: None if name == "stonesoup" else real(name, *a))
+    raw = {"experiment": "twin_sensor", "params": {"algorithms": ["mspda_parallel/ekf"]},
+           "sweep": {"algorithms": [["mspda_parallel/ekf"], ["stonesoup_pda/ukf"]]}}
+    with pytest.raises(ConfigError, match=r"sweep\.algorithms: stonesoup_pda/ukf needs "
+                                          r"Stone Soup.*pip install 'trackfuse\[stonesoup\]'"):
+        build(raw, "cfg.yaml")
+    raw["sweep"] = {}
+    assert build(raw, "cfg.yaml").params["algorithms"] == ["mspda_parallel/ekf"]

@@ -345,7 +345,8 @@ class Runner:
     def _manifest(self, status: RunStatus, session: _Session, failed: int = 0) -> dict[str, Any]:
         versions = {"trackfuse": trackfuse.__version__, "python": platform.python_version(),
                     "numpy": np.__version__, "scipy": scipy.__version__,
-                    "pandas": pd.__version__, "matplotlib": _version("matplotlib")}
+                    "pandas": pd.__version__, "matplotlib": _version("matplotlib"),
+                    "stonesoup": _version("stonesoup")}  # None when not installed
         previous = session.previous or {}
         return {
             "status": status,

@@ -120,6 +120,9 @@ class Experiment:
     run_batch: Callable[[Params, Sequence[TrialStreams]], list[list[Row]]] | None = None
     row_keys: tuple[str, ...] = ("algorithm",)
     batch_size: int = 25
+    #: Optional last check of a config: ``check(params, sweep)`` returns ``(key, problem)``
+    #: for a choice this machine cannot run (a missing optional dependency), else ``None``.
+    check: Callable[[Params, Mapping[str, list[Any]]], tuple[str, str] | None] | None = None
     schema: dict[str, Param] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:

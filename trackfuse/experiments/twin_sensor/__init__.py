@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from trackfuse.experiments.base import Experiment, FigureSpec
 from trackfuse.experiments.twin_sensor.model import PARAMS, ROW_METRICS, run_batch, run_trial
+from trackfuse.experiments.twin_sensor.stonesoup import missing_stonesoup
 
 FIGURES = {
     "loss_vs_clutter": FigureSpec(
@@ -51,6 +52,7 @@ EXPERIMENT = Experiment(
     figures=FIGURES,
     row_keys=("algorithm", "scan"),
     batch_size=100,
+    check=missing_stonesoup,
 )
 
 __all__ = ["EXPERIMENT", "FIGURES"]

@@ -32,7 +32,8 @@ any executor and after resume.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import importlib.util
+from collections.abc import Mapping, Sequence
 from contextlib import suppress
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -83,6 +84,19 @@ STONESOUP_PARAMS = (
 def is_stonesoup(algorithm: str) -> bool:
     """Whether ``algorithm`` (``association/filter``) names a Stone Soup algorithm."""
     return algorithm.startswith(PREFIX)
+
+
+def missing_stonesoup(params: Mapping[str, Any],
+                      sweep: Mapping[str, list[Any]]) -> tuple[str, str] | None:
+    """``("algorithms", problem)`` when a Stone Soup algorithm is configured (in ``params``
+    or any swept value) but Stone Soup is not installed; else ``None``."""
+    chosen = [*params.get("algorithms", []), *(a for value in sweep.get("algorithms", [])
+                                              for a in value)]
+    wanted = sorted({a for a in chosen if is_stonesoup(a)})
+    if wanted and importlib.util.find_spec("stonesoup") is None:
+        return "algorithms", (f"{wanted[0]} needs Stone Soup, which is not installed; "
+                              "install it with: pip install 'trackfuse[stonesoup]'")
+    return None
 
 
 @dataclass(frozen=True)
