@@ -76,6 +76,7 @@ from trackfuse.reported import TWIN_SENSOR
 from trackfuse.reports import HEADLINE_COLUMNS
 from trackfuse.rundata import RunData, swept_keys
 from trackfuse.stats import nees_band, t_interval, wilson_interval
+from trackfuse.tracking.pda import METHODS
 
 SCHEMA = {p.key: p for p in PARAMS}
 CLAIM = TWIN_SENSOR.result("loss rate up to 9 false returns")
@@ -172,6 +173,12 @@ def _main_algorithms(algorithms: Sequence[str]) -> list[str]:
     """The Fig. 1 main curves: the paper's method and ours (MGEKF), else the emphasised."""
     wanted = [n for n in ("paper_approx/mgekf", "mspda_parallel/mgekf") if n in algorithms]
     return wanted or [n for n in algorithms if look(n).emphasised] or list(algorithms[:2])
+
+
+def _other_filters(algorithms: Sequence[str]) -> list[str]:
+    """Algorithms from outside this package (Stone Soup's filters), drawn beside ours
+    wherever our headline pair is."""
+    return [a for a in algorithms if a.split("/")[0] not in METHODS]
 
 
 def _emphasis_last(names: Sequence[str]) -> list[str]:
@@ -592,7 +599,8 @@ def _final_figure(run: RunData) -> Figure | str:
     facets = _facets(run, last, x_key, min_levels=2)
     if isinstance(facets, str):
         return facets
-    names = _headline_pair(run.params["algorithms"])
+    algorithms = run.params["algorithms"]
+    names = list(dict.fromkeys(_headline_pair(algorithms) + _other_filters(algorithms)))
     title = [("Paper Fig. 2 quantified: final" if x_key == "clutter.mean" else "Final")
              + f" range RMSE ({_runs(last)} runs per point)",
              _context(run, "95 % bootstrap intervals")]
@@ -651,6 +659,8 @@ def _drawers(run: RunData) -> dict[str, Callable[[], Figure | str]]:
 
     by_filter = [(f"{label} filters", [a for a in algorithms if a.endswith(f"/{suffix}")],
                   MAIN_RULE) for suffix, label in (("mgekf", "MGEKF"), ("ekf", "EKF"))]
+    by_filter.append(("other filters", [a for a in _other_filters(algorithms)
+                                        if not a.endswith(("/mgekf", "/ekf"))], MAIN_RULE))
     index_reason = "target.q is not swept"
     return {
         "loss_vs_clutter": loss([("", _main_algorithms(algorithms), MAIN_RULE)],
