@@ -58,4 +58,4 @@ def test_a_typo_in_outputs_figures_is_refused_at_validation(write_config):
         assert "outputs.figures: unknown figure 'estimat'; did you mean 'estimate'?" in \
             result.stderr
     listed = trackfuse("list", "toy_experiments:GAUSSIAN")
-    assert "\n  estimate\n" in listed.stdout  # every figure name is listed
+    assert "\n  estimate (paper Fig. 1)\n" in listed.stdout  # every figure name is listed
