@@ -339,3 +339,16 @@ def test_a_billion_trials_in_batches_of_one_start_at_once_in_flat_memory(write_c
     assert time.perf_counter() - t0 < 30
     assert peak < 20e6, f"{peak / 1e6:.0f} MB"
     assert [s.first for s in written] == list(range(40))  # resume recomputed nothing
+
+
+def test_a_trials_own_interrupt_is_contained_when_ctrl_c_is_ignored(write_config, tmp_path):
+    """A background job (SIGINT ignored) cannot get Ctrl-C: a KeyboardInterrupt raised by a
+    trial fails that trial instead of stopping the run."""
+    path = write_config("experiment: toy_experiments:UNRULY\ntrials: 12\nseed: 3\n"
+                        "params: {how: interrupt}\n")
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        outcome = run(path, tmp_path / "s", executor="serial")
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert 0 < outcome.failed_trials < 12

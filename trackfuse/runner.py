@@ -162,6 +162,8 @@ def _is_user_interrupt(err: BaseException) -> bool:
         return False
     if _user_interrupt.is_set():
         return True
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        return False  # Ctrl-C cannot reach this process (a background job): the trial raised it
     in_main = threading.current_thread() is threading.main_thread() and \
         multiprocessing.parent_process() is None
     return in_main and not _sigint_watched.is_set()

@@ -34,27 +34,39 @@ from __future__ import annotations
 import zlib
 from collections.abc import Sequence
 from datetime import datetime, timedelta
+from functools import lru_cache
+from types import SimpleNamespace
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.special import logsumexp
 
 from trackfuse.tracking.sensors import azel_jacobian
 
-try:
-    from stonesoup.models.measurement.nonlinear import CartesianToElevationBearing
-    from stonesoup.models.transition.linear import LinearGaussianTimeInvariantTransitionModel
-    from stonesoup.types.array import CovarianceMatrix, StateVector, StateVectors
-    from stonesoup.types.detection import Detection
+if TYPE_CHECKING:
     from stonesoup.types.state import GaussianState, ParticleState
-    from stonesoup.types.update import Update
-except ModuleNotFoundError as error:  # the optional extra is not installed
-    if not (error.name or "").startswith("stonesoup"):
-        raise
-    STONESOUP_MISSING: str | None = (
-        "Stone Soup is not installed: pip install 'trackfuse[stonesoup]' (needed by the "
-        "stonesoup_* algorithms and trackfuse.interop.stonesoup)")
-else:
-    STONESOUP_MISSING = None
+
+STONESOUP_MISSING = ("Stone Soup is not installed: pip install 'trackfuse[stonesoup]' (needed "
+                     "by the stonesoup_* algorithms and trackfuse.interop.stonesoup)")
+
+
+@lru_cache(maxsize=1)
+def stonesoup_types() -> SimpleNamespace:
+    """Stone Soup's classes used here, imported on first use (importing Stone Soup costs
+    about a second, which ``trackfuse list``/``validate`` must not pay); ``ImportError``
+    with :data:`STONESOUP_MISSING` when it is not installed."""
+    try:
+        from stonesoup.models.measurement.nonlinear import CartesianToElevationBearing
+        from stonesoup.models.transition.linear import (
+            LinearGaussianTimeInvariantTransitionModel,
+        )
+        from stonesoup.types.array import CovarianceMatrix, StateVector, StateVectors
+        from stonesoup.types.detection import Detection
+        from stonesoup.types.state import GaussianState, ParticleState
+        from stonesoup.types.update import Update
+    except ModuleNotFoundError as error:  # the optional extra is not installed
+        if not (error.name or "").startswith("stonesoup"):
+            raise
+        raise ImportError(STONESOUP_MISSING) from None
 
     class ElevationBearingExactJacobian(CartesianToElevationBearing):
         """``CartesianToElevationBearing`` with the analytic Jacobian
@@ -73,6 +85,22 @@ else:
                  - np.asarray(self.translation_offset, dtype=float)[:, 0])
             return azel_jacobian(d)[::-1][:, TO_STONESOUP]
 
+    return SimpleNamespace(
+        CartesianToElevationBearing=CartesianToElevationBearing,
+        ElevationBearingExactJacobian=ElevationBearingExactJacobian,
+        LinearGaussianTimeInvariantTransitionModel=LinearGaussianTimeInvariantTransitionModel,
+        CovarianceMatrix=CovarianceMatrix, StateVector=StateVector, StateVectors=StateVectors,
+        Detection=Detection, GaussianState=GaussianState, ParticleState=ParticleState,
+        Update=Update)
+
+
+def logsumexp(a: np.ndarray, axis: int | None = None) -> np.ndarray:
+    """``scipy.special.logsumexp``, imported on first use (see :func:`stonesoup_types`)."""
+    from scipy.special import logsumexp as scipy_logsumexp
+
+    return scipy_logsumexp(a, axis=axis)
+
+
 TO_STONESOUP = np.array([0, 3, 1, 4, 2, 5])
 """Stone Soup state component ``i`` is our component ``TO_STONESOUP[i]``."""
 FROM_STONESOUP = np.argsort(TO_STONESOUP)
@@ -84,8 +112,7 @@ _STREAM_KEY = 0x5705  # spawn-key branch of Stone Soup's randomness (far above s
 
 def require_stonesoup() -> None:
     """Raise ``ImportError`` with a one-line message when Stone Soup is not installed."""
-    if STONESOUP_MISSING is not None:
-        raise ImportError(STONESOUP_MISSING)
+    stonesoup_types()
 
 
 def timestamp(t: float) -> datetime:
@@ -112,15 +139,17 @@ def estimate(state) -> tuple[np.ndarray, np.ndarray]:
 
 def gaussian_prior(x: np.ndarray, P: np.ndarray, t: float) -> GaussianState:
     """Stone Soup Gaussian state from our ``x: (6,)``, ``P: (6, 6)`` at time ``t`` (s)."""
+    T = stonesoup_types()
     xs, Ps = state_to_stonesoup(x, P)
-    return GaussianState(xs, Ps, timestamp=timestamp(t))
+    return T.GaussianState(xs, Ps, timestamp=timestamp(t))
 
 
 def particle_prior(x: np.ndarray, P: np.ndarray, t: float, count: int,
                    random_state: np.random.RandomState) -> ParticleState:
     """``count`` equally weighted particles drawn from ``N(x, P)`` (our order) at ``t`` (s)."""
+    T = stonesoup_types()
     draws = x[:, None] + np.linalg.cholesky(P) @ random_state.standard_normal((6, count))
-    return ParticleState(StateVectors(draws[TO_STONESOUP]),
+    return T.ParticleState(T.StateVectors(draws[TO_STONESOUP]),
                          log_weight=np.full(count, -np.log(count)), timestamp=timestamp(t))
 
 
@@ -130,7 +159,8 @@ def transition_model(F: np.ndarray, Q: np.ndarray,
 
     Time-invariant: every prediction applies one period, so predict only at scan times.
     """
-    model = LinearGaussianTimeInvariantTransitionModel(
+    T = stonesoup_types()
+    model = T.LinearGaussianTimeInvariantTransitionModel(
         transition_matrix=F[np.ix_(TO_STONESOUP, TO_STONESOUP)],
         covariance_matrix=Q[np.ix_(TO_STONESOUP, TO_STONESOUP)])
     model.random_state = random_state
@@ -143,9 +173,10 @@ def angle_model(sensor: np.ndarray, R: np.ndarray,
     """Stone Soup azimuth/elevation model of a sensor at ``sensor: (3,)`` (m) with our
     ``R: (2, 2)`` (rad^2, azimuth first); ``exact_jacobian`` gives it the analytic Jacobian
     (:class:`ElevationBearingExactJacobian`) instead of Stone Soup's finite difference."""
-    kind = ElevationBearingExactJacobian if exact_jacobian else CartesianToElevationBearing
+    T = stonesoup_types()
+    kind = T.ElevationBearingExactJacobian if exact_jacobian else T.CartesianToElevationBearing
     model = kind(ndim_state=6, mapping=(0, 2, 4),
-                 noise_covar=R[::-1, ::-1].copy(), translation_offset=StateVector(sensor))
+                 noise_covar=R[::-1, ::-1].copy(), translation_offset=T.StateVector(sensor))
     model.random_state = random_state
     return model
 
@@ -154,8 +185,9 @@ def detections(z: np.ndarray, t: float, model) -> list:
     """Stone Soup detections of the angle returns ``z: (M, 2)`` (rad, azimuth first) at ``t``
     (s), in the order given. A list, not a set: a set's order follows memory addresses, and
     the order fixes the floating-point sums of the association weights."""
+    T = stonesoup_types()
     when = timestamp(t)
-    return [Detection(StateVector(zi[::-1]), timestamp=when, measurement_model=model)
+    return [T.Detection(T.StateVector(zi[::-1]), timestamp=when, measurement_model=model)
             for zi in np.asarray(z, dtype=float).reshape(-1, 2)]
 
 
@@ -220,13 +252,14 @@ def gaussian_pda_update(hypotheses: Sequence, updater):
     floats: fed ``Probability`` weights, Stone Soup's own sums run on Python objects and took
     half the time of a Stone Soup EKF + PDA scan.
     """
+    T = stonesoup_types()
     states = [updater.update(h) if h else h.prediction for h in hypotheses]
     beta = np.array([float(h.probability) for h in hypotheses])
     mean, covar = collapse(np.stack([np.asarray(s.state_vector, dtype=float)[:, 0]
                                      for s in states]),
                            np.stack([np.asarray(s.covar, dtype=float) for s in states]), beta)
     prediction = hypotheses[0].prediction
-    return Update.from_state(prediction, StateVector(mean), CovarianceMatrix(covar),
+    return T.Update.from_state(prediction, T.StateVector(mean), T.CovarianceMatrix(covar),
                              hypothesis=hypotheses, timestamp=prediction.timestamp)
 
 
@@ -246,6 +279,7 @@ def particle_pda_update(hypotheses: Sequence, updater, resampler: SeededSystemat
     ``resampler``. With exact ``beta_h`` this is Bayes' rule for the PDA likelihood
     ``(1 - P_D P_G) + P_D / lambda sum_j p(z_j | x)``; Stone Soup's ``PDAHypothesiser``
     gives ``beta_h`` from a Gaussian fit of the particle measurement prediction."""
+    T = stonesoup_types()
     prediction = hypotheses[0].prediction
     terms = []
     for h in hypotheses:
@@ -253,6 +287,6 @@ def particle_pda_update(hypotheses: Sequence, updater, resampler: SeededSystemat
         terms.append(h.probability.log_value + np.asarray(log_w, dtype=float))
     combined = logsumexp(np.stack(terms), axis=0)
     combined -= logsumexp(combined)
-    update = Update.from_state(prediction, log_weight=combined, hypothesis=hypotheses,
+    update = T.Update.from_state(prediction, log_weight=combined, hypothesis=hypotheses,
                                timestamp=prediction.timestamp)
     return resampler.resample(update)

@@ -45,20 +45,6 @@ from trackfuse.interop import stonesoup as ss
 from trackfuse.seeding import TrialStreams
 from trackfuse.tracking.sensors import ellipse_points, gate_volume, inv2
 
-try:
-    from stonesoup.hypothesiser.probability import PDAHypothesiser
-    from stonesoup.models.transition.linear import (
-        CombinedLinearGaussianTransitionModel,
-        ConstantVelocity,
-    )
-    from stonesoup.predictor.kalman import ExtendedKalmanPredictor, UnscentedKalmanPredictor
-    from stonesoup.predictor.particle import ParticlePredictor
-    from stonesoup.updater.kalman import ExtendedKalmanUpdater, UnscentedKalmanUpdater
-    from stonesoup.updater.particle import ParticleUpdater
-except ModuleNotFoundError as error:  # optional extra; ss.require_stonesoup() says so
-    if not (error.name or "").startswith("stonesoup"):
-        raise
-
 if TYPE_CHECKING:
     from trackfuse.experiments.twin_sensor.model import Batch, Scenario
 
@@ -149,6 +135,16 @@ def run_stonesoup(algorithm: str, params: dict[str, Any], sc: Scenario, b: Batch
 def _components(kind: str, params: dict[str, Any], sc: Scenario,
                 rs: np.random.RandomState) -> _Filter:
     """Predictor, updater and (particle filter) resampler of filter ``kind``."""
+    # Stone Soup is optional and slow to import: on first use (run_stonesoup checked it)
+    from stonesoup.models.transition.linear import (
+        CombinedLinearGaussianTransitionModel,
+        ConstantVelocity,
+    )
+    from stonesoup.predictor.kalman import ExtendedKalmanPredictor, UnscentedKalmanPredictor
+    from stonesoup.predictor.particle import ParticlePredictor
+    from stonesoup.updater.kalman import ExtendedKalmanUpdater, UnscentedKalmanUpdater
+    from stonesoup.updater.particle import ParticleUpdater
+
     if params["stonesoup.process_noise"] == "ours":
         transition = ss.transition_model(sc.F, sc.Q_filter, rs)
     else:
@@ -170,6 +166,8 @@ def _components(kind: str, params: dict[str, Any], sc: Scenario,
 
 def _track(flt: _Filter, sc: Scenario, b: Batch, n: int, out: Estimates) -> None:
     """Filter trial ``n`` of ``b`` scan by scan, writing into ``out``."""
+    from stonesoup.hypothesiser.probability import PDAHypothesiser  # see _components
+
     if flt.resampler is None:
         state = ss.gaussian_prior(b.x0[n], sc.P0, sc.times[0])
     else:
