@@ -312,7 +312,12 @@ class RunFolder:
 
     def drop_resume_state(self) -> None:
         """Delete ``parts/`` once the final files are written, verified and recorded in a
-        ``complete`` manifest: they hold every row, so the parts would be a second copy."""
+        ``complete`` manifest: they hold every row, so the parts would be a second copy.
+        Trials parts go first, so a kill midway still leaves no trials part without its
+        timings part (the order :meth:`write_part` keeps)."""
+        if self.parts.is_dir():
+            for part in self.parts.glob("*.trials.csv"):
+                part.unlink(missing_ok=True)
         shutil.rmtree(self.parts, ignore_errors=True)
 
     def remove_temporaries(self) -> list[Path]:
