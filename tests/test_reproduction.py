@@ -36,17 +36,30 @@ def test_one_section_per_paper_with_every_headline_row_and_main_figure(runs):
     sections = collect(folders, TOY_PAPER)
     assert [s.key for s in sections] == ["toy_gaussian"]
     section = sections[0]
-    assert len(section.rows) == 4  # two algorithms x two runs; toy_trivial has no paper
-    assert sum(section.verdict_counts().values()) == 4
+    assert len(section.rows) == 2  # two algorithms of the paper's config; no toy_trivial
+    assert sum(section.verdict_counts().values()) == 2
+    assert sum(section.others["extension"].values()) == 2  # the other config: counts only
     assert [(f.config, f.paper_item) for f in section.figures] == [("paper", "Fig. 1")]
     assert [f.config for f in section.linked] == ["extension"]
+
+
+def test_a_comparison_that_several_configs_give_identically_is_listed_once(runs):
+    root, folders = runs
+    toy = TOY_PAPER["toy_gaussian"]
+    paper = {"toy_gaussian": Paper(toy.key, toy.citation, toy.results, ("paper", "again"))}
+    copy = root / "again.yaml"
+    copy.write_text((root / "paper.yaml").read_text())
+    again = Runner(load(copy), root, executor="serial", progress=False).run()
+    section = collect([folders[0], again.folder], paper)[0]
+    assert len(section.rows) == 2 and set(section.rows["config"]) == {"paper, again"}
 
 
 def test_the_markdown_names_paper_value_our_interval_and_verdict(runs):
     root, folders = runs
     write_reproduction_report(folders, root, TOY_PAPER)
     text = (root / REPORT_MD).read_text()
-    assert "## toy_gaussian" in text and "4 paper items compared over 2 configs" in text
+    assert "## toy_gaussian" in text and "2 paper items compared in the paper's own" in text
+    assert "Other configs (their own index.html): extension: " in text
     row = next(line for line in text.splitlines() if line.startswith("| paper | Fig. 1"))
     assert "| 0.95 |" in row and "[" in row and ("**agrees**" in row or "**differs**" in row)
     assert "Paper: Fig. 1: the interval covers mu 95 % of the time" in text

@@ -54,6 +54,7 @@ class PaperSection:
     linked: list[MainFigure] = field(default_factory=list)
     configs: list[str] = field(default_factory=list)
     problems: list[str] = field(default_factory=list)
+    others: dict[str, dict[str, int]] = field(default_factory=dict)
 
     def verdict_counts(self) -> dict[str, int]:
         """How many compared items got each verdict (in :data:`VERDICTS` order)."""
@@ -108,16 +109,37 @@ def collect(folders: Sequence[Path],
         except ValueError as err:
             section.problems.append(str(err))
             rows = pd.DataFrame()
-        if len(rows):
+        own = _config_name(run) in paper.configs or not paper.configs
+        if len(rows) and own:
             section.rows = rows if section.rows.empty else pd.concat(
                 [section.rows, rows], ignore_index=True)
-        own = _config_name(run) in paper.configs
+        elif len(rows):
+            counts = rows["verdict"].value_counts()
+            section.others[_config_name(run)] = {v: int(counts.get(v, 0)) for v in VERDICTS}
         (section.figures if own else section.linked).extend(_main_figures(run))
         section.configs.append(_config_name(run))
     for section in sections.values():
+        section.rows = _merge_repeats(section.rows)
         if not section.figures:
             section.figures, section.linked = section.linked, []
     return [sections[k] for k in papers if k in sections]
+
+
+def _merge_repeats(rows: pd.DataFrame) -> pd.DataFrame:
+    """One row per distinct comparison: a row that several configs give identically (the
+    AHP table, say) is kept once with its configs joined by ", "."""
+    if rows.empty:
+        return rows
+    same = [c for c in HEADLINE_COLUMNS if c not in ("trials", "docs")]
+    keys = rows[same].map(_text).agg("|".join, axis=1)
+    configs = rows.groupby(keys, sort=False)["config"].agg(", ".join)
+    kept = rows.loc[~keys.duplicated()].copy()
+    kept["config"] = configs.loc[keys[~keys.duplicated()]].to_numpy()
+    return kept.reset_index(drop=True)
+
+
+def _text(value: object) -> str:
+    return "" if pd.isna(value) else str(value)
 
 
 def _ours(row: pd.Series) -> str:
@@ -127,16 +149,19 @@ def _ours(row: pd.Series) -> str:
     text = f"{value:.4g}"
     if not (pd.isna(row["ci_low"]) or pd.isna(row["ci_high"])):
         text += f" [{row['ci_low']:.4g}, {row['ci_high']:.4g}]"
-    unit = "" if pd.isna(row["unit"]) else str(row["unit"])
-    return f"{text} {unit}".strip()
+    unit = _text(row["unit"])
+    return f"{text} {unit}".strip() if unit not in ("1", "fraction") else text
 
 
 def _summary_line(section: PaperSection) -> str:
     counts = section.verdict_counts()
     total = sum(counts.values())
     parts = ", ".join(f"{n} {v}" for v, n in counts.items() if n)
-    return (f"{total} paper items compared over {len(section.configs)} configs: {parts}."
-            if total else "No paper item could be compared from these runs.")
+    line = (f"{total} paper items compared in the paper's own configs: {parts}."
+            if total else "No paper item could be compared from the paper's own configs.")
+    others = "; ".join(f"{name}: " + ", ".join(f"{n} {v}" for v, n in counts.items() if n)
+                       for name, counts in section.others.items())
+    return line + (f" Other configs (their own index.html): {others}." if others else "")
 
 
 def _doc_link(docs: object, out: Path) -> tuple[str, str]:
@@ -171,8 +196,8 @@ def report_markdown(sections: Sequence[PaperSection], out: Path) -> str:
             link, text = _doc_link(r["docs"], out)
             reason = (f"{r['reason']} ([{text}]({link}))" if link
                       else f"{r['reason']} ({text})" if text else str(r["reason"]))
-            cells = [r["config"], r["paper_item"], r["quantity"], r["algorithm"],
-                     r["paper_value"], _ours(r), f"**{r['verdict']}**", reason]
+            cells = [r["config"], r["paper_item"], r["quantity"], _text(r["algorithm"]),
+                     _text(r["paper_value"]), _ours(r), f"**{r['verdict']}**", reason]
             lines.append("| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |")
         lines.append("")
         lines += [f"- problem: {p}" for p in s.problems] + ([""] if s.problems else [])
@@ -209,9 +234,9 @@ def _html_rows(section: PaperSection, out: Path) -> str:
         verdict = str(r["verdict"])
         body.append(
             f"<tr class='{esc(verdict.replace(' ', '-'))}'>" + "".join(
-                f"<td>{esc(str(c))}</td>" for c in (r["config"], r["paper_item"],
-                                                    r["quantity"], r["algorithm"],
-                                                    r["paper_value"], _ours(r)))
+                f"<td>{esc(_text(c))}</td>" for c in (r["config"], r["paper_item"],
+                                                      r["quantity"], r["algorithm"],
+                                                      r["paper_value"], _ours(r)))
             + f"<td><b>{esc(verdict)}</b></td><td>{esc(str(r['reason']))}{more}</td></tr>")
     return f"<table>{head}{''.join(body)}</table>"
 
