@@ -43,7 +43,7 @@ class Look:
 LOOKS: dict[str, Look] = {
     # paper 000 (twin_sensor): association variants
     "paper_approx": Look("paper's fused-gate PDA (reconstruction)", VERMILLION, "s", "paper"),
-    "mspda_parallel": Look("two-sensor parallel PDA (corrected)", GREEN, "o", "ours"),
+    "mspda_parallel": Look("parallel PDA (corrected; PDAF with one sensor)", GREEN, "o", "ours"),
     "mspda_sequential": Look("sequential PDA", BLUE, "^", "variant"),
     "nn": Look("nearest neighbour", PURPLE, "x", "variant"),
     # paper 001 (esm_radar)
