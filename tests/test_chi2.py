@@ -18,10 +18,10 @@ def test_equals_scipy_stats_bit_for_bit(dof):
         assert chi2_quantile(float(p), dof) == stats.chi2.ppf(p, dof)
 
 
-def test_building_the_paper_experiments_imports_no_scipy():
+def test_building_the_paper_experiments_imports_no_scipy_or_numba():
     code = ("import sys, trackfuse.experiments.twin_sensor, trackfuse.experiments.esm_radar, "
             "trackfuse.experiments.passive_assoc; print(sorted(m for m in sys.modules "
-            "if m.split('.')[0] in ('scipy', 'pandas', 'matplotlib')))")
+            "if m.split('.')[0] in ('scipy', 'pandas', 'matplotlib', 'numba')))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout
     assert out.strip() == "[]"

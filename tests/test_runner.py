@@ -172,7 +172,7 @@ def test_cli_run_writes_outputs_and_plot_redraws_them(write_config, tmp_path):
     manifest = json.loads((folder / "manifest.json").read_text())
     assert manifest["status"] == "complete" and manifest["root_seed"] == 11
     assert manifest["trials_done"] == manifest["trials_total"] == 92
-    assert set(manifest["versions"]) >= {"trackfuse", "python", "numpy", "scipy"}
+    assert set(manifest["versions"]) >= {"trackfuse", "python", "numpy", "scipy", "numba"}
     assert set(manifest["per_point_wall_s"]) == {"0", "1", "2", "3"}
     png = (folder / "figures/estimate.png").read_bytes()
     pdf = (folder / "figures/estimate.pdf").read_bytes()

@@ -348,7 +348,7 @@ class Runner:
         versions = {"trackfuse": trackfuse.__version__, "python": platform.python_version(),
                     "numpy": np.__version__, "scipy": scipy.__version__,
                     "pandas": pd.__version__, "matplotlib": _version("matplotlib"),
-                    "stonesoup": _version("stonesoup")}  # None when not installed
+                    "numba": _version("numba"), "stonesoup": _version("stonesoup")}  # None when not installed
         previous = session.previous or {}
         return {
             "status": status,
