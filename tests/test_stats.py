@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from scipy import stats
 
 from trackfuse.stats import (
@@ -82,3 +83,22 @@ def test_welch_and_mcnemar_match_scipy():
     assert np.isclose(p, ref.pvalue) and np.isclose(low, ci.low) and np.isclose(high, ci.high)
     assert np.isclose(mcnemar_p(2, 9), stats.binomtest(2, 11).pvalue)
     assert mcnemar_p(0, 0) == 1.0
+
+
+@pytest.mark.parametrize("level", [0.9, 0.95, 0.99])
+def test_quantiles_equal_scipy_stats_bit_for_bit(level):
+    """The summary uses scipy.special's quantiles (fast to import); they must be the very
+    numbers scipy.stats gives, or every summary.csv would change in its last digits."""
+    n = np.arange(0, 3000, dtype=float)
+    low, high = t_interval(np.zeros_like(n), np.ones_like(n), n, level)
+    t = stats.t.ppf(0.5 + level / 2, np.maximum(n - 1, 1))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        np.testing.assert_array_equal(high, np.where(n >= 2, t / np.sqrt(n), np.nan))
+    k = np.arange(0, 51)
+    z = stats.norm.ppf(0.5 + level / 2)
+    p = k / 50
+    centre = (p + z**2 / 100) / (1 + z**2 / 50)
+    half = z * np.sqrt(p * (1 - p) / 50 + z**2 / (4 * 50**2)) / (1 + z**2 / 50)
+    low, high = wilson_interval(k, 50, level)
+    np.testing.assert_array_equal(low[1:], np.clip(centre - half, 0, 1)[1:])
+    np.testing.assert_array_equal(high[:-1], np.clip(centre + half, 0, 1)[:-1])

@@ -23,7 +23,7 @@ import multiprocessing
 import os
 import signal
 import socket
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from itertools import islice
@@ -96,10 +96,11 @@ class ProcessExecutor:
 
     kind = "process"
 
-    def __init__(self, workers: int):
+    def __init__(self, workers: int, preload: Sequence[str] = ()):
         self.workers = workers
         ctx = multiprocessing.get_context("forkserver")
-        ctx.set_forkserver_preload(["trackfuse.runner"])
+        # heard only by a fork server not yet running (the first pool of a process)
+        ctx.set_forkserver_preload(["trackfuse.runner", *preload])
         _start_forkserver_single_threaded()
         self._ctx = ctx
         self._pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=_ignore_sigint)
@@ -240,14 +241,15 @@ def scheduler_address(path: str) -> str:
 
 
 def make_executor(kind: str, workers: int, address: str | None = None,
-                  scheduler_file: str | None = None):
-    """Build the executor named ``kind`` (see :data:`KINDS`)."""
+                  scheduler_file: str | None = None, preload: Sequence[str] = ()):
+    """Build the executor named ``kind`` (see :data:`KINDS`); a process pool's workers fork
+    with the modules ``preload`` already imported."""
     if address or scheduler_file:
         kind = "dask"
     if kind == "serial" or (kind == "process" and workers <= 1):
         return SerialExecutor()
     if kind == "process":
-        return ProcessExecutor(workers)
+        return ProcessExecutor(workers, preload)
     if kind == "dask":
         return DaskExecutor(workers, address, scheduler_file)
     raise ExecutorError(f"unknown executor {kind!r}; allowed: {', '.join(KINDS)}")

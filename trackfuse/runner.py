@@ -348,7 +348,8 @@ class Runner:
         versions = {"trackfuse": trackfuse.__version__, "python": platform.python_version(),
                     "numpy": np.__version__, "scipy": scipy.__version__,
                     "pandas": pd.__version__, "matplotlib": _version("matplotlib"),
-                    "numba": _version("numba"), "stonesoup": _version("stonesoup")}  # None when not installed
+                    "numba": _version("numba"),
+                    "stonesoup": _version("stonesoup")}  # None when not installed
         previous = session.previous or {}
         return {
             "status": status,
@@ -471,7 +472,7 @@ class Runner:
             return
         todo = (span for span in self.spans() if span not in scan.finished)
         executor = make_executor(self.executor_kind, self.workers, self.scheduler,
-                                 self.scheduler_file)
+                                 self.scheduler_file, self.config.experiment.preload)
         self.workers, self.executor_used = executor.workers, executor.kind
         self.folder.write_manifest(self._manifest(RunStatus.RUNNING, session))
         last = time.monotonic()

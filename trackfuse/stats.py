@@ -8,12 +8,16 @@
   score intervals for differences of proportions, paired (his method 10, 1998) or
   independent (method 10 of Newcombe 1998, Stat. Med. 17, 873-890), which keep their
   coverage when few pairs are discordant, where the Wald interval does not.
+
+scipy is imported on first use: ``scipy.stats`` takes about a second to import, and the
+summary of every run only needs the t and normal quantiles of ``scipy.special``
+(``stdtrit`` and ``ndtri``, the functions ``scipy.stats`` itself calls: bit for bit the same
+numbers, tested).
 """
 
 from __future__ import annotations
 
 import numpy as np
-from scipy import stats
 
 
 def wilson_interval(successes, n, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
@@ -22,9 +26,11 @@ def wilson_interval(successes, n, level: float = 0.95) -> tuple[np.ndarray, np.n
     ``successes`` and ``n`` broadcast; returns ``(low, high)`` arrays in [0, 1]. Where
     ``n == 0`` both bounds are NaN.
     """
+    from scipy.special import ndtri  # on first use: see the module docstring
+
     k = np.asarray(successes, dtype=float)
     n = np.asarray(n, dtype=float)
-    z = float(stats.norm.ppf(0.5 + level / 2))
+    z = float(ndtri(0.5 + level / 2))
     with np.errstate(invalid="ignore", divide="ignore"):
         p = k / n
         denom = 1 + z**2 / n
@@ -38,11 +44,13 @@ def wilson_interval(successes, n, level: float = 0.95) -> tuple[np.ndarray, np.n
 
 def t_interval(mean, std, n, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
     """Student-t interval ``mean +- t_{n-1} std / sqrt(n)``; NaN where ``n < 2``."""
+    from scipy.special import stdtrit  # on first use: see the module docstring
+
     mean = np.asarray(mean, dtype=float)
     std = np.asarray(std, dtype=float)
     n = np.asarray(n, dtype=float)
     with np.errstate(invalid="ignore", divide="ignore"):
-        t = stats.t.ppf(0.5 + level / 2, np.maximum(n - 1, 1))
+        t = stdtrit(np.maximum(n - 1, 1), 0.5 + level / 2)
         half = np.where(n >= 2, t * std / np.sqrt(n), np.nan)
     return mean - half, mean + half
 
@@ -53,6 +61,8 @@ def nees_band(dim: int, n_runs: int, level: float = 0.95) -> tuple[float, float]
     ``n_runs * ANEES ~ chi2(n_runs * dim)`` for a consistent filter, so the band is
     ``chi2.ppf([a/2, 1-a/2], n_runs*dim) / n_runs``.
     """
+    from scipy import stats  # on first use: see the module docstring
+
     dof = dim * n_runs
     alpha = 1 - level
     low, high = stats.chi2.ppf([alpha / 2, 1 - alpha / 2], dof) / n_runs
@@ -66,6 +76,8 @@ def welch_interval(m1, s1, n1, m2, s2, n2,
     deviations and sizes (all broadcast). Returns ``(low, high, p_value)``; the p-value is
     the two-sided Welch t test of equal means. NaN where a sample has fewer than two values.
     """
+    from scipy import stats  # on first use: see the module docstring
+
     m1, s1, n1, m2, s2, n2 = (np.asarray(v, dtype=float) for v in (m1, s1, n1, m2, s2, n2))
     with np.errstate(invalid="ignore", divide="ignore"):
         v1, v2 = s1**2 / n1, s2**2 / n2
@@ -121,6 +133,8 @@ def _paired_phi(a: np.ndarray, k1: np.ndarray, k2: np.ndarray, n: np.ndarray) ->
 def mcnemar_p(b, c) -> np.ndarray:
     """Two-sided exact McNemar p-value from the discordant counts ``b`` and ``c``
     (McNemar 1947): the binomial test of ``b`` in ``b + c`` at one half; 1 when ``b + c = 0``."""
+    from scipy import stats  # on first use: see the module docstring
+
     b, c = np.asarray(b, dtype=float), np.asarray(c, dtype=float)
     p = 2 * stats.binom.cdf(np.minimum(b, c), b + c, 0.5)
     return np.where(b + c > 0, np.minimum(p, 1.0), 1.0)
@@ -129,6 +143,8 @@ def mcnemar_p(b, c) -> np.ndarray:
 def two_proportion_p(k1, n1, k2, n2) -> np.ndarray:
     """Two-sided p-value of the 'N-1' chi-square test of equal independent proportions
     (Campbell 2007, Stat. Med. 26, 3661-3675), accurate down to small expected counts."""
+    from scipy import stats  # on first use: see the module docstring
+
     k1, n1, k2, n2 = (np.asarray(v, dtype=float) for v in (k1, n1, k2, n2))
     a, b, c, d = k1, n1 - k1, k2, n2 - k2
     n = n1 + n2

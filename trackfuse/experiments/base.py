@@ -123,6 +123,9 @@ class Experiment:
     #: Optional last check of a config: ``check(params, sweep)`` returns ``(key, problem)``
     #: for a choice this machine cannot run (a missing optional dependency), else ``None``.
     check: Callable[[Params, Mapping[str, list[Any]]], tuple[str, str] | None] | None = None
+    #: Modules the process pool's fork server imports before it forks workers (a module
+    #: that loads a compiled kernel, say), so every worker starts with them in memory.
+    preload: tuple[str, ...] = ()
     schema: dict[str, Param] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:

@@ -53,6 +53,7 @@ EXPERIMENT = Experiment(
     row_keys=("algorithm", "scan"),
     batch_size=100,
     check=missing_stonesoup,
+    preload=("trackfuse.experiments.twin_sensor.preload",),
 )
 
 __all__ = ["EXPERIMENT", "FIGURES"]
