@@ -12,7 +12,10 @@ exactly as a new user installs it, and runs its own shipped configs:
   included; the two versions may ship different sets of configs, so the config counts and
   trial totals are printed beside the times),
 * ``startup``: ``trackfuse --help``, ``trackfuse list`` and ``trackfuse validate`` of the
-  orbit config (what a ``--set`` trial-and-error loop pays each time).
+  orbit config (what a ``--set`` trial-and-error loop pays each time),
+* ``first run``: ``run --no-plots`` once with numba's on-disk cache emptied, as the first run
+  after installing: the current version compiles its filter kernel then (once per install);
+  every other line is timed after it, with the compiled kernel cached.
 
     python benchmarks/end_to_end.py [--baseline 6f49e5c] [--repeats 3] [--skip reproduce]
 
@@ -80,6 +83,14 @@ def measure(homes: dict[str, Path], commands: dict[str, list[str]], repeats: int
     return times
 
 
+def first_run(home: Path) -> float:
+    """Wall seconds of ``run --no-plots`` with numba's on-disk cache of ``home`` emptied."""
+    for cached in (home / "venv").rglob("*.nb[ic]"):
+        cached.unlink()
+    with tempfile.TemporaryDirectory() as out:
+        return timed(home, "run", MAIN_CONFIG, "--workers", "2", "--no-plots", out=Path(out))
+
+
 def config_count(home: Path) -> int:
     return len(list((home / "src" / "configs").glob("*.yaml")))
 
@@ -102,8 +113,10 @@ def main() -> None:
         "startup validate": ["validate", MAIN_CONFIG],
     }
     commands = {k: v for k, v in commands.items() if k.split()[0] not in args.skip}
+    firsts = {name: first_run(home) for name, home in homes.items()}
     times = measure(homes, commands, args.repeats,
                     writes={"run", "run --no-plots", "reproduce"})
+    times["first run --no-plots"] = {name: [t] for name, t in firsts.items()}
     for name, home in homes.items():
         print(f"{name}: {home.name}, {config_count(home)} paper configs")
     print(f"{'command':<18} {'baseline min/median s':>22} {'current min/median s':>21} "
