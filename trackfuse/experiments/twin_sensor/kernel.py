@@ -396,10 +396,7 @@ def Moments():  # noqa: N802 (builds a record, read as a type)
 @njit(**JIT)
 def _clear(mom):
     """Zero the moments and the update sums."""
-    mom.nub[:] = 0.0
-    mom.NN[:, :] = 0.0
-    mom.Gbar[:, :] = 0.0
-    mom.C[:, :] = 0.0
+    _clear_class(mom)
     mom.dx[:] = 0.0
     mom.dP[:, :] = 0.0
 
