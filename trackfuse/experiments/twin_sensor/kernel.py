@@ -579,6 +579,10 @@ def _pair_log_weights(lin, S12inv, det12, P_D, P_G, method, joint_full):
     half_logdet12 = 0.5 * math.log(det12) if det12 > 0 else (
         -np.inf if det12 == 0 else np.nan)
     const = 2.0 * LOG_2PI + half_logdet12
+    col = np.empty(m2)  # each sensor-2 return's own term, once (not once per pair)
+    for b in range(m2):
+        j = ok[1, b]
+        col[b] = -0.5 * _mahalanobis2(nu[1, j, 0], nu[1, j, 1], S12inv[2:, 2:])
     for a in range(m1):
         i = ok[0, a]
         n0, n1 = nu[0, i, 0], nu[0, i, 1]
@@ -588,8 +592,7 @@ def _pair_log_weights(lin, S12inv, det12, P_D, P_G, method, joint_full):
         for b in range(m2):
             j = ok[1, b]
             if joint:
-                col = -0.5 * _mahalanobis2(nu[1, j, 0], nu[1, j, 1], S12inv[2:, 2:])
-                B[i, j] = (x0 * nu[1, j, 0] + x1 * nu[1, j, 1] + row + col) + pair_add
+                B[i, j] = (x0 * nu[1, j, 0] + x1 * nu[1, j, 1] + row + col[b]) + pair_add
             else:
                 B[i, j] = pair_add + log_n[0, i] + log_n[1, j]
             top = _nan_max(top, B[i, j])
