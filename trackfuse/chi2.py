@@ -8,9 +8,13 @@ importing ``scipy.stats`` for it at module load would cost every ``trackfuse lis
 
 from __future__ import annotations
 
+import numpy as np
 
-def chi2_quantile(p: float, dof: float) -> float:
-    """The ``p`` quantile of the chi-square distribution with ``dof`` degrees of freedom."""
+
+def chi2_quantile(p: float, dof: float | np.ndarray) -> float | np.ndarray:
+    """The ``p`` quantile of the chi-square distribution with ``dof`` degrees of freedom: a
+    float for a number ``dof``, an array of ``dof``'s shape for an array."""
     from scipy.special import gammaincinv  # on first use: see the module docstring
 
-    return float(2.0 * gammaincinv(dof / 2.0, p))
+    quantile = 2.0 * gammaincinv(np.asarray(dof, dtype=float) / 2.0, p)
+    return float(quantile) if quantile.ndim == 0 else quantile

@@ -100,7 +100,8 @@ class ProcessExecutor:
         self.workers = workers
         ctx = multiprocessing.get_context("forkserver")
         # heard only by a fork server not yet running (the first pool of a process)
-        ctx.set_forkserver_preload(["trackfuse.runner", *preload])
+        ctx.set_forkserver_preload(["trackfuse.runner", *preload,
+                                    "trackfuse.forkserver_freeze"])
         _start_forkserver_single_threaded()
         self._ctx = ctx
         self._pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=_ignore_sigint)

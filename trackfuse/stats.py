@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from trackfuse.chi2 import chi2_quantile
+
 
 def wilson_interval(successes, n, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
     """Wilson score interval for a binomial proportion.
@@ -61,12 +63,9 @@ def nees_band(dim: int, n_runs: int, level: float = 0.95) -> tuple[float, float]
     ``n_runs * ANEES ~ chi2(n_runs * dim)`` for a consistent filter, so the band is
     ``chi2.ppf([a/2, 1-a/2], n_runs*dim) / n_runs``.
     """
-    from scipy import stats  # on first use: see the module docstring
-
     dof = dim * n_runs
     alpha = 1 - level
-    low, high = stats.chi2.ppf([alpha / 2, 1 - alpha / 2], dof) / n_runs
-    return float(low), float(high)
+    return chi2_quantile(alpha / 2, dof) / n_runs, chi2_quantile(1 - alpha / 2, dof) / n_runs
 
 
 

@@ -67,8 +67,8 @@ import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
-from scipy import stats
 
+from trackfuse.chi2 import chi2_quantile
 from trackfuse.experiments.twin_sensor.model import PARAMS, bounds, build_scenario
 from trackfuse.plots.algorithms import GREYS, VERMILLION, line_kwargs, look
 from trackfuse.plots.style import Margins, context, fixed_figure, legend_in_strip
@@ -250,8 +250,8 @@ def _rmse_band(sq: pd.DataFrame) -> pd.DataFrame:
     """Per group of ``sq`` (columns ``mean``, ``count`` of squared errors): RMSE and its 95 %
     chi-square interval ``n MSE / RMSE_true^2 ~ chi2(n)`` (zero-mean Gaussian errors)."""
     n, mse = sq["count"].to_numpy(float), sq["mean"].to_numpy(float)
-    return pd.DataFrame({"rmse": np.sqrt(mse), "lo": np.sqrt(n * mse / stats.chi2.ppf(0.975, n)),
-                         "hi": np.sqrt(n * mse / stats.chi2.ppf(0.025, n))}, index=sq.index)
+    return pd.DataFrame({"rmse": np.sqrt(mse), "lo": np.sqrt(n * mse / chi2_quantile(0.975, n)),
+                         "hi": np.sqrt(n * mse / chi2_quantile(0.025, n))}, index=sq.index)
 
 
 # --------------------------------------------------------------------------------------------
