@@ -24,16 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from trackfuse.results import format_value
-
-_NEEDS_QUOTES = (",", '"', "\r", "\n")
-
-
-def csv_cell(text: str) -> str:
-    """``text`` as one CSV field, quoted the way :mod:`csv` (``QUOTE_MINIMAL``) quotes it."""
-    if any(c in text for c in _NEEDS_QUOTES):
-        return '"' + text.replace('"', '""') + '"'
-    return text
+from trackfuse.results import csv_cell, format_value
 
 
 def column_cells(values: np.ndarray | Sequence[Any]) -> list[str]:
