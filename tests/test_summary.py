@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from trackfuse.summary import summarize
+from trackfuse.summary import _chunk_stats, summarize
 
 
 @pytest.mark.parametrize("chunk_rows", [7, 64, 10_000])
@@ -41,3 +41,29 @@ def test_failed_rows_are_counted_and_excluded(tmp_path):
     summary, failed = summarize(path, ["point", "algorithm"])
     assert failed == 1
     assert summary.loc[0, "n"] == 2 and summary.loc[0, "mean"] == 2.0
+
+
+def _long_format_stats(frame: pd.DataFrame, group: list[str], metrics: list[str]):
+    """The per-chunk statistics as the long format gives them (melt, drop missing values,
+    group by keys and metric): the reference the wide computation must equal."""
+    long = frame.melt(id_vars=group, value_vars=metrics, var_name="metric",
+                      value_name="value").dropna(subset=["value"])
+    stats = long.groupby([*group, "metric"], sort=False, dropna=False)["value"].agg(
+        n="count", mean="mean", var="var")
+    var = stats.pop("var").to_numpy(float)
+    stats["m2"] = np.where(stats["n"].to_numpy() > 1, var * (stats["n"] - 1), 0.0)
+    return stats.reset_index()
+
+
+def test_wide_chunk_statistics_equal_the_long_format_bit_for_bit():
+    rng = np.random.default_rng(4)
+    n = 500
+    frame = pd.DataFrame({
+        "point": rng.integers(0, 3, n), "algorithm": rng.choice(["a", "b", "c"], n),
+        "x": rng.normal(1e4, 3.0, n), "k": rng.integers(0, 5, n),
+        "y": rng.exponential(2.0, n)})
+    frame.loc[rng.random(n) < 0.3, "x"] = np.nan  # groups whose first rows lack a value
+    frame.loc[frame.algorithm == "c", "y"] = np.nan  # a metric some groups never have
+    got = _chunk_stats(frame, ["point", "algorithm"], ["x", "k", "y"])
+    expected = _long_format_stats(frame, ["point", "algorithm"], ["x", "k", "y"])
+    assert got.to_csv(index=False) == expected.to_csv(index=False)

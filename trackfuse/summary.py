@@ -18,7 +18,6 @@ from trackfuse.results import FAILED_ROW, RUNNER_COLUMNS
 from trackfuse.stats import t_interval, wilson_interval
 
 CHUNK_ROWS = 200_000
-_VALUE = "__value__"
 
 
 def summarize(path: Path, keys: Sequence[str], binary: Sequence[str] = (),
@@ -45,13 +44,7 @@ def summarize(path: Path, keys: Sequence[str], binary: Sequence[str] = (),
                    and c.endswith(suffix) and pd.api.types.is_numeric_dtype(chunk[c])]
         if chunk.empty or not metrics:
             continue
-        long = chunk.melt(id_vars=group, value_vars=metrics, var_name="metric",
-                          value_name=_VALUE).dropna(subset=[_VALUE])
-        grouped = long.groupby([*group, "metric"], sort=False, dropna=False)[_VALUE]
-        stats = grouped.agg(n="count", mean="mean", var="var")
-        var = stats.pop("var").to_numpy(float)
-        stats["m2"] = np.where(stats["n"].to_numpy() > 1, var * (stats["n"] - 1), 0.0)
-        partial.append(stats.reset_index())
+        partial.append(_chunk_stats(chunk, group, metrics))
     if not partial:
         return pd.DataFrame(columns=[*keys, "metric", "n", "mean", "std", "ci_low", "ci_high",
                                      "interval"]), failed
@@ -73,6 +66,31 @@ def summarize(path: Path, keys: Sequence[str], binary: Sequence[str] = (),
     out["ci_high"] = np.where(is_binary, w_high, t_high)
     out["interval"] = np.where(is_binary, "wilson", "t")
     return out, failed
+
+
+def _chunk_stats(chunk: pd.DataFrame, group: list[str], metrics: list[str]) -> pd.DataFrame:
+    """``(*group, metric, n, mean, m2)`` of one chunk: one row per group and metric with at
+    least one value, metric by metric, each metric's groups in the order of their first
+    value (the long format's order). ``n``, ``mean`` and the variance come from pandas'
+    grouped count, mean and var over the chunk's rows in order."""
+    values = chunk[metrics]
+    keys = [chunk[k] for k in group]
+    grouped = values.groupby(keys, sort=False, dropna=False)
+    n, mean, var = grouped.count(), grouped.mean(), grouped.var()
+    row = np.where(values.notna().to_numpy(), np.arange(len(chunk))[:, None], len(chunk))
+    first = pd.DataFrame(row, columns=metrics, index=chunk.index).groupby(
+        keys, sort=False, dropna=False).min()
+    counts = n.to_numpy().T.ravel()  # metric-major: every group of the first metric, ...
+    which = np.repeat(np.arange(len(metrics)), len(n))
+    order = np.lexsort((first.to_numpy().T.ravel(), which))
+    order = order[counts[order] > 0]
+    out = n.index.to_frame(index=False).iloc[order % len(n)].reset_index(drop=True)
+    out["metric"] = np.asarray(metrics, dtype=object)[which[order]]
+    out["n"] = counts[order]
+    out["mean"] = mean.to_numpy(float).T.ravel()[order]
+    variance = var.to_numpy(float).T.ravel()[order]
+    out["m2"] = np.where(out["n"].to_numpy() > 1, variance * (out["n"] - 1), 0.0)
+    return out
 
 
 def _combine(stats: pd.DataFrame, group: list[str]) -> pd.DataFrame:
