@@ -132,6 +132,16 @@ class RunOptions:
             except ExecutorError as err:
                 fail(str(err))
 
+    def start_workers(self, configs: list[Config]) -> None:
+        """Start the process pool's fork server now, if the runs will use one: it loads the
+        experiments' code while this process builds the runners (runs that turn out to be
+        complete already leave it unused)."""
+        from trackfuse.executors import default_workers, start_fork_server
+        if self.executor == "process" and not (self.scheduler or self.scheduler_file) and \
+                (self.workers or default_workers()) > 1:
+            start_fork_server(list(dict.fromkeys(module for config in configs
+                                                 for module in config.experiment.preload)))
+
     def runner(self, config: Config) -> Runner:
         from trackfuse.executors import default_workers
         from trackfuse.progress import PhaseLog
@@ -208,6 +218,8 @@ def run(
     options = RunOptions(out_dir, workers, executor.value, scheduler, scheduler_file,
                          not no_plots, not no_progress, force, name)
     options.check()
+    if not dry_run:
+        options.start_workers([config])
     runner = options.runner(config)
     if dry_run:
         import yaml
@@ -275,6 +287,7 @@ def run_configs(configs: list[Config], options: RunOptions) -> list[RunOutcome]:
     """Run each config in turn (a finished one resumes at once) and return their outcomes,
     printing one line per config."""
     outcomes = []
+    options.start_workers(configs)
     for config in configs:
         outcome = _execute(options.runner(config))
         outcomes.append(outcome)

@@ -164,17 +164,17 @@ def test_scheduler_file_missing_or_garbage_is_one_line_without_waiting(write_con
         assert result.stderr.count("\n") == 1
 
 
-def test_pool_workers_fork_with_the_runner_loaded_and_frozen():
+def test_pool_workers_fork_with_the_batch_code_loaded_frozen_and_no_pandas():
     # a fresh process, so that its fork server starts with this code's preload list
     code = ("from trackfuse.executors import ProcessExecutor\n"
             "if __name__ == '__main__':\n"
             "    pool = ProcessExecutor(2)\n"
-            "    probe = \"(__import__('gc').get_freeze_count(), 'trackfuse.runner' in "
-            "__import__('sys').modules)\"\n"
+            "    probe = \"(__import__('gc').get_freeze_count(), 'trackfuse.batch' in "
+            "__import__('sys').modules, 'pandas' in __import__('sys').modules)\"\n"
             "    print(list(pool.imap_unordered(eval, [probe] * 2)))\n"
             "    pool.close()\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, timeout=120).stdout
     results = eval(out)  # noqa: S307 - the list printed above
     assert len(results) == 2
-    assert all(frozen > 10_000 and loaded for frozen, loaded in results)
+    assert all(frozen > 10_000 and loaded and not pandas for frozen, loaded, pandas in results)

@@ -91,6 +91,20 @@ def _start_forkserver_single_threaded() -> None:
                 os.environ[key] = value
 
 
+def start_fork_server(preload: Sequence[str] = ()) -> None:
+    """Start the fork server that process pools fork their workers from, unless it runs.
+
+    It imports :mod:`trackfuse.batch` and ``preload`` (then freezes them:
+    :mod:`trackfuse.forkserver_freeze`) in its own process, about a second for the twin-sensor
+    kernel; the caller goes on meanwhile. The command line starts it as soon as it knows the
+    experiment, so that this overlaps its own work before the first batch.
+    """
+    ctx = multiprocessing.get_context("forkserver")
+    # heard only by a fork server not yet running (the first of a process)
+    ctx.set_forkserver_preload(["trackfuse.batch", *preload, "trackfuse.forkserver_freeze"])
+    _start_forkserver_single_threaded()
+
+
 class ProcessExecutor:
     """A local process pool with a bounded number of batches in flight."""
 
@@ -98,13 +112,10 @@ class ProcessExecutor:
 
     def __init__(self, workers: int, preload: Sequence[str] = ()):
         self.workers = workers
-        ctx = multiprocessing.get_context("forkserver")
-        # heard only by a fork server not yet running (the first pool of a process)
-        ctx.set_forkserver_preload(["trackfuse.runner", *preload,
-                                    "trackfuse.forkserver_freeze"])
-        _start_forkserver_single_threaded()
-        self._ctx = ctx
-        self._pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=_ignore_sigint)
+        start_fork_server(preload)
+        self._ctx = multiprocessing.get_context("forkserver")
+        self._pool = ProcessPoolExecutor(workers, mp_context=self._ctx,
+                                         initializer=_ignore_sigint)
 
     def imap_unordered(self, fn: Callable, tasks: Iterable) -> Iterator[Any]:
         tasks = iter(tasks)

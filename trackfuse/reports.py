@@ -12,9 +12,10 @@ PNG files at :data:`PNG_DPI` dpi, PDF files as vectors, both without timestamps 
 redrawing gives the same bytes. ``index.html`` needs no network and no JavaScript: its images
 sit beside it in ``figures/``.
 
-This module imports no matplotlib: report modules draw on :class:`matplotlib.figure.Figure`
-objects (:func:`trackfuse.plots.style.new_figure`, not registered with pyplot, freed with
-their last reference), and the runner, which imports this module, stays free of it.
+This module imports matplotlib only when it draws (the style's warm-up before forking the
+drawing processes): report modules draw on :class:`matplotlib.figure.Figure` objects
+(:func:`trackfuse.plots.style.new_figure`, not registered with pyplot, freed with their last
+reference), and the runner, which imports this module, stays free of it.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ import importlib
 import multiprocessing
 import os
 import threading
-from collections.abc import Collection, Sequence
+from collections.abc import Callable, Collection, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -187,10 +188,10 @@ def _draw(run: RunData, module: ModuleType, names: Sequence[str],
 _FORK_STATE: tuple[RunData, ModuleType, Sequence[str]] | None = None
 
 
-def _draw_in_fork(names: Sequence[str]) -> Report:
+def _draw_in_fork(name: str) -> Report:
     assert _FORK_STATE is not None
     run, module, formats = _FORK_STATE
-    return _draw(run, module, names, formats)
+    return _draw(run, module, [name], formats)
 
 
 def drawing_processes(figures: int) -> int:
@@ -202,21 +203,27 @@ def drawing_processes(figures: int) -> int:
 
 
 def _write_figures(run: RunData, module: ModuleType, wanted: Sequence[str],
-                   formats: Sequence[str], report: Report) -> None:
-    """Draw ``wanted`` in :func:`drawing_processes` forked processes (each saves its own
-    files, so the bytes do not depend on the split) and merge their parts in order."""
+                   formats: Sequence[str], report: Report, meanwhile: Callable[[], None]) -> None:
+    """Draw ``wanted`` in :func:`drawing_processes` forked processes, each taking the next
+    figure when it is free (each saves its own files, so the bytes do not depend on who
+    drew what), call ``meanwhile`` here while they draw, and merge their parts in order."""
     global _FORK_STATE
     (run.path / "figures").mkdir(exist_ok=True)
     processes = drawing_processes(len(wanted))
-    groups = [list(wanted[i::processes]) for i in range(processes)]
     if processes == 1:
-        parts = [_draw(run, module, groups[0], formats)]
+        meanwhile()
+        parts = [_draw(run, module, wanted, formats)]
     else:
+        from trackfuse.plots.style import warm_up  # matplotlib: see the module docstring
+
         run.trials, run.summary  # noqa: B018 - read once here, inherited by the forks
+        warm_up(list(formats), PNG_DPI)
         _FORK_STATE = (run, module, formats)
         try:
             with ProcessPoolExecutor(processes, multiprocessing.get_context("fork")) as pool:
-                parts = list(pool.map(_draw_in_fork, groups))
+                drawing = [pool.submit(_draw_in_fork, name) for name in wanted]
+                meanwhile()
+                parts = [future.result() for future in drawing]
         finally:
             _FORK_STATE = None
     position = {name: i for i, name in enumerate(wanted)}
@@ -246,8 +253,8 @@ def write_report(run: RunData, wanted: Collection[str] | None = None,
     module = _module(run, report)
     tables: dict[str, pd.DataFrame] = {}
     if module is not None:
-        tables = _write_tables(run, module, report)
-        _write_figures(run, module, list(wanted), formats, report)
+        _write_figures(run, module, list(wanted), formats, report,
+                       meanwhile=lambda: tables.update(_write_tables(run, module, report)))
     md = index_markdown(run, tables, report)
     atomic_write(run.path / INDEX_MD, md)
     atomic_write(run.path / INDEX_HTML, index_html(run, tables, report))

@@ -9,9 +9,8 @@ order, so for a given ``batch_size`` any schedule writes byte-identical files. T
 size itself is part of the run id: an experiment's vectorized ``run_batch`` may round the
 last bits differently for different batch compositions.
 
-Containment: whatever a trial raises (``SystemExit`` and, inside a worker,
-``KeyboardInterrupt`` included) or returns instead of a non-empty list of row dicts becomes
-one ``failed`` row carrying the error text; the run goes on.
+Each batch runs in a worker through :func:`trackfuse.batch.execute_batch`, which contains
+whatever a trial raises.
 
 Resume: the run folder's name is a hash of everything that determines the numbers. Running
 the same config again takes the folder's lock (:mod:`trackfuse.runlock`), keeps the parts
@@ -23,16 +22,11 @@ from __future__ import annotations
 
 import importlib.metadata
 import math
-import multiprocessing
 import platform
-import signal
 import subprocess
 import sys
-import threading
 import time
-import traceback
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -43,15 +37,14 @@ import pandas as pd
 import scipy
 
 import trackfuse
+from trackfuse.batch import BatchTask, execute_batch, watch_sigint
 from trackfuse.config import Config
 from trackfuse.executors import make_executor
-from trackfuse.experiments.base import Experiment
 from trackfuse.fingerprint import code_fingerprint
 from trackfuse.progress import RunProgress
 from trackfuse.reports import write_report
 from trackfuse.results import (
     CONFIG,
-    FAILED_ROW,
     INDEX_HTML,
     SUMMARY,
     TIME_SUFFIX,
@@ -66,24 +59,17 @@ from trackfuse.results import (
     RunStatus,
     atomic_write,
     config_hash,
-    rows_to_csv,
     run_id,
     sha256_file,
     sibling_manifests,
-    split_timings,
 )
-from trackfuse.rowtable import Constant, RowTable, columns_csv
 from trackfuse.rundata import load
 from trackfuse.runlock import RunLock
-from trackfuse.seeding import batch_streams, trial_streams
 from trackfuse.summary import summarize
 from trackfuse.sweep import expand
 
 MANIFEST_EVERY_S = 5.0
 MAX_REPAIRS = 3
-RESERVED_COLUMNS = ("point", "trial")
-_user_interrupt = threading.Event()
-_sigint_watched = threading.Event()
 
 
 class RunInterrupted(Exception):
@@ -92,29 +78,6 @@ class RunInterrupted(Exception):
     def __init__(self, folder: Path, done: int, total: int):
         self.folder, self.done, self.total = folder, done, total
         super().__init__(f"interrupted after {done}/{total} trials")
-
-
-@dataclass(frozen=True)
-class BatchTask:
-    """Everything a worker needs to run one batch (picklable, self-contained)."""
-
-    experiment: Experiment
-    params: dict[str, Any]
-    swept: dict[str, Any]
-    seed: int
-    span: BatchSpan
-
-
-@dataclass(frozen=True)
-class BatchResult:
-    """A finished batch as CSV text, ready to store."""
-
-    span: BatchSpan
-    trials_csv: str
-    trial_rows: int
-    timings_csv: str
-    timing_rows: int
-    wall_s: float
 
 
 @dataclass
@@ -131,117 +94,6 @@ class RunOutcome:
     figure_errors: list[str] = field(default_factory=list)
     report: Path | None = None
     seconds: float = 0.0
-
-
-# -- one batch, in a worker ------------------------------------------------------------------
-def _on_sigint(signum: int, frame: object) -> None:
-    _user_interrupt.set()
-    raise KeyboardInterrupt
-
-
-@contextmanager
-def _watch_sigint() -> Iterator[None]:
-    """Mark Ctrl-C as the user's, so a trial's own ``KeyboardInterrupt`` can be contained."""
-    if threading.current_thread() is not threading.main_thread() or \
-            signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
-        yield
-        return
-    _user_interrupt.clear()
-    _sigint_watched.set()
-    signal.signal(signal.SIGINT, _on_sigint)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
-        _sigint_watched.clear()
-
-
-def _is_user_interrupt(err: BaseException) -> bool:
-    """A ``KeyboardInterrupt`` that must stop the run rather than fail a trial."""
-    if not isinstance(err, KeyboardInterrupt):
-        return False
-    if _user_interrupt.is_set():
-        return True
-    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
-        return False  # Ctrl-C cannot reach this process (a background job): the trial raised it
-    in_main = threading.current_thread() is threading.main_thread() and \
-        multiprocessing.parent_process() is None
-    return in_main and not _sigint_watched.is_set()
-
-
-def _failure(prefix: dict[str, Any], err: BaseException) -> dict[str, Any]:
-    text = "".join(traceback.format_exception_only(type(err), err)).strip().replace("\n", " ")
-    return {**prefix, "algorithm": "", "status": FAILED_ROW, "error": text[:500]}
-
-
-def _rows(result: Any, producer: str) -> list[dict[str, Any]]:
-    """``result`` if it is a non-empty list of dicts, else a ``TypeError`` saying what it is."""
-    if isinstance(result, list) and result and all(isinstance(r, dict) for r in result):
-        return result
-    got = f"an empty {type(result).__name__}" if result == [] else type(result).__name__
-    raise TypeError(f"{producer} returned {got}; expected a non-empty list of row dicts")
-
-
-def _one_trial(task: BatchTask, trial: int) -> list[dict[str, Any]] | BaseException:
-    try:
-        streams = trial_streams(task.seed, task.span.point, trial)
-        return _rows(task.experiment.run_trial(task.params, streams), "run_trial")
-    except BaseException as err:  # noqa: BLE001 - recorded in the CSV, the run goes on
-        if _is_user_interrupt(err):
-            raise
-        return err
-
-
-def execute_batch(task: BatchTask) -> BatchResult:
-    """Run one batch (in a worker). A trial that fails becomes a ``failed`` row."""
-    t0 = time.perf_counter()
-    span = task.span
-    trials = range(span.first, span.stop)
-    try:
-        batch = task.experiment.run_trials(task.params,
-                                           batch_streams(task.seed, span.point, trials))
-        if isinstance(batch, RowTable):
-            batch.check(len(trials))
-            return _table_result(task, batch, t0)
-        if not isinstance(batch, list) or len(batch) != len(trials):
-            raise TypeError("run_batch returned the wrong number of trials")
-        per_trial: list[Any] = [_rows(r, "run_batch") for r in batch]
-    except BaseException as err:  # noqa: BLE001 - isolate the failing trial(s) one by one
-        if _is_user_interrupt(err):
-            raise
-        per_trial = [_one_trial(task, t) for t in trials]
-    rows: list[dict[str, Any]] = []
-    for trial, result in zip(trials, per_trial, strict=True):
-        prefix = {"point": span.point, "trial": trial, **task.swept}
-        if isinstance(result, BaseException):
-            rows.append(_failure(prefix, result))
-        else:
-            rows.extend({**prefix, **{k: v for k, v in row.items()
-                                      if k not in RESERVED_COLUMNS}} for row in result)
-    keys = ["point", "trial", *task.swept, *task.experiment.row_keys]
-    trial_rows, timing_rows = split_timings(rows, keys)
-    return BatchResult(span, rows_to_csv(trial_rows), len(trial_rows), rows_to_csv(timing_rows),
-                       len(timing_rows), time.perf_counter() - t0)
-
-
-def _table_result(task: BatchTask, table: RowTable, t0: float) -> BatchResult:
-    """The CSV parts of a batch returned as a :class:`~trackfuse.rowtable.RowTable`: the
-    same trial rows, cell for cell, as the dict rows would give, and one timings row per
-    entry of the table's per-batch timing table (``trial`` is the batch's first trial,
-    ``trials`` its size)."""
-    span = task.span
-    swept = {k: Constant(v) for k, v in task.swept.items()}
-    metrics = {k: v for k, v in table.columns.items()
-               if k not in RESERVED_COLUMNS and k not in task.swept
-               and not k.endswith(TIME_SUFFIX)}
-    trials_csv = columns_csv({"point": Constant(span.point), "trial": span.first + table.trial,
-                              **swept, **metrics}, table.rows)
-    timed = len(next(iter(table.timings.values()), ()))
-    timings_csv = columns_csv({"point": Constant(span.point), "trial": Constant(span.first),
-                               "trials": Constant(span.trials), **swept, **table.timings},
-                              timed) if timed else rows_to_csv([])
-    return BatchResult(span, trials_csv, table.rows, timings_csv, timed,
-                       time.perf_counter() - t0)
 
 
 # -- the run, in the client ------------------------------------------------------------------
@@ -393,7 +245,7 @@ class Runner:
         t0 = time.perf_counter()
         if self.out.exists() and not self.out.is_dir():
             raise RunFolderError(f"{self.out}: the output root is not a folder")
-        with RunLock(self.folder.path, self.warn), _watch_sigint():
+        with RunLock(self.folder.path, self.warn), watch_sigint():
             outcome = self._run_locked()
         outcome.seconds = time.perf_counter() - t0
         return outcome
@@ -552,4 +404,4 @@ def _per_point(previous: dict[str, Any] | None) -> dict[int, float]:
             if str(k).isdigit() and isinstance(v, (int, float)) and math.isfinite(v)}
 
 
-__all__ = ["BatchTask", "RunInterrupted", "RunOutcome", "Runner", "execute_batch"]
+__all__ = ["RunInterrupted", "RunOutcome", "Runner"]

@@ -1,0 +1,166 @@
+"""One batch of trials, run in a worker: seeds, the experiment's code, CSV text.
+
+Containment: whatever a trial raises (``SystemExit`` and, inside a worker,
+``KeyboardInterrupt`` included) or returns instead of a non-empty list of row dicts becomes
+one ``failed`` row carrying the error text; the run goes on.
+
+This module is what the process pool's workers load (with the experiment): it imports no
+pandas, no matplotlib and none of the run orchestration (:mod:`trackfuse.runner`).
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import signal
+import threading
+import time
+import traceback
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from typing import Any
+
+from trackfuse.experiments.base import Experiment
+from trackfuse.results import FAILED_ROW, TIME_SUFFIX, BatchSpan, rows_to_csv, split_timings
+from trackfuse.rowtable import Constant, RowTable, columns_csv
+from trackfuse.seeding import batch_streams, trial_streams
+
+RESERVED_COLUMNS = ("point", "trial")
+_user_interrupt = threading.Event()
+_sigint_watched = threading.Event()
+
+
+@dataclass(frozen=True)
+class BatchTask:
+    """Everything a worker needs to run one batch (picklable, self-contained)."""
+
+    experiment: Experiment
+    params: dict[str, Any]
+    swept: dict[str, Any]
+    seed: int
+    span: BatchSpan
+
+
+@dataclass(frozen=True)
+class BatchResult:
+    """A finished batch as CSV text, ready to store."""
+
+    span: BatchSpan
+    trials_csv: str
+    trial_rows: int
+    timings_csv: str
+    timing_rows: int
+    wall_s: float
+
+
+def _on_sigint(signum: int, frame: object) -> None:
+    _user_interrupt.set()
+    raise KeyboardInterrupt
+
+
+@contextmanager
+def watch_sigint() -> Iterator[None]:
+    """Mark Ctrl-C as the user's, so a trial's own ``KeyboardInterrupt`` can be contained."""
+    if threading.current_thread() is not threading.main_thread() or \
+            signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield
+        return
+    _user_interrupt.clear()
+    _sigint_watched.set()
+    signal.signal(signal.SIGINT, _on_sigint)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        _sigint_watched.clear()
+
+
+def _is_user_interrupt(err: BaseException) -> bool:
+    """A ``KeyboardInterrupt`` that must stop the run rather than fail a trial."""
+    if not isinstance(err, KeyboardInterrupt):
+        return False
+    if _user_interrupt.is_set():
+        return True
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        return False  # Ctrl-C cannot reach this process (a background job): the trial raised it
+    in_main = threading.current_thread() is threading.main_thread() and \
+        multiprocessing.parent_process() is None
+    return in_main and not _sigint_watched.is_set()
+
+
+def _failure(prefix: dict[str, Any], err: BaseException) -> dict[str, Any]:
+    text = "".join(traceback.format_exception_only(type(err), err)).strip().replace("\n", " ")
+    return {**prefix, "algorithm": "", "status": FAILED_ROW, "error": text[:500]}
+
+
+def _rows(result: Any, producer: str) -> list[dict[str, Any]]:
+    """``result`` if it is a non-empty list of dicts, else a ``TypeError`` saying what it is."""
+    if isinstance(result, list) and result and all(isinstance(r, dict) for r in result):
+        return result
+    got = f"an empty {type(result).__name__}" if result == [] else type(result).__name__
+    raise TypeError(f"{producer} returned {got}; expected a non-empty list of row dicts")
+
+
+def _one_trial(task: BatchTask, trial: int) -> list[dict[str, Any]] | BaseException:
+    try:
+        streams = trial_streams(task.seed, task.span.point, trial)
+        return _rows(task.experiment.run_trial(task.params, streams), "run_trial")
+    except BaseException as err:  # noqa: BLE001 - recorded in the CSV, the run goes on
+        if _is_user_interrupt(err):
+            raise
+        return err
+
+
+def execute_batch(task: BatchTask) -> BatchResult:
+    """Run one batch (in a worker). A trial that fails becomes a ``failed`` row."""
+    t0 = time.perf_counter()
+    span = task.span
+    trials = range(span.first, span.stop)
+    try:
+        batch = task.experiment.run_trials(task.params,
+                                           batch_streams(task.seed, span.point, trials))
+        if isinstance(batch, RowTable):
+            batch.check(len(trials))
+            return _table_result(task, batch, t0)
+        if not isinstance(batch, list) or len(batch) != len(trials):
+            raise TypeError("run_batch returned the wrong number of trials")
+        per_trial: list[Any] = [_rows(r, "run_batch") for r in batch]
+    except BaseException as err:  # noqa: BLE001 - isolate the failing trial(s) one by one
+        if _is_user_interrupt(err):
+            raise
+        per_trial = [_one_trial(task, t) for t in trials]
+    rows: list[dict[str, Any]] = []
+    for trial, result in zip(trials, per_trial, strict=True):
+        prefix = {"point": span.point, "trial": trial, **task.swept}
+        if isinstance(result, BaseException):
+            rows.append(_failure(prefix, result))
+        else:
+            rows.extend({**prefix, **{k: v for k, v in row.items()
+                                      if k not in RESERVED_COLUMNS}} for row in result)
+    keys = ["point", "trial", *task.swept, *task.experiment.row_keys]
+    trial_rows, timing_rows = split_timings(rows, keys)
+    return BatchResult(span, rows_to_csv(trial_rows), len(trial_rows), rows_to_csv(timing_rows),
+                       len(timing_rows), time.perf_counter() - t0)
+
+
+def _table_result(task: BatchTask, table: RowTable, t0: float) -> BatchResult:
+    """The CSV parts of a batch returned as a :class:`~trackfuse.rowtable.RowTable`: the
+    same trial rows, cell for cell, as the dict rows would give, and one timings row per
+    entry of the table's per-batch timing table (``trial`` is the batch's first trial,
+    ``trials`` its size)."""
+    span = task.span
+    swept = {k: Constant(v) for k, v in task.swept.items()}
+    metrics = {k: v for k, v in table.columns.items()
+               if k not in RESERVED_COLUMNS and k not in task.swept
+               and not k.endswith(TIME_SUFFIX)}
+    trials_csv = columns_csv({"point": Constant(span.point), "trial": span.first + table.trial,
+                              **swept, **metrics}, table.rows)
+    timed = len(next(iter(table.timings.values()), ()))
+    timings_csv = columns_csv({"point": Constant(span.point), "trial": Constant(span.first),
+                               "trials": Constant(span.trials), **swept, **table.timings},
+                              timed) if timed else rows_to_csv([])
+    return BatchResult(span, trials_csv, table.rows, timings_csv, timed,
+                       time.perf_counter() - t0)
+
+
+__all__ = ["BatchResult", "BatchTask", "execute_batch", "watch_sigint"]
