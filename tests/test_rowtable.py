@@ -15,6 +15,7 @@ def _table() -> RowTable:
     floats[[1, 4, 7]] = [np.nan, np.inf, -0.0]
     return RowTable(np.repeat(np.arange(4), 3), {
         "algorithm": np.array(["a/b", 'say "hi"', "x,y"] * 4, dtype=object),
+        "label": np.array(["b", "a\rc", "b", 'q"', "", "b"] * 2),  # str dtype: quoted once
         "scan": np.tile(np.arange(1, 4), 4),
         "err": floats,
         "lost": rng.random(12) < 0.5,

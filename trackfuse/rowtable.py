@@ -37,7 +37,16 @@ def column_cells(values: np.ndarray | Sequence[Any]) -> list[str]:
         return list(map(repr, a.astype(float, copy=False).tolist()))
     if a.dtype.kind in "iu":
         return list(map(str, a.tolist()))
-    return [csv_cell(format_value(v)) for v in a.tolist()]
+    quoted: dict[str, str] = {}  # labels (algorithm names) repeat: each is quoted once
+    cells = []
+    for value in a.tolist():
+        if type(value) is str:
+            if value not in quoted:
+                quoted[value] = csv_cell(value)
+            cells.append(quoted[value])
+        else:
+            cells.append(csv_cell(format_value(value)))
+    return cells
 
 
 @dataclass(frozen=True)

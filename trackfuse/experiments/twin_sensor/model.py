@@ -461,14 +461,14 @@ def _scan_returns(sc: Scenario, b: Batch, k: int, Xp: np.ndarray,
 
 def angle_off_target(X: np.ndarray, sensor: np.ndarray, los_true: np.ndarray,
                      sigma: np.ndarray, sigmas: float) -> np.ndarray:
-    """Angle rule at one scan: ``(N,)`` bool, True where the azimuth or the elevation of the
-    estimates ``X: (N, 6)`` seen from ``sensor: (3,)`` (m) is more than ``sigmas`` times
-    ``sigma: (2,)`` (rad, az and el noise sd) from the true angles ``los_true: (N, 2)``
+    """Angle rule: ``(...)`` bool, True where the azimuth or the elevation of the estimates
+    ``X: (..., 6)`` seen from ``sensor: (..., 3)`` (m) is more than ``sigmas`` times
+    ``sigma: (2,)`` (rad, az and el noise sd) from the true angles ``los_true: (..., 2)``
     (rad). Non-finite estimates count as off target. Uses the truth, not the filter's
     covariance, so it judges every filter by the same yardstick."""
     with np.errstate(invalid="ignore"):
-        err = np.abs(wrap(azel(X[:, :3] - sensor) - los_true)) / sigma
-        return ~(err <= sigmas).all(axis=1)
+        err = np.abs(wrap(azel(X[..., :3] - sensor) - los_true)) / sigma
+        return ~(err <= sigmas).all(axis=-1)
 
 
 def run_filter(sc: Scenario, b: Batch, options: PDAOptions,
@@ -478,97 +478,97 @@ def run_filter(sc: Scenario, b: Batch, options: PDAOptions,
 
     This is the plain numpy reference of the compiled filter loop that :func:`run_batch`
     uses (:mod:`.kernel`): the tests pin the two together to 1e-9 and the speed benchmark
-    times both."""
+    times both. A trial whose mean or covariance stops being finite has diverged: NaN from
+    that scan on, as in the kernel."""
     N = b.x0.shape[0]
     X = b.x0.copy()
     P = np.broadcast_to(sc.P0, (N, 6, 6)).copy()
-    out = {k: np.empty((N, sc.K)) for k in METRICS}
-    status = TrackStatus.start(N)
+    est = Estimates(np.empty((N, sc.K, 6)), np.empty((N, sc.K, 6, 6)),
+                    np.empty((N, sc.K, len(sc.R))), np.empty((N, sc.K), dtype=bool))
+    diverged = np.zeros(N, dtype=bool)
     for k in range(1, sc.K + 1):
         Xp = X @ sc.F.T
         Pp = sc.F @ P @ sc.F.T + sc.Q_filter
         returns, inside = _scan_returns(sc, b, k, Xp, Pp)
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             X, P, m = pda_update(Xp, Pp, returns, options)
-        X, P = score_scan(sc, b, k, X, P, m, inside, rules, status, out)
-    return out
+        P = 0.5 * (P + P.transpose(0, 2, 1))
+        diverged |= ~(np.isfinite(X).all(axis=1) & np.isfinite(P).all(axis=(1, 2)))
+        X[diverged], P[diverged] = np.nan, np.nan
+        est.X[:, k - 1], est.P[:, k - 1], est.n_valid[:, k - 1] = X, P, m
+        est.inside[:, k - 1] = inside
+    return score_estimates(sc, b, est, rules)
 
 
-@dataclass
-class TrackStatus:
-    """Running loss state of one algorithm over ``N`` trials, carried from scan to scan:
-    consecutive scans outside every gate and off target (``(N,)`` int), the permanent loss
-    flags and the divergence flag (``(N,)`` bool)."""
-
-    outside_run: np.ndarray
-    off_run: np.ndarray
-    lost_gate: np.ndarray
-    lost_angle: np.ndarray
-    diverged: np.ndarray
-
-    @classmethod
-    def start(cls, N: int) -> TrackStatus:
-        """The status before the first scan."""
-        return cls(np.zeros(N, dtype=int), np.zeros(N, dtype=int), np.zeros(N, dtype=bool),
-                   np.zeros(N, dtype=bool), np.zeros(N, dtype=bool))
-
-
-def score_scan(sc: Scenario, b: Batch, k: int, X: np.ndarray, P: np.ndarray, m: np.ndarray,
-               inside: np.ndarray, rules: LossRules, status: TrackStatus,
-               out: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-    """Score scan ``k`` of one algorithm: posterior ``X: (N, 6)``, ``P: (N, 6, 6)``, validated
-    returns ``m: (N, S)``, target-in-gate ``inside: (N,)``. Writes column ``k - 1`` of every
-    metric in ``out``, updates ``status`` and returns ``X, P`` (NaN where diverged)."""
-    P = 0.5 * (P + P.transpose(0, 2, 1))
-    status.diverged |= ~(np.isfinite(X).all(axis=1) & np.isfinite(P).all(axis=(1, 2)))
-    X[status.diverged], P[status.diverged] = np.nan, np.nan
-    status.outside_run = np.where(inside, 0, status.outside_run + 1)
-    status.lost_gate |= (status.outside_run >= rules.gate_window) | status.diverged
-    off = angle_off_target(X, sc.sensor_pos[k, 0], b.los[:, k - 1, 0], sc.noise_sd[0],
-                           rules.angle_sigmas)
-    status.off_run = np.where(off, status.off_run + 1, 0)
-    status.lost_angle |= (status.off_run >= rules.angle_window) | status.diverged
-    x_true, e = b.x_true[:, k], X - b.x_true[:, k]
-    p_plat = sc.platform[k]
-    range_err = (np.linalg.norm(X[:, :3] - p_plat, axis=1)
-                 - np.linalg.norm(x_true[:, :3] - p_plat, axis=1))
-    nees_pos = _nees(e[:, :3], P[:, :3, :3])
-    with np.errstate(invalid="ignore"):
-        inconsistent = (nees_pos > rules.nees_limit) | status.diverged
-    scan = {"range_err_m": range_err, "range_sq_err_m2": range_err**2,
-            "pos_sq_err_m2": (e[:, :3] ** 2).sum(axis=1), "nees": _nees(e, P),
-            "nees_pos": nees_pos, "n_valid": m.mean(axis=1), "lost_gate": status.lost_gate,
-            "lost_angle": status.lost_angle, "inconsistent_nees": inconsistent}
-    for key, value in scan.items():
-        out[key][:, k - 1] = value
-    return X, P
+def _runs(flags: np.ndarray) -> np.ndarray:
+    """Length of the run of consecutive True values ending at each scan: ``(N, K)`` int for
+    ``flags: (N, K)`` bool (0 where the flag is False)."""
+    runs = np.zeros(flags.shape, dtype=int)
+    count = np.zeros(flags.shape[0], dtype=int)
+    for k in range(flags.shape[1]):
+        count = np.where(flags[:, k], count + 1, 0)
+        runs[:, k] = count
+    return runs
 
 
 def score_estimates(sc: Scenario, b: Batch, est: Estimates,
                     rules: LossRules) -> dict[str, np.ndarray]:
-    """Every metric of :data:`METRICS` as ``(N, K)`` for another library's per-scan
-    estimates (:class:`~trackfuse.experiments.twin_sensor.stonesoup.Estimates`), scored
-    exactly as :func:`run_filter` scores ours."""
-    N = b.x0.shape[0]
-    out = {k: np.empty((N, sc.K)) for k in METRICS}
-    status = TrackStatus.start(N)
-    for k in range(1, sc.K + 1):
-        score_scan(sc, b, k, est.X[:, k - 1].copy(), est.P[:, k - 1].copy(),
-                   est.n_valid[:, k - 1], est.inside[:, k - 1], rules, status, out)
-    return out
+    """Every metric of :data:`METRICS` as ``(N, K)`` for per-scan estimates ``est`` (ours,
+    from :func:`run_filter` or the kernel, or another library's,
+    :class:`~trackfuse.experiments.twin_sensor.stonesoup.Estimates`), all scored alike.
+
+    ``P`` is symmetrized; a trial is diverged from the first scan where its mean or
+    covariance is not finite, and both are NaN from then on. The loss flags are permanent:
+    lost by the gate rule after ``gate_window`` consecutive scans with the target outside
+    every gate, by the angle rule after ``angle_window`` consecutive scans off target, and
+    by both on divergence."""
+    X = est.X.copy()
+    P = 0.5 * (est.P + est.P.transpose(0, 1, 3, 2))
+    bad = ~(np.isfinite(X).all(axis=2) & np.isfinite(P).all(axis=(2, 3)))
+    diverged = np.logical_or.accumulate(bad, axis=1)
+    X[diverged], P[diverged] = np.nan, np.nan
+    scans = np.arange(1, sc.K + 1)
+    off = angle_off_target(X, sc.sensor_pos[scans, 0], b.los[:, :, 0], sc.noise_sd[0],
+                           rules.angle_sigmas)
+    lost_gate = np.logical_or.accumulate(
+        (_runs(~est.inside) >= rules.gate_window) | diverged, axis=1)
+    lost_angle = np.logical_or.accumulate((_runs(off) >= rules.angle_window) | diverged,
+                                          axis=1)
+    x_true = b.x_true[:, scans]
+    e = X - x_true
+    platform = sc.platform[scans]
+    range_err = (np.linalg.norm(X[..., :3] - platform, axis=-1)
+                 - np.linalg.norm(x_true[..., :3] - platform, axis=-1))
+    nees_pos = _nees(e[..., :3], P[..., :3, :3])
+    with np.errstate(invalid="ignore"):
+        inconsistent = (nees_pos > rules.nees_limit) | diverged
+    return {"range_err_m": range_err, "range_sq_err_m2": range_err**2,
+            "pos_sq_err_m2": (e[..., :3] ** 2).sum(axis=-1), "nees": _nees(e, P),
+            "nees_pos": nees_pos, "n_valid": est.n_valid.mean(axis=-1),
+            "lost_gate": lost_gate, "lost_angle": lost_angle,
+            "inconsistent_nees": inconsistent}
 
 
 def _nees(e: np.ndarray, P: np.ndarray) -> np.ndarray:
-    """``e' P^-1 e`` for ``e: (N, n)``, ``P: (N, n, n)``; NaN where ``P`` is not finite."""
-    finite = np.isfinite(P).all(axis=(1, 2)) & np.isfinite(e).all(axis=1)
-    out = np.full(e.shape[0], np.nan)
+    """``e' P^-1 e`` for ``e: (..., n)``, ``P: (..., n, n)``: ``(...)``, NaN where ``P`` or
+    ``e`` is not finite; a singular ``P`` is inverted by its pseudo-inverse."""
+    finite = np.isfinite(P).all(axis=(-2, -1)) & np.isfinite(e).all(axis=-1)
+    out = np.full(e.shape[:-1], np.nan)
     if finite.any():
         Pf, ef = P[finite], e[finite]
         try:
             out[finite] = (ef * np.linalg.solve(Pf, ef[..., None])[..., 0]).sum(axis=1)
         except np.linalg.LinAlgError:
-            out[finite] = [float(x @ np.linalg.pinv(Q) @ x) for x, Q in zip(ef, Pf, strict=True)]
+            out[finite] = [_nees_one(x, Q) for x, Q in zip(ef, Pf, strict=True)]
     return out
+
+
+def _nees_one(e: np.ndarray, P: np.ndarray) -> float:
+    """``e' P^-1 e`` of one ``e: (n,)``, ``P: (n, n)``; the pseudo-inverse if ``P`` is singular."""
+    try:
+        return float((e * np.linalg.solve(P, e[:, None])[:, 0]).sum())
+    except np.linalg.LinAlgError:
+        return float(e @ np.linalg.pinv(P) @ e)
 
 
 def run_batch(params: dict[str, Any], streams: Sequence[TrialStreams]) -> RowTable:
