@@ -13,9 +13,10 @@ redrawing gives the same bytes. ``index.html`` needs no network and no JavaScrip
 sit beside it in ``figures/``.
 
 This module imports matplotlib only when it draws (the style's warm-up before forking the
-drawing processes): report modules draw on :class:`matplotlib.figure.Figure` objects
-(:func:`trackfuse.plots.style.new_figure`, not registered with pyplot, freed with their last
-reference), and the runner, which imports this module, stays free of it.
+drawing processes, or ahead of drawing: :func:`load_drawing`): report modules draw on
+:class:`matplotlib.figure.Figure` objects (:func:`trackfuse.plots.style.new_figure`, not
+registered with pyplot, freed with their last reference), and the runner, which imports
+this module, stays free of it until it draws.
 """
 
 from __future__ import annotations
@@ -217,7 +218,7 @@ def _write_figures(run: RunData, module: ModuleType, wanted: Sequence[str],
         from trackfuse.plots.style import warm_up  # matplotlib: see the module docstring
 
         run.trials, run.summary  # noqa: B018 - read once here, inherited by the forks
-        warm_up(list(formats), PNG_DPI)
+        warm_up(tuple(formats), PNG_DPI)
         _FORK_STATE = (run, module, formats)
         try:
             with ProcessPoolExecutor(processes, multiprocessing.get_context("fork")) as pool:
@@ -236,6 +237,27 @@ def _write_figures(run: RunData, module: ModuleType, wanted: Sequence[str],
     report.not_drawn = {n: report.not_drawn[n] for n in wanted if n in report.not_drawn}
 
 
+def figure_formats(config: dict[str, Any]) -> list[str]:
+    """The file formats of a run's figures: the resolved config's ``outputs.formats``."""
+    return list((config.get("outputs") or {}).get("formats") or ["png", "pdf"])
+
+
+def load_drawing(report_module: str | None, formats: Sequence[str]) -> None:
+    """Import ``report_module`` (an experiment's report module, and with it matplotlib) and
+    warm up the house style: what drawing a run's figures loads first, done ahead of time
+    (the runner calls this in a thread while its workers compute). A module that fails to
+    import is left for :func:`write_report` to report."""
+    if not report_module:
+        return
+    try:
+        importlib.import_module(report_module)
+    except Exception:  # noqa: BLE001 - write_report imports it again and says why it fails
+        return
+    from trackfuse.plots.style import warm_up  # matplotlib: see the module docstring
+
+    warm_up(tuple(formats), PNG_DPI)
+
+
 def write_report(run: RunData, wanted: Collection[str] | None = None,
                  formats: Sequence[str] | None = None) -> Report:
     """Draw the tables and figures of ``run`` and write ``index.md`` and ``index.html``.
@@ -248,7 +270,7 @@ def write_report(run: RunData, wanted: Collection[str] | None = None,
     if wanted is None:
         choice = outputs.get("figures", "all")
         wanted = declared if choice == "all" else list(choice)
-    formats = list(formats or outputs.get("formats") or ["png", "pdf"])
+    formats = list(formats or figure_formats(run.config))
     report = Report()
     module = _module(run, report)
     tables: dict[str, pd.DataFrame] = {}

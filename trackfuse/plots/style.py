@@ -15,6 +15,7 @@ from __future__ import annotations
 import io
 from contextlib import AbstractContextManager
 from dataclasses import dataclass
+from functools import cache
 
 import matplotlib
 import numpy as np
@@ -46,8 +47,10 @@ def new_figure(ncols: int = 1, nrows: int = 1, width: float = 5.0, height: float
     return fig, (flat[0] if flat.size == 1 else flat)
 
 
-def warm_up(formats: list[str], dpi: int) -> None:
-    """Draw one small figure in the house style and save it in memory in each format.
+@cache
+def warm_up(formats: tuple[str, ...], dpi: int) -> None:
+    """Draw one small figure in the house style and save it in memory in each format (once
+    per process).
 
     What the first figure of a process loads (the fonts, the PDF font subsetter, the image
     writers: about 0.5 s) is then loaded here once, before the drawing processes fork from
