@@ -117,3 +117,16 @@ def test_fingerprint_covers_the_experiment_its_imports_and_the_numbers_path():
     assert "trackfuse.association.pga" in modules  # imported by the experiment
     assert set(NUMBERS_PATH) <= set(modules)
     assert "toy_experiments" in code_fingerprint(GAUSSIAN).modules
+
+
+def test_fingerprinting_runs_none_of_the_modules_it_hashes():
+    # reading the kernel's source must not import it (numba, about 0.5 s, in every run)
+    code = ("import sys\n"
+            "from trackfuse.experiments import get\n"
+            "from trackfuse.fingerprint import code_fingerprint\n"
+            "modules = code_fingerprint(get('twin_sensor')).modules\n"
+            "print('trackfuse.experiments.twin_sensor.kernel' in modules, "
+            "'trackfuse.experiments.twin_sensor.kernel' in sys.modules, 'numba' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=ROOT).stdout.split()
+    assert out == ["True", "False", "False"]

@@ -24,8 +24,10 @@ from __future__ import annotations
 import ast
 import hashlib
 import importlib.util
-from collections.abc import Iterable
+import sys
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
+from importlib.machinery import ModuleSpec, PathFinder
 from pathlib import Path
 
 from trackfuse.experiments.base import Experiment
@@ -44,11 +46,24 @@ class CodeFingerprint:
     modules: tuple[str, ...]
 
 
-def _source_file(module: str) -> Path | None:
+def _spec(module: str) -> ModuleSpec | None:
+    """Where ``module`` would be loaded from, found without importing it or its parents
+    (``importlib.util.find_spec`` imports the parent package, and ``a.b.c`` for a name ``c``
+    imported from module ``a.b`` would run ``a.b``, compiled kernel and all)."""
+    parent, _, _ = module.rpartition(".")
     try:
-        spec = importlib.util.find_spec(module)
+        if not parent or module in sys.modules:
+            return importlib.util.find_spec(module)
+        outer = _spec(parent)
+        if outer is None or outer.submodule_search_locations is None:
+            return None  # the parent is not a package: ``module`` is a name inside it
+        return PathFinder.find_spec(module, list(outer.submodule_search_locations))
     except (ImportError, ValueError):
         return None
+
+
+def _source_file(module: str) -> Path | None:
+    spec = _spec(module)
     if spec is None or not spec.origin or not spec.has_location:
         return None
     return Path(spec.origin)
@@ -63,7 +78,7 @@ def _imports(module: str, path: Path) -> set[str]:
         return set()
     package = module if path.name == "__init__.py" else module.rpartition(".")[0]
     found: set[str] = set()
-    for node in ast.walk(tree):
+    for node in _statements(tree.body):
         if isinstance(node, ast.Import):
             found.update(alias.name for alias in node.names)
         elif isinstance(node, ast.ImportFrom):
@@ -76,6 +91,18 @@ def _imports(module: str, path: Path) -> set[str]:
             found.add(base)
             found.update(f"{base}.{alias.name}" for alias in node.names)  # submodules
     return found
+
+
+def _statements(body: list[ast.AST]) -> Iterator[ast.AST]:
+    """Every statement in ``body`` and in the bodies nested in it (functions, classes,
+    branches, loops, ``try``, ``with``, ``match``): where an import can be, without walking
+    the expressions, which hold none."""
+    for node in body:
+        yield node
+        for field in ("body", "orelse", "finalbody", "handlers", "cases"):
+            nested = getattr(node, field, None)
+            if isinstance(nested, list):
+                yield from _statements(nested)
 
 
 def _closure(roots: Iterable[str], tops: set[str]) -> dict[str, Path]:
