@@ -9,15 +9,17 @@ exactly as a new user installs it, and runs its own shipped configs:
 * ``run --no-plots``: the same without figures (simulation, filters, CSVs and summaries: the
   compute part, apart from the drawing),
 * ``reproduce``: ``trackfuse reproduce configs --workers 2`` (every paper config, figures
-  included; the two versions may ship different sets of configs, so the config counts and
-  trial totals are printed beside the times),
+  included; the two versions may ship different sets of configs, so the config counts are
+  printed beside the times),
+* ``reproduce same``: the same command, both versions on the baseline's configs folder (the
+  like-for-like comparison when the shipped configs have changed),
 * ``startup``: ``trackfuse --help``, ``trackfuse list`` and ``trackfuse validate`` of the
   orbit config (what a ``--set`` trial-and-error loop pays each time),
 * ``first run``: ``run --no-plots`` once with numba's on-disk cache emptied, as the first run
   after installing: the current version compiles its filter kernel then (once per install);
   every other line is timed after it, with the compiled kernel cached.
 
-    python benchmarks/end_to_end.py [--baseline 6f49e5c] [--repeats 3] [--skip reproduce]
+    python benchmarks/end_to_end.py [--baseline 6f49e5c] [--repeats 3] [--skip reproduce first]
 
 The current version is the working tree's committed ``HEAD`` (uncommitted changes are not
 measured). Prints the minimum and median over the repeats and the ratio baseline/current.
@@ -100,7 +102,7 @@ def main() -> None:
     parser.add_argument("--baseline", default="6f49e5c")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--skip", nargs="*", default=[], choices=["run", "reproduce",
-                                                                  "startup"],
+                                                                  "startup", "first"],
                         help="skip commands by first word (run skips both run lines)")
     args = parser.parse_args()
     homes = {"baseline": install(args.baseline), "current": install("HEAD")}
@@ -108,15 +110,19 @@ def main() -> None:
         "run": ["run", MAIN_CONFIG, "--workers", "2"],
         "run --no-plots": ["run", MAIN_CONFIG, "--workers", "2", "--no-plots"],
         "reproduce": ["reproduce", "configs", "--workers", "2"],
+        "reproduce same": ["reproduce", str(homes["baseline"] / "src" / "configs"),
+                           "--workers", "2"],
         "startup --help": ["--help"],
         "startup list": ["list"],
         "startup validate": ["validate", MAIN_CONFIG],
     }
     commands = {k: v for k, v in commands.items() if k.split()[0] not in args.skip}
-    firsts = {name: first_run(home) for name, home in homes.items()}
+    firsts = {} if "first" in args.skip else \
+        {name: first_run(home) for name, home in homes.items()}
     times = measure(homes, commands, args.repeats,
-                    writes={"run", "run --no-plots", "reproduce"})
-    times["first run --no-plots"] = {name: [t] for name, t in firsts.items()}
+                    writes={"run", "run --no-plots", "reproduce", "reproduce same"})
+    if firsts:
+        times["first run --no-plots"] = {name: [t] for name, t in firsts.items()}
     for name, home in homes.items():
         print(f"{name}: {home.name}, {config_count(home)} paper configs")
     print(f"{'command':<18} {'baseline min/median s':>22} {'current min/median s':>21} "
