@@ -11,7 +11,7 @@ exactly as a new user installs it, and runs its own shipped configs:
 * ``reproduce``: ``trackfuse reproduce configs --workers 2`` (every paper config, figures
   included; the two versions may ship different sets of configs, so the config counts are
   printed beside the times),
-* ``reproduce same``: the same command, both versions on the baseline's configs folder (the
+* ``reproduce-same``: the same command, both versions on the baseline's configs folder (the
   like-for-like comparison when the shipped configs have changed),
 * ``startup``: ``trackfuse --help``, ``trackfuse list`` and ``trackfuse validate`` of the
   orbit config (what a ``--set`` trial-and-error loop pays each time),
@@ -101,8 +101,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--baseline", default="6f49e5c")
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--skip", nargs="*", default=[], choices=["run", "reproduce",
-                                                                  "startup", "first"],
+    parser.add_argument("--skip", nargs="*", default=[],
+                        choices=["run", "reproduce", "reproduce-same", "startup", "first"],
                         help="skip commands by first word (run skips both run lines)")
     args = parser.parse_args()
     homes = {"baseline": install(args.baseline), "current": install("HEAD")}
@@ -110,7 +110,7 @@ def main() -> None:
         "run": ["run", MAIN_CONFIG, "--workers", "2"],
         "run --no-plots": ["run", MAIN_CONFIG, "--workers", "2", "--no-plots"],
         "reproduce": ["reproduce", "configs", "--workers", "2"],
-        "reproduce same": ["reproduce", str(homes["baseline"] / "src" / "configs"),
+        "reproduce-same": ["reproduce", str(homes["baseline"] / "src" / "configs"),
                            "--workers", "2"],
         "startup --help": ["--help"],
         "startup list": ["list"],
@@ -120,7 +120,7 @@ def main() -> None:
     firsts = {} if "first" in args.skip else \
         {name: first_run(home) for name, home in homes.items()}
     times = measure(homes, commands, args.repeats,
-                    writes={"run", "run --no-plots", "reproduce", "reproduce same"})
+                    writes={"run", "run --no-plots", "reproduce", "reproduce-same"})
     if firsts:
         times["first run --no-plots"] = {name: [t] for name, t in firsts.items()}
     for name, home in homes.items():
