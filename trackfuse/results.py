@@ -125,13 +125,10 @@ def format_value(value: Any) -> str:
     return str(value)
 
 
-_NEEDS_QUOTES = (",", '"', "\r", "\n")
-
-
 def csv_cell(text: str) -> str:
     """``text`` as one CSV field: quoted where it holds a comma, a quote or a line break
     (``\\r`` too, which :mod:`csv`'s writer leaves bare with a ``\\n`` line terminator)."""
-    if any(c in text for c in _NEEDS_QUOTES):
+    if "," in text or '"' in text or "\n" in text or "\r" in text:
         return '"' + text.replace('"', '""') + '"'
     return text
 

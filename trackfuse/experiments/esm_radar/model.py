@@ -69,6 +69,7 @@ Table 1; ``ablation``; ``paper_vs_reproduced``) are built by
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -557,7 +558,8 @@ SCAN_SERIES = {
 
 def encode_series(values: np.ndarray, fmt: str) -> str:
     """One per-scan CSV cell: ``values`` (K,) formatted with ``fmt``, joined by ``;``."""
-    return ";".join("nan" if not np.isfinite(v) else format(v, fmt) for v in values)
+    return ";".join(format(v, fmt) if math.isfinite(v) else "nan"
+                    for v in np.asarray(values, dtype=float).tolist())
 
 
 def decode_series(cells: Sequence[str]) -> np.ndarray:
