@@ -62,10 +62,13 @@ def _function_level_imports(tree: ast.AST) -> list[tuple[int, str]]:
 
 
 # Function-level imports allowed for start-up time, each with its reason: the twin-sensor
-# kernel imports numba (about 0.5 s), which only a running batch needs; the house style
+# kernel imports numba (about 0.5 s), which only a running batch needs; so does the compiled
+# PGA loop, which only a running passive_assoc trial needs; the house style
 # imports matplotlib (about 0.4 s), which only drawing needs (the runner imports reports).
 LAZY_IMPORTS = {("trackfuse.experiments.twin_sensor.model",
                  "trackfuse.experiments.twin_sensor.kernel"),
+                ("trackfuse.experiments.passive_assoc.model",
+                 "trackfuse.association.pga_kernel"),
                 ("trackfuse.reports", "trackfuse.plots.style")}
 
 

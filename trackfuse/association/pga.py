@@ -69,7 +69,7 @@ from __future__ import annotations
 import math
 import time
 from bisect import bisect_right
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from itertools import accumulate
 from typing import NamedTuple
@@ -185,28 +185,43 @@ def column_ranks(a: np.ndarray, a_0j: np.ndarray) -> np.ndarray:
     return ranks
 
 
-def _problem(weights: PairWeights, roulette: str) -> _Problem:
+class Oriented(NamedTuple):
+    """One assignment problem in PGA form as arrays, the smaller set on the rows."""
+
+    w: np.ndarray  # (m1+1, m2) float gains, row 0 (the dummy) zero
+    rank: np.ndarray  # (m1+1, m2) int roulette weight of column j when it holds row r
+    transpose: bool  # rows are the caller's sensor-2 measurements
+
+
+def orient(weights: PairWeights, roulette: str) -> Oriented:
     """Setup: orient the problem (rows = the smaller set), gains and roulette weights."""
     transpose = weights.a.shape[0] > weights.a.shape[1]
     a, a_0j = (weights.a.T, weights.a_i0) if transpose else (weights.a, weights.a_0j)
     gain = weights.gain.T if transpose else weights.gain
     m1, m2 = a.shape
-    rank = column_ranks(a, a_0j).tolist()
+    rank = column_ranks(a, a_0j)
     if roulette == "better":
-        rank = [[m1 + 2 - v for v in row] for row in rank]
+        rank = m1 + 2 - rank
     elif roulette != "worse":
         raise ValueError(f"unknown roulette direction {roulette!r}")
-    return _Problem([[0.0] * m2] + gain.tolist(), rank, m1, m2, transpose)
+    w = np.vstack([np.zeros((1, m2)), gain]).astype(np.float64, copy=False)
+    return Oriented(w, rank.astype(np.int64, copy=False), transpose)
 
 
-def _initial(problem: _Problem, init: str, rng: np.random.Generator) -> list[int]:
+def _problem(weights: PairWeights, roulette: str) -> _Problem:
+    """Setup of the reference search: :func:`orient` as nested lists."""
+    w, rank, transpose = orient(weights, roulette)
+    return _Problem(w.tolist(), rank.tolist(), rank.shape[0] - 1, rank.shape[1], transpose)
+
+
+def initial_solution(m1: int, m2: int, init: str, rng: np.random.Generator) -> list[int]:
     """Setup: the initial solution ``col_row`` (module docstring)."""
-    cur = [0] * problem.m2
+    cur = [0] * m2
     if init == "random_B":
-        for r, j in enumerate(rng.permutation(problem.m2)[:problem.m1].tolist(), start=1):
+        for r, j in enumerate(rng.permutation(m2)[:m1].tolist(), start=1):
             cur[j] = r
     elif init == "standard":
-        cur[:problem.m1] = range(1, problem.m1 + 1)
+        cur[:m1] = range(1, m1 + 1)
     else:
         raise ValueError(f"unknown init {init!r}")
     return cur
@@ -310,30 +325,37 @@ class _Search:
         self.dJ, self.child_paired, self.touched = 0.0, self.n_paired, []
 
 
-def _draws(rng: np.random.Generator, ops: int):
-    """The :class:`Draws` of operations ``1..ops``, drawn in blocks of ``_BLOCK`` rows."""
+def draw_blocks(rng: np.random.Generator, ops: int) -> Iterator[np.ndarray]:
+    """The uniforms of operations ``1..ops`` in blocks of at most ``_BLOCK`` rows, each
+    ``(rows, 8)`` with the columns of :class:`Draws`."""
     for first in range(0, ops, _BLOCK):
-        yield from map(Draws._make, rng.random((min(_BLOCK, ops - first), 8)).tolist())
+        yield rng.random((min(_BLOCK, ops - first), 8))
 
 
-def _collect(problem: _Problem, saved: dict[int, tuple[list[int], float]],
-             rows: int) -> PGAResult:
-    """Collection: checkpointed solutions back in the caller's orientation (``rows`` =
-    sensor-1 count)."""
+def _draws(rng: np.random.Generator, ops: int) -> Iterator[Draws]:
+    """The :class:`Draws` of operations ``1..ops`` (:func:`draw_blocks`)."""
+    for block in draw_blocks(rng, ops):
+        yield from map(Draws._make, block.tolist())
+
+
+def collect(saved: dict[int, tuple[list[int], float]], objective: Callable[[list[int]], float],
+            transpose: bool, rows: int) -> PGAResult:
+    """Collection: checkpointed solutions (checkpoint -> (``col_row``, elapsed s)), scored
+    by ``objective``, back in the caller's orientation (``rows`` = sensor-1 count)."""
     marks = sorted(saved)
     partner = np.full((len(marks), rows), -1)
-    objective = np.empty(len(marks))
+    objective_at = np.empty(len(marks))
     elapsed = np.empty(len(marks))
     for k, c in enumerate(marks):
         sol, elapsed[k] = saved[c]
-        objective[k] = problem.objective(sol)
+        objective_at[k] = objective(sol)
         for j, r in enumerate(sol):
             if r:
-                if problem.transpose:
+                if transpose:
                     partner[k, j] = r - 1
                 else:
                     partner[k, r - 1] = j
-    return PGAResult(checkpoints=np.array(marks), partner1=partner, objective=objective,
+    return PGAResult(checkpoints=np.array(marks), partner1=partner, objective=objective_at,
                      elapsed_s=elapsed)
 
 
@@ -369,8 +391,8 @@ def pga(weights: PairWeights, rng: np.random.Generator, ops: int = 1000,
     if accept not in ("monotone", "anneal"):
         raise ValueError(f"unknown acceptance {accept!r}")
     anneal = accept == "anneal"
-    search = _Search(problem, _initial(problem, init, rng), p_m, second, repair_moves,
-                     staged, evict, anneal)
+    search = _Search(problem, initial_solution(problem.m1, problem.m2, init, rng), p_m,
+                     second, repair_moves, staged, evict, anneal)
     marks = {int(c) for c in checkpoints if 0 <= c <= ops} | {ops}
     saved: dict[int, tuple[list[int], float]] = {}  # checkpoint -> (best, elapsed s)
     if 0 in marks:
@@ -382,4 +404,4 @@ def pga(weights: PairWeights, rng: np.random.Generator, ops: int = 1000,
         search.T *= cool
         if t in marks:
             saved[t] = (search.best.copy(), time.perf_counter() - start)
-    return _collect(problem, saved, weights.a.shape[0])
+    return collect(saved, problem.objective, problem.transpose, weights.a.shape[0])

@@ -2,7 +2,8 @@
 (``passive_assoc``).
 
 The science (scene, pair weights, exact and PGA solvers, scoring) is :mod:`.model`; the
-figures and tables are :mod:`.report`, which reads saved runs only. See
+figures and tables are :mod:`.report`, which reads saved runs only; :mod:`.preload` loads the
+compiled PGA loop once in the process pool's fork server. See
 ``docs/papers/passive_assoc.md``.
 """
 
@@ -36,6 +37,7 @@ EXPERIMENT = Experiment(
     figures=FIGURES,
     row_keys=("algorithm", "ops"),
     batch_size=25,
+    preload=("trackfuse.experiments.passive_assoc.preload",),
 )
 
 __all__ = ["EXPERIMENT", "FIGURES"]

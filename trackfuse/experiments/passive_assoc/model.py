@@ -55,7 +55,7 @@ import numpy as np
 
 from trackfuse.association.assignment import COSTS, EXACT, pair_weights, solve_exact
 from trackfuse.association.passive_scene import scene_targets, simulate_scan, true_partners
-from trackfuse.association.pga import CHECKPOINTS, pga
+from trackfuse.association.pga import CHECKPOINTS
 from trackfuse.experiments.base import Metric, Param
 from trackfuse.seeding import TrialStreams
 
@@ -149,7 +149,13 @@ def _partner2(partner1: np.ndarray, m2: int) -> np.ndarray:
 
 
 def run_trial(params: dict[str, Any], streams: TrialStreams) -> list[dict[str, Any]]:
-    """One scan: simulate, weigh, solve exactly and by each PGA variant; rows per checkpoint."""
+    """One scan: simulate, weigh, solve exactly and by each PGA variant; rows per checkpoint.
+
+    The PGA runs compiled (:func:`trackfuse.association.pga_kernel.pga_compiled`, bit for
+    bit :func:`trackfuse.association.pga.pga`).
+    """
+    from trackfuse.association.pga_kernel import pga_compiled  # numba: on use
+
     truth, noise, shuffle, algo = streams.common.spawn(4)
     clutter = streams.point
     sigma = sigma_of(params)
@@ -185,11 +191,11 @@ def run_trial(params: dict[str, Any], streams: TrialStreams) -> list[dict[str, A
     for stream, (name, options) in zip(streams, VARIANTS.items(), strict=True):
         if name not in wanted:
             continue
-        result = pga(weights, stream, ops=int(params["pga.ops"]),
-                     checkpoints=[int(c) for c in params["pga.checkpoints"]],
-                     p_m=params["pga.p_m"], init=params["pga.init"],
-                     roulette=params["pga.roulette"], second=params["pga.second"],
-                     t0=params["pga.t0"], t1=params["pga.t1"], **options)
+        result = pga_compiled(weights, stream, ops=int(params["pga.ops"]),
+                              checkpoints=[int(c) for c in params["pga.checkpoints"]],
+                              p_m=params["pga.p_m"], init=params["pga.init"],
+                              roulette=params["pga.roulette"], second=params["pga.second"],
+                              t0=params["pga.t0"], t1=params["pga.t1"], **options)
         for k, ops in enumerate(result.checkpoints.tolist()):
             rows.append(row(name, ops, result.partner1[k], float(result.objective[k]),
                             float(result.elapsed_s[k])))

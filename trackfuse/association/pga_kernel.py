@@ -1,0 +1,246 @@
+"""Compiled search loop of the partheno-genetic algorithm (numba), bit for bit the reference.
+
+:func:`pga_compiled` takes the arguments of :func:`trackfuse.association.pga.pga` and returns
+the same :class:`~trackfuse.association.pga.PGAResult`: the same solutions and objectives at
+every checkpoint, bit for bit, for every option (only ``elapsed_s``, a wall time, differs).
+The setup (orientation, roulette weights, initial solution), the random draws (the same
+numpy blocks, :func:`~trackfuse.association.pga.draw_blocks`) and the collection are the
+reference's own functions; only the genetic operations run compiled. They repeat the
+reference's :class:`~trackfuse.association.pga._Search` step by step on arrays: the same
+column choices (the roulette's binary search over the integer cumulative weights), the same
+moves, the same floating-point operations in the same order (``J`` grows by the same gains,
+the Metropolis test is ``u < exp(dJ / T)`` and ``T`` is multiplied by the same cooling
+factor after every operation). ``tests/test_pga_kernel.py`` pins the two exactly.
+
+The loop runs from checkpoint to checkpoint (and block to block of draws), so the wall time
+of each checkpoint is measured as in the reference. The compiled code is cached on disk
+beside this module (``cache=True``): the first run on a machine compiles it (a few
+seconds), later processes load it.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+
+import numpy as np
+from numba import njit
+
+from trackfuse.association.assignment import PairWeights
+from trackfuse.association.pga import (
+    CHECKPOINTS,
+    PGAResult,
+    collect,
+    draw_blocks,
+    initial_solution,
+    orient,
+)
+
+JIT = {"cache": True, "nogil": True, "error_model": "numpy"}
+# Columns of a row of draws (the fields of pga.Draws, in stream order).
+FIRST, SECOND, MUTATE, REPAIR, PICK, PLACE, ACCEPT_CROSSOVER, ACCEPT_MUTATION = range(8)
+# Entries of the float state carried from one compiled segment to the next.
+J_CUR, J_BEST, TEMPERATURE = range(3)
+
+
+def pga_compiled(weights: PairWeights, rng: np.random.Generator, ops: int = 1000,
+                 checkpoints: Sequence[int] = CHECKPOINTS, p_m: float = 0.2,
+                 init: str = "random_B", roulette: str = "worse", second: str = "roulette",
+                 repair_moves: bool = False, staged: bool = False, evict: bool = False,
+                 accept: str = "monotone", t0: float = 1.0, t1: float = 0.01) -> PGAResult:
+    """:func:`trackfuse.association.pga.pga` with the genetic operations compiled (same
+    parameters, same result)."""
+    start = time.perf_counter()
+    w, rank, transpose = orient(weights, roulette)
+    if accept not in ("monotone", "anneal"):
+        raise ValueError(f"unknown acceptance {accept!r}")
+    if second not in ("roulette", "uniform"):
+        raise ValueError(f"unknown second-column rule {second!r}")
+    anneal = accept == "anneal"
+    m1, m2 = rank.shape[0] - 1, rank.shape[1]
+    columns = np.arange(m2)
+
+    def objective(col_row: list[int]) -> float:  # the reference's sum, of Python floats
+        return sum(w[col_row, columns].tolist())
+
+    cur = initial_solution(m1, m2, init, rng)
+    J = objective(cur)
+    cur = np.array(cur, dtype=np.int64)
+    best, q = cur.copy(), rank[cur, columns]
+    state = np.array([J, J, t0])
+    marks = {int(c) for c in checkpoints if 0 <= c <= ops} | {ops}
+    saved: dict[int, tuple[list[int], float]] = {}  # checkpoint -> (best, elapsed s)
+    if 0 in marks:
+        saved[0] = (best.tolist(), time.perf_counter() - start)
+    cool = (t1 / t0) ** (1.0 / max(ops, 1)) if anneal else 1.0
+    done = 0
+    for block in draw_blocks(rng, ops):
+        lo = 0
+        while lo < len(block):
+            hi = min(len(block), min(c for c in marks if c > done) - done + lo)
+            _search(block[lo:hi], w, rank, cur, best, q, state, float(p_m),
+                    second == "roulette", bool(repair_moves), bool(staged), bool(evict), anneal,
+                    cool)
+            done, lo = done + hi - lo, hi
+            if done in marks:
+                saved[done] = (best.tolist(), time.perf_counter() - start)
+    return collect(saved, objective, transpose, weights.a.shape[0])
+
+
+@njit(**JIT)
+def _search(draws, w, rank, cur, best, q, state, p_m, roulette_second, repair_moves, staged,
+            evict, anneal, cool):
+    """Run the genetic operations of ``draws: (n, 8)`` from the solution ``cur: (m2,)``
+    (with its roulette weights ``q``), updating ``cur``, ``q``, ``best`` and ``state``
+    (``J``, best ``J``, temperature) in place; the flags are the options of
+    :func:`pga_compiled`. One iteration is ``_Search.operate`` of the reference.
+    """
+    m1, m2 = w.shape[0] - 1, w.shape[1]
+    J, J_best, T = state[J_CUR], state[J_BEST], state[TEMPERATURE]
+    child, cum, touched = cur.copy(), np.cumsum(q), np.empty(3, np.int64)
+    scratch, seen = np.empty(max(m1, m2) + 1, np.int64), np.empty(m1 + 1, np.bool_)
+    n_paired = 0
+    for j in range(m2):
+        n_paired += cur[j] != 0
+    stale = False
+    for t in range(draws.shape[0]):
+        d = draws[t]
+        dJ, child_paired, n_touched = 0.0, n_paired, 0
+        if m2 >= 2:
+            if stale:
+                cum[:] = np.cumsum(q)
+                stale = False
+            j1, j2 = _columns(cum, q, d[FIRST], d[SECOND], roulette_second)
+            r1, r2 = child[j1], child[j2]
+            child[j1], child[j2] = r2, r1
+            dJ += w[r2, j1] + w[r1, j2] - w[r1, j1] - w[r2, j2]
+            touched[0], touched[1], n_touched = j1, j2, 2
+            if staged:
+                if _accepted(dJ, d[ACCEPT_CROSSOVER], anneal, T):
+                    J, J_best, n_paired, stale = _commit(J + dJ, J_best, child_paired, cur,
+                                                         child, best, q, rank, touched, 2)
+                else:
+                    _revert(cur, child, touched, 2)
+                dJ, child_paired, n_touched = 0.0, n_paired, 0
+        if m1 > 0 and d[MUTATE] < p_m:
+            gain, c, child_paired = _mutate(child, w, d, child_paired, repair_moves, evict,
+                                            scratch, seen)
+            if c >= 0:
+                dJ += gain
+                touched[n_touched] = c
+                n_touched += 1
+        if n_touched:
+            if _accepted(dJ, d[ACCEPT_MUTATION], anneal, T):
+                J, J_best, n_paired, stale = _commit(J + dJ, J_best, child_paired, cur, child,
+                                                     best, q, rank, touched, n_touched)
+            else:
+                _revert(cur, child, touched, n_touched)
+        T *= cool
+    state[J_CUR], state[J_BEST], state[TEMPERATURE] = J, J_best, T
+
+
+@njit(**JIT)
+def _accepted(dJ, u, anneal, T):
+    """Monotone acceptance, or Metropolis at temperature ``T``."""
+    return dJ >= 0.0 or (anneal and u < math.exp(dJ / T))
+
+
+@njit(**JIT)
+def _commit(J, J_best, child_paired, cur, child, best, q, rank, touched, n_touched):
+    """Accept the offspring (objective ``J``): copy its touched columns into ``cur`` and
+    their roulette weights into ``q``, and keep it as ``best`` if it beats ``J_best``.
+    Returns ``J``, best ``J``, the number of pairs and the stale flag of the roulette."""
+    for k in range(n_touched):
+        j = touched[k]
+        cur[j] = child[j]
+        q[j] = rank[cur[j], j]
+    if J_best < J:
+        J_best = J
+        best[:] = cur
+    return J, J_best, child_paired, True
+
+
+@njit(**JIT)
+def _revert(cur, child, touched, n_touched):
+    """Reject the offspring: restore its touched columns from ``cur``."""
+    for k in range(n_touched):
+        j = touched[k]
+        child[j] = cur[j]
+
+
+@njit(**JIT)
+def _bisect_right(cum, x, lo, hi, shift):
+    """First index in ``lo..hi-1`` with ``cum[i] - shift > x`` (``hi`` if none), by the
+    binary search of :func:`bisect.bisect_right` (``cum`` increasing)."""
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if x < cum[mid] - shift:
+            hi = mid
+        else:
+            lo = mid + 1
+    return lo
+
+
+@njit(**JIT)
+def _columns(cum, q, u1, u2, roulette_second):
+    """The crossover's two columns (``_Search._crossover`` of the reference)."""
+    m2 = cum.shape[0]
+    j1 = min(_bisect_right(cum, u1 * cum[m2 - 1], 0, m2, 0), m2 - 1)
+    if roulette_second:
+        x, q1 = u2 * (cum[m2 - 1] - q[j1]), q[j1]
+        j2 = _bisect_right(cum, x, 0, j1, 0)
+        if j2 == j1:
+            j2 = _bisect_right(cum, x, j1 + 1, m2, q1)
+            if j2 == m2:
+                j2 = m2 - 1 if j1 < m2 - 1 else m2 - 2
+    else:
+        j2 = int(u2 * (m2 - 1))
+        j2 += j2 >= j1
+    return j1, j2
+
+
+@njit(**JIT)
+def _mutate(child, w, d, child_paired, repair_moves, evict, scratch, seen):
+    """Re-pair (plain or evicting) or unpair in place (``_Search._mutate`` of the
+    reference). Returns the gain, the touched column (-1 for none) and the pair count."""
+    m1, m2 = w.shape[0] - 1, w.shape[1]
+    if repair_moves and d[REPAIR] < 0.5 and child_paired < m1:
+        seen[:] = False
+        for j in range(m2):
+            seen[child[j]] = True
+        n_free = 0
+        for r in range(1, m1 + 1):
+            if not seen[r]:
+                scratch[n_free] = r
+                n_free += 1
+        r = scratch[int(d[PICK] * n_free)]
+        if evict and d[PLACE] < 0.5:
+            c = int(2.0 * d[PLACE] * m2)
+            child_paired += child[c] == 0
+            old = child[c]
+            child[c] = r
+            return w[r, c] - w[old, c], c, child_paired
+        n_empty = _columns_where(child, False, scratch)
+        c = scratch[int((2.0 * d[PLACE] - 1.0 if evict else d[PLACE]) * n_empty)]
+        child[c] = r
+        return w[r, c], c, child_paired + 1
+    if child_paired:
+        n = _columns_where(child, True, scratch)
+        c = scratch[int(d[PICK] * n)]
+        r = child[c]
+        child[c] = 0
+        return -w[r, c], c, child_paired - 1
+    return 0.0, -1, child_paired
+
+
+@njit(**JIT)
+def _columns_where(child, paired, out):
+    """Write the columns that hold a real row (``paired``) or none into ``out``, in order;
+    return their number."""
+    n = 0
+    for j in range(child.shape[0]):
+        if (child[j] != 0) == paired:
+            out[n] = j
+            n += 1
+    return n
