@@ -231,10 +231,15 @@ def csv_records(text: str) -> list[list[str]]:
     faster and with the same result (a blank line is an empty record)."""
     if not _plain(text):
         return list(csv.reader(io.StringIO(text, newline="")))
+    return [line.split(",") if line else [] for line in _lines(text)]
+
+
+def _lines(text: str) -> list[str]:
+    """The lines of ``text`` without their newlines (no empty last line for a final one)."""
     lines = text.split("\n")
     if lines[-1] == "":
         lines.pop()
-    return [line.split(",") if line else [] for line in lines]
+    return lines
 
 
 def read_part(path: Path, span: BatchSpan, kind: str) -> PartText:
@@ -260,9 +265,7 @@ def read_part(path: Path, span: BatchSpan, kind: str) -> PartText:
         text = body.decode("utf-8")
         if _plain(text):  # the usual part: checked line by line without splitting every cell
             header, _, data = text.partition("\n")
-            lines = data.split("\n")
-            if lines[-1] == "":
-                lines.pop()
+            lines = _lines(data)
             columns = header.split(",") if header else []
             widths = [line.count(",") + 1 if line else 0 for line in lines]
             _check_rows(span, kind, columns, widths, lambda reach: [

@@ -237,8 +237,6 @@ class _Search:
 
     def __init__(self, problem: _Problem, cur: list[int], p_m: float, second: str,
                  repair_moves: bool, staged: bool, evict: bool, anneal: bool) -> None:
-        if second not in ("roulette", "uniform"):
-            raise ValueError(f"unknown second-column rule {second!r}")
         self.problem, self.p_m, self.staged, self.anneal = problem, p_m, staged, anneal
         self.roulette_second, self.repair_moves, self.evict = second == "roulette", \
             repair_moves, evict
@@ -325,6 +323,29 @@ class _Search:
         self.dJ, self.child_paired, self.touched = 0.0, self.n_paired, []
 
 
+class Schedule(NamedTuple):
+    """When a run records its best solution and how it accepts: ``marks`` the operation
+    counts of the checkpoints (``ops`` always one), ``anneal`` Metropolis acceptance,
+    ``cool`` the temperature factor per operation (1 without annealing)."""
+
+    marks: set[int]
+    anneal: bool
+    cool: float
+
+
+def schedule(ops: int, checkpoints: Sequence[int], accept: str, second: str, t0: float,
+             t1: float) -> Schedule:
+    """The :class:`Schedule` of a run of ``ops`` operations; ``ValueError`` for an unknown
+    ``accept`` or ``second`` option (see :func:`pga`)."""
+    if accept not in ("monotone", "anneal"):
+        raise ValueError(f"unknown acceptance {accept!r}")
+    if second not in ("roulette", "uniform"):
+        raise ValueError(f"unknown second-column rule {second!r}")
+    anneal = accept == "anneal"
+    return Schedule({int(c) for c in checkpoints if 0 <= c <= ops} | {ops}, anneal,
+                    (t1 / t0) ** (1.0 / max(ops, 1)) if anneal else 1.0)
+
+
 def draw_blocks(rng: np.random.Generator, ops: int) -> Iterator[np.ndarray]:
     """The uniforms of operations ``1..ops`` in blocks of at most ``_BLOCK`` rows, each
     ``(rows, 8)`` with the columns of :class:`Draws`."""
@@ -388,16 +409,12 @@ def pga(weights: PairWeights, rng: np.random.Generator, ops: int = 1000,
     """
     start = time.perf_counter()
     problem = _problem(weights, roulette)
-    if accept not in ("monotone", "anneal"):
-        raise ValueError(f"unknown acceptance {accept!r}")
-    anneal = accept == "anneal"
+    marks, anneal, cool = schedule(ops, checkpoints, accept, second, t0, t1)
     search = _Search(problem, initial_solution(problem.m1, problem.m2, init, rng), p_m,
                      second, repair_moves, staged, evict, anneal)
-    marks = {int(c) for c in checkpoints if 0 <= c <= ops} | {ops}
     saved: dict[int, tuple[list[int], float]] = {}  # checkpoint -> (best, elapsed s)
     if 0 in marks:
         saved[0] = (search.best.copy(), time.perf_counter() - start)
-    cool = (t1 / t0) ** (1.0 / max(ops, 1)) if anneal else 1.0
     search.T = t0
     for t, draws in enumerate(_draws(rng, ops), start=1):
         search.operate(draws)

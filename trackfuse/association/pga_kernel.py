@@ -35,6 +35,7 @@ from trackfuse.association.pga import (
     draw_blocks,
     initial_solution,
     orient,
+    schedule,
 )
 
 JIT = {"cache": True, "nogil": True, "error_model": "numpy"}
@@ -53,11 +54,7 @@ def pga_compiled(weights: PairWeights, rng: np.random.Generator, ops: int = 1000
     parameters, same result)."""
     start = time.perf_counter()
     w, rank, transpose = orient(weights, roulette)
-    if accept not in ("monotone", "anneal"):
-        raise ValueError(f"unknown acceptance {accept!r}")
-    if second not in ("roulette", "uniform"):
-        raise ValueError(f"unknown second-column rule {second!r}")
-    anneal = accept == "anneal"
+    marks, anneal, cool = schedule(ops, checkpoints, accept, second, t0, t1)
     m1, m2 = rank.shape[0] - 1, rank.shape[1]
     columns = np.arange(m2)
 
@@ -69,11 +66,9 @@ def pga_compiled(weights: PairWeights, rng: np.random.Generator, ops: int = 1000
     cur = np.array(cur, dtype=np.int64)
     best, q = cur.copy(), rank[cur, columns]
     state = np.array([J, J, t0])
-    marks = {int(c) for c in checkpoints if 0 <= c <= ops} | {ops}
     saved: dict[int, tuple[list[int], float]] = {}  # checkpoint -> (best, elapsed s)
     if 0 in marks:
         saved[0] = (best.tolist(), time.perf_counter() - start)
-    cool = (t1 / t0) ** (1.0 / max(ops, 1)) if anneal else 1.0
     done = 0
     for block in draw_blocks(rng, ops):
         lo = 0
