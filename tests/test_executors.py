@@ -178,3 +178,34 @@ def test_pool_workers_fork_with_the_batch_code_loaded_frozen_and_no_pandas():
     results = eval(out)  # noqa: S307 - the list printed above
     assert len(results) == 2
     assert all(frozen > 10_000 and loaded and not pandas for frozen, loaded, pandas in results)
+
+
+def test_workers_dying_every_time_is_a_one_line_error(write_config, tmp_path):
+    path = write_config("experiment: toy_experiments:DOOMED\ntrials: 20\nseed: 1\n")
+    result = trackfuse("run", path, "--out", tmp_path / "out", "--workers", "2",
+                       "--no-plots", "--no-progress", timeout=120)
+    assert result.returncode != 0
+    assert result.stderr.startswith("error: the worker processes died 4 times")
+    assert result.stderr.count("\n") == 1 and "Traceback" not in result.stderr
+    assert not list(tmp_path.glob("out/*/*/trials.csv")), "an unfinished run looks complete"
+
+
+def test_workers_import_this_trackfuse_not_one_in_the_working_directory(tmp_path):
+    """The fork server runs ``python -c`` in our working directory; another version's
+    ``trackfuse`` folder there (a source checkout) must not be what the workers import."""
+    shadow = tmp_path / "checkout"
+    (shadow / "trackfuse").mkdir(parents=True)
+    (shadow / "trackfuse" / "__init__.py").write_text("SHADOW = True\n")
+    script = tmp_path / "probe.py"
+    script.write_text(
+        "import trackfuse\n"
+        "from trackfuse.executors import ProcessExecutor\n"
+        "if __name__ == '__main__':\n"
+        "    pool = ProcessExecutor(2)\n"
+        "    probe = \"__import__('trackfuse').__file__\"\n"
+        "    print(trackfuse.__file__, *pool.imap_unordered(eval, [probe] * 2))\n"
+        "    pool.close()\n")
+    out = subprocess.run([sys.executable, str(script)], cwd=shadow, capture_output=True,
+                         text=True, check=True, timeout=120).stdout.split()
+    assert len(out) == 3 and "checkout" not in out[0]
+    assert out[1] == out[2] == out[0]

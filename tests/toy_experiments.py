@@ -114,6 +114,26 @@ CRASH = register(Experiment(
 ))
 
 
+def doomed_trial(params, streams: TrialStreams) -> list[dict]:
+    """Kill the worker process (``os._exit``) on every trial run in one: a pool that cannot
+    finish anything."""
+    import multiprocessing
+    import os
+
+    if multiprocessing.parent_process() is not None:
+        os._exit(1)
+    return [{"algorithm": "a", "value": float(streams.point.normal())}]
+
+
+DOOMED = register(Experiment(
+    name="toy_doomed",
+    title="Every worker dies on its first trial",
+    params=(),
+    run_trial=doomed_trial,
+    batch_size=5,
+))
+
+
 UNRULY_WAYS = ("exit", "interrupt", "none", "empty", "not_rows", "raise")
 
 

@@ -27,6 +27,7 @@ from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from itertools import islice
+from pathlib import Path
 from typing import Any
 
 KINDS = ("serial", "process", "dask")
@@ -70,6 +71,12 @@ def _ignore_sigint() -> None:
 BLAS_THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 
+def _imported_from_working_directory() -> bool:
+    """Whether this process imported trackfuse from the working directory's ``trackfuse``."""
+    home = Path(__file__).resolve().parents[1]
+    return home == Path.cwd().resolve()
+
+
 def _start_forkserver_single_threaded() -> None:
     """Start the fork server with one BLAS thread per worker (no oversubscription of cores).
 
@@ -78,9 +85,14 @@ def _start_forkserver_single_threaded() -> None:
     """
     from multiprocessing import forkserver
 
-    saved = {k: os.environ.get(k) for k in BLAS_THREAD_VARS}
+    saved = {k: os.environ.get(k) for k in (*BLAS_THREAD_VARS, "PYTHONSAFEPATH")}
     for key in BLAS_THREAD_VARS:
         os.environ.setdefault(key, "1")
+    if not _imported_from_working_directory():
+        # the server runs ``python -c``, whose module path starts with the working directory
+        # (Python 3.11 drops the path it is given): a ``trackfuse`` folder there, such as
+        # another version's source, would be what the workers import
+        os.environ["PYTHONSAFEPATH"] = "1"
     try:
         forkserver.ensure_running()
     finally:
@@ -153,7 +165,11 @@ class ProcessExecutor:
             if broken:
                 restarts += 1
                 if restarts > MAX_POOL_RESTARTS:
-                    raise BrokenProcessPool(f"workers died {restarts} times; giving up")
+                    raise ExecutorError(
+                        f"the worker processes died {restarts} times (out of memory, or "
+                        "killed?); the batches they finished are saved: run the same command "
+                        "to resume, or add --executor serial to see the failure in this "
+                        "process")
                 retry.extend(pending.values())
                 pending.clear()
                 self._restart()
