@@ -10,11 +10,16 @@ from trackfuse.experiments import get
 from trackfuse.experiments.esm_radar import EXPERIMENT, report
 from trackfuse.experiments.esm_radar.model import (
     ALGORITHMS,
+    SCAN_SERIES,
+    decode_series,
     differences,
+    encode_series,
     simulate,
     static_weights,
 )
 from trackfuse.reported import ESM_RADAR_WEIGHTS
+from trackfuse.results import rows_to_csv
+from trackfuse.rowtable import columns_csv
 from trackfuse.seeding import trial_streams
 from trackfuse.stats import wilson_interval
 
@@ -165,7 +170,7 @@ def test_batch_equals_single_trials_and_algorithms_do_not_change_data(over):
 def test_rows_are_tidy_and_deterministic():
     a = EXPERIMENT.run_trials(params(), rngs(4))
     b = EXPERIMENT.run_trials(params(), rngs(4))
-    assert a == b
+    assert list(a) == list(b)
     for trial in a:
         assert [r["algorithm"] for r in trial] == ALL
         for r in trial:
@@ -233,3 +238,26 @@ def test_static_weight_methods():
                                [0.637, 0.258, 0.105], atol=1e-3)
     np.testing.assert_allclose(static_weights(("angle", "range"), "root_exact"),
                                [1 / 6, 5 / 6])
+
+
+@pytest.mark.parametrize("fmt", sorted(set(SCAN_SERIES.values())))
+def test_series_cells_are_each_value_formatted_and_nan_where_not_finite(fmt):
+    rng = np.random.default_rng(3)
+    values = rng.normal(size=(40, 13)) * 10.0 ** rng.integers(-9, 9, size=(40, 13))
+    values[0, :6] = [np.nan, np.inf, -np.inf, -0.0, 0.5, 2.5]
+    cells = encode_series(values, fmt)
+    assert cells == [";".join(format(v, fmt) if np.isfinite(v) else "nan" for v in row)
+                     for row in values]
+    back = decode_series(cells)
+    assert np.array_equal(np.isnan(back), ~np.isfinite(values))
+
+
+def test_the_batch_table_writes_the_cells_of_its_row_dicts():
+    """The batch's columns written as CSV equal its per-trial row dicts written one by one
+    (the runner writes the former; the latter is the plain form of the same rows)."""
+    table = EXPERIMENT.run_trials(params(), rngs(7))
+    rows = [row for trial in table for row in trial]
+    assert columns_csv(table.columns, table.rows) == rows_to_csv(rows)
+    assert sum(1 for r in rows if r["alpha_per_scan"]) == 7
+    assert all(type(r[k]) is int for r in rows
+               for k in ("chosen", "correct", "decided", "esm_invalid"))

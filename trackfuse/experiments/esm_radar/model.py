@@ -69,7 +69,6 @@ Table 1; ``ablation``; ``paper_vs_reproduced``) are built by
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -109,6 +108,7 @@ from trackfuse.association.time_align import bracket, interpolate, interpolate_c
 from trackfuse.association.track_likelihood import abstaining_decision, ml_track_decision
 from trackfuse.experiments.base import Metric, Param
 from trackfuse.reported import ESM_RADAR_WEIGHTS
+from trackfuse.rowtable import RowTable
 from trackfuse.seeding import TrialStreams
 from trackfuse.tracking.models import wrap
 
@@ -556,10 +556,13 @@ SCAN_SERIES = {
 }
 
 
-def encode_series(values: np.ndarray, fmt: str) -> str:
-    """One per-scan CSV cell: ``values`` (K,) formatted with ``fmt``, joined by ``;``."""
-    return ";".join(format(v, fmt) if math.isfinite(v) else "nan"
-                    for v in np.asarray(values, dtype=float).tolist())
+def encode_series(values: np.ndarray, fmt: str) -> list[str]:
+    """Per-scan CSV cells: each row of ``values`` (N, K) formatted with ``fmt`` and joined
+    by ``;``, non-finite values written ``nan``; a list of N strings."""
+    a = np.asarray(values, dtype=float)
+    a = np.where(np.isfinite(a), a, np.nan)  # %-formatting writes inf as inf
+    line = ";".join([f"%{fmt}"] * a.shape[-1])
+    return [line % tuple(row) for row in a.tolist()]
 
 
 def decode_series(cells: Sequence[str]) -> np.ndarray:
@@ -576,55 +579,58 @@ def esm_errors(sim: Simulated) -> tuple[np.ndarray, np.ndarray]:
     return sim.x_esm[..., 0] - r_true, wrap(sim.x_esm[..., 2] - theta_true)
 
 
-def _esm_track_columns(sim: Simulated) -> list[dict[str, Any]]:
-    """Per-trial columns of the ESM track shared by every algorithm: summaries and the
-    per-scan series of :data:`SCAN_SERIES` (first row of each trial only)."""
+def _esm_track_columns(sim: Simulated) -> dict[str, np.ndarray | list[str]]:
+    """Per-trial columns of the ESM track shared by every algorithm, each (N,): summaries,
+    then the per-scan series of :data:`SCAN_SERIES` (written on each trial's first row)."""
     alpha = np.nan_to_num(sim.alpha, nan=0.0)
     defined = np.isfinite(sim.alpha).sum(axis=-1)
-    alpha_mean = np.divide(alpha.sum(axis=-1), defined, out=np.zeros(len(alpha)),
-                           where=defined > 0)
-    invalid = (~sim.esm_valid).sum(axis=-1)
-    sigma = np.sqrt(sim.P_esm[..., 0, 0]).mean(axis=-1)
     dr, dtheta = esm_errors(sim)
-    return [{"alpha_mean": float(alpha_mean[i]), "alpha_peak": float(alpha[i].max()),
-             "esm_invalid": int(invalid[i]), "esm_range_sigma_m": float(sigma[i]),
-             "series": {
-                 "alpha_per_scan": encode_series(sim.alpha[i], SCAN_SERIES["alpha_per_scan"]),
-                 "esm_range_error_per_scan_m": encode_series(
-                     dr[i], SCAN_SERIES["esm_range_error_per_scan_m"]),
-                 "esm_bearing_error_per_scan_mrad": encode_series(
-                     1e3 * dtheta[i], SCAN_SERIES["esm_bearing_error_per_scan_mrad"])}}
-            for i in range(len(alpha))]
+    return {
+        "alpha_mean": np.divide(alpha.sum(axis=-1), defined, out=np.zeros(len(alpha)),
+                                where=defined > 0),
+        "alpha_peak": alpha.max(axis=-1),
+        "esm_invalid": (~sim.esm_valid).sum(axis=-1),
+        "esm_range_sigma_m": np.sqrt(sim.P_esm[..., 0, 0]).mean(axis=-1),
+        "alpha_per_scan": encode_series(sim.alpha, SCAN_SERIES["alpha_per_scan"]),
+        "esm_range_error_per_scan_m": encode_series(
+            dr, SCAN_SERIES["esm_range_error_per_scan_m"]),
+        "esm_bearing_error_per_scan_mrad": encode_series(
+            1e3 * dtheta, SCAN_SERIES["esm_bearing_error_per_scan_mrad"])}
 
 
-def _row(name: str, res: dict[str, np.ndarray], i: int, esm: dict[str, Any],
-         first: bool) -> dict[str, Any]:
-    """The row of algorithm ``name`` in trial ``i`` (see the module docstring)."""
-    j = int(res["chosen"][i])
-    dynamic = ALGORITHMS[name].dynamic and "range_weights" in res
-    row = {"algorithm": name, "chosen": j + 1, "correct": int(j == TRUE_TRACK),
-           "decided": int(j >= 0), "margin": float(res["margin"][i]),
-           "range_weight_mean": float(res["range_weight_mean"][i]),
-           "range_weight_min": float(res["range_weight_min"][i]),
-           **{k: v for k, v in esm.items() if k != "series"}}
-    row.update({k: (v if first else "") for k, v in esm["series"].items()})
-    row["range_weight_per_scan"] = (encode_series(res["range_weights"][i],
-                                                  SCAN_SERIES["range_weight_per_scan"])
-                                    if dynamic else "")
-    return row
-
-
-def run_batch(params: Mapping[str, Any],
-              streams: Sequence[TrialStreams]) -> list[list[dict]]:
-    """Vectorized trials: one row list per trial, one row per algorithm."""
+def run_batch(params: Mapping[str, Any], streams: Sequence[TrialStreams]) -> RowTable:
+    """Vectorized trials: rows trial-major, one per algorithm (see the module docstring)."""
     sim = simulate(params, streams)
     esm = _esm_track_columns(sim)
     diff = differences(sim)
     results = {name: evaluate(ALGORITHMS[name], diff, sim.alpha, params)
                for name in params["algorithms"]}
-    return [[_row(name, res, i, esm[i], first=k == 0)
-             for k, (name, res) in enumerate(results.items())]
-            for i in range(len(streams))]
+    N, A = len(streams), len(results)
+
+    def per_row(key: str) -> np.ndarray:  # (N,) per algorithm -> (N * A,) trial-major
+        return np.stack([res[key] for res in results.values()], axis=1).reshape(-1)
+
+    chosen = per_row("chosen").astype(np.int64)
+    columns: dict[str, np.ndarray] = {
+        "algorithm": np.tile(np.array(list(results), dtype=object), N),
+        "chosen": chosen + 1, "correct": (chosen == TRUE_TRACK).astype(np.int64),
+        "decided": (chosen >= 0).astype(np.int64),
+        **{key: per_row(key).astype(float)
+           for key in ("margin", "range_weight_mean", "range_weight_min")}}
+    for key, values in esm.items():
+        if key in SCAN_SERIES:  # on the first row of each trial only
+            cells = np.full((N, A), "", dtype=object)
+            cells[:, 0] = values
+            columns[key] = cells.reshape(-1)
+        else:
+            columns[key] = np.repeat(values, A)
+    weights = np.full((N, A), "", dtype=object)
+    for a, (name, res) in enumerate(results.items()):
+        if ALGORITHMS[name].dynamic and "range_weights" in res:
+            weights[:, a] = encode_series(res["range_weights"],
+                                          SCAN_SERIES["range_weight_per_scan"])
+    columns["range_weight_per_scan"] = weights.reshape(-1)
+    return RowTable(np.repeat(np.arange(N), A), columns)
 
 
 def run_trial(params: Mapping[str, Any], streams: TrialStreams) -> list[dict]:
