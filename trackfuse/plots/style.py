@@ -28,6 +28,10 @@ RC = {
     "savefig.dpi": 200,
     "font.size": 9,
     "axes.titlesize": 10,
+    # titles at the top of their axes, where matplotlib puts them when nothing is above
+    # the axes; left to itself it searches every tick label for that at each draw (a
+    # tenth of the drawing time, and no shipped figure's bytes change without it)
+    "axes.titley": 1.0,
     "axes.labelsize": 9,
     "legend.fontsize": 8,
     "axes.grid": True,
