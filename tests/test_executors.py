@@ -188,6 +188,11 @@ def test_workers_dying_every_time_is_a_one_line_error(write_config, tmp_path):
     assert result.stderr.startswith("error: the worker processes died 4 times")
     assert result.stderr.count("\n") == 1 and "Traceback" not in result.stderr
     assert not list(tmp_path.glob("out/*/*/trials.csv")), "an unfinished run looks complete"
+    # what the message advises: the same command in this process finishes the run
+    again = trackfuse("run", path, "--out", tmp_path / "out", "--executor", "serial",
+                      "--no-plots", "--no-progress", timeout=120)
+    assert again.returncode == 0, again.stderr
+    assert next(tmp_path.glob("out/*/*/trials.csv")).read_text().count("\n") == 1 + 20
 
 
 def test_workers_import_this_trackfuse_not_one_in_the_working_directory(tmp_path):
