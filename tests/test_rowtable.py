@@ -1,12 +1,17 @@
-"""trackfuse.rowtable: column-wise CSV text is the dict rows' CSV text, byte for byte."""
+"""trackfuse.rowtable: column-wise CSV text is the dict rows' CSV text (and a frame's is
+pandas' text), byte for byte."""
 
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from trackfuse.results import rows_to_csv
-from trackfuse.rowtable import Constant, RowTable, columns_csv
+from trackfuse.rowtable import Constant, RowTable, columns_csv, frame_csv
+from trackfuse.summary import summarize
 
 
 def _table() -> RowTable:
@@ -55,3 +60,67 @@ def test_check_refuses_a_short_column():
     with pytest.raises(TypeError):
         RowTable(np.arange(3), {"x": np.zeros(2)}).check(3)
     RowTable(np.arange(3), {"x": np.zeros(3)}).check(3)
+
+
+def _column(data, kind: str, rows: int) -> pd.Series:
+    """A column of ``rows`` values of one ``kind``: the column-wise path's (float, int,
+    uint8, str) or pandas' (text needing quotes, bool, nullable integers)."""
+    def values(strategy):
+        return data.draw(st.lists(strategy, min_size=rows, max_size=rows))
+
+    if kind == "float":  # NaN, infinities, -0, subnormals, 1e300...
+        return pd.Series(values(st.floats(width=64) | st.just(float("nan"))), dtype="float64")
+    if kind == "int":
+        return pd.Series(values(st.integers(-2**63, 2**63 - 1)), dtype="int64")
+    if kind == "uint8":
+        return pd.Series(values(st.integers(0, 255)), dtype="uint8")
+    if kind in ("str", "text"):
+        alphabet = "ab/_.-" if kind == "str" else 'ab,"\r\n '
+        size = {"min_size": 1} if kind == "str" else {}
+        return pd.Series(values(st.text(alphabet, max_size=4, **size)), dtype=object)
+    if kind == "bool":
+        return pd.Series(values(st.booleans()), dtype=bool)
+    return pd.Series(values(st.none() | st.integers(0, 9)), dtype="Int64")
+
+
+FAST = ["float", "int", "uint8", "str"]
+
+
+@settings(max_examples=150, deadline=None)
+@given(data=st.data(), rows=st.integers(0, 6),
+       kinds=st.lists(st.sampled_from(FAST), min_size=2, max_size=5))
+def test_frame_csv_writes_what_pandas_writes(data, rows, kinds):
+    frame = pd.DataFrame({f"c{i}" if i % 2 else f"col {i}.x": _column(data, kind, rows)
+                          for i, kind in enumerate(kinds)})
+    expected = frame.to_csv(index=False)
+    original, pd.DataFrame.to_csv = pd.DataFrame.to_csv, None  # the column-wise path
+    try:
+        assert frame_csv(frame) == expected
+    finally:
+        pd.DataFrame.to_csv = original
+
+
+@settings(max_examples=60, deadline=None)
+@given(data=st.data(), rows=st.integers(0, 6),
+       kinds=st.lists(st.sampled_from([*FAST, "text", "bool", "nullable"]), min_size=1,
+                      max_size=4))
+def test_frame_csv_of_any_frame_is_what_pandas_writes(data, rows, kinds):
+    """Other column types (and one-column frames) are left to pandas."""
+    frame = pd.DataFrame({f"c{i}": _column(data, kind, rows) for i, kind in enumerate(kinds)})
+    assert frame_csv(frame) == frame.to_csv(index=False)
+
+
+def test_frame_csv_of_a_run_summary_is_what_pandas_writes(tmp_path, monkeypatch):
+    """A summary (string row keys and metric names, integer counts, float statistics with
+    NaN standard deviations) takes the column-wise path and writes pandas' bytes."""
+    rng = np.random.default_rng(5)
+    trials = pd.DataFrame({"point": np.repeat([0, 1], 30), "trial": np.tile(range(30), 2),
+                           "algorithm": np.tile(["a/mgekf", "b/ekf", "c"], 20),
+                           "err": rng.standard_normal(60) * 1e3,
+                           "lost": rng.random(60) < 0.3, "once": np.r_[1.5, [np.nan] * 59]})
+    trials.to_csv(tmp_path / "trials.csv", index=False)
+    summary, _ = summarize(tmp_path / "trials.csv", ["point", "algorithm"], ["lost"])
+    assert summary["std"].isna().any() and summary["algorithm"].dtype.kind == "O"
+    expected = summary.to_csv(index=False)
+    monkeypatch.setattr(pd.DataFrame, "to_csv", None)  # the column-wise path, not pandas
+    assert frame_csv(summary) == expected

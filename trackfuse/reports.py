@@ -36,6 +36,7 @@ from typing import Any
 import pandas as pd
 
 from trackfuse.results import INDEX_HTML, INDEX_MD, atomic_write
+from trackfuse.rowtable import frame_csv
 from trackfuse.rundata import RunData
 
 PNG_DPI = 200
@@ -154,7 +155,7 @@ def _write_tables(run: RunData, module: ModuleType, report: Report) -> dict[str,
         report.errors.append(f"tables: {type(err).__name__}: {err}")
         return {}
     for name, table in made.items():
-        for suffix, text in ((".csv", table.to_csv(index=False)),
+        for suffix, text in ((".csv", frame_csv(table)),
                              (".md", markdown_table(display_table(table)))):
             atomic_write(folder / f"{name}{suffix}", text)
             report.tables.append(folder / f"{name}{suffix}")

@@ -73,6 +73,39 @@ def columns_csv(columns: Mapping[str, np.ndarray | Sequence[Any] | Constant], ro
     return "\n".join(lines) + "\n"
 
 
+def frame_csv(frame) -> str:
+    """``frame.to_csv(index=False)``, byte for byte, written column by column: about twice
+    as fast for the float columns of summaries and tables. ``frame`` is a
+    :class:`pandas.DataFrame`; floats are written by ``repr`` and NaN as an empty cell, as
+    pandas writes them. A frame with another column type than float64, numpy integers and
+    strings that need no quoting (or with fewer than two columns) is written by pandas."""
+    names = [str(c) for c in frame.columns]
+    if len(names) < 2 or not _plain_texts(names):
+        return frame.to_csv(index=False)
+    cells: list[list[str]] = []
+    for name in frame.columns:
+        column = frame[name]
+        dtype = column.dtype
+        values = column.tolist()
+        if isinstance(dtype, np.dtype) and dtype == np.float64:
+            cells.append(["" if v != v else repr(v) for v in values])
+        elif isinstance(dtype, np.dtype) and dtype.kind in "iu":
+            cells.append(list(map(str, values)))
+        elif dtype.kind == "O" and all(type(v) is str for v in values) \
+                and _plain_texts(set(values)):
+            cells.append(values)
+        else:
+            return frame.to_csv(index=False)
+    lines = [",".join(names)]
+    lines.extend(map(",".join, zip(*cells, strict=True)))
+    return "\n".join(lines) + "\n"
+
+
+def _plain_texts(texts) -> bool:
+    """Whether none of ``texts`` is empty or needs CSV quoting."""
+    return all(t and not any(c in t for c in ',"\n\r') for t in texts)
+
+
 @dataclass(frozen=True)
 class RowTable(Sequence[list[dict[str, Any]]]):
     """Rows of a batch of ``N`` trials as columns.

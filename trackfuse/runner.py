@@ -65,6 +65,7 @@ from trackfuse.results import (
     sha256_file,
     sibling_manifests,
 )
+from trackfuse.rowtable import frame_csv
 from trackfuse.rundata import load
 from trackfuse.runlock import RunLock
 from trackfuse.summary import summarize
@@ -384,11 +385,11 @@ class Runner:
         self.on_phase("summarising into summary.csv")
         summary, failed_rows = summarize(path / TRIALS, keys,
                                          self.config.experiment.binary_metrics)
-        files[SUMMARY] = _write_record(path / SUMMARY, summary.to_csv(index=False))
+        files[SUMMARY] = _write_record(path / SUMMARY, frame_csv(summary))
         if timings["rows"]:
             timing_summary, _ = summarize(path / TIMINGS, keys, suffix=TIME_SUFFIX)
             files[TIMING_SUMMARY] = _write_record(path / TIMING_SUMMARY,
-                                                  timing_summary.to_csv(index=False))
+                                                  frame_csv(timing_summary))
         else:
             (path / TIMING_SUMMARY).unlink(missing_ok=True)
         outcome = RunOutcome(path, RunStatus.COMPLETE, self.total_trials, session.computed,
