@@ -263,13 +263,14 @@ def read_part(path: Path, span: BatchSpan, kind: str) -> PartText:
                                       "written")
     try:
         text = body.decode("utf-8")
-        if _plain(text):  # the usual part: checked line by line without splitting every cell
+        if _plain(text):  # the usual part: checked without splitting every cell
             header, _, data = text.partition("\n")
-            lines = _lines(data)
             columns = header.split(",") if header else []
-            widths = [line.count(",") + 1 if line else 0 for line in lines]
-            _check_rows(span, kind, columns, widths, lambda reach: [
-                line.split(",", reach) for line in lines], rows)
+            if not _rows_fit(body[len(header) + 1:], span, kind, columns, rows):
+                lines = _lines(data)  # something is off: find what, line by line
+                widths = [line.count(",") + 1 if line else 0 for line in lines]
+                _check_rows(span, kind, columns, widths, lambda reach: [
+                    line.split(",", reach) for line in lines], rows)
             return PartText(columns, data if data.endswith("\n") or not data else data + "\n",
                             rows)
         records = list(csv.reader(io.StringIO(text, newline="")))
@@ -278,6 +279,46 @@ def read_part(path: Path, span: BatchSpan, kind: str) -> PartText:
     columns, data = (records[0], records[1:]) if records else ([], [])
     _check_rows(span, kind, columns, [len(row) for row in data], lambda reach: data, rows)
     return PartText(columns, "".join(map(csv_line, data)), rows)
+
+
+def _rows_fit(data: bytes, span: BatchSpan, kind: str, columns: list[str], rows: int) -> bool:
+    """Whether the rows of a part pass :func:`_check_rows`, shown with array operations on
+    the bytes (about ten times faster than splitting its lines): ``data`` is the plain CSV
+    (no quotes) after the header line, whose ``columns`` start with ``point, trial``.
+    ``False`` means "not shown", not "damaged": :func:`_check_rows` then says what is wrong.
+    """
+    import numpy as np  # loaded by every run; kept out of the command line's start-up
+
+    n = len(columns)
+    if rows == 0 or columns[:2] != ["point", "trial"] or not data.endswith(b"\n"):
+        return False
+    b = np.frombuffer(data, dtype=np.uint8)
+    ends = np.flatnonzero(b == ord("\n"))
+    commas = np.flatnonzero(b == ord(","))
+    if len(ends) != rows or len(commas) != rows * (n - 1):
+        return False
+    # row i's first cell ends at the first comma of group i, so each group starts in its own
+    # row; with rows x (n - 1) commas in all, every row then holds exactly n cells
+    commas = commas.reshape(rows, n - 1)
+    starts = np.r_[0, ends[:-1] + 1]
+    point = str(span.point).encode()
+    if (commas[:, 0] - starts != len(point)).any() or any(
+            (b[starts + i] != c).any() for i, c in enumerate(point)):
+        return False
+    first = commas[:, 0] + 1  # the trial cell: digits up to the next comma or line end
+    width = (commas[:, 1] if n > 2 else ends) - first
+    if width.min() < 1 or width.max() > 9:
+        return False
+    trial = np.zeros(rows, dtype=np.int64)
+    for i in range(int(width.max())):
+        inside = i < width
+        digit = b[np.where(inside, first + i, first)].astype(np.int64) - ord("0")
+        if ((digit < 0) | (digit > 9))[inside].any():
+            return False
+        trial = np.where(inside, 10 * trial + digit, trial)
+    if trial.min() < span.first or trial.max() >= span.stop:
+        return False
+    return kind != "trials" or len(np.unique(trial)) == span.trials
 
 
 def _check_rows(span: BatchSpan, kind: str, columns: list[str], widths: list[int],
