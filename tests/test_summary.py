@@ -34,6 +34,27 @@ def test_chunked_summary_equals_direct(tmp_path, chunk_rows):
     assert (hits["interval"] == "wilson").all() and (hits["ci_low"] >= 0).all()
 
 
+@pytest.mark.parametrize("chunk_rows", [7, 10_000])
+def test_a_file_read_whole_gives_the_summary_of_the_file(tmp_path, chunk_rows):
+    """The runner summarizes a small trials.csv from the frame the report reads too: the
+    same bytes as from the file, failed rows, NaN and integer metrics included."""
+    rng = np.random.default_rng(1)
+    n = 120
+    frame = pd.DataFrame({
+        "point": np.repeat([0, 1], n // 2), "trial": np.arange(n),
+        "algorithm": np.tile(["a/b", "c"], n // 2), "x": rng.normal(5, 2, n) * 1e-3,
+        "hit": rng.integers(0, 2, n), "status": "", "error": ""})
+    frame.loc[[3, 40], "x"] = np.nan
+    frame.loc[7, ["status", "error"]] = ["failed", "boom"]
+    path = tmp_path / "t.csv"
+    frame.to_csv(path, index=False)
+    whole = pd.read_csv(path, low_memory=False)
+    from_file = summarize(path, ["point", "algorithm"], ["hit"], chunk_rows=chunk_rows)
+    from_frame = summarize(whole, ["point", "algorithm"], ["hit"], chunk_rows=chunk_rows)
+    assert from_file[1] == from_frame[1] == 1
+    assert from_frame[0].to_csv(index=False) == from_file[0].to_csv(index=False)
+
+
 def test_failed_rows_are_counted_and_excluded(tmp_path):
     path = tmp_path / "t.csv"
     path.write_text("point,trial,algorithm,x,status,error\n0,0,a,1.0,,\n0,1,,,failed,boom\n"

@@ -319,6 +319,22 @@ def test_final_scan_intervals_are_numeric_and_hold_their_value(small_run):
     assert not any("ci95" in c for c in table)
 
 
+def test_prepare_computes_every_bound_the_tables_use(shipped):
+    """After ``prepare`` (run while the workers compute, inherited by the drawing
+    processes) the tables and the range-error figure compute no bound of their own."""
+    from trackfuse.experiments.twin_sensor.model import _bounds_cached
+    from trackfuse.reports import load_drawing
+
+    run = shipped("twin_sensor_orbit")
+    _bounds_cached.cache_clear()
+    load_drawing(EXPERIMENT.report, ["png"], run.path)
+    prepared = _bounds_cached.cache_info()
+    assert prepared.currsize == 2 * len(run.points)
+    report.tables(run)
+    report.figures(run, ["range_error_vs_time"])
+    assert _bounds_cached.cache_info().misses == prepared.misses
+
+
 def test_bootstrap_of_many_groups_equals_one_group_at_a_time():
     rng = np.random.default_rng(4)
     groups = [rng.exponential(size=n) for n in (5, 7, 5, 30)] + [np.array([1.0, np.inf, 2.0])]

@@ -5,6 +5,12 @@ experiment's report module (``Experiment.report``, a module path), which provide
 
     figures(run: RunData, wanted: Collection[str]) -> dict[str, matplotlib.figure.Figure]
     tables(run: RunData) -> dict[str, pandas.DataFrame]
+    prepare(run: RunData) -> None    # optional
+
+``prepare`` computes ahead, into the module's own caches, what both the tables and the
+figures derive from the config alone (the twin-sensor bounds at every sweep point): the
+runner calls it while its workers compute (:func:`load_drawing`), and the drawing processes
+it forks later inherit the caches, so nothing is computed twice.
 
 Nothing is recomputed except what a report module derives from the config alone (bounds,
 noise-free geometry). Every file is written under a temporary name and renamed into place;
@@ -21,6 +27,7 @@ this module, stays free of it until it draws.
 
 from __future__ import annotations
 
+import contextlib
 import html
 import importlib
 import multiprocessing
@@ -37,7 +44,7 @@ import pandas as pd
 
 from trackfuse.results import INDEX_HTML, INDEX_MD, atomic_write
 from trackfuse.rowtable import frame_csv
-from trackfuse.rundata import RunData
+from trackfuse.rundata import RunData, load
 
 PNG_DPI = 200
 #: zlib level of PNG files: 1 halves the encoding time of level 6 for files ~1.3x larger.
@@ -243,20 +250,25 @@ def figure_formats(config: dict[str, Any]) -> list[str]:
     return list((config.get("outputs") or {}).get("formats") or ["png", "pdf"])
 
 
-def load_drawing(report_module: str | None, formats: Sequence[str]) -> None:
-    """Import ``report_module`` (an experiment's report module, and with it matplotlib) and
-    warm up the house style: what drawing a run's figures loads first, done ahead of time
-    (the runner calls this in a thread while its workers compute). A module that fails to
-    import is left for :func:`write_report` to report."""
+def load_drawing(report_module: str | None, formats: Sequence[str],
+                 folder: Path | None = None) -> None:
+    """Import ``report_module`` (an experiment's report module, and with it matplotlib),
+    warm up the house style and, given the run ``folder``, call the module's ``prepare``:
+    what drawing a run's report needs first, done ahead of time (the runner calls this in a
+    thread while its workers compute). A module that fails, or whose ``prepare`` fails, is
+    left for :func:`write_report` to report: its tables and figures meet the same fault."""
     if not report_module:
         return
     try:
-        importlib.import_module(report_module)
+        module = importlib.import_module(report_module)
     except Exception:  # noqa: BLE001 - write_report imports it again and says why it fails
         return
     from trackfuse.plots.style import warm_up  # matplotlib: see the module docstring
 
     warm_up(tuple(formats), PNG_DPI)
+    if folder is not None and hasattr(module, "prepare"):
+        with contextlib.suppress(Exception):  # a cache left cold: see the docstring
+            module.prepare(load(folder, require_complete=False))
 
 
 def write_report(run: RunData, wanted: Collection[str] | None = None,

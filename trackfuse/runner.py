@@ -68,7 +68,7 @@ from trackfuse.results import (
 from trackfuse.rowtable import frame_csv
 from trackfuse.rundata import load
 from trackfuse.runlock import RunLock
-from trackfuse.summary import summarize
+from trackfuse.summary import CHUNK_ROWS, summarize
 from trackfuse.sweep import expand
 
 MANIFEST_EVERY_S = 5.0
@@ -353,18 +353,18 @@ class Runner:
 
     def _load_finishing_code(self, executor_kind: str) -> threading.Thread | None:
         """While the workers compute, load in this process what the steps after them need
-        first (scipy.special for the summary's intervals; the report module, matplotlib and
-        the warmed-up house style for the figures): about a second that would otherwise
-        follow the last batch. Not when the batches run in this process (serial)."""
+        first (scipy.special for the summary's intervals; the report module, matplotlib, the
+        warmed-up house style and the report's ``prepare``): about a second that would
+        otherwise follow the last batch. Not when the batches run in this process (serial)."""
         if executor_kind == "serial":
             return None
         report = self.config.experiment.report if self.plots else None
 
-        def load() -> None:
+        def load_ahead() -> None:
             importlib.import_module("scipy.special")
-            load_drawing(report, figure_formats(self.resolved))
+            load_drawing(report, figure_formats(self.resolved), self.folder.path)
 
-        thread = threading.Thread(target=load, name="trackfuse-load-finishing-code",
+        thread = threading.Thread(target=load_ahead, name="trackfuse-load-finishing-code",
                                   daemon=True)
         thread.start()
         return thread
@@ -383,7 +383,10 @@ class Runner:
             (path / TIMINGS).unlink()
         keys = ["point", *self.config.sweep, *self.config.experiment.row_keys]
         self.on_phase("summarising into summary.csv")
-        summary, failed_rows = summarize(path / TRIALS, keys,
+        run = load(path, require_complete=False)
+        # a trials.csv of one summary chunk is read once, for the summary and the report
+        whole = self.plots and files[TRIALS]["rows"] <= CHUNK_ROWS
+        summary, failed_rows = summarize(run.trials if whole else path / TRIALS, keys,
                                          self.config.experiment.binary_metrics)
         files[SUMMARY] = _write_record(path / SUMMARY, frame_csv(summary))
         if timings["rows"]:
@@ -396,7 +399,7 @@ class Runner:
                              failed_rows, files[TRIALS]["rows"])
         if self.plots:  # before "complete": a Ctrl-C while drawing leaves a resumable run
             self.on_phase("drawing figures and tables")
-            report = write_report(load(path, require_complete=False))
+            report = write_report(run)
             outcome.figures, outcome.figure_errors = report.figures, report.errors
             outcome.report = report.index
         session.done = self.total_trials

@@ -8,7 +8,7 @@ does not depend on how the trials were scheduled. Rows of failed trials (``statu
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -20,9 +20,10 @@ from trackfuse.stats import t_interval, wilson_interval
 CHUNK_ROWS = 200_000
 
 
-def summarize(path: Path, keys: Sequence[str], binary: Sequence[str] = (),
+def summarize(source: Path | pd.DataFrame, keys: Sequence[str], binary: Sequence[str] = (),
               chunk_rows: int = CHUNK_ROWS, suffix: str = "") -> tuple[pd.DataFrame, int]:
-    """Return ``(summary, failed_rows)`` for the CSV at ``path``.
+    """Return ``(summary, failed_rows)`` for the CSV at ``source``, or for the CSV already
+    read whole (``pd.read_csv(path, low_memory=False)``), taken in the same chunks.
 
     ``keys`` are the grouping columns (``point``, swept keys, the experiment's row keys);
     every other numeric column whose name ends in ``suffix`` is a metric. ``binary`` metrics
@@ -30,10 +31,14 @@ def summarize(path: Path, keys: Sequence[str], binary: Sequence[str] = (),
     """
     partial: list[pd.DataFrame] = []
     failed = 0
-    try:
-        chunks = pd.read_csv(path, chunksize=chunk_rows, low_memory=False)
-    except pd.errors.EmptyDataError:
-        chunks = []
+    chunks: Iterable[pd.DataFrame]
+    if isinstance(source, pd.DataFrame):
+        chunks = (source.iloc[i:i + chunk_rows] for i in range(0, len(source), chunk_rows))
+    else:
+        try:
+            chunks = pd.read_csv(source, chunksize=chunk_rows, low_memory=False)
+        except pd.errors.EmptyDataError:
+            chunks = []
     for chunk in chunks:
         if "status" in chunk:
             bad = chunk["status"].astype(str) == FAILED_ROW

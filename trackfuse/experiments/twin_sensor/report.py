@@ -684,6 +684,16 @@ def _with_hint(drawn: Figure | str, hint: str) -> Figure | str:
     return drawn + hint if isinstance(drawn, str) else drawn
 
 
+def prepare(run: RunData) -> None:
+    """Compute the square-root PCRLBs (truth model and the filter's ``q``) of every sweep
+    point into :func:`~trackfuse.experiments.twin_sensor.model.bounds`' cache, from the
+    config alone: the table, the range-error figure and the final-RMSE figure all use them
+    (``trackfuse.reports`` calls this ahead, so they are computed once)."""
+    for params in run.points:
+        bounds(params)
+        bounds(params, q_model=float(params["filter.q"]))
+
+
 def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure | str]:
     """The ``wanted`` figures (module docstring); a one-line reason for each that this run
     cannot draw. Drawn in the house style (:func:`trackfuse.plots.style.context`)."""
