@@ -23,10 +23,11 @@ An experiment module is the only place that knows its science. It exposes one mo
   0/1, and whether lower or higher is better). 0/1 metrics get Wilson intervals in the
   summary; ``trackfuse.compare`` gates regressions in the declared direction.
 * ``report``: the module path of the experiment's report module, which provides
-  ``figures(run, wanted) -> dict[str, Figure]`` and ``tables(run) -> dict[str, DataFrame]``
-  and reads saved results only through :class:`trackfuse.rundata.RunData` (no trial is
-  recomputed). The report module imports the experiment's science, never the reverse, and
-  is imported only when a report is drawn (so workers and the runner load no matplotlib).
+  ``figures(run, wanted) -> dict[str, Figure]``, ``tables(run) -> dict[str, DataFrame]``
+  and optionally ``prepare(run)`` (:mod:`trackfuse.reports`), and reads saved results only
+  through :class:`trackfuse.rundata.RunData` (no trial is recomputed). The report module
+  imports the experiment's science, never the reverse, and is imported only when a report
+  is drawn (so workers and the runner load no matplotlib).
 * ``figures``: name -> :class:`FigureSpec` for every figure the report can draw (the names
   a config may list in ``outputs.figures``).
 * the algorithms it compares: by convention the ``choices`` of a list parameter called
