@@ -204,7 +204,7 @@ def orient(weights: PairWeights, roulette: str) -> Oriented:
         rank = m1 + 2 - rank
     elif roulette != "worse":
         raise ValueError(f"unknown roulette direction {roulette!r}")
-    w = np.vstack([np.zeros((1, m2)), gain]).astype(np.float64, copy=False)
+    w = np.ascontiguousarray(np.vstack([np.zeros((1, m2)), gain]), dtype=np.float64)
     return Oriented(w, rank.astype(np.int64, copy=False), transpose)
 
 

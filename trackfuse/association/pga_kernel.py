@@ -41,6 +41,10 @@ from trackfuse.association.pga import (
 JIT = {"cache": True, "nogil": True, "error_model": "numpy"}
 # Columns of a row of draws (the fields of pga.Draws, in stream order).
 FIRST, SECOND, MUTATE, REPAIR, PICK, PLACE, ACCEPT_CROSSOVER, ACCEPT_MUTATION = range(8)
+# Constant arguments as int64 and bool values: a literal in a call would compile one more
+# copy of the called function per constant (about a second each, on the first run).
+_ZERO, _CROSSOVER_COLUMNS = np.int64(0), np.int64(2)
+_EMPTY, _PAIRED = np.bool_(False), np.bool_(True)
 # Entries of the float state carried from one compiled segment to the next.
 J_CUR, J_BEST, TEMPERATURE = range(3)
 
@@ -95,7 +99,7 @@ def _search(draws, w, rank, cur, best, q, state, p_m, roulette_second, repair_mo
     J, J_best, T = state[J_CUR], state[J_BEST], state[TEMPERATURE]
     child, cum, touched = cur.copy(), np.cumsum(q), np.empty(3, np.int64)
     scratch, seen = np.empty(max(m1, m2) + 1, np.int64), np.empty(m1 + 1, np.bool_)
-    n_paired = 0
+    n_paired = _ZERO
     for j in range(m2):
         n_paired += cur[j] != 0
     stale = False
@@ -114,9 +118,10 @@ def _search(draws, w, rank, cur, best, q, state, p_m, roulette_second, repair_mo
             if staged:
                 if _accepted(dJ, d[ACCEPT_CROSSOVER], anneal, T):
                     J, J_best, n_paired, stale = _commit(J + dJ, J_best, child_paired, cur,
-                                                         child, best, q, rank, touched, 2)
+                                                         child, best, q, rank, touched,
+                                                         _CROSSOVER_COLUMNS)
                 else:
-                    _revert(cur, child, touched, 2)
+                    _revert(cur, child, touched, _CROSSOVER_COLUMNS)
                 dJ, child_paired, n_touched = 0.0, n_paired, 0
         if m1 > 0 and d[MUTATE] < p_m:
             gain, c, child_paired = _mutate(child, w, d, child_paired, repair_moves, evict,
@@ -181,10 +186,10 @@ def _bisect_right(cum, x, lo, hi, shift):
 def _columns(cum, q, u1, u2, roulette_second):
     """The crossover's two columns (``_Search._crossover`` of the reference)."""
     m2 = cum.shape[0]
-    j1 = min(_bisect_right(cum, u1 * cum[m2 - 1], 0, m2, 0), m2 - 1)
+    j1 = min(_bisect_right(cum, u1 * cum[m2 - 1], _ZERO, m2, _ZERO), m2 - 1)
     if roulette_second:
         x, q1 = u2 * (cum[m2 - 1] - q[j1]), q[j1]
-        j2 = _bisect_right(cum, x, 0, j1, 0)
+        j2 = _bisect_right(cum, x, _ZERO, j1, _ZERO)
         if j2 == j1:
             j2 = _bisect_right(cum, x, j1 + 1, m2, q1)
             if j2 == m2:
@@ -216,12 +221,12 @@ def _mutate(child, w, d, child_paired, repair_moves, evict, scratch, seen):
             old = child[c]
             child[c] = r
             return w[r, c] - w[old, c], c, child_paired
-        n_empty = _columns_where(child, False, scratch)
+        n_empty = _columns_where(child, _EMPTY, scratch)
         c = scratch[int((2.0 * d[PLACE] - 1.0 if evict else d[PLACE]) * n_empty)]
         child[c] = r
         return w[r, c], c, child_paired + 1
     if child_paired:
-        n = _columns_where(child, True, scratch)
+        n = _columns_where(child, _PAIRED, scratch)
         c = scratch[int(d[PICK] * n)]
         r = child[c]
         child[c] = 0

@@ -32,6 +32,11 @@ PARALLEL, SEQUENTIAL, NEAREST, PAPER_APPROX = (METHODS.index(m) for m in (
 LOG_2PI = math.log(2.0 * math.pi)
 TWO_PI = 2.0 * math.pi
 JIT = {"cache": True, "nogil": True, "error_model": "numpy"}
+#: The sensor indices (and each sensor's first row in the moments) as int64
+#: values: a literal 0 or 1 in a call would compile one more copy of the called function
+#: per constant, each about a second of the first run after installing.
+_FIRST, _SECOND = np.int64(0), np.int64(1)
+_FIRST_ROWS, _SECOND_ROWS = np.int64(0), np.int64(2)
 
 
 def run_filter_compiled(sc, b, options: PDAOptions) -> Estimates:
@@ -374,7 +379,7 @@ def _single_update(X, P, R, P_D, P_G, nearest, mg_combined, lin, s, mom):
     if mg_combined and m > 0:
         _at_combined(lin, s, w)
     _clear(mom)
-    bsum = _single_moments(lin, s, w, P, mom, 0)
+    bsum = _single_moments(lin, s, w, P, mom, _FIRST_ROWS)
     _class_terms(lin.Kg[s], R, P, bsum, mom)
     _collapse(X, P, b0, mom)
 
@@ -500,7 +505,7 @@ def _pair_update(Xp, Pp, R, P_D, P_G, method, joint_full, mg_combined, lin, mom,
         _pair_at_combined(lin)
     _clear(mom)
     for s in range(2):
-        bsum = _single_moments(lin, s, lin.w[s], Pp, mom, 0)
+        bsum = _single_moments(lin, s, lin.w[s], Pp, mom, _FIRST_ROWS)
         _class_terms(lin.Kg[s], R[s], Pp, bsum, mom)
         _clear_class(mom)
     bsum = _pair_moments(lin, Pp, mom)
@@ -561,7 +566,8 @@ def _pair_log_weights(lin, S12inv, det12, P_D, P_G, method, joint_full):
         off1, off2 = common - math.log(geom[1, AREA]), common - math.log(geom[0, AREA])
         pair_add = common
     else:
-        f1, f2 = _log_null(lin, 0, P_D[0], P_G), _log_null(lin, 1, P_D[1], P_G)
+        f1 = _log_null(lin, _FIRST, P_D[0], P_G)
+        f2 = _log_null(lin, _SECOND, P_D[1], P_G)
         lp1, lp2 = _log_or_minus_inf(P_D[0]), _log_or_minus_inf(P_D[1])
         log00 = f1 + f2
         off1, off2 = lp1 + f2, f1 + lp2
@@ -666,9 +672,9 @@ def _pair_at_combined(lin):
         for a in range(m[0]):
             w2[j] += B[ok[0, a], j]
     if m[0] > 0:
-        _at_combined(lin, 0, w1)
+        _at_combined(lin, _FIRST, w1)
     if m[1] > 0:
-        _at_combined(lin, 1, w2)
+        _at_combined(lin, _SECOND, w2)
 
 
 @njit(**JIT)
@@ -708,8 +714,8 @@ def _pair_moments(lin, P, mom):
             NN[p, 3] += nu[0, i, p] * v1
             for q in range(2):
                 C[p, 2 + q] += gp0 * W[q, 0] + gp1 * W[q, 1] + gp2 * W[q, 2]
-    bsum = _single_moments(lin, 0, r, P, mom, 0)
-    _single_moments(lin, 1, c, P, mom, 2)
+    bsum = _single_moments(lin, _FIRST, r, P, mom, _FIRST_ROWS)
+    _single_moments(lin, _SECOND, c, P, mom, _SECOND_ROWS)
     for p in range(2):
         for q in range(2):
             NN[2 + q, p] = NN[p, 2 + q]
