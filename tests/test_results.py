@@ -147,6 +147,20 @@ def test_a_damaged_resume_state_is_repaired_with_a_warning(case, copy, reference
     resumes_to_reference(config, out, folder, reference[3], warning)
 
 
+def test_a_damaged_manifest_is_replaced_when_the_report_is_drawn(copy, reference):
+    """Every part is there, the manifest is not: the runner warns that it writes a new one
+    and must finish the run with its report too (not refuse the damaged manifest when it
+    opens the run folder for the report)."""
+    config, out, folder = copy
+    as_interrupted(folder)
+    (folder / "manifest.json").write_text("[1, 2]")
+    result = cli("run", config, "--out", out, "--executor", "serial", "--no-progress")
+    check_contract(result, allowed=(0,))
+    assert "manifest.json: not a trackfuse manifest" in result.stderr
+    assert (folder / "trials.csv").read_bytes() == reference[3]
+    assert json.loads((folder / "manifest.json").read_text())["status"] == "complete"
+
+
 def test_parts_being_a_file_is_refused_in_one_line(copy, reference):
     config, out, folder = copy
     as_interrupted(folder)

@@ -66,7 +66,7 @@ from trackfuse.results import (
     sibling_manifests,
 )
 from trackfuse.rowtable import frame_csv
-from trackfuse.rundata import load
+from trackfuse.rundata import RunData, load
 from trackfuse.runlock import RunLock
 from trackfuse.summary import CHUNK_ROWS, summarize
 from trackfuse.sweep import expand
@@ -369,6 +369,12 @@ class Runner:
         thread.start()
         return thread
 
+    def _open_for_report(self, session: _Session) -> RunData:
+        """The run folder as the report reads it, its manifest first written anew: a resume
+        that computed nothing has not replaced a damaged one yet."""
+        self.folder.write_manifest(self._manifest(RunStatus.RUNNING, session))
+        return load(self.folder.path, require_complete=False)
+
     def _finish(self, session: _Session) -> RunOutcome:
         """Merge verified parts into the final CSVs, summarize, write the report
         (:func:`trackfuse.reports.write_report`), mark the run complete."""
@@ -383,10 +389,10 @@ class Runner:
             (path / TIMINGS).unlink()
         keys = ["point", *self.config.sweep, *self.config.experiment.row_keys]
         self.on_phase("summarising into summary.csv")
-        run = load(path, require_complete=False)
+        run = self._open_for_report(session) if self.plots else None
         # a trials.csv of one summary chunk is read once, for the summary and the report
-        whole = self.plots and files[TRIALS]["rows"] <= CHUNK_ROWS
-        summary, failed_rows = summarize(run.trials if whole else path / TRIALS, keys,
+        whole = run is not None and files[TRIALS]["rows"] <= CHUNK_ROWS
+        summary, failed_rows = summarize(run.trials if run and whole else path / TRIALS, keys,
                                          self.config.experiment.binary_metrics)
         files[SUMMARY] = _write_record(path / SUMMARY, frame_csv(summary))
         if timings["rows"]:
@@ -397,7 +403,7 @@ class Runner:
             (path / TIMING_SUMMARY).unlink(missing_ok=True)
         outcome = RunOutcome(path, RunStatus.COMPLETE, self.total_trials, session.computed,
                              failed_rows, files[TRIALS]["rows"])
-        if self.plots:  # before "complete": a Ctrl-C while drawing leaves a resumable run
+        if run is not None:  # before "complete": a Ctrl-C while drawing leaves a resumable run
             self.on_phase("drawing figures and tables")
             report = write_report(run)
             outcome.figures, outcome.figure_errors = report.figures, report.errors
