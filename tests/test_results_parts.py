@@ -115,3 +115,13 @@ def test_an_empty_trial_cell_is_not_trial_zero(tmp_path):
     path.write_bytes(part_bytes(span, HEADER + "\n" + "".join(r + "\n" for r in rows), 3))
     with pytest.raises(PartDamaged, match="trial '' is not one of trials 0 to 1"):
         read_part(path, span, "trials")
+
+
+@pytest.mark.parametrize("trial", ["1²", "١١", "1١"])
+def test_a_trial_of_other_than_ascii_digits_is_damage(tmp_path, trial):
+    """``str.isdigit`` holds for superscripts (which ``int`` refuses: a ValueError escaped the
+    merge's repair loop, which recomputes only a PartDamaged batch) and for other scripts'
+    digits (which ``int`` reads: a row whose trial cell is not the runner's was merged)."""
+    rows = _rows()[:1] + [f"3,{trial},a/b,1.0,0"] + _rows()[1:]
+    with pytest.raises(PartDamaged, match=f"trial '{trial}' is not one of trials 10 to 13"):
+        _read(tmp_path, rows, count=len(rows))

@@ -124,3 +124,13 @@ def test_frame_csv_of_a_run_summary_is_what_pandas_writes(tmp_path, monkeypatch)
     expected = summary.to_csv(index=False)
     monkeypatch.setattr(pd.DataFrame, "to_csv", None)  # the column-wise path, not pandas
     assert frame_csv(summary) == expected
+
+
+@pytest.mark.parametrize("columns", [
+    ["a", "a"],  # duplicate names: frame[name] is a frame (AttributeError: no dtype)
+    [np.nan, "b"],  # a missing label: pandas writes an empty name, str() gives "nan"
+    pd.to_datetime(["2020-01-01", "2020-01-02"]),  # pandas writes midnight as the date
+])
+def test_frame_csv_of_any_column_labels_is_what_pandas_writes(columns):
+    frame = pd.DataFrame([[1.0, 2.0]], columns=columns)
+    assert frame_csv(frame) == frame.to_csv(index=False)

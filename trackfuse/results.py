@@ -344,7 +344,7 @@ def _check_rows(span: BatchSpan, kind: str, columns: list[str], widths: list[int
         raise PartDamaged(span, kind, f"a row of point {min(points)[:20]!r}")
     seen: set[int] = set()
     for text in sorted(set(map(itemgetter(at_trial), heads))):
-        trial = int(text) if text.isdigit() else -1
+        trial = int(text) if text.isascii() and text.isdigit() else -1
         if not span.first <= trial < span.stop:
             raise PartDamaged(span, kind, f"trial {text[:20]!r} is not one of trials "
                                           f"{span.first} to {span.stop - 1}")

@@ -78,9 +78,11 @@ def frame_csv(frame) -> str:
     as fast for the float columns of summaries and tables. ``frame`` is a
     :class:`pandas.DataFrame`; floats are written by ``repr`` and NaN as an empty cell, as
     pandas writes them. A frame with another column type than float64, numpy integers and
-    strings that need no quoting (or with fewer than two columns) is written by pandas."""
-    names = [str(c) for c in frame.columns]
-    if len(names) < 2 or not _plain_texts(names):
+    strings that need no quoting, or whose column names are not distinct plain strings, or
+    with fewer than two columns, is written by pandas."""
+    names = list(frame.columns)
+    if len(names) < 2 or len(set(names)) < len(names) \
+            or not all(type(n) is str for n in names) or not _plain_texts(names):
         return frame.to_csv(index=False)
     cells: list[list[str]] = []
     for name in frame.columns:
