@@ -266,7 +266,7 @@ def read_part(path: Path, span: BatchSpan, kind: str) -> PartText:
         if _plain(text):  # the usual part: checked without splitting every cell
             header, _, data = text.partition("\n")
             columns = header.split(",") if header else []
-            if not _rows_fit(body[len(header) + 1:], span, kind, columns, rows):
+            if not _rows_fit(body[len(header.encode()) + 1:], span, kind, columns, rows):
                 lines = _lines(data)  # something is off: find what, line by line
                 widths = [line.count(",") + 1 if line else 0 for line in lines]
                 _check_rows(span, kind, columns, widths, lambda reach: [
