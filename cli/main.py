@@ -41,6 +41,7 @@ from trackfuse_cli.options import (
     Sweeps,
     Workers,
     fail,
+    out_folder,
     print_error,
     warn,
 )
@@ -197,7 +198,7 @@ def run(
                                                help="Trials per sweep point.")] = None,
     workers: Workers = 0,
     seed: Annotated[int | None, typer.Option(metavar="N", min=0, help="Root seed.")] = None,
-    out_dir: OutDir = Path("results"),
+    out_dir: OutDir = "results",
     sets: Sets = [],  # noqa: B006 - typer reads the default
     sweeps: Sweeps = [],  # noqa: B006
     executor: ExecutorOpt = Executor.process,
@@ -215,8 +216,8 @@ def run(
 ) -> None:
     """Run CONFIG: every sweep point x trial, then trials.csv, summary.csv and the report."""
     config = _load(cfg, _overrides(sets, overrides), sweeps, trials=trials, seed=seed)
-    options = RunOptions(out_dir, workers, executor.value, scheduler, scheduler_file,
-                         not no_plots, not no_progress, force, name)
+    options = RunOptions(out_folder(out_dir), workers, executor.value, scheduler,
+                         scheduler_file, not no_plots, not no_progress, force, name)
     options.check()
     if not dry_run:
         options.start_workers([config])
@@ -307,7 +308,7 @@ def reproduce(
         help="Folder of configs (default: ./configs if present, else the shipped paper "
              "configs).")] = None,
     workers: Workers = 0,
-    out_dir: OutDir = Path("results"),
+    out_dir: OutDir = "results",
     sets: Sets = [],  # noqa: B006
     executor: ExecutorOpt = Executor.process,
     scheduler: Scheduler = None,
@@ -320,8 +321,9 @@ def reproduce(
 
     Finished configs resume at once; all configs are validated before the first one runs.
     A --set parameter applies to every config whose experiment has it."""
+    out = out_folder(out_dir)
     configs = _load_all(_config_paths(folder), _overrides(sets, None))
-    options = RunOptions(out_dir, workers, executor.value, scheduler, scheduler_file,
+    options = RunOptions(out, workers, executor.value, scheduler, scheduler_file,
                          not no_plots, not no_progress)
     options.check()
     if dry_run:
@@ -332,7 +334,7 @@ def reproduce(
     finished = [o.folder for o in outcomes if o.report is not None]
     if finished:
         from trackfuse.reproduction import write_reproduction_report
-        print(f"report: {write_reproduction_report(finished, out_dir)}")
+        print(f"report: {write_reproduction_report(finished, out)}")
     raise typer.Exit(exit_status(outcomes))
 
 
@@ -353,9 +355,9 @@ def plot(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR",
     from trackfuse.runlock import RunLock
     runs = find_runs(run_dir) if run_dir.is_dir() and not is_run_folder(run_dir) else []
     if runs:
-        print(f"{run_dir} is a folder of runs; plot one of them:")
         _print_runs(runs)
-        return
+        fail(f"{run_dir}: a folder of {len(runs)} runs, not a run; plot one of them (listed "
+             "above)")
     try:
         run = load_run(run_dir)
         with RunLock(run.path, warn):
@@ -429,6 +431,9 @@ def _print_comparison(result, shown: int = 30) -> None:
     print(f"{'paired' if result.paired else 'unpaired'} comparison, {len(cells)} cells, "
           f"{result.gated} gated (family-wise alpha {result.alpha:g}): "
           + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())))
+    if result.only_base or result.only_new:
+        print(f"not compared: {result.only_base} cells only in BASE, {result.only_new} only "
+              "in NEW (sweep points or row keys the other run lacks)")
     notable = cells[~cells["verdict"].str.startswith("no significant")]
     if notable.empty:
         return
@@ -478,6 +483,7 @@ def compare(
     if as_json:
         print(json.dumps({"paired": result.paired, "alpha": result.alpha,
                           "gated": result.gated, "regressions": len(result.regressions),
+                          "only_base": result.only_base, "only_new": result.only_new,
                           "cells": json.loads(result.cells.to_json(orient="records"))}))
     else:
         _print_comparison(result)

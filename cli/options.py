@@ -17,7 +17,16 @@ from typer.core import TyperGroup
 
 
 class OneLineErrors(TyperGroup):
-    """Usage errors (a bad option value, a missing argument) as one ``error:`` line, exit 2."""
+    """Usage errors (a bad option value, a missing argument) as one ``error:`` line, exit 2;
+    a Ctrl-C as one ``interrupted:`` line, exit 130."""
+
+    def invoke(self, ctx):
+        """A Ctrl-C that no command turned into its own message is one line too."""
+        try:
+            return super().invoke(ctx)
+        except KeyboardInterrupt:
+            print("interrupted: run the same command again to resume", file=sys.stderr)
+            raise typer.Exit(130) from None
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True,
              **extra):
@@ -91,7 +100,15 @@ Sweeps = Annotated[list[str], typer.Option(
          "brackets: 'algorithms=\\[a,b],\\[c]' (repeatable).")]
 Workers = Annotated[int, typer.Option(metavar="N", min=0, show_default="all cores",
                                       help="Parallel workers (0 = all cores).")]
-OutDir = Annotated[Path, typer.Option("--out", metavar="FOLDER", help="Output root folder.")]
+OutDir = Annotated[str, typer.Option("--out", metavar="FOLDER", help="Output root folder.")]
+
+
+def out_folder(text: str) -> Path:
+    """The ``--out`` folder; an empty value (such as an unset shell variable) is refused
+    rather than read as the working directory."""
+    if not text.strip():
+        fail("--out: got an empty folder name; allowed: a folder path (default: results)")
+    return Path(text)
 ExecutorOpt = Annotated[Executor, typer.Option(help="Where batches run.")]
 Scheduler = Annotated[str | None, typer.Option(metavar="ADDRESS", help="dask scheduler "
                                                "address, e.g. tcp://host:8786.")]

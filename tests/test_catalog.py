@@ -26,5 +26,6 @@ def test_runs_lists_run_folders_with_their_name_and_plot_lists_a_folder_of_runs(
     assert json.loads((again.folder.path / "manifest.json").read_text())["name"] == "first try"
     listed = CliRunner().invoke(app, ["runs", str(out)])
     assert listed.exit_code == 0 and "first try" in listed.stdout
-    plotted = CliRunner().invoke(app, ["plot", str(out / "gauss")])
-    assert plotted.exit_code == 0 and "folder of runs" in plotted.stdout
+    plotted = CliRunner().invoke(app, ["plot", str(out / "gauss")])  # lists them, draws none
+    assert plotted.exit_code == 2 and "first try" in plotted.stdout
+    assert "a folder of 2 runs, not a run" in plotted.stderr

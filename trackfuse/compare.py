@@ -24,6 +24,7 @@ from the experiment's declared :class:`~trackfuse.experiments.base.Metric` list.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -31,6 +32,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from trackfuse.config import did_you_mean
 from trackfuse.results import FAILED_ROW, RUNNER_COLUMNS
 from trackfuse.rundata import RunData
 from trackfuse.stats import (
@@ -53,13 +55,18 @@ class Comparison:
     ``test`` and ``verdict`` (``regression``, ``improvement``, ``no significant change``,
     or for ungated metrics ``differs`` / ``no significant difference``).
     ``paired``: whether trials were paired. ``gated``: number of gated cells.
-    ``alpha``: the family-wise false-alarm level of the gate.
+    ``alpha``: the family-wise false-alarm level of the gate. ``only_base``,
+    ``only_new``: cells found in one run only (a sweep point or algorithm the other run
+    lacks), left out of the comparison.
     """
 
     cells: pd.DataFrame
     paired: bool
     gated: int
     alpha: float
+    #: cells (key values x metric) that only one of the runs has: not compared
+    only_base: int = 0
+    only_new: int = 0
 
     @property
     def regressions(self) -> pd.DataFrame:
@@ -178,7 +185,11 @@ def compare_trials(base: pd.DataFrame, new: pd.DataFrame, keys: Sequence[str],
         "no significant difference")
     columns = [*keys, "metric", "better", "n_base", "n_new", "base", "new", "diff", "ci_low",
                "ci_high", "p_value", "test", "verdict"]
-    return Comparison(cells[columns].reset_index(drop=True), paired, m, alpha)
+    shared = len(cells)
+    only_base = b_long.groupby([*keys, "metric"], dropna=False).ngroups - shared
+    only_new = n_long.groupby([*keys, "metric"], dropna=False).ngroups - shared
+    return Comparison(cells[columns].reset_index(drop=True), paired, m, alpha, only_base,
+                      only_new)
 
 
 def compare_runs(base: RunData, new: RunData, tolerance: Mapping[str, float] | None = None,
@@ -195,7 +206,20 @@ def compare_runs(base: RunData, new: RunData, tolerance: Mapping[str, float] | N
                          f"{new.config['experiment']!r}")
     if list(base.sweep) != list(new.sweep):
         raise ValueError(f"different swept keys: {list(base.sweep)} and {list(new.sweep)}")
+    for run in (base, new):
+        points = [repr([p[k] for k in run.sweep]) for p in run.points]
+        if len(set(points)) < len(points):
+            raise ValueError(f"{run.path}: a sweep point comes twice (a run of a version "
+                             "that allowed it); compare needs distinct points")
     experiment = base.experiment
+    names = [m.name for m in experiment.metrics]
+    for metric, value in (tolerance or {}).items():
+        if metric not in names:
+            raise ValueError(f"--tolerance: unknown metric {metric!r}"
+                             f"{did_you_mean(metric, names)}; allowed: {', '.join(names)}")
+        if not 0 <= value < math.inf:
+            raise ValueError(f"--tolerance: got {metric}={value}; allowed: a finite number "
+                             ">= 0 (in the metric's unit)")
     paired = (base.config.get("seed") == new.config.get("seed")
               and base.config.get("trials") == new.config.get("trials"))
     return compare_trials(base.trials, new.trials, [*base.sweep, *experiment.row_keys],

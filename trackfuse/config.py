@@ -189,7 +189,23 @@ def _validated(source: str, exp: Experiment, where: str, key: str, value: Any) -
         return check_value(p, value)
     except (ValueError, TypeError, OverflowError):
         raise ConfigError(source, _dotted(where, key),
-                          f"got {_describe(value)}; allowed: {allowed_text(p)}") from None
+                          f"got {_bad_part(p, value)}; allowed: {allowed_text(p)}") from None
+
+
+def _bad_part(p: Param, value: Any) -> str:
+    """``value`` described for an error: a list by its first item that is not allowed
+    (a long list would be cut before it), with a did-you-mean among the choices."""
+    if p.kind is not list or not isinstance(value, list) or not value:
+        return _describe(value)
+    element = str if p.choices is not None and isinstance(p.choices[0], str) else float
+    for item in value:
+        try:
+            _scalar(p, item, element)
+        except (ValueError, TypeError, OverflowError):
+            hint = did_you_mean(item, p.choices) \
+                if isinstance(item, str) and p.choices else ""
+            return f"{_describe(item)} in the list{hint}"
+    return _describe(value)
 
 
 def _int(source: str, key: str, value: Any, low: int, high: int = MAX_TRIALS) -> int:
@@ -244,6 +260,7 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
         params[key] = _validated(SET, exp, "", key, value)
     sweep = _sweep(source, exp, raw.get("sweep") or {}, dict(sweeps or {}), dropped=set(sets))
     mode = _sweep_mode(origin["sweep_mode"], raw.get("sweep_mode", "grid"), sweep)
+    _check_distinct(source, sweep, mode, set(sweeps or {}))
     if count_points(sweep, mode) > MAX_POINTS:
         raise ConfigError(source, "sweep", f"the {mode} has {count_points(sweep, mode)} points;"
                                            f" allowed: at most {MAX_POINTS}")
@@ -302,6 +319,31 @@ def _sweep_mode(source: str, mode: Any, sweep: dict[str, list[Any]]) -> str:
         lengths = ", ".join(f"{k}={len(v)}" for k, v in sweep.items())
         raise ConfigError(source, "sweep", f"zip needs axes of equal length, got {lengths}")
     return mode
+
+
+def _check_distinct(source: str, sweep: dict[str, list[Any]], mode: str,
+                    from_options: set[str]) -> None:
+    """Refuse a sweep with two equal points: a value repeated on a grid axis, or a repeated
+    combination of zipped axes. Two such points would differ only in their random numbers
+    (the point stream), and be read as two settings."""
+    if mode == "zip":
+        seen: set[str] = set()
+        for values in zip(*sweep.values(), strict=True):
+            text = repr(values)
+            if text in seen:
+                got = ", ".join(f"{k}={v!r}" for k, v in zip(sweep, values, strict=True))
+                raise ConfigError(source, "sweep", f"the point {got} comes twice; allowed: "
+                                                   "distinct points")
+            seen.add(text)
+        return
+    for key, values in sweep.items():
+        texts = [repr(v) for v in values]
+        repeated = next((v for v, t in zip(values, texts, strict=True)
+                         if texts.count(t) > 1), None)
+        if repeated is not None:
+            where, section = (SWEEP, "") if key in from_options else (source, "sweep")
+            raise ConfigError(where, _dotted(section, key), f"got {repeated!r} twice; "
+                                                            "allowed: distinct values")
 
 
 def _experiment(source: str, name: Any) -> Experiment:

@@ -23,12 +23,15 @@ import multiprocessing
 import os
 import signal
 import socket
+import threading
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from itertools import islice
 from pathlib import Path
 from typing import Any
+
+from trackfuse.child_processes import setup_child
 
 KINDS = ("serial", "process", "dask")
 MAX_POOL_RESTARTS = 3
@@ -63,11 +66,6 @@ class SerialExecutor:
         pass
 
 
-def _ignore_sigint() -> None:
-    """Workers leave Ctrl-C to the parent, which stops them cleanly."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
 BLAS_THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 
@@ -93,9 +91,15 @@ def _start_forkserver_single_threaded() -> None:
         # (Python 3.11 drops the path it is given): a ``trackfuse`` folder there, such as
         # another version's source, would be what the workers import
         os.environ["PYTHONSAFEPATH"] = "1"
+    # started with Ctrl-C ignored (inherited through exec), so a Ctrl-C while it loads its
+    # modules prints no traceback of its own: the main process stops the run
+    main_thread = threading.current_thread() is threading.main_thread()
+    handler = signal.signal(signal.SIGINT, signal.SIG_IGN) if main_thread else None
     try:
         forkserver.ensure_running()
     finally:
+        if main_thread:
+            signal.signal(signal.SIGINT, handler)
         for key, value in saved.items():
             if value is None:
                 os.environ.pop(key, None)
@@ -127,7 +131,7 @@ class ProcessExecutor:
         start_fork_server(preload)
         self._ctx = multiprocessing.get_context("forkserver")
         self._pool = ProcessPoolExecutor(workers, mp_context=self._ctx,
-                                         initializer=_ignore_sigint)
+                                         initializer=setup_child, initargs=(os.getpid(),))
 
     def imap_unordered(self, fn: Callable, tasks: Iterable) -> Iterator[Any]:
         tasks = iter(tasks)
@@ -178,7 +182,7 @@ class ProcessExecutor:
         """A worker died: replace the pool (unfinished batches are resubmitted by the caller)."""
         self._pool.shutdown(wait=False, cancel_futures=True)
         self._pool = ProcessPoolExecutor(self.workers, mp_context=self._ctx,
-                                         initializer=_ignore_sigint)
+                                         initializer=setup_child, initargs=(os.getpid(),))
 
     def close(self) -> None:
         self._pool.shutdown(wait=True, cancel_futures=True)

@@ -42,6 +42,7 @@ from typing import Any
 
 import pandas as pd
 
+from trackfuse.child_processes import setup_child
 from trackfuse.results import INDEX_HTML, INDEX_MD, atomic_write
 from trackfuse.rowtable import frame_csv
 from trackfuse.rundata import RunData, load
@@ -229,10 +230,16 @@ def _write_figures(run: RunData, module: ModuleType, wanted: Sequence[str],
         warm_up(tuple(formats), PNG_DPI)
         _FORK_STATE = (run, module, formats)
         try:
-            with ProcessPoolExecutor(processes, multiprocessing.get_context("fork")) as pool:
+            with ProcessPoolExecutor(processes, multiprocessing.get_context("fork"),
+                                     initializer=setup_child,
+                                     initargs=(os.getpid(),)) as pool:
                 drawing = [pool.submit(_draw_in_fork, name) for name in wanted]
-                meanwhile()
-                parts = [future.result() for future in drawing]
+                try:
+                    meanwhile()
+                    parts = [future.result() for future in drawing]
+                except KeyboardInterrupt:  # stop now: no figure more
+                    pool.shutdown(wait=False, cancel_futures=True)
+                    raise
         finally:
             _FORK_STATE = None
     position = {name: i for i, name in enumerate(wanted)}

@@ -1,0 +1,187 @@
+"""Problems found by using the command line as a demanding user would (Ctrl-C from a
+terminal, kill -9, typos, empty options, folders of runs, mismatched runs): each test failed
+before its fix."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from conftest import ROOT, cli_env, trackfuse
+
+CI = ROOT / "configs" / "ci"
+PASSIVE = CI / "passive_assoc_ci.yaml"
+SLOW_ARGS = ("--set", "trials=40", "--set", "batch_size=2", "--workers", "2", "--no-progress")
+
+
+def _children(pid: int) -> list[int]:
+    """Direct children of ``pid`` (Linux /proc)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            stat = (entry / "stat").read_text()
+        except OSError:
+            continue
+        if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
+            found.append(int(entry.name))
+    return found
+
+
+def _cmdline(pid: int) -> str:
+    try:
+        return (Path("/proc") / str(pid) / "cmdline").read_bytes().replace(b"\0", b" ").decode()
+    except OSError:
+        return ""
+
+
+def _wait_for_fork_server(pid: int, timeout: float = 60) -> int:
+    """The pid of the fork server the run ``pid`` starts, as soon as it exists."""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        for child in _children(pid):
+            if "multiprocessing.forkserver" in _cmdline(child):
+                return child
+        time.sleep(0.01)
+    pytest.fail("the run started no fork server")
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = (Path("/proc") / str(pid) / "stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+def _start(out: Path) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "trackfuse", "run", str(PASSIVE),
+                             "--out", str(out), *SLOW_ARGS], env=cli_env(),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux /proc")
+def test_terminal_ctrl_c_while_the_fork_server_loads_prints_no_traceback(tmp_path):
+    """A terminal's Ctrl-C reaches the whole process group, the fork server included.
+
+    Pressed in the first seconds of a run (while the fork server imports the preload
+    modules), it printed the fork server's 20-80 line ``KeyboardInterrupt`` traceback.
+    """
+    proc = _start(tmp_path / "out")
+    try:
+        _wait_for_fork_server(proc.pid)
+        time.sleep(0.2)
+        os.killpg(proc.pid, signal.SIGINT)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130
+    assert "Traceback" not in err, err
+    assert err.strip().startswith("interrupted:"), err
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux /proc")
+def test_kill_9_of_a_run_leaves_no_fork_server_behind(tmp_path):
+    """After ``kill -9`` of ``trackfuse run`` its fork server (about 160 MB), resource
+    tracker and idle workers stayed alive for good: ten kills left 1.9 GB of orphans."""
+    proc = _start(tmp_path / "out")
+    server = _wait_for_fork_server(proc.pid)
+    leftovers: list[int] = []
+    try:
+        deadline = time.monotonic() + 60
+        while not _children(server) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        leftovers = [server, *_children(server),
+                     *(c for c in _children(proc.pid) if c != server)]
+        proc.kill()
+        proc.wait(timeout=30)
+        time.sleep(5)
+        alive = [pid for pid in leftovers if _alive(pid)]
+        assert not alive, f"still running after the run was killed: {alive}"
+    finally:
+        for pid in leftovers:
+            if _alive(pid):
+                os.kill(pid, signal.SIGKILL)
+
+
+def test_plot_of_a_folder_that_is_not_a_run_exits_nonzero(tmp_path):
+    """``trackfuse plot results/`` listed the runs, drew nothing and exited 0, so a script
+    (`trackfuse plot DIR && publish`) took it for success."""
+    out = tmp_path / "results"
+    done = trackfuse("run", PASSIVE, "--out", out, "--set", "trials=1", "--executor", "serial",
+                     "--no-plots", "--no-progress")
+    assert done.returncode == 0, done.stderr
+    result = trackfuse("plot", out)
+    assert result.returncode == 2, result.stdout
+    assert len(result.stderr.strip().splitlines()) == 1
+    assert not list(out.rglob("figures/*.png"))
+
+
+def test_unknown_algorithm_is_named_even_when_it_is_not_among_the_first_four(write_config):
+    """A typo in the fifth algorithm was cut from the message: `got ['exact', ..., ...]`."""
+    text = PASSIVE.read_text().replace("pga_anneal]", "pga_aneal]")
+    assert "pga_aneal" in text
+    result = trackfuse("validate", write_config(text))
+    assert result.returncode == 2
+    assert "pga_aneal" in result.stderr, result.stderr
+
+
+def test_a_value_repeated_in_a_grid_sweep_axis_is_refused(write_config):
+    """`targets.n: [5, 5]` ran two points with the same parameters and different numbers
+    (the point stream differs), and the figures joined them by a vertical line at N = 5
+    that reads as an interval."""
+    text = PASSIVE.read_text().replace("targets.n: [5, 10]", "targets.n: [5, 5]")
+    result = trackfuse("validate", write_config(text))
+    assert result.returncode == 2, result.stdout
+    assert "targets.n" in result.stderr and len(result.stderr.strip().splitlines()) == 1
+
+
+def test_empty_out_is_refused_instead_of_writing_into_the_current_folder(tmp_path):
+    """`--out ''` (an unset shell variable: `--out "$OUT"`) silently wrote into the
+    current folder."""
+    result = trackfuse("run", PASSIVE, "--out", "", "--set", "trials=1", "--executor",
+                       "serial", "--no-plots", "--no-progress", cwd=tmp_path)
+    assert result.returncode == 2, result.stdout
+    assert not (tmp_path / "passive_assoc_ci").exists()
+
+
+def _small_run(out: Path, *extra: str) -> Path:
+    done = trackfuse("run", PASSIVE, "--out", out, "--set", "trials=3", "--executor", "serial",
+                     "--no-plots", "--no-progress", *extra)
+    assert done.returncode == 0, done.stderr
+    return next(out.rglob("manifest.json")).parent
+
+
+def test_compare_tolerance_for_an_unknown_metric_is_refused(tmp_path):
+    """`--tolerance accuraci=0.5` (a typo) was accepted and silently ignored, so a CI gate
+    ran without the tolerance its author wrote."""
+    run = _small_run(tmp_path / "a")
+    result = trackfuse("compare", run, run, "--fail-on-regression", "--tolerance",
+                       "accuraci=0.5")
+    assert result.returncode == 2, result.stdout
+    assert "accuraci" in result.stderr and len(result.stderr.strip().splitlines()) == 1
+
+
+def test_compare_says_which_cells_only_one_run_has(tmp_path):
+    """A base run over ``targets.n: [5, 10]`` against one over ``[5]``: the 10-target cells
+    were dropped without a word. (A run repeating a sweep value, which made compare count
+    base trials twice, is now refused: test_a_value_repeated_in_a_grid_sweep_axis_is_refused.)
+    """
+    base = _small_run(tmp_path / "base")
+    new = _small_run(tmp_path / "new", "--sweep", "targets.n=5")
+    result = trackfuse("compare", base, new, "--json")
+    assert result.returncode == 0, result.stderr
+    report = json.loads(result.stdout)
+    assert report["only_base"] == len(report["cells"]) > 0 and report["only_new"] == 0
+    assert max(cell["n_base"] for cell in report["cells"]) <= 3
+    text = trackfuse("compare", base, new)
+    assert f"{report['only_base']} cells only in BASE" in text.stdout

@@ -1,0 +1,57 @@
+"""Setup of the processes a run forks: pool workers and drawing processes.
+
+Ctrl-C in a terminal reaches every process of the group. The main process stops the run
+(one line, exit 130) and ends its children, so they ignore it: otherwise each printed its
+own ``KeyboardInterrupt`` traceback. (The fork server starts with it ignored:
+:mod:`trackfuse.executors`.)
+
+A main process that is killed (``kill -9``, out of memory), or interrupted while its pool was
+still starting a worker, cannot end every child, and an idle pool worker waits for work
+forever: it holds a copy of its own task queue, so the queue never reports that the other end
+is gone, and it keeps the fork server alive too (multiprocessing hands every child the fork
+server's keep-alive pipe). So each child watches the main process and ends when it does.
+"""
+
+from __future__ import annotations
+
+import os
+import select
+import signal
+import threading
+import time
+
+
+def ignore_ctrl_c() -> None:
+    """Leave Ctrl-C to the main process."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def setup_child(main_pid: int) -> None:
+    """A pool worker's or drawing process's start: ignore Ctrl-C, and end when the process
+    ``main_pid`` (the run's main process) ends."""
+    ignore_ctrl_c()
+    threading.Thread(target=_exit_with, args=(main_pid,), name="trackfuse-exit-with-main",
+                     daemon=True).start()
+
+
+def _exit_with(pid: int) -> None:
+    """Wait (without using the CPU where Linux's pidfd exists) until process ``pid`` has
+    ended, then end this process at once."""
+    try:
+        handle = os.pidfd_open(pid)
+    except (AttributeError, OSError):  # not Linux, or ``pid`` is gone already
+        while _alive(pid):
+            time.sleep(1.0)
+    else:
+        select.select([handle], [], [])
+    os._exit(1)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # alive, under another user
+        return True
+    return True
