@@ -125,13 +125,19 @@ class RunOptions:
     name: str | None = None
 
     def check(self) -> None:
-        """Refuse a ``--scheduler-file`` without an address in one line."""
-        from trackfuse.executors import ExecutorError, scheduler_address
+        """Refuse a ``--scheduler-file`` without an address in one line; warn about more
+        local workers than cores."""
+        from trackfuse.executors import ExecutorError, default_workers, scheduler_address
         if self.scheduler_file:
             try:
                 scheduler_address(self.scheduler_file)
             except ExecutorError as err:
                 fail(str(err))
+        cores = default_workers()
+        if self.workers > cores and self.executor != "serial" and not self.scheduler \
+                and not self.scheduler_file:
+            warn(f"--workers {self.workers}: more than the {cores} cores this process may use; "
+                 "the extra workers share them and only add memory")
 
     def start_workers(self, configs: list[Config]) -> None:
         """Start the process pool's fork server now, if the runs will use one: it loads the

@@ -143,6 +143,27 @@ def test_resume_after_interrupt_equals_uninterrupted(write_config, tmp_path, mon
     assert manifest["status"] == "complete" and manifest["sessions"] == 2
 
 
+def test_a_full_disk_leaves_an_interrupted_run_that_resumes(write_config, tmp_path,
+                                                           monkeypatch):
+    """A disk that fills up while the parts are merged: the manifest says interrupted (not
+    running) with every trial counted, and the same command finishes the run once there is
+    room."""
+    path = write_config(CFG)
+    original = RunFolder.merge
+
+    def full(self, *args):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(RunFolder, "merge", full)
+    with pytest.raises(OSError):
+        run(path, tmp_path / "out", executor="serial")
+    folder = next((tmp_path / "out").rglob("manifest.json")).parent
+    manifest = json.loads((folder / "manifest.json").read_text())
+    assert manifest["status"] == "interrupted" and manifest["trials_done"] == 4 * 23
+    monkeypatch.setattr(RunFolder, "merge", original)
+    assert run(path, tmp_path / "out", executor="serial").computed_trials == 0
+
+
 def test_failed_trials_are_recorded_and_the_run_goes_on(write_config, tmp_path):
     path = write_config(CFG + "  fail_every: [3]\n")
     result = trackfuse("run", path, "--out", tmp_path, "--workers", "2", "--no-plots")

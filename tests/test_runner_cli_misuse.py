@@ -185,3 +185,11 @@ def test_compare_says_which_cells_only_one_run_has(tmp_path):
     assert max(cell["n_base"] for cell in report["cells"]) <= 3
     text = trackfuse("compare", base, new)
     assert f"{report['only_base']} cells only in BASE" in text.stdout
+
+
+@pytest.mark.skipif(len(os.sched_getaffinity(0)) >= 64, reason="needs fewer than 64 cores")
+def test_more_workers_than_cores_is_said_in_one_line():
+    """`--workers 1000` started 1000 processes without a word."""
+    result = trackfuse("run", PASSIVE, "--workers", "64", "--dry-run")
+    assert result.returncode == 0, result.stderr
+    assert result.stderr.startswith("warning: --workers 64: more than the"), result.stderr

@@ -20,6 +20,7 @@ plan is lazy: batches are generated as they are submitted, never listed whole.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import importlib.metadata
 import math
@@ -288,6 +289,10 @@ class Runner:
         except KeyboardInterrupt:
             self.folder.write_manifest(self._manifest(RunStatus.INTERRUPTED, session))
             raise RunInterrupted(self.folder.path, session.done, self.total_trials) from None
+        except OSError:  # a full or failing disk: the saved batches stay resumable
+            with contextlib.suppress(OSError):
+                self.folder.write_manifest(self._manifest(RunStatus.INTERRUPTED, session))
+            raise
 
     def _note_other_code(self) -> None:
         """Say in one line when a run of the same config from other code exists."""
