@@ -64,7 +64,6 @@ class Comparison:
     paired: bool
     gated: int
     alpha: float
-    #: cells (key values x metric) that only one of the runs has: not compared
     only_base: int = 0
     only_new: int = 0
 

@@ -154,14 +154,18 @@ def _scalar(p: Param, value: Any, kind: type) -> Any:
     return value
 
 
+def _element_kind(p: Param) -> type:
+    """The type of each item of a list parameter: strings when its choices are strings."""
+    return str if p.choices is not None and isinstance(p.choices[0], str) else float
+
+
 def check_value(p: Param, value: Any) -> Any:
     """Return ``value`` coerced to the parameter's type, or raise ``ValueError``."""
     if p.kind is list:
         items = value if isinstance(value, list) else [value]
         if not items:
             raise ValueError
-        element = str if p.choices is not None and isinstance(p.choices[0], str) else float
-        return [_scalar(p, v, element) for v in items]
+        return [_scalar(p, v, _element_kind(p)) for v in items]
     return _scalar(p, value, p.kind)
 
 
@@ -197,10 +201,9 @@ def _bad_part(p: Param, value: Any) -> str:
     (a long list would be cut before it), with a did-you-mean among the choices."""
     if p.kind is not list or not isinstance(value, list) or not value:
         return _describe(value)
-    element = str if p.choices is not None and isinstance(p.choices[0], str) else float
     for item in value:
         try:
-            _scalar(p, item, element)
+            _scalar(p, item, _element_kind(p))
         except (ValueError, TypeError, OverflowError):
             hint = did_you_mean(item, p.choices) \
                 if isinstance(item, str) and p.choices else ""
@@ -337,13 +340,13 @@ def _check_distinct(source: str, sweep: dict[str, list[Any]], mode: str,
             seen.add(text)
         return
     for key, values in sweep.items():
-        texts = [repr(v) for v in values]
-        repeated = next((v for v, t in zip(values, texts, strict=True)
-                         if texts.count(t) > 1), None)
-        if repeated is not None:
-            where, section = (SWEEP, "") if key in from_options else (source, "sweep")
-            raise ConfigError(where, _dotted(section, key), f"got {repeated!r} twice; "
-                                                            "allowed: distinct values")
+        seen = set()
+        for value in values:
+            if repr(value) in seen:
+                where, section = (SWEEP, "") if key in from_options else (source, "sweep")
+                raise ConfigError(where, _dotted(section, key), f"got {value!r} twice; "
+                                                                "allowed: distinct values")
+            seen.add(repr(value))
 
 
 def _experiment(source: str, name: Any) -> Experiment:
