@@ -84,6 +84,12 @@ def test_terminal_ctrl_c_while_the_fork_server_loads_prints_no_traceback(tmp_pat
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
+    assert "forkserver.py" not in err and "process.py" not in err, err  # no child's traceback
+    if proc.returncode == 0:
+        # CPython drops a KeyboardInterrupt raised inside a callback of its import machinery
+        # ("Exception ignored in"), and the run goes on: rare, and not the children's doing
+        assert "Exception ignored in" in err, err
+        return
     assert proc.returncode == 130
     assert "Traceback" not in err, err
     assert err.strip().startswith("interrupted:"), err
