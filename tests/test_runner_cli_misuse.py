@@ -62,10 +62,14 @@ def _alive(pid: int) -> bool:
 
 
 def _start(out: Path) -> subprocess.Popen:
+    """The run as a terminal starts it: its own process group, Ctrl-C not ignored (a test
+    session started in the background, as `.ci/run &` is, ignores it and would pass that on).
+    """
     return subprocess.Popen([sys.executable, "-m", "trackfuse", "run", str(PASSIVE),
                              "--out", str(out), *SLOW_ARGS], env=cli_env(),
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+                            start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux /proc")
