@@ -68,7 +68,12 @@ def columns_csv(columns: Mapping[str, np.ndarray | Sequence[Any] | Constant], ro
         if len(column) != rows:
             raise ValueError(f"column {name!r} has {len(column)} rows, expected {rows}")
         cells.append(column)
-    lines = [",".join(map(csv_cell, columns))]
+    return _csv_text([csv_cell(name) for name in columns], cells)
+
+
+def _csv_text(header: list[str], cells: Sequence[Sequence[str]]) -> str:
+    """CSV text of the ``header`` fields and one list of ready fields per column."""
+    lines = [",".join(header)]
     lines.extend(map(",".join, zip(*cells, strict=True)))
     return "\n".join(lines) + "\n"
 
@@ -98,14 +103,12 @@ def frame_csv(frame) -> str:
             cells.append(values)
         else:
             return frame.to_csv(index=False)
-    lines = [",".join(names)]
-    lines.extend(map(",".join, zip(*cells, strict=True)))
-    return "\n".join(lines) + "\n"
+    return _csv_text(names, cells)
 
 
 def _plain_texts(texts) -> bool:
-    """Whether none of ``texts`` is empty or needs CSV quoting."""
-    return all(t and not any(c in t for c in ',"\n\r') for t in texts)
+    """Whether none of ``texts`` is empty or needs CSV quoting (:func:`csv_cell`)."""
+    return all(t and csv_cell(t) == t for t in texts)
 
 
 @dataclass(frozen=True)

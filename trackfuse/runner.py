@@ -396,9 +396,9 @@ class Runner:
         self.on_phase("summarising into summary.csv")
         run = self._open_for_report(session) if self.plots else None
         # a trials.csv of one summary chunk is read once, for the summary and the report
-        whole = run is not None and files[TRIALS]["rows"] <= CHUNK_ROWS
-        summary, failed_rows = summarize(run.trials if run and whole else path / TRIALS, keys,
-                                         self.config.experiment.binary_metrics)
+        source = run.trials if run is not None and files[TRIALS]["rows"] <= CHUNK_ROWS \
+            else path / TRIALS
+        summary, failed_rows = summarize(source, keys, self.config.experiment.binary_metrics)
         files[SUMMARY] = _write_record(path / SUMMARY, frame_csv(summary))
         if timings["rows"]:
             timing_summary, _ = summarize(path / TIMINGS, keys, suffix=TIME_SUFFIX)
