@@ -50,3 +50,17 @@ def test_phase_log_names_each_phase_and_the_time_of_the_previous_one():
     quiet: list[str] = []
     PhaseLog("exp", enabled=False, write=quiet.append)("merging")
     assert quiet == []
+
+
+def test_rate_is_timed_from_the_first_batch_not_from_the_workers_start_up(monkeypatch):
+    clock = [100.0]
+    monkeypatch.setattr("trackfuse.progress.time.monotonic", lambda: clock[0])
+    bar = RunProgress(1000, 0, "exp", enabled=False)
+    assert bar.rate() == 0.0  # nothing timed yet: no ETA
+    clock[0] = 130.0  # 30 s of start-up (a first run compiling its kernel), then a batch
+    bar.advance(50, busy_s=0.5)
+    assert bar.rate() == 100.0
+    clock[0] = 130.5
+    bar.advance(50, busy_s=0.5)
+    assert bar.rate() == 100.0
+    assert plain_line("exp", bar.done, bar.total, bar.rate()).endswith("ETA 9 s")

@@ -53,13 +53,16 @@ class RunProgress:
 
     ``console`` (default: standard error) decides between the bar (a terminal) and plain
     lines; the label is shortened so the count and ETA always fit the console's width.
+    The rate is timed from the moment the first finished batch started, so the workers'
+    start-up (loading, or on a first run compiling, the kernels) does not skew the ETA.
     """
 
     def __init__(self, total: int, done: int, label: str, enabled: bool = True,
                  console: Console | None = None):
         self.total, self.done, self.label = total, done, label
-        self.start_done, self.t0 = done, time.monotonic()
-        self._last_print, self._printed = self.t0, -1
+        self.start_done = done
+        self._t0: float | None = None  # when the first finished batch started
+        self._last_print, self._printed = time.monotonic(), -1
         console = console or Console(stderr=True)
         self._rich = enabled and console.is_terminal
         self._plain = enabled and not self._rich
@@ -72,7 +75,7 @@ class RunProgress:
                 TextColumn("{task.fields[rate]}"), TextColumn("ETA"), TimeRemainingColumn(),
                 console=console, expand=True)
             self._task = self._bar.add_task(escape(shown), total=total, completed=done,
-                                            rate="")
+                                            rate="starting workers")
 
     def __enter__(self) -> RunProgress:
         if self._rich:
@@ -88,10 +91,16 @@ class RunProgress:
             self._line()
 
     def rate(self) -> float:
-        """Trials per second in this session."""
-        return (self.done - self.start_done) / max(time.monotonic() - self.t0, 1e-9)
+        """Trials per second in this session since the first finished batch started; 0
+        before a batch has finished."""
+        if self._t0 is None:
+            return 0.0
+        return (self.done - self.start_done) / max(time.monotonic() - self._t0, 1e-9)
 
-    def advance(self, trials: int) -> None:
+    def advance(self, trials: int, busy_s: float = 0.0) -> None:
+        """Count ``trials`` more done, by a batch that computed for ``busy_s`` seconds."""
+        if self._t0 is None:
+            self._t0 = time.monotonic() - busy_s
         self.done += trials
         if self._rich:
             self._bar.update(self._task, completed=self.done, rate=f"{self.rate():,.0f} trials/s")

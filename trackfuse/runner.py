@@ -347,7 +347,7 @@ class Runner:
                     session.per_point[point] = session.per_point.get(point, 0.0) + res.wall_s
                     session.done += res.span.trials
                     session.computed += res.span.trials
-                    bar.advance(res.span.trials)
+                    bar.advance(res.span.trials, res.wall_s)
                     if time.monotonic() - last > MANIFEST_EVERY_S:
                         last = time.monotonic()
                         self.folder.write_manifest(self._manifest(RunStatus.RUNNING, session))
