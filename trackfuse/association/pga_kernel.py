@@ -108,7 +108,7 @@ def _search(draws, w, rank, cur, best, q, state, p_m, roulette_second, repair_mo
         dJ, child_paired, n_touched = 0.0, n_paired, 0
         if m2 >= 2:
             if stale:
-                cum[:] = np.cumsum(q)
+                _cumulative_sum(q, cum)
                 stale = False
             j1, j2 = _columns(cum, q, d[FIRST], d[SECOND], roulette_second)
             r1, r2 = child[j1], child[j2]
@@ -157,8 +157,20 @@ def _commit(J, J_best, child_paired, cur, child, best, q, rank, touched, n_touch
         q[j] = rank[cur[j], j]
     if J_best < J:
         J_best = J
-        best[:] = cur
+        for j in range(cur.shape[0]):
+            best[j] = cur[j]
     return J, J_best, child_paired, True
+
+
+@njit(**JIT)
+def _cumulative_sum(q, out):
+    """``out = np.cumsum(q)`` in place, element by element: an array-to-array assignment
+    compiles numba's shape-mismatch message (string formatting, about 3 s of the first run
+    after installing) for a mismatch that cannot occur here."""
+    acc = 0
+    for j in range(q.shape[0]):
+        acc += q[j]
+        out[j] = acc
 
 
 @njit(**JIT)

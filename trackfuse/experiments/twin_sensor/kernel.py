@@ -80,8 +80,7 @@ def _filter_batch(x0, P0, F, Q, sensor_pos, R, P_D, los, z_target, detected, clu
     X, P, Xp, Pp = np.empty(6), np.empty((6, 6)), np.empty(6), np.empty((6, 6))
     pair = S == 2 and method != SEQUENTIAL
     for n in range(N):
-        X[:] = x0[n]
-        P[:, :] = P0
+        _copy_state(x0[n], P0, X, P)
         diverged = False
         for k in range(K):
             if diverged:  # as the reference: no return validated, target outside every gate
@@ -101,21 +100,20 @@ def _filter_batch(x0, P0, F, Q, sensor_pos, R, P_D, los, z_target, detected, clu
                     _linearize(z[s], valid[s], lam_true[s], gamma, mgekf, nonparametric, lin, s)
                 _pair_update(Xp, Pp, R, P_D, P_G, method, joint_full, mg_combined, lin, mom, X, P)
             else:
-                X[:] = Xp
-                P[:, :] = Pp
+                _copy_state(Xp, Pp, X, P)
                 for s in range(S):
                     if s > 0:  # sensor 1 sees the prediction, whose geometry is in place
                         _geometry(X, P, sensor_pos[k, s], R[s], lin, s)
                     _linearize(z[s], valid[s], lam_true[s], gamma, mgekf, nonparametric, lin, s)
                     _single_update(X, P, R[s], P_D[s], P_G, method == NEAREST, mg_combined,
                                    lin, s, mom)
-            m_out[n, k] = lin.m
+            for s in range(S):  # element by element: see _copy_state
+                m_out[n, k, s] = lin.m[s]
             diverged = _symmetrize_and_check(X, P)
             if diverged:
                 X[:] = np.nan
                 P[:, :] = np.nan
-            X_out[n, k] = X
-            P_out[n, k] = P
+            _copy_state(X, P, X_out[n, k], P_out[n, k])
 
 
 @njit(**JIT)
@@ -137,6 +135,17 @@ def Linearized(S, M):  # noqa: N802 (builds a record, read as a type)
 
 
 _Lin = namedtuple("_Lin", "geom H PHt Sm Si Kg nu G log_n ok m w B")
+
+
+@njit(**JIT)
+def _copy_state(X, P, X_to, P_to):
+    """``X_to = X: (6,)``, ``P_to = P: (6, 6)``, element by element: an array-to-array
+    assignment compiles numba's shape-mismatch message (string formatting, about 5 s of the
+    first run after installing) for a mismatch that cannot occur here."""
+    for i in range(6):
+        X_to[i] = X[i]
+        for j in range(6):
+            P_to[i, j] = P[i, j]
 
 
 @njit(**JIT)
@@ -514,10 +523,7 @@ def _pair_update(Xp, Pp, R, P_D, P_G, method, joint_full, mg_combined, lin, mom,
         for j in range(2):
             R12[i, j], R12[2 + i, 2 + j] = R[0, i, j], R[1, i, j]
     _class_terms(K12, R12, Pp, bsum, mom)
-    for i in range(6):
-        X[i] = Xp[i]
-        for j in range(6):
-            P[i, j] = Pp[i, j]
+    _copy_state(Xp, Pp, X, P)
     _collapse(X, P, b00, mom)
 
 
