@@ -3,6 +3,7 @@ page as a browser shows it."""
 
 from __future__ import annotations
 
+import dataclasses
 import os
 
 import pandas as pd
@@ -36,6 +37,19 @@ def test_a_wanted_figure_the_report_cannot_draw_is_listed_with_its_reason(toy_ru
     assert list(report.not_drawn) == ["not_a_figure_of_this_run"]
     assert "## Not drawn" in (toy_run.path / "index.md").read_text()
     assert "Not drawn" in (toy_run.path / "index.html").read_text()
+
+
+def test_the_index_written_while_the_run_finishes_prints_no_none(toy_run):
+    """The runner writes the report before it marks the run complete, so its manifest has
+    no finishing time yet; a package that is not installed has no version. Neither may be
+    printed as the word None."""
+    m = toy_run.manifest
+    running = dataclasses.replace(toy_run, manifest={
+        **m, "finished": None, "versions": {**m["versions"], "stonesoup": None}})
+    write_report(running)
+    facts = (toy_run.path / "index.md").read_text().split("\n## ")[0]
+    assert "None" not in facts
+    assert f"**started**: {m['started']}" in facts and "stonesoup not installed" in facts
 
 
 def test_the_headline_table_shows_its_interval_as_one_column(toy_run):

@@ -306,7 +306,8 @@ def write_report(run: RunData, wanted: Collection[str] | None = None,
 
 def _run_facts(run: RunData) -> list[tuple[str, str]]:
     m, c = run.manifest, run.config
-    versions = ", ".join(f"{k} {v}" for k, v in (m.get("versions") or {}).items())
+    versions = ", ".join(f"{k} {'not installed' if v is None else v}"
+                         for k, v in (m.get("versions") or {}).items())
     sweep = "; ".join(f"{k} = {', '.join(map(str, v))}" for k, v in run.sweep.items())
     return [
         ("experiment", f"{c['experiment']}: {c.get('title', '')}"),
@@ -319,7 +320,9 @@ def _run_facts(run: RunData) -> list[tuple[str, str]]:
         ("run id", str(m.get("run_id", run.path.name))),
         ("code", _code_text(m)),
         ("versions", versions),
-        ("finished", str(m.get("finished", ""))),
+        # the runner writes the report before it records the finishing time
+        ("finished", str(m["finished"])) if m.get("finished")
+        else ("started", str(m.get("started", ""))),
     ]
 
 

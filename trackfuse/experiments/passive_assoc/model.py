@@ -154,6 +154,8 @@ def run_trial(params: dict[str, Any], streams: TrialStreams) -> list[dict[str, A
     The PGA runs compiled (:func:`trackfuse.association.pga_kernel.pga_compiled`, bit for
     bit :func:`trackfuse.association.pga.pga`).
     """
+    import scipy.optimize  # noqa: F401 - on use, and before the exact solve is timed
+
     from trackfuse.association.pga_kernel import pga_compiled  # numba: on use
 
     truth, noise, shuffle, algo = streams.common.spawn(4)
