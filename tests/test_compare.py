@@ -119,3 +119,12 @@ def test_compare_runs_takes_binary_metrics_and_directions_from_the_experiment(tm
     with pytest.raises(ValueError, match="different swept keys"):
         compare_runs(base, harness.run_data(tmp_path / "d", "toy_gaussian", {"n": 5},
                                             {"sigma": [1.0, 2.0]}, trials=5, seed=3))
+
+
+@pytest.mark.parametrize("paired", [True, False])
+def test_a_single_trial_or_an_infinite_value_has_no_p_value(paired):
+    """No spread to test against: the p-value is NaN like the interval, not 0."""
+    one = gate(frame([1.0]), frame([2.0]), paired=paired).cells
+    assert np.isnan(one.loc[one.metric == "error_m", "p_value"]).all()
+    inf = gate(frame([1.0, 2.0, 3.0]), frame([1.0, np.inf, 3.0]), paired=paired).cells
+    assert np.isnan(inf.loc[inf.metric == "error_m", "p_value"]).all()

@@ -9,6 +9,7 @@ from scipy import stats
 from trackfuse.stats import (
     mcnemar_p,
     nees_band,
+    paired_t_p,
     proportion_difference_interval,
     t_interval,
     welch_interval,
@@ -104,3 +105,14 @@ def test_quantiles_equal_scipy_stats_bit_for_bit(level):
     low, high = wilson_interval(k, 50, level)
     np.testing.assert_array_equal(low[1:], np.clip(centre - half, 0, 1)[1:])
     np.testing.assert_array_equal(high[:-1], np.clip(centre + half, 0, 1)[:-1])
+
+
+def test_p_values_are_nan_when_the_spread_is_undefined():
+    """One value or an infinite one leaves the t tests nothing to go on: NaN, never 0."""
+    assert np.isnan(paired_t_p(1.0, np.nan, 1))
+    assert np.isnan(paired_t_p(np.inf, np.nan, 3))
+    assert paired_t_p(0.5, 0.0, 4) == 0.0 and paired_t_p(0.0, 0.0, 4) == 1.0
+    d = np.random.default_rng(2).normal(0.3, 1, 12)
+    assert np.isclose(paired_t_p(d.mean(), d.std(ddof=1), 12), stats.ttest_1samp(d, 0).pvalue)
+    assert np.isnan(welch_interval(1.0, 1.0, 3, np.inf, np.nan, 3)[2])
+    assert welch_interval(1.0, 0.0, 3, 2.0, 0.0, 3)[2] == 0.0

@@ -30,13 +30,13 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
 from trackfuse.config import did_you_mean
 from trackfuse.results import FAILED_ROW, RUNNER_COLUMNS
 from trackfuse.rundata import RunData
 from trackfuse.stats import (
     mcnemar_p,
+    paired_t_p,
     proportion_difference_interval,
     t_interval,
     two_proportion_p,
@@ -98,10 +98,7 @@ def _paired_cells(base: pd.DataFrame, new: pd.DataFrame, keys: list[str],
         k2=("value_new", "sum"), both=("both", "sum")).reset_index()
     is_bin = g["metric"].isin(binary).to_numpy()
     t_low, t_high = t_interval(g["diff"], g["sd"], g["n"], level)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        t = g["diff"] / (g["sd"] / np.sqrt(g["n"]))
-        t_p = np.where(g["sd"] > 0, 2 * stats.t.sf(np.abs(t), g["n"] - 1),
-                       np.where(g["diff"] == 0, 1.0, 0.0))
+    t_p = paired_t_p(g["diff"], g["sd"], g["n"])
     b_low, b_high = proportion_difference_interval(g["k1"], g["n"], g["k2"], g["n"], g["both"],
                                                    level)
     b_p = mcnemar_p(g["k1"] - g["both"], g["k2"] - g["both"])

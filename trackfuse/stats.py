@@ -85,12 +85,33 @@ def welch_interval(m1, s1, n1, m2, s2, n2,
         dof = np.where(se > 0, dof, np.inf)
         half = stats.t.ppf(0.5 + level / 2, dof) * se
         t = (m2 - m1) / se
-        p = np.where(se > 0, 2 * stats.t.sf(np.abs(t), dof), np.where(m1 == m2, 1.0, 0.0))
+        p = _p_value(2 * stats.t.sf(np.abs(t), dof), se, m2 - m1)
     ok = (n1 >= 2) & (n2 >= 2)
     diff = m2 - m1
     nan = np.full(np.broadcast(diff, ok).shape, np.nan)
     return (np.where(ok, diff - half, nan), np.where(ok, diff + half, nan),
             np.where(ok, p, nan))
+
+
+def _p_value(p_test, se, diff) -> np.ndarray:
+    """``p_test`` where the standard error ``se`` is positive; where it is exactly 0 (every
+    value equal), 1 for a zero difference ``diff`` and 0 otherwise; NaN where ``se`` is not
+    a number (one value, or an infinite one): the test has nothing to go on."""
+    se, diff = np.asarray(se, dtype=float), np.asarray(diff, dtype=float)
+    return np.where(se > 0, p_test, np.where(se == 0, np.where(diff == 0, 1.0, 0.0), np.nan))
+
+
+def paired_t_p(diff, sd, n) -> np.ndarray:
+    """Two-sided p-value of the paired t test from the mean ``diff``, standard deviation
+    ``sd`` and number ``n`` of the per-trial differences (all broadcast); see
+    :func:`_p_value` for ``sd`` zero or not a number."""
+    from scipy import stats  # on first use: see the module docstring
+
+    diff, sd, n = (np.asarray(v, dtype=float) for v in (diff, sd, n))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        se = sd / np.sqrt(n)
+        p = 2 * stats.t.sf(np.abs(diff / se), n - 1)
+    return _p_value(p, se, diff)
 
 
 def proportion_difference_interval(k1, n1, k2, n2, both=None,

@@ -107,4 +107,7 @@ def _combine(stats: pd.DataFrame, group: list[str]) -> pd.DataFrame:
     stats = stats.join(pooled["mean"].rename("pooled"), on=group)
     stats["m2"] += stats["n"] * (stats["mean"] - stats["pooled"]) ** 2
     pooled["m2"] = stats.groupby(group, sort=False, dropna=False)["m2"].sum()
+    # an infinite value makes the variance undefined, as in one chunk (pandas' var is NaN;
+    # the grouped sum above would skip that chunk's NaN and report inf)
+    pooled.loc[~np.isfinite(pooled["mean"]), "m2"] = np.nan
     return pooled.drop(columns="sum").reset_index()
