@@ -14,12 +14,16 @@ from trackfuse import harness
 from trackfuse.experiments import get
 from trackfuse.experiments.passive_assoc import EXPERIMENT, report
 from trackfuse.experiments.passive_assoc.model import ALGORITHMS, VARIANTS, score, sigma_of
-from trackfuse.experiments.passive_assoc.report import gap_interval
+from trackfuse.experiments.passive_assoc.report import (
+    BOOTSTRAP_RESAMPLES,
+    BOOTSTRAP_SEED,
+    gap_interval,
+)
 from trackfuse.plots.algorithms import LOOKS
 from trackfuse.reported import PASSIVE_ASSOC
 from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS
 from trackfuse.seeding import trial_streams
-from trackfuse.stats import t_interval
+from trackfuse.stats import bootstrap_t_mean_intervals, t_interval
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -161,17 +165,23 @@ def test_set_ops_beyond_the_default_checkpoints_scores_the_budget():
         assert ops == [*EXPERIMENT.defaults()["pga.checkpoints"], 5000]
 
 
-def test_gap_interval_is_a_bootstrap_interval_that_cannot_go_below_zero():
-    # 47 runs at the optimum, 3 far from it: the t interval dips below zero, ours cannot
-    gaps = np.r_[np.zeros(47), 30.0, 45.0, 60.0]
+def test_gap_interval_is_a_bootstrap_t_interval_that_cannot_go_below_zero():
+    # 30 runs at the optimum, 20 far from it: the t interval dips below zero, ours cannot
+    gaps = np.r_[np.zeros(30), np.random.default_rng(8).exponential(1.0, 20)]
+    gaps[-1] = 20.0
     t_low, _ = t_interval(gaps.mean(), gaps.std(ddof=1), len(gaps))
     assert t_low < 0
     low, high = gap_interval(gaps)
-    assert 0.0 <= low < gaps.mean() < high <= gaps.max()
+    assert 0.0 < low < gaps.mean() < high < np.inf
     assert gap_interval(gaps) == (low, high)  # fixed resampling seed: same table on redraw
     assert gap_interval(np.zeros(20)) == (0.0, 0.0)
-    # a wider spread gives a wider interval
-    assert np.diff(gap_interval(2 * gaps)) == pytest.approx(2 * np.diff(gap_interval(gaps)))
+    assert gap_interval(np.r_[np.zeros(49), 3.0])[1] == np.inf  # one run off J*: unbounded
+    # the studentized interval of a small symmetric sample reaches below 0: clipped there
+    small = np.array([0.0, 0.0, 1.0, 1.0, 2.0, 2.0])
+    assert bootstrap_t_mean_intervals([small], 0.95, BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED)[0, 0] < 0
+    assert gap_interval(small)[0] == 0.0
+    # a wider spread gives a proportionally wider interval
+    assert gap_interval(2 * gaps) == pytest.approx((2 * low, 2 * high))
 
 
 def test_tables_report_recall_whole_solution_and_the_paper_claims(tmp_path):

@@ -171,3 +171,83 @@ def two_proportion_p(k1, n1, k2, n2) -> np.ndarray:
     with np.errstate(invalid="ignore", divide="ignore"):
         chi2 = (a * d - b * c) ** 2 * (n - 1) / (n1 * n2 * (a + c) * (b + d))
     return np.where(np.isfinite(chi2), stats.chi2.sf(chi2, 1), 1.0)
+
+
+def bootstrap_t_mean_intervals(groups, level: float = 0.95, resamples: int = 2000,
+                               seed: int = 0) -> np.ndarray:
+    """Expanded bootstrap-t (studentized) interval of the mean of each array of ``groups``.
+
+    Each resample's mean is studentized by its own analytic standard error ``s* / sqrt(n)``;
+    the interval is ``mean - q_hi s / sqrt(n), mean - q_lo s / sqrt(n)`` with ``q_lo, q_hi``
+    the ``alpha', 1 - alpha'`` quantiles of the resampled t values (Efron & Tibshirani 1993,
+    ch. 12.5), where ``alpha' = Phi(sqrt(n / (n - 1)) t_{n-1}((1 - level) / 2))`` is
+    Hesterberg's expansion for small samples (Hesterberg 2015, Am. Stat. 69, 371-386),
+    which widens it at n = 8 and hardly at all at n = 50. A resample with no spread has an
+    infinite t (``+-inf``, 0 when its mean is the sample's), so with few distinct values a
+    bound can be infinite: the data do not bound the mean. A sample with no spread gives
+    ``(mean, mean)``.
+
+    groups : sequence of ``(n_i,)`` arrays (non-finite values dropped); groups of equal
+        size share one draw of resampling indices (generator ``seed``), the draw a separate
+        call would make, so a group's interval does not depend on the others.
+    Returns ``(len(groups), 2)`` (low, high); NaN where a group has fewer than 2 values.
+
+    Measured coverage (nominal 95 %; the squared final-scan range errors of
+    ``configs/twin_sensor_orbit.yaml``, 4000 runs per level as the population, nearest
+    neighbour with MGEKF and EKF at clutter 0 and 9, 1000 replications each, Monte Carlo
+    s.e. 0.007) of the RMSE interval :func:`rmse_intervals` built on it: 0.961-0.970 at
+    n = 8 and 0.947-0.962 at n = 50, where the percentile bootstrap covers 0.787-0.805
+    and 0.905-0.933 (see ``docs/runner.md`` for the method's limits).
+    """
+    from scipy.special import ndtr, stdtrit  # on first use: see the module docstring
+
+    clean = [np.asarray(g, dtype=float)[np.isfinite(np.asarray(g, dtype=float))]
+             for g in groups]
+    out = np.full((len(clean), 2), np.nan)
+    for n in sorted({len(c) for c in clean if len(c) >= 2}):
+        which = [i for i, c in enumerate(clean) if len(c) == n]
+        x = np.stack([clean[i] for i in which])
+        alpha = float(ndtr(np.sqrt(n / (n - 1)) * stdtrit(n - 1, (1 - level) / 2)))
+        t = _bootstrap_t(x, _resample_counts(n, resamples, seed))
+        q_lo = np.quantile(t, alpha, axis=1, method="lower")
+        q_hi = np.quantile(t, 1 - alpha, axis=1, method="higher")
+        mean, se = x.mean(axis=1), x.std(axis=1, ddof=1) / np.sqrt(n)
+        with np.errstate(invalid="ignore"):
+            low, high = mean - q_hi * se, mean - q_lo * se
+        flat = se == 0
+        out[which] = np.column_stack([np.where(flat, mean, low), np.where(flat, mean, high)])
+    return out
+
+
+def _resample_counts(n: int, resamples: int, seed: int) -> np.ndarray:
+    """``(resamples, n)`` counts of each value in each resample drawn with replacement."""
+    idx = np.random.default_rng(seed).integers(0, n, (resamples, n))
+    return np.bincount((np.arange(resamples)[:, None] * n + idx).ravel(),
+                       minlength=resamples * n).reshape(resamples, n)
+
+
+def _bootstrap_t(x: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """``(groups, resamples)`` t values ``(mean* - mean) / (s* / sqrt(n))`` of the samples
+    ``x: (groups, n)`` resampled by ``counts: (resamples, n)``; ``+-inf`` (0 at the
+    sample's mean) where a resample has no spread."""
+    n = x.shape[1]
+    centred = x - x.mean(axis=1, keepdims=True)  # variance from centred values: no cancellation
+    scale = np.abs(centred).max(axis=1, keepdims=True)
+    mean = centred @ counts.T / n
+    var = np.maximum(centred**2 @ counts.T / n - mean**2, 0.0) * n / (n - 1)
+    tiny = 1e-12 * scale
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = mean / np.sqrt(var / n)
+    degenerate = np.where(mean > tiny, np.inf, np.where(mean < -tiny, -np.inf, 0.0))
+    return np.where(var > tiny**2, t, degenerate)
+
+
+def rmse_intervals(squared_errors, level: float = 0.95, resamples: int = 2000,
+                   seed: int = 0) -> np.ndarray:
+    """Interval of the root mean square ``sqrt(mean(e^2))`` from the squared errors of each
+    array of ``squared_errors``: :func:`bootstrap_t_mean_intervals` of the mean square,
+    lower bound clipped at 0, then square-rooted. Assumes neither zero-mean nor Gaussian
+    errors. Returns ``(groups, 2)``; coverage as measured there.
+    """
+    mse = bootstrap_t_mean_intervals(squared_errors, level, resamples, seed)
+    return np.sqrt(np.clip(mse, 0.0, None))

@@ -30,8 +30,8 @@ numeric columns ``<quantity>_ci_low``/``<quantity>_ci_high``:
   :data:`trackfuse.reports.HEADLINE_COLUMNS` (:func:`paper_vs_reproduced`).
 * ``checkpoints``: every point, algorithm and checkpoint: measurement-level accuracy, pair
   precision and recall (means, 95 % Student-t intervals), whole-solution-correct and
-  at-optimum rates (95 % Wilson intervals) and the gap ``J* - J`` (mean, 95 % percentile
-  bootstrap interval, see :func:`gap_interval`).
+  at-optimum rates (95 % Wilson intervals) and the gap ``J* - J`` (mean, 95 % bootstrap-t
+  interval, see :func:`gap_interval`).
 * ``final``: the same at each algorithm's last checkpoint, including the ablation variants
   that the figures leave out.
 * ``versus_exact``: at the paper's setting, each compared variant against the exact
@@ -61,7 +61,12 @@ from trackfuse.reported import PASSIVE_ASSOC
 from trackfuse.reports import HEADLINE_COLUMNS
 from trackfuse.results import FAILED_ROW
 from trackfuse.rundata import RunData, swept_keys
-from trackfuse.stats import proportion_difference_interval, t_interval, wilson_interval
+from trackfuse.stats import (
+    bootstrap_t_mean_intervals,
+    proportion_difference_interval,
+    t_interval,
+    wilson_interval,
+)
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -383,24 +388,27 @@ RATE_METRICS = ("correct", "at_opt")
 
 
 def gap_interval(gap: ArrayLike, level: float = 0.95) -> tuple[float, float]:
-    """Percentile bootstrap interval of the mean objective gap ``J* - J`` (nats).
+    """Interval of the mean objective gap ``J* - J`` (nats): the expanded bootstrap-t
+    interval of :func:`trackfuse.stats.bootstrap_t_mean_intervals`
+    (:data:`BOOTSTRAP_RESAMPLES` resamples, generator :data:`BOOTSTRAP_SEED`), the lower
+    bound clipped at 0 since no gap is negative.
 
-    gap : (n,) per-run gaps, each >= 0. The bounds are the ``(1 -+ level) / 2`` quantiles of
-    the means of :data:`BOOTSTRAP_RESAMPLES` resamples drawn with replacement (Efron &
-    Tibshirani 1993, ch. 13). Every resampled mean lies between the smallest and the
-    largest gap, so the interval never goes below zero, where a Student-t interval does
-    when most runs are at the optimum and a few are far from it. Its coverage is
-    asymptotic; when every run has the same gap (all at the optimum, typically) it
-    collapses to that value and the Wilson interval of the at-optimum rate says how sure
-    that is. NaN for an empty sample.
+    gap : (n,) per-run gaps, each >= 0, exactly 0 for a run at the optimum (the caller
+    zeroes the rounding residue of runs at ``J*``). When every run has the same gap (all at
+    the optimum, typically) the interval collapses to that value, and when fewer than a few
+    runs are off the optimum the upper bound is infinite (the data do not bound the mean):
+    in both cases the Wilson interval of the at-optimum rate says how sure the run is.
+    Measured coverage of the mean gap at 50 runs (``configs/passive_association.yaml``,
+    2000 runs per N as the population, 1000 replications): 0.949-0.963 for the paper's PGA
+    (most runs off the optimum), where the percentile bootstrap covered 0.930-0.942; for
+    variants at ``J*`` in 97-99.6 % of runs no resampling interval can cover (most samples
+    of 50 hold at most one run off the optimum). NaN for an empty sample.
     """
     g = np.asarray(gap, dtype=float)
-    if g.size == 0:
-        return float("nan"), float("nan")
-    rng = np.random.default_rng(BOOTSTRAP_SEED)
-    means = g[rng.integers(0, g.size, (BOOTSTRAP_RESAMPLES, g.size))].mean(axis=1)
-    low, high = np.quantile(means, [(1 - level) / 2, (1 + level) / 2])
-    return float(low), float(high)
+    if g.size < 2:
+        return (float("nan"),) * 2 if g.size == 0 else (float(g[0]),) * 2
+    low, high = bootstrap_t_mean_intervals([g], level, BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED)[0]
+    return max(float(low), 0.0), float(high)
 
 
 def _ok_rows(trials: pd.DataFrame) -> pd.DataFrame:
@@ -423,8 +431,9 @@ def _interval_columns(g: pd.DataFrame) -> dict[str, float]:
         k = int(g[metric].sum())
         lo, hi = wilson_interval(k, n)
         row.update({metric: k / n, f"{metric}_ci_low": float(lo), f"{metric}_ci_high": float(hi)})
-    lo, hi = gap_interval(g["gap"])
-    row.update({"gap": float(g["gap"].mean()), "gap_ci_low": lo, "gap_ci_high": hi,
+    gap = g["gap"].where(g["at_opt"] == 0, 0.0)  # at J*: the gap is rounding residue
+    lo, hi = gap_interval(gap)
+    row.update({"gap": float(gap.mean()), "gap_ci_low": lo, "gap_ci_high": hi,
                 "pairs": float(g["pairs"].mean())})
     return row
 
@@ -434,8 +443,9 @@ def checkpoint_metrics(trials: pd.DataFrame, config: dict) -> pd.DataFrame:
 
     Columns: ``point``, the swept keys, ``algorithm``, ``ops``, ``n`` and, per metric,
     ``<metric>``, ``<metric>_ci_low``, ``<metric>_ci_high``: Student-t for accuracy, precision and
-    recall (clipped to [0, 1]); Wilson for ``correct`` and ``at_opt``; percentile
-    bootstrap for ``gap`` (:func:`gap_interval`); and the mean number of declared pairs.
+    recall (clipped to [0, 1]); Wilson for ``correct`` and ``at_opt``; bootstrap-t for
+    ``gap`` (:func:`gap_interval`; 0 for runs at ``J*``); and the mean number of declared
+    pairs.
     """
     keys = ["point", *[k for k in _grouping_keys(config) if k in trials], "algorithm", "ops"]
     rows = [{**dict(zip(keys, key, strict=True)), **_interval_columns(g)}

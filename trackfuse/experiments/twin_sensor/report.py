@@ -33,7 +33,7 @@ Figures (the keys of :func:`figures`, which name the files; see ``docs/papers/tw
     Diagnostic: 6-state ANEES against time with its 95 % chi-square band, same panels.
 ``final_range_rmse_vs_sweep``
     Range RMSE (km) at the last scan against the swept axis (clutter, baseline, range cue)
-    with 95 % bootstrap intervals beside the square-root PCRLB (truth and filter models);
+    with 95 % bootstrap-t intervals beside the square-root PCRLB (truth and filter models);
     the main figure of ``configs/twin_sensor_rmse_vs_bound.yaml``.
 
 A wanted figure that a run cannot draw is returned as a one-line reason (a ``str``).
@@ -41,7 +41,7 @@ A wanted figure that a run cannot draw is returned as a one-line reason (a ``str
 Tables
 ------
 ``final_scan``: per point and algorithm at the last scan, loss (gate and angle rules) and
-inconsistency rates with 95 % Wilson intervals, range RMSE with a 95 % bootstrap interval
+inconsistency rates with 95 % Wilson intervals, range RMSE with a 95 % bootstrap-t interval
 beside the clutter-aware square-root PCRLB (truth model and filter model), RMSE over runs not
 lost, signed range bias at scan 1 and at the last scan with 95 % t intervals, position RMSE,
 ANEES and validated returns (mean over all scans). Intervals are numeric ``<q>_ci_low`` /
@@ -68,14 +68,13 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from trackfuse.chi2 import chi2_quantile
 from trackfuse.experiments.twin_sensor.model import PARAMS, bounds, build_scenario
 from trackfuse.plots.algorithms import GREYS, VERMILLION, line_kwargs, look
 from trackfuse.plots.style import Margins, context, fixed_figure, legend_in_strip
 from trackfuse.reported import TWIN_SENSOR
 from trackfuse.reports import HEADLINE_COLUMNS
 from trackfuse.rundata import RunData, swept_keys
-from trackfuse.stats import nees_band, t_interval, wilson_interval
+from trackfuse.stats import nees_band, rmse_intervals, t_interval, wilson_interval
 from trackfuse.tracking.pda import METHODS
 
 SCHEMA = {p.key: p for p in PARAMS}
@@ -246,12 +245,14 @@ def _rates(frame: pd.DataFrame, x_key: str, rule: str) -> pd.DataFrame:
     return r.assign(pct=100 * r["k"] / r["n"], lo=100 * np.asarray(lo), hi=100 * np.asarray(hi))
 
 
-def _rmse_band(sq: pd.DataFrame) -> pd.DataFrame:
-    """Per group of ``sq`` (columns ``mean``, ``count`` of squared errors): RMSE and its 95 %
-    chi-square interval ``n MSE / RMSE_true^2 ~ chi2(n)`` (zero-mean Gaussian errors)."""
-    n, mse = sq["count"].to_numpy(float), sq["mean"].to_numpy(float)
-    return pd.DataFrame({"rmse": np.sqrt(mse), "lo": np.sqrt(n * mse / chi2_quantile(0.975, n)),
-                         "hi": np.sqrt(n * mse / chi2_quantile(0.025, n))}, index=sq.index)
+def _rmse_band(sq: pd.Series) -> pd.DataFrame:
+    """Per group of the squared errors ``sq`` (grouped Series, m^2): RMSE and its 95 %
+    interval ``lo``, ``hi`` (m), the tables' bootstrap-t interval (:func:`_rmse_intervals`),
+    which does not assume zero-mean errors."""
+    groups = [g.to_numpy() for _, g in sq]
+    ci = _rmse_intervals(groups)
+    return pd.DataFrame({"rmse": [np.sqrt(np.nanmean(g)) for g in groups], "lo": ci[:, 0],
+                         "hi": ci[:, 1]}, index=[key for key, _ in sq])
 
 
 # --------------------------------------------------------------------------------------------
@@ -513,13 +514,13 @@ def _time_figure(run: RunData, draw: Callable[[Axes, pd.DataFrame, dict[str, Any
 
 def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
                 names: Sequence[str]) -> None:
-    """Range RMSE (km) with 95 % chi-square bands (the MGEKF's filled, the EKF's as thin
-    edges), five single runs of the first algorithm, the square-root PCRLBs, and the
+    """Range RMSE (km) with 95 % bootstrap-t bands per scan (the MGEKF's filled, the EKF's
+    as thin edges), five single runs of the first algorithm, the square-root PCRLBs, and the
     correlation of the first algorithm's errors between the first and the last scan."""
     period = float(params["scan.period"])
     for i, name in enumerate(names):
         rows = frame[frame["algorithm"] == name]
-        band = _rmse_band(rows.groupby("scan")["range_sq_err_m2"].agg(["mean", "count"])) / 1e3
+        band = _rmse_band(rows.groupby("scan")["range_sq_err_m2"]) / 1e3
         t = band.index.to_numpy(float) * period
         kw = line_kwargs(name)
         ax.plot(t, band["rmse"], **{**kw, "markersize": 3})
@@ -548,7 +549,7 @@ def _range_figure(run: RunData) -> Figure:
     """Paper Fig. 2: range RMSE (km) against time (s)."""
     names = _headline_pair(run.config["params"]["algorithms"])
     title = [f"{_fig_words(run, 2)}: range RMSE against time ({_runs(run.trials)} runs per "
-             "point)", _context(run, "95 % chi-square bands; grey: single runs")]
+             "point)", _context(run, "95 % bootstrap-t bands per scan; grey: single runs")]
     return _time_figure(run, lambda ax, f, p: _draw_range(ax, f, p, names), title,
                         "range RMSE (km)", len(names) + 3)
 
@@ -589,7 +590,7 @@ def _final_x_key(run: RunData) -> str:
 
 
 def _final_figure(run: RunData) -> Figure | str:
-    """Range RMSE (km) at the last scan against the swept axis with 95 % bootstrap intervals
+    """Range RMSE (km) at the last scan against the swept axis with 95 % bootstrap-t intervals
     beside the square-root PCRLB of the truth model (41-point grid plus the swept values)
     and of the filter's q at the swept values; one panel per facet of the other keys."""
     x_key = _final_x_key(run)
@@ -603,7 +604,7 @@ def _final_figure(run: RunData) -> Figure | str:
     names = list(dict.fromkeys(_headline_pair(algorithms) + _other_filters(algorithms)))
     title = [("Paper Fig. 2 quantified: final" if x_key == "clutter.mean" else "Final")
              + f" range RMSE ({_runs(last)} runs per point)",
-             _context(run, "95 % bootstrap intervals")]
+             _context(run, "95 % bootstrap-t intervals")]
     panel = SINGLE_PANEL if len(facets) == 1 else PANEL
     titles = _wrapped([t if len(facets) > 1 else "" for t, _ in facets], panel[0])
     fig, axes, cols = _figure(len(facets), min(len(facets), 3), panel, title, len(names) + 2,
@@ -625,7 +626,7 @@ def _draw_final(ax: Axes, run: RunData, frame: pd.DataFrame, x_key: str,
         rows = frame[frame["algorithm"] == name]
         groups = list(rows.groupby(x_key)["range_sq_err_m2"])
         stats_ = [(x, np.sqrt(g.mean()), *ci) for (x, g), ci in zip(
-            groups, _bootstrap_rmse_many([g.to_numpy() for _, g in groups]), strict=True)]
+            groups, _rmse_intervals([g.to_numpy() for _, g in groups]), strict=True)]
         x, rmse, lo, hi = (np.array(c, dtype=float) for c in zip(*stats_, strict=True))
         x = x / scale + 0.006 * (values[-1] - values[0]) / scale * (i - (len(names) - 1) / 2)
         ax.errorbar(x, rmse / 1e3, yerr=[(rmse - lo) / 1e3, (hi - rmse) / 1e3], capsize=2,
@@ -705,31 +706,11 @@ def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure | str]:
 # Tables
 
 
-def _bootstrap_rmse(sq: np.ndarray, resamples: int = 2000, seed: int = 0) -> tuple[float, float]:
-    """95 % percentile-bootstrap interval of ``sqrt(mean(sq))`` (fixed seed: deterministic).
-
-    Unlike the chi-square interval it assumes neither zero-mean nor Gaussian errors."""
-    return _bootstrap_rmse_many([sq], resamples, seed)[0]
-
-
-def _bootstrap_rmse_many(groups: Sequence[np.ndarray], resamples: int = 2000,
-                         seed: int = 0) -> list[tuple[float, float]]:
-    """:func:`_bootstrap_rmse` of each array of ``groups`` (non-finite values dropped);
-    groups of equal size share one draw of resampling indices, which is what a separate
-    call with the same ``seed`` would draw, so the result does not depend on the grouping."""
-    clean = [np.asarray(g, dtype=float)[np.isfinite(g)] for g in groups]
-    out: list[tuple[float, float]] = [(np.nan, np.nan)] * len(clean)
-    for n in {len(c) for c in clean if len(c) >= 2}:
-        which = [i for i, c in enumerate(clean) if len(c) == n]
-        idx = np.random.default_rng(seed).integers(0, n, (resamples, n))
-        counts = np.bincount((np.arange(resamples)[:, None] * n + idx).ravel(),
-                             minlength=resamples * n).reshape(resamples, n)
-        sq = np.stack([clean[i] for i in which])
-        rmse = np.sqrt(sq @ counts.T / n)  # (groups, resamples): each resample's mean
-        for i, (lo, hi) in zip(which, np.quantile(rmse, [0.025, 0.975], axis=1).T,
-                               strict=True):
-            out[i] = (float(lo), float(hi))
-    return out
+def _rmse_intervals(groups: Sequence[np.ndarray]) -> np.ndarray:
+    """``(len(groups), 2)`` 95 % intervals (m) of the RMSE of each array of squared errors
+    (m^2): :func:`trackfuse.stats.rmse_intervals`, expanded bootstrap-t on the mean square
+    with a fixed seed (deterministic); assumes neither zero-mean nor Gaussian errors."""
+    return rmse_intervals([np.asarray(g, dtype=float) for g in groups])
 
 
 def _with_interval(table: pd.DataFrame, name: str, value: Any, lo: Any, hi: Any) -> None:
@@ -748,7 +729,7 @@ def final_scan_table(run: RunData) -> pd.DataFrame:
     """Per point and algorithm at the last scan (lengths in km, rates in %).
 
     Columns: the three 0/1 rules with 95 % Wilson intervals; range RMSE with its 95 %
-    bootstrap interval beside the clutter-aware square-root PCRLB of the truth model and of
+    bootstrap-t interval beside the clutter-aware square-root PCRLB of the truth model and of
     the filter's ``q``; RMSE over runs not lost (gate rule); signed range bias at scan 1 and
     at the last scan with 95 % t intervals; position RMSE; 6-state ANEES; validated returns
     per sensor and scan averaged over all scans. Intervals: ``<column>_ci_low/_ci_high``.
@@ -766,7 +747,7 @@ def final_scan_table(run: RunData) -> pd.DataFrame:
         lo, hi = wilson_interval(k, n)
         _with_interval(table, f"{rule}_pct", 100 * k / n, 100 * lo, 100 * hi)
     sq = grouped["range_sq_err_m2"]
-    boot = np.array(_bootstrap_rmse_many([g.to_numpy() for _, g in sq])) / 1e3
+    boot = _rmse_intervals([g.to_numpy() for _, g in sq]) / 1e3
     _with_interval(table, "range_rmse_km", np.sqrt(sq.mean().to_numpy()) / 1e3, boot[:, 0],
                    boot[:, 1])
     params = [run.point_params(int(pt)) for pt in table["point"]]
@@ -838,7 +819,7 @@ def _fig2_row(run: RunData, name: str, rows: pd.DataFrame) -> dict[str, Any]:
     level = float(levels.iloc[(levels - CLAIM_UP_TO).abs().argmin()])
     at = rows[levels == level]
     sq = at["range_sq_err_m2"].to_numpy()
-    lo, hi = (v / 1e3 for v in _bootstrap_rmse(sq))
+    lo, hi = (v / 1e3 for v in _rmse_intervals([sq])[0])
     bound = bounds(run.point_params(int(at["point"].iloc[0])))[0][-1] / 1e3
     where = "inside" if lo <= bound <= hi else "below" if bound < lo else "above"
     return _headline_row(
