@@ -144,12 +144,18 @@ def legend_below(fig, ax, max_cols: int | None = None) -> None:
 
 
 
+OUTSIDE = "<outside the figure>"
+"""The partner :func:`text_overlaps` gives a text that runs off the figure."""
+
+
 def text_overlaps(fig, tolerance_px: float = 1.0) -> list[tuple[str, str]]:
-    """Pairs of text elements drawn in ``fig`` whose boxes overlap.
+    """Pairs of text elements drawn in ``fig`` whose boxes overlap, and texts that run off
+    the figure (paired with :data:`OUTSIDE`: they would be cut when saved).
 
     The figure is drawn once while every :class:`~matplotlib.text.Text` that actually
     renders (visible, non-empty, inside its axes' view) is recorded; boxes are in display
-    pixels and overlap when they share more than ``tolerance_px`` in both directions.
+    pixels and overlap when they share more than ``tolerance_px`` in both directions; a text
+    is outside when it passes an edge of the figure by more than ``tolerance_px``.
     Returns ``[(text_a, text_b), ...]``; empty for a clean figure. A figure made without a
     canvas (:func:`new_figure`) is given an Agg canvas first.
     """
@@ -170,7 +176,10 @@ def text_overlaps(fig, tolerance_px: float = 1.0) -> list[tuple[str, str]]:
         Text.draw = original
     renderer = fig.canvas.get_renderer()
     boxes = [(t.get_text(), t.get_window_extent(renderer)) for t in drawn]
-    found = []
+    page = fig.bbox
+    found = [(text, OUTSIDE) for text, b in boxes
+             if min(b.x0 - page.x0, b.y0 - page.y0, page.x1 - b.x1, page.y1 - b.y1)
+             < -tolerance_px]
     for i, (text_a, a) in enumerate(boxes):
         for text_b, b in boxes[i + 1:]:
             dx = min(a.x1, b.x1) - max(a.x0, b.x0)

@@ -89,6 +89,9 @@ MAIN_RULE = "lost_angle"
 SINGLE_PANEL, PANEL, TIME_PANEL = (5.6, 2.9), (3.9, 2.7), (3.1, 2.3)
 """Panel sizes (width, height) in inches: a figure of one panel, of several, against time."""
 MAX_FACETS = 4
+LEGEND_COLUMN_IN = 3.9
+"""Width (inches) of a legend column: the handle and the longest entry ("parallel PDA
+(corrected; PDAF with one sensor), MGEKF", 53 characters at 8 pt)."""
 SINGLE_RUNS = 5
 DOCS = "docs/papers/twin_sensor.md"
 
@@ -245,12 +248,25 @@ def _rates(frame: pd.DataFrame, x_key: str, rule: str) -> pd.DataFrame:
     return r.assign(pct=100 * r["k"] / r["n"], lo=100 * np.asarray(lo), hi=100 * np.asarray(hi))
 
 
+def _band_ylim(ax: Axes, highest: float) -> None:
+    """y from 0 to 1.8 times ``highest`` (the highest RMSE or bound drawn, km): intervals of
+    a few runs may run off the top instead of squeezing the curves."""
+    ax.set_ylim(0.0, 1.8 * highest)
+
+
+def _drawable(values: np.ndarray) -> np.ndarray:
+    """``values`` with infinite entries (interval ends the data do not bound) as NaN, which
+    matplotlib leaves out instead of stretching the axis to them."""
+    return np.where(np.isfinite(values), values, np.nan)
+
+
 def _rmse_band(sq: pd.Series) -> pd.DataFrame:
     """Per group of the squared errors ``sq`` (grouped Series, m^2): RMSE and its 95 %
     interval ``lo``, ``hi`` (m), the tables' bootstrap-t interval (:func:`_rmse_intervals`),
-    which does not assume zero-mean errors."""
+    which does not assume zero-mean errors; an unbounded end (very few runs) is NaN, not
+    drawn."""
     groups = [g.to_numpy() for _, g in sq]
-    ci = _rmse_intervals(groups)
+    ci = _drawable(_rmse_intervals(groups))
     return pd.DataFrame({"rmse": [np.sqrt(np.nanmean(g)) for g in groups], "lo": ci[:, 0],
                          "hi": ci[:, 1]}, index=[key for key, _ in sq])
 
@@ -266,7 +282,7 @@ def _frame(n_panels: int, ncols: int, panel: tuple[float, float], title_lines: l
     ``legend_entries`` entries."""
     nrows = -(-n_panels // ncols)
     width = 0.85 + ncols * panel[0] + (ncols - 1) * 0.55
-    legend_cols = max(1, min(legend_entries, int(width / 3.2)))
+    legend_cols = max(1, min(legend_entries, int(width / LEGEND_COLUMN_IN)))
     strip = 0.2 * -(-legend_entries // legend_cols) + 0.1
     margins = Margins(top=0.15 + 0.19 * len(title_lines) + 0.18 * panel_titles + 0.07,
                       hspace=0.55 + 0.18 * panel_titles, strip=strip)
@@ -457,8 +473,10 @@ def _index_figure(run: RunData) -> Figure | str:
              _context(run, "truth q = filter q")]
     free = last[last["clutter.mean"] == 0]
     fig, axes, cols = _figure(2, 2, PANEL, title, len(names) + 1 + (len(free) > 0), 1)
+    tops = [_draw_rates(ax, with_clutter, "index", rule, names, False)
+            for ax, rule in zip(axes, ("lost_angle", "lost_gate"), strict=True)]
     for ax, rule in zip(axes, ("lost_angle", "lost_gate"), strict=True):
-        _loss_ylim(ax, _draw_rates(ax, with_clutter, "index", rule, names, False))
+        _loss_ylim(ax, max(tops))  # one y range: the same quantity in both panels
         if len(free):
             worst = free.groupby(["index", "algorithm"])[rule].mean().groupby(level=0).max()
             ax.plot(worst.index, 100 * worst, "x", color=GREYS[0], markersize=6,
@@ -518,9 +536,11 @@ def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
     as thin edges), five single runs of the first algorithm, the square-root PCRLBs, and the
     correlation of the first algorithm's errors between the first and the last scan."""
     period = float(params["scan.period"])
+    top = 0.0
     for i, name in enumerate(names):
         rows = frame[frame["algorithm"] == name]
         band = _rmse_band(rows.groupby("scan")["range_sq_err_m2"]) / 1e3
+        top = max(top, float(band["rmse"].max()))
         t = band.index.to_numpy(float) * period
         kw = line_kwargs(name)
         ax.plot(t, band["rmse"], **{**kw, "markersize": 3})
@@ -540,6 +560,7 @@ def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
             label="sqrt PCRLB (truth model, clutter-aware)")
     ax.plot(times, bounds(params, q_model=float(params["filter.q"]))[0] / 1e3, "k:", lw=1.0,
             label="sqrt PCRLB (filter's q)")
+    _band_ylim(ax, max(top, float(np.max(bounds(params)[0])) / 1e3))
     corr = float(np.corrcoef(errors.iloc[:, 0], errors.iloc[:, -1])[0, 1])
     ax.text(0.03, 0.04, f"corr. of errors, scan 1 vs {errors.columns[-1]}: {corr:.2f}",
             transform=ax.transAxes, fontsize=7, va="bottom")
@@ -622,12 +643,15 @@ def _draw_final(ax: Axes, run: RunData, frame: pd.DataFrame, x_key: str,
                 names: Sequence[str]) -> None:
     scale = _x_scale(x_key)
     values = np.sort(frame[x_key].astype(float).unique())
+    top = 0.0
     for i, name in enumerate(names):
         rows = frame[frame["algorithm"] == name]
         groups = list(rows.groupby(x_key)["range_sq_err_m2"])
         stats_ = [(x, np.sqrt(g.mean()), *ci) for (x, g), ci in zip(
-            groups, _rmse_intervals([g.to_numpy() for _, g in groups]), strict=True)]
+            groups, _drawable(_rmse_intervals([g.to_numpy() for _, g in groups])),
+            strict=True)]
         x, rmse, lo, hi = (np.array(c, dtype=float) for c in zip(*stats_, strict=True))
+        top = max(top, float(rmse.max()) / 1e3)
         x = x / scale + 0.006 * (values[-1] - values[0]) / scale * (i - (len(names) - 1) / 2)
         ax.errorbar(x, rmse / 1e3, yerr=[(rmse - lo) / 1e3, (hi - rmse) / 1e3], capsize=2,
                     elinewidth=0.8, **line_kwargs(name))
@@ -638,7 +662,8 @@ def _draw_final(ax: Axes, run: RunData, frame: pd.DataFrame, x_key: str,
     ax.plot(grid / scale, truth, "k--", lw=1.0, label="sqrt PCRLB (truth model, clutter-aware)")
     model = [bounds({**base, x_key: kind(v)}, q_model=float(base["filter.q"]) if x_key !=
                     "filter.q" else float(v))[0][-1] / 1e3 for v in values]
-    ax.plot(values / scale, model, "k:", marker="_", lw=1.0, label="sqrt PCRLB (filter's q)")
+    ax.plot(values / scale, model, "k:", lw=1.0, label="sqrt PCRLB (filter's q)")
+    _band_ylim(ax, max(top, max(truth)))
 
 
 # --------------------------------------------------------------------------------------------
@@ -862,7 +887,8 @@ def paper_vs_reproduced(run: RunData) -> pd.DataFrame:
     ``clutter.mean`` swept over at least two levels; empty otherwise. Per Fig. 1 main
     algorithm (:func:`_main_algorithms`), by the angle rule: claim 1, loss below 5 % up to 9
     false returns (the fraction of runs lost at any level up to 9, Wilson interval; "agrees"
-    when the interval lies below 5 %, see :func:`_fig1_rows`); claim 2, the curve rises (the highest level's interval above the lowest's).
+    when the interval lies below 5 %, see :func:`_fig1_rows`); claim 2, the curve rises
+    (the highest level's interval above the lowest's).
     Fig. 2 for the paper's MGEKF: "not comparable", our RMSE set against the bound.
     """
     if "clutter.mean" not in swept_keys(run.config):
