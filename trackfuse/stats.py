@@ -197,7 +197,7 @@ def bootstrap_t_mean_intervals(groups, level: float = 0.95, resamples: int = 200
     neighbour with MGEKF and EKF at clutter 0 and 9, 1000 replications each, Monte Carlo
     s.e. 0.007) of the RMSE interval :func:`rmse_intervals` built on it: 0.961-0.970 at
     n = 8 and 0.947-0.962 at n = 50, where the percentile bootstrap covers 0.787-0.805
-    and 0.905-0.933 (see ``docs/runner.md`` for the method's limits).
+    and 0.905-0.933 (``docs/papers/twin_sensor.md``, Metrics, gives the limits).
     """
     from scipy.special import ndtr, stdtrit  # on first use: see the module docstring
 
