@@ -118,14 +118,13 @@ def test_another_config_is_shown_by_its_declared_main_figure():
 
 def test_doc_links_stay_valid_wherever_the_report_folder_is(tmp_path):
     checkout = tmp_path / "checkout"
-    page = checkout / "docs" / "papers" / "x.md"
+    page = checkout / "guide" / "x.md"  # any page of the checkout (not a real docs page)
     page.parent.mkdir(parents=True)
     page.write_text("# x\n")
     inside, outside = checkout / "results" / "repro", tmp_path / "elsewhere" / "repro"
-    link, text = _doc_link("docs/papers/x.md#table-3", inside, [checkout])
-    assert text == "docs/papers/x.md#table-3"
-    assert link == "../../docs/papers/x.md#table-3"  # moves with the checkout
-    link, _ = _doc_link("docs/papers/x.md#table-3", outside, [checkout])
+    link, text = _doc_link("guide/x.md#table-3", inside, [checkout])
+    assert text == "guide/x.md#table-3"
+    assert link == "../../guide/x.md#table-3"  # moves with the checkout
+    link, _ = _doc_link("guide/x.md#table-3", outside, [checkout])
     assert link == f"{page.resolve()}#table-3"  # survives moving the report folder
-    assert _doc_link("docs/papers/missing.md", outside, [checkout]) == (
-        "", "docs/papers/missing.md")
+    assert _doc_link("guide/missing.md", outside, [checkout]) == ("", "guide/missing.md")

@@ -209,7 +209,7 @@ CHECKOUT = Path(trackfuse.__file__).resolve().parent.parent
 
 def _doc_link(docs: object, out: Path, checkouts: Sequence[Path] | None = None
               ) -> tuple[str, str]:
-    """``(href, text)`` for the ``docs`` column (``docs/papers/x.md#anchor``): the page in
+    """``(href, text)`` for the ``docs`` column (``docs/papers/<page>.md#<anchor>``): the page in
     the first of ``checkouts`` (default: :data:`CHECKOUT`, then the current folder) that
     holds it, linked relative to ``out`` when ``out`` lies inside that checkout, else by
     its absolute path (see the module docstring); no link when no checkout holds it."""
