@@ -14,8 +14,10 @@ from trackfuse.experiments.esm_radar.model import (
     decode_series,
     differences,
     encode_series,
+    run_trial,
     simulate,
     static_weights,
+    variant_weights,
 )
 from trackfuse.reported import ESM_RADAR_WEIGHTS
 from trackfuse.results import rows_to_csv
@@ -261,3 +263,15 @@ def test_the_batch_table_writes_the_cells_of_its_row_dicts():
     assert sum(1 for r in rows if r["alpha_per_scan"]) == 7
     assert all(type(r[k]) is int for r in rows
                for k in ("chosen", "correct", "decided", "esm_invalid"))
+
+
+def test_no_range_variant_uses_the_five_factor_weights_rescaled():
+    """improved_no_range: static weights where the dynamic ones go when the range weight is
+    cut to 0 (the other four five-factor AHP weights, rescaled), never the 4x4 sub-block."""
+    variant = ALGORITHMS["improved_no_range"]
+    five = static_weights(ALGORITHMS["improved"].factors, "root_exact")
+    w = variant_weights(variant, variant.factors, "root_exact")
+    np.testing.assert_allclose(w, five[1:] / five[1:].sum())
+    assert not variant.dynamic and "range" not in variant.factors
+    rows = run_trial(params(algorithms=["improved", "improved_no_range"]), rngs(1)[0])
+    assert rows[1]["range_weight_mean"] == 0.0 and rows[0]["range_weight_mean"] > 0

@@ -107,3 +107,12 @@ def test_headline_table_schema_verdicts_and_docs_links(shipped_run):
     for link in set(table["docs"]):
         page, _, anchor = link.partition("#")
         assert page == report.DOCS and anchor in anchors, link
+
+
+def test_every_table_has_rows_or_says_why_not(shipped_run):
+    tables = report.tables(shipped_run)
+    for name, table in tables.items():
+        assert isinstance(table, str) and table and "\n" not in table or len(table) > 0, name
+    at_paper = shipped_run.params["scene.mode"] == "paper" \
+        and "exact" in shipped_run.params["algorithms"]
+    assert isinstance(tables["versus_exact"], str) != at_paper  # the scale study: a reason

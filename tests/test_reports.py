@@ -8,6 +8,7 @@ import os
 
 import pandas as pd
 import pytest
+import toy_report
 from browser import chromium, decoded_images
 
 from trackfuse import reports
@@ -83,3 +84,21 @@ def test_figures_drawn_in_two_processes_are_the_bytes_drawn_in_one(tmp_path, mon
     assert [p.name for p in one.figures] == [p.name for p in two.figures]
     assert len(files) >= 6 and one.not_drawn == two.not_drawn
     assert {p.name: p.read_bytes() for p in one.figures} == files
+
+
+def test_a_table_without_rows_is_not_written_as_a_result(toy_run, monkeypatch):
+    tables = toy_report.tables(toy_run)
+    folder = toy_run.path / "tables"
+    folder.mkdir(exist_ok=True)
+    (folder / "empty.csv").write_text("stale result\n")  # left by an earlier drawing
+    monkeypatch.setattr(toy_report, "tables", lambda run: {
+        **tables, "empty": pd.DataFrame(columns=["a", "b"]), "why": "nothing at the setting"})
+    report = write_report(toy_run)
+    names = {p.name for p in report.tables}
+    assert "paper_vs_reproduced.csv" in names and not names & {"empty.csv", "why.csv"}
+    assert not (folder / "empty.csv").exists() and not (folder / "why.md").exists()
+    assert report.not_tabulated == {"empty": reports.NO_ROWS, "why": "nothing at the setting"}
+    text = (toy_run.path / "index.md").read_text()
+    assert "## Not tabulated" in text and "- why: nothing at the setting" in text
+    assert "## Table: empty" not in text
+    assert "Not tabulated" in (toy_run.path / "index.html").read_text()

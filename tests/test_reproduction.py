@@ -3,13 +3,25 @@ main figures beside the paper's claims, and a page a browser loads with every im
 
 from __future__ import annotations
 
+import pandas as pd
 import pytest
 from browser import chromium, decoded_images
 
 from trackfuse.config import load
 from trackfuse.harness import run_data
-from trackfuse.reported import Paper, Reported
-from trackfuse.reproduction import REPORT_HTML, REPORT_MD, collect, write_reproduction_report
+from trackfuse.reported import ESM_RADAR, Paper, Reported
+from trackfuse.reproduction import (
+    REPORT_HTML,
+    REPORT_MD,
+    PaperSection,
+    _claims,
+    _doc_link,
+    collect,
+    main_figure_names,
+    paper_claims,
+    paper_item_names,
+    write_reproduction_report,
+)
 from trackfuse.runner import Runner
 
 TOY_PAPER = {"toy_gaussian": Paper("toy_gaussian", "A. Author, a toy paper, 2026", (
@@ -76,3 +88,43 @@ def test_the_report_page_loads_in_a_browser_with_every_image_decoded(runs, tmp_p
     assert page == root / REPORT_HTML
     images = decoded_images(page, tmp_path / "report.png")
     assert len(images) == 1 and all(ok for _, ok in images)
+
+
+def test_a_paper_item_shows_every_claim_of_its_tables_and_figures():
+    section = PaperSection("esm_radar", "", _claims(ESM_RADAR), pd.DataFrame())
+    text = paper_claims(section, "Table 3, Figs. 3-4")
+    # Table 3 has several results, most without words: the words are not lost among them
+    assert "Table 3: improved fuzzy comprehensive evaluation" in text
+    assert "traditional multi-factor fuzzy decision" in text
+    assert "Fig. 3: both methods degrade" in text and "Fig. 4: both decline" in text
+    assert paper_item_names("Figs. 1-2, Abstract") == ["Fig. 1", "Fig. 2", "Abstract"]
+    assert paper_claims(section, "Figs. 1-2").endswith("(the paper gives no number for it)")
+
+
+def test_another_config_is_shown_by_its_declared_main_figure():
+    paper_items = {"loss_vs_clutter": "Fig. 1", "loss_vs_manoeuvring_index": "",
+                   "range_error_vs_time": "Fig. 2", "final_range_rmse_vs_sweep": ""}
+    drawn = {"loss_vs_manoeuvring_index", "range_error_vs_time", "final_range_rmse_vs_sweep"}
+    declared = list(paper_items)
+    # a config listing its main figure first is shown by it, not by a paper figure
+    wanted = ["loss_vs_manoeuvring_index", "loss_vs_clutter", "range_error_vs_time"]
+    assert main_figure_names(wanted, drawn, paper_items, own=False) == wanted[:1]
+    # 'all': the first declared figure that was drawn
+    assert main_figure_names(declared, drawn, paper_items, own=False) == [
+        "loss_vs_manoeuvring_index"]
+    # the paper's own config: every drawn paper figure, in the wanted order
+    assert main_figure_names(declared, drawn, paper_items, own=True) == ["range_error_vs_time"]
+
+
+def test_doc_links_stay_valid_wherever_the_report_folder_is(tmp_path):
+    checkout = tmp_path / "checkout"
+    page = checkout / "guide" / "x.md"  # any page of the checkout (not a real docs page)
+    page.parent.mkdir(parents=True)
+    page.write_text("# x\n")
+    inside, outside = checkout / "results" / "repro", tmp_path / "elsewhere" / "repro"
+    link, text = _doc_link("guide/x.md#table-3", inside, [checkout])
+    assert text == "guide/x.md#table-3"
+    assert link == "../../guide/x.md#table-3"  # moves with the checkout
+    link, _ = _doc_link("guide/x.md#table-3", outside, [checkout])
+    assert link == f"{page.resolve()}#table-3"  # survives moving the report folder
+    assert _doc_link("guide/missing.md", outside, [checkout]) == ("", "guide/missing.md")

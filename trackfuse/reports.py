@@ -4,8 +4,12 @@ The report layer reads only the run folder (through :mod:`trackfuse.rundata`) an
 experiment's report module (``Experiment.report``, a module path), which provides::
 
     figures(run: RunData, wanted: Collection[str]) -> dict[str, matplotlib.figure.Figure]
-    tables(run: RunData) -> dict[str, pandas.DataFrame]
+    tables(run: RunData) -> dict[str, pandas.DataFrame | str]
     prepare(run: RunData) -> None    # optional
+
+A figure or table that the run's config cannot give is returned as a one-line reason
+(``str``) and listed under "Not drawn" or "Not tabulated"; a table without rows is never
+written as if it were a result (it is listed too, and a stale file of that name removed).
 
 ``prepare`` computes ahead, into the module's own caches, what both the tables and the
 figures derive from the config alone (the twin-sensor bounds at every sweep point): the
@@ -64,6 +68,8 @@ HEADLINE_COLUMNS = ("paper_item", "quantity", "algorithm", "paper_value", "repro
 #: ``agrees``: the paper's number lies inside our interval, or its claim holds;
 #: ``differs``: it does not; ``not comparable``: the run's config cannot answer it.
 VERDICTS = ("agrees", "differs", "not comparable")
+#: Why a table is not written when its report module returns it without rows.
+NO_ROWS = "no rows for this config"
 #: What each file of a run folder holds (figures and tables add their own captions).
 FILES = {
     "config.yaml": "the resolved config: every parameter, defaults included",
@@ -82,13 +88,15 @@ FILES = {
 class Report:
     """What :func:`write_report` wrote: figure and table files, the index, and one message
     per figure or table that failed (the data stay complete), and the reason for each wanted
-    figure this run's config cannot draw (``not_drawn``)."""
+    figure this run's config cannot draw (``not_drawn``) and each table it cannot fill
+    (``not_tabulated``)."""
 
     figures: list[Path] = field(default_factory=list)
     tables: list[Path] = field(default_factory=list)
     index: Path | None = None
     errors: list[str] = field(default_factory=list)
     not_drawn: dict[str, str] = field(default_factory=dict)
+    not_tabulated: dict[str, str] = field(default_factory=dict)
 
 
 def markdown_table(table: pd.DataFrame, digits: int = 4) -> str:
@@ -162,12 +170,19 @@ def _write_tables(run: RunData, module: ModuleType, report: Report) -> dict[str,
     except Exception as err:  # noqa: BLE001 - a report bug must not lose the run
         report.errors.append(f"tables: {type(err).__name__}: {err}")
         return {}
+    written = {}
     for name, table in made.items():
+        if isinstance(table, str) or table.empty:
+            report.not_tabulated[name] = table if isinstance(table, str) else NO_ROWS
+            for suffix in (".csv", ".md"):  # a redraw must not leave an old result behind
+                (folder / f"{name}{suffix}").unlink(missing_ok=True)
+            continue
         for suffix, text in ((".csv", frame_csv(table)),
                              (".md", markdown_table(display_table(table)))):
             atomic_write(folder / f"{name}{suffix}", text)
             report.tables.append(folder / f"{name}{suffix}")
-    return made
+        written[name] = table
+    return written
 
 
 def _draw(run: RunData, module: ModuleType, names: Sequence[str],
@@ -353,9 +368,11 @@ def index_markdown(run: RunData, tables: dict[str, pd.DataFrame], report: Report
     for name in _figure_names(report):
         lines += [f"## Figure: {name}", "", f"![{name}](figures/{name}.png)", "",
                   captions.get(name, ""), ""]
-    if report.not_drawn:
-        lines += ["## Not drawn", ""] + [f"- {n}: {why}" for n, why in report.not_drawn.items()]
-        lines += [""]
+    for heading, reasons in (("Not drawn", report.not_drawn),
+                             ("Not tabulated", report.not_tabulated)):
+        if reasons:
+            lines += [f"## {heading}", ""] + [f"- {n}: {why}" for n, why in reasons.items()]
+            lines += [""]
     if report.errors:
         lines += ["## Problems", ""] + [f"- {e}" for e in report.errors] + [""]
     lines += ["## Files", ""] + [f"- `{f}`: {d}" for f, d in _file_list(run, report)]
@@ -398,9 +415,11 @@ def index_html(run: RunData, tables: dict[str, pd.DataFrame], report: Report) ->
         parts.append(f"<figure><img src='figures/{esc(name)}.png' alt='{esc(name)}'>"
                      f"<figcaption><b>{esc(name)}</b>: {esc(captions.get(name, ''))}"
                      "</figcaption></figure>")
-    if report.not_drawn:
-        parts.append("<h2>Not drawn</h2><ul>" + "".join(
-            f"<li>{esc(n)}: {esc(why)}</li>" for n, why in report.not_drawn.items()) + "</ul>")
+    for heading, reasons in (("Not drawn", report.not_drawn),
+                             ("Not tabulated", report.not_tabulated)):
+        if reasons:
+            parts.append(f"<h2>{heading}</h2><ul>" + "".join(
+                f"<li>{esc(n)}: {esc(why)}</li>" for n, why in reasons.items()) + "</ul>")
     if report.errors:
         parts.append("<h2>Problems</h2><ul>"
                      + "".join(f"<li>{esc(e)}</li>" for e in report.errors) + "</ul>")

@@ -5,22 +5,31 @@
 its figures and its config) and writes :data:`REPORT_MD` and :data:`REPORT_HTML` into the
 output root. One section per paper: the citation, a count of verdicts, one row per paper
 item compared (the paper's value beside ours with its 95 % interval, the verdict and a
-one-line reason linking to ``docs/papers/``), then each main figure (a figure whose
-:class:`~trackfuse.experiments.base.FigureSpec` names a paper figure or table) beside what the
-paper itself shows. The page needs no network and no JavaScript; its images are the run
+one-line reason linking to ``docs/papers/``), then each main figure of the paper's own configs
+(a figure whose :class:`~trackfuse.experiments.base.FigureSpec` names a paper figure or table)
+beside what the paper itself shows, and a link to the main figure of every other config: the
+first figure of its ``outputs.figures`` that was drawn (the experiment's declared order when
+it says ``all``). The page needs no network and no JavaScript; its images are the run
 folders' PNG files, linked by relative paths.
+
+Links into ``docs/`` (the headline table's ``docs`` column) point at the checkout that holds
+the running code (else the current folder): relative to the output folder when it lies inside
+that checkout, so they survive moving the whole checkout; an absolute path otherwise, so they
+survive moving the output folder. A page found in neither is named without a link.
 """
 
 from __future__ import annotations
 
 import html
 import os
-from collections.abc import Mapping, Sequence
+import re
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import pandas as pd
 
+import trackfuse
 from trackfuse.reported import PAPERS, Paper
 from trackfuse.reports import HEADLINE_COLUMNS, HEADLINE_TABLE, VERDICTS
 from trackfuse.results import atomic_write
@@ -81,13 +90,43 @@ def _config_name(run: RunData) -> str:
     return Path(source).stem
 
 
-def _main_figures(run: RunData) -> list[MainFigure]:
-    found = []
-    for name, spec in run.experiment.figures.items():
-        png = run.path / "figures" / f"{name}.png"
-        if spec.paper and png.exists():
-            found.append(MainFigure(png, spec.caption, spec.paper, _config_name(run)))
-    return found
+def wanted_figures(run: RunData) -> list[str]:
+    """The figures the run's config asks for, in its order (``outputs.figures``; the
+    experiment's declared order when it says ``all``)."""
+    choice = (run.config.get("outputs") or {}).get("figures", "all")
+    return list(run.experiment.figures) if choice == "all" else list(choice)
+
+
+def main_figure_names(wanted: Sequence[str], drawn: Collection[str],
+                      paper_items: Mapping[str, str], own: bool) -> list[str]:
+    """Which drawn figures stand for a run in the report: for one of the paper's own configs
+    every drawn figure that names a paper item (``paper_items[name]`` non-empty), in
+    ``wanted`` order; for any other config the first of ``wanted`` that was drawn (its
+    declared main figure)."""
+    present = [name for name in wanted if name in drawn]
+    if own:
+        return [name for name in present if paper_items.get(name)]
+    return present[:1]
+
+
+def _main_figures(run: RunData, own: bool) -> list[MainFigure]:
+    specs = run.experiment.figures
+    folder = run.path / "figures"
+    drawn = {name for name in specs if (folder / f"{name}.png").exists()}
+    names = main_figure_names(wanted_figures(run), drawn,
+                              {n: s.paper for n, s in specs.items()}, own)
+    return [MainFigure(folder / f"{name}.png", specs[name].caption, specs[name].paper,
+                       _config_name(run)) for name in names]
+
+
+def _claims(paper: Paper) -> dict[str, str]:
+    """The paper's words per item (``"Table 3"``), its non-empty claims joined by "; "."""
+    claims: dict[str, list[str]] = {}
+    for result in paper.results:
+        found = claims.setdefault(result.where, [])
+        if result.claim and result.claim not in found:
+            found.append(result.claim)
+    return {where: "; ".join(found) for where, found in claims.items()}
 
 
 def collect(folders: Sequence[Path],
@@ -102,7 +141,7 @@ def collect(folders: Sequence[Path],
         if paper is None:
             continue
         section = sections.setdefault(key, PaperSection(
-            key, paper.citation, {r.where: r.claim for r in paper.results},
+            key, paper.citation, _claims(paper),
             pd.DataFrame(columns=["config", *HEADLINE_COLUMNS])))
         try:
             rows = _headline(run)
@@ -116,7 +155,7 @@ def collect(folders: Sequence[Path],
         elif len(rows):
             counts = rows["verdict"].value_counts()
             section.others[_config_name(run)] = {v: int(counts.get(v, 0)) for v in VERDICTS}
-        (section.figures if own else section.linked).extend(_main_figures(run))
+        (section.figures if own else section.linked).extend(_main_figures(run, own))
         section.configs.append(_config_name(run))
     for section in sections.values():
         section.rows = _merge_repeats(section.rows)
@@ -164,21 +203,50 @@ def _summary_line(section: PaperSection) -> str:
     return line + (f" Other configs (their own index.html): {others}." if others else "")
 
 
-def _doc_link(docs: object, out: Path) -> tuple[str, str]:
-    """``(href, text)`` for the ``docs`` column: a link relative to ``out`` when the current
-    folder is a checkout holding that page, else no link and the path as text."""
+#: The checkout holding the running code (its ``docs/`` sits beside ``trackfuse/``).
+CHECKOUT = Path(trackfuse.__file__).resolve().parent.parent
+
+
+def _doc_link(docs: object, out: Path, checkouts: Sequence[Path] | None = None
+              ) -> tuple[str, str]:
+    """``(href, text)`` for the ``docs`` column (``docs/papers/<page>.md#<anchor>``): the page in
+    the first of ``checkouts`` (default: :data:`CHECKOUT`, then the current folder) that
+    holds it, linked relative to ``out`` when ``out`` lies inside that checkout, else by
+    its absolute path (see the module docstring); no link when no checkout holds it."""
     target = "" if pd.isna(docs) else str(docs)
     page, _, anchor = target.partition("#")
-    local = Path.cwd() / page
-    if target and local.is_file():
-        return os.path.relpath(local, out.resolve()) + (f"#{anchor}" if anchor else ""), target
+    suffix = f"#{anchor}" if anchor else ""
+    for root in checkouts if checkouts is not None else (CHECKOUT, Path.cwd()):
+        local = root.resolve() / page
+        if target and local.is_file():
+            inside = out.resolve().is_relative_to(root.resolve())
+            return (os.path.relpath(local, out.resolve()) if inside else str(local)) + suffix, \
+                target
     return "", target
 
 
+_ITEM = re.compile(r"(Figs?|Tables?)\.?\s*(\d+)(?:\s*-\s*(\d+))?$")
+
+
+def paper_item_names(paper_items: str) -> list[str]:
+    """The single items named in ``paper_items``: ``"Table 3, Figs. 3-4"`` -> ``["Table 3",
+    "Fig. 3", "Fig. 4"]``; a part that is no figure or table (``"Abstract"``) kept as is."""
+    names = []
+    for part in (p.strip() for p in paper_items.split(",")):
+        match = _ITEM.match(part)
+        if not match:
+            names.append(part)
+            continue
+        kind = "Fig. " if match[1].startswith("Fig") else "Table "
+        first = int(match[2])
+        names += [f"{kind}{n}" for n in range(first, int(match[3] or first) + 1)]
+    return names
+
+
 def paper_claims(section: PaperSection, paper_items: str) -> str:
-    """What the paper states for the items named in ``paper_items`` ("Figs. 3-4, Table 3")."""
-    found = [f"{where}: {claim}" for where, claim in section.claims.items()
-             if where in paper_items]
+    """What the paper states for the items named in ``paper_items`` ("Table 3, Figs. 3-4")."""
+    found = [f"{where}: {section.claims[where]}" for where in paper_item_names(paper_items)
+             if section.claims.get(where)]
     return " ".join(found) or f"{paper_items} (the paper gives no number for it)"
 
 
@@ -187,7 +255,9 @@ def report_markdown(sections: Sequence[PaperSection], out: Path) -> str:
     lines = ["# trackfuse reproduce: paper reported vs reproduced", "",
              "Each paper item is set against our estimate with its 95 % interval; "
              "`agrees` means the paper's number lies inside our interval (or its claim "
-             "holds), `differs` that it does not, with the reason in one line.", ""]
+             "holds), `differs` that it does not, with the reason in one line. Links into "
+             "`docs/` point at the checkout that ran the code: relative when this folder lies "
+             "inside it, absolute otherwise.", ""]
     for s in sections:
         lines += [f"## {s.key}", "", f"*{s.citation}*", "", _summary_line(s), ""]
         lines += ["| config | paper item | quantity | algorithm | paper | ours [95 % CI] "

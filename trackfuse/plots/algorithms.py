@@ -54,6 +54,7 @@ LOOKS: dict[str, Look] = {
     "traditional_5f": Look("traditional, 5 factors", ORANGE, "v", "variant"),
     "improved_static": Look("improved, static weights", GREYS[0], "^", "variant"),
     "improved_3f": Look("improved, 3 factors", GREYS[1], "<", "variant"),
+    "improved_no_range": Look("improved, no range factor", GREYS[2], "P", "variant"),
     "improved_l2": Look("improved, L2 membership", GREYS[2], ">", "variant"),
     "chi2": Look("chi-square ML reference", BLACK, "", "reference"),
     "chi2_lrt": Look("chi-square reference, may abstain", GREYS[0], "", "reference"),

@@ -17,8 +17,8 @@ FIGURES = {
         "numeric is swept, curves against separation (Fig. 3) or radar range error (Fig. 4) "
         "otherwise", "Table 3, Figs. 3-4"),
     "correct_rate_ablations": FigureSpec(
-        "the same for the ablations of the paper's method (static weights, 3 factors, L2 "
-        "membership, traditional on 5 factors)", ""),
+        "the same for the ablations of the paper's method (static weights, no range factor, "
+        "3 factors, L2 membership, traditional on 5 factors)", ""),
     "correct_rate_references": FigureSpec(
         "the same for the chi-square maximum-likelihood references beside the paper's two "
         "methods", ""),

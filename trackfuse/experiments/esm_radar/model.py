@@ -21,6 +21,10 @@ improved           paper 001 (docs section "Improved fuzzy evaluation"): five fa
                    (``weights``) made dynamic by the manoeuvre index (``alpha.*``), weighted
                    average, mean-membership decision
 improved_static    improved with the static AHP weights (ablation: dynamic weights)
+improved_no_range  improved without the range factor, static weights: the five-factor AHP
+                   weights of the other four rescaled to sum to 1, which is where the
+                   dynamic weights go when the range weight is cut to 0 (ablation: cutting
+                   the range weight always instead of on a manoeuvre)
 improved_3f        improved on range, speed, angle only (ablation: 3 vs 5 factors)
 improved_l2        improved with the L2 inverse-distance membership (ablation)
 improved_gauss     improved with the Gaussian posterior membership (ablation, W001-1)
@@ -127,7 +131,9 @@ class Variant:
     ``membership_norm`` param); ``chi2`` for the ML reference, ``chi2_lrt`` for the ML
     reference that may abstain. ``dynamic``: manoeuvre-dependent weights. ``decision``:
     ``mean``, ``vote`` or ``"param"`` (``baseline.decision``). ``summary``: one line for the
-    ablation table.
+    ablation table. ``subset_weights``: static weights of a factor subset, ``ahp`` (the AHP
+    of the judgement matrix's sub-block) or ``rescaled`` (the five-factor weights of the
+    subset, rescaled to sum to 1).
     """
 
     factors: tuple[str, ...] | str
@@ -135,6 +141,7 @@ class Variant:
     dynamic: bool = False
     decision: str = "mean"
     summary: str = ""
+    subset_weights: str = "ahp"
 
 
 FIVE = FACTORS
@@ -147,6 +154,9 @@ ALGORITHMS: dict[str, Variant] = {
     "improved": Variant(FIVE, "param", True, "mean",
                         "paper 001: 5 factors, 1/d membership, dynamic weights"),
     "improved_static": Variant(FIVE, "param", False, "mean", "improved, static weights"),
+    "improved_no_range": Variant(FIVE[1:], "param", False, "mean",
+                                 "improved without range, static weights rescaled",
+                                 subset_weights="rescaled"),
     "improved_3f": Variant(THREE, "param", True, "mean", "improved, 3 factors"),
     "improved_l2": Variant(FIVE, "l2", True, "mean", "improved, L2 1/d membership"),
     "improved_gauss": Variant(FIVE, "posterior", True, "mean",
@@ -383,6 +393,17 @@ def static_weights(factors: Sequence[str], method: str) -> np.ndarray:
     return ahp.weights(sub, "eigen" if method == "eigen" else "root")
 
 
+def variant_weights(variant: Variant, names: Sequence[str], method: str) -> np.ndarray:
+    """Static weights (F,) of ``variant`` on its factors ``names``: :func:`static_weights`
+    of the subset, or for ``subset_weights = "rescaled"`` the five-factor weights of
+    ``names`` rescaled to sum to 1."""
+    if variant.subset_weights == "ahp":
+        return static_weights(names, method)
+    five = static_weights(FACTORS, method)
+    kept = five[[FACTORS.index(f) for f in names]]
+    return kept / kept.sum()
+
+
 def factor_names(variant: Variant, params: Mapping[str, Any]) -> tuple[str, ...]:
     """The factor names ``variant`` uses, in :data:`FACTORS` order (``params`` needs only
     ``baseline.factors``, read when ``variant.factors == "baseline"``)."""
@@ -531,7 +552,7 @@ def evaluate(variant: Variant, diff: Differences, alpha: np.ndarray,
                 "range_weight_min": zero}
     kind = params["membership_norm"] if variant.membership == "param" else variant.membership
     R = membership(kind, np.abs(d), diff, idx, params)
-    a0 = static_weights(names, params["weights"])
+    a0 = variant_weights(variant, names, params["weights"])
     if variant.dynamic and names[0] == "range":
         a_max, mode = alpha_max(params)
         a = dynamic_weights(a0, np.nan_to_num(alpha, nan=0.0), a_max, mode)

@@ -19,7 +19,8 @@ correct_rate              the paper's main result: correct-association rate (%) 
                           error) layout otherwise, the paper's Table 3 values marked at their
                           setting. Chance between T1 and T2 is 1/2 (track 3 is never chosen).
 correct_rate_ablations    the same for the ablations (``traditional_5f``, ``improved_static``,
-                          ``improved_3f``, ``improved_l2``) beside ``improved``.
+                          ``improved_no_range``, ``improved_3f``, ``improved_l2``) beside
+                          ``improved``.
 correct_rate_references   the same for the chi-square ML references beside the paper's two.
 trajectory                paper Figs. 1-2: true tracks and the ESM TDOA-DF location track of
                           one saved trial, its per-scan manoeuvre index and range weight, and
@@ -33,7 +34,8 @@ one-line reason string.
 
 Tables, returned by :func:`tables`: ``table3`` (counts per chosen radar track, correct
 rate with its Wilson interval), ``ablation`` (every algorithm against ``improved`` on the
-same trials, exact McNemar test), ``ahp`` (paper Table 1) and ``paper_vs_reproduced``
+same trials, exact McNemar test), ``ahp`` (paper Table 1), ``manoeuvre`` (mean manoeuvre
+index and range weight of ``improved`` per point, 95 % t intervals) and ``paper_vs_reproduced``
 (:data:`trackfuse.reports.HEADLINE_COLUMNS`, see :func:`paper_vs_reproduced`).
 """
 
@@ -45,6 +47,7 @@ from typing import TYPE_CHECKING, Any
 import matplotlib
 import numpy as np
 import pandas as pd
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 from scipy.stats import binomtest
 
@@ -141,6 +144,29 @@ def ablation(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
+def manoeuvre_table(summary: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
+    """Per point: the ESM track's manoeuvre index (``alpha_mean``, its mean over the scans
+    where it is defined, then over the trials) and the mean range weight of ``improved``
+    (``improved_range_weight``), each with its 95 % Student-t interval from ``summary.csv``
+    (columns ``<q>_ci_low``/``<q>_ci_high``). The index is the same for every algorithm of a
+    trial; it is read from the first algorithm's rows."""
+    keys = swept_keys(config)
+    first = summary["algorithm"].iloc[0]
+    wanted = {("alpha_mean", first): "alpha_mean",
+              ("range_weight_mean", "improved"): "improved_range_weight"}
+    out = []
+    for point, g in summary.groupby("point", sort=True):
+        row = {"point": point, **{k: g[k].iloc[0] for k in keys}}
+        for (metric, name), column in wanted.items():
+            hit = g[(g["metric"] == metric) & (g["algorithm"] == name)]
+            if len(hit):
+                row.update({column: hit["mean"].iloc[0],
+                            f"{column}_ci_low": hit["ci_low"].iloc[0],
+                            f"{column}_ci_high": hit["ci_high"].iloc[0]})
+        out.append(row)
+    return pd.DataFrame(out)
+
+
 def ahp_table() -> pd.DataFrame:
     """Paper 001 Table 1 weights by the root and eigenvector methods, with consistency.
 
@@ -171,6 +197,9 @@ def ahp_table() -> pd.DataFrame:
 #: Paper 001's Table 3 setting, by param key: T1-T2 separation (m) and the radar range sd
 #: coefficient of its Table 2. Points of a run at other values are not compared with it.
 PAPER_TABLE3_SETTING = {"target.separation": 200.0, "radar.sigma_range_coef": 0.01}
+#: The paper's scenario beyond :data:`PAPER_TABLE3_SETTING`: its 1 km weave (a run's points
+#: in straight flight are not compared with the paper's Table 3).
+PAPER_SCENARIO = {"snake.amplitude": 1000.0}
 #: The paper's method and its baseline, compared in every claim.
 PAPER_PAIR = ("improved", "traditional")
 
@@ -203,12 +232,22 @@ def _setting_words(point: Mapping[str, Any], keys: Sequence[str]) -> str:
     return "; ".join(_value_words(k, point[k]) for k in keys)
 
 
+def _headline_words(point: Mapping[str, Any], keys: Sequence[str]) -> str:
+    """The swept settings of a point for the headline table: as :func:`_setting_words`, but
+    the radar-factor model named by its value (``radar factors 'derived': ...``), so a row
+    says which model it judges."""
+    return "; ".join(f"radar factors '{point[k]}': "
+                     + _value_words(k, point[k]).removeprefix("radar ")
+                     if k == "radar.factor_model" else _value_words(k, point[k]) for k in keys)
+
+
 def _table3_rows(run: RunData) -> list[dict[str, Any]]:
     """Paper Table 3 correct rates against every point of the run at the paper's setting."""
     trials, out = run.trials, []
     keys = [k for k in swept_keys(run.config) if k not in PAPER_TABLE3_SETTING]
+    setting = {**PAPER_TABLE3_SETTING, **PAPER_SCENARIO}
     for point, params in enumerate(run.points):
-        if not all(np.isclose(float(params[k]), v) for k, v in PAPER_TABLE3_SETTING.items()):
+        if not all(np.isclose(float(params[k]), v) for k, v in setting.items()):
             continue
         at = trials[trials["point"] == point]
         for name in (n for n in PAPER_PAIR if n in set(at["algorithm"])):
@@ -220,7 +259,7 @@ def _table3_rows(run: RunData) -> list[dict[str, Any]]:
                    and params["radar.factor_model"] == "table" else "")
             out.append(_headline(
                 "Table 3", "correct association rate at 200 m separation, radar range sd 1 %"
-                + (f" ({_setting_words(params, keys)})" if keys else ""), name, paper,
+                + (f" ({_headline_words(params, keys)})" if keys else ""), name, paper,
                 x.mean(), lo, hi, "fraction", len(x), lo <= paper <= hi,
                 f"paper's {paper:.3f} {side} our 95 % Wilson interval{why}", "table-3"))
     return out
@@ -272,7 +311,7 @@ def _sweep_groups(run: RunData, x: str) -> list[tuple[str, list[tuple[float, int
     groups: dict[tuple, list[tuple[float, int]]] = {}
     for point, params in enumerate(run.points):
         groups.setdefault(tuple(params[k] for k in others), []).append((float(params[x]), point))
-    return [(_setting_words(dict(zip(others, key, strict=True)), others), sorted(members))
+    return [(_headline_words(dict(zip(others, key, strict=True)), others), sorted(members))
             for key, members in groups.items()]
 
 
@@ -371,10 +410,11 @@ def paper_vs_reproduced(run: RunData) -> pd.DataFrame:
 
 
 def tables(run: RunData) -> dict[str, pd.DataFrame]:
-    """The Table 3 analogue, the ablation table, the AHP weights and the headline table."""
+    """The Table 3 analogue, the ablation table, the AHP weights, the manoeuvre index per
+    point and the headline table."""
     trials, config = run.trials, run.config
     out = {"paper_vs_reproduced": paper_vs_reproduced(run), "table3": table3(trials, config),
-           "ahp": ahp_table()}
+           "ahp": ahp_table(), "manoeuvre": manoeuvre_table(run.summary, config)}
     abl = ablation(trials, config)
     if not abl.empty:
         out["ablation"] = abl
@@ -393,14 +433,17 @@ AXES = {
 }
 #: Words for the values of categorical keys.
 WORDS = {("radar.factor_model", "table"): "radar TDOA/phase with their own noise",
-         ("radar.factor_model", "derived"): "radar TDOA/phase derived from its position"}
+         ("radar.factor_model", "derived"): "radar TDOA/phase derived from its position",
+         ("alpha.index", "nis_tdoa"): "NIS index", ("alpha.index", "literal"): "literal index",
+         ("alpha.max_mode", "chi2"): "α_max chi-square", ("alpha.max_mode", "fixed"): "α_max fixed",
+         ("alpha.max_mode", "running_max"): "α_max running maximum"}
 #: Paper figure drawn by ``correct_rate`` for each numeric swept key.
 PAPER_FIGURE = {"target.separation": "Fig. 3", "radar.sigma_range_coef": "Fig. 4"}
 #: The algorithms of each correct-rate figure: the paper's pair and ours, the ablations
 #: (beside the paper's method), the chi-square references (beside the paper's pair).
 GROUPS = {"correct_rate": ("improved", "traditional", "improved_gauss"),
           "correct_rate_ablations": ("improved", "traditional_5f", "improved_static",
-                                     "improved_3f", "improved_l2"),
+                                     "improved_no_range", "improved_3f", "improved_l2"),
           "correct_rate_references": ("improved", "traditional", "chi2", "chi2_lrt", "chi2_5f")}
 GROUP_TITLES = {"correct_rate": "paper's methods and ours",
                 "correct_rate_ablations": "ablations",
@@ -429,19 +472,25 @@ def _numeric_axis(config: Mapping[str, Any], summary: pd.DataFrame) -> str | Non
     return None
 
 
+#: Grids up to this many values get a labelled tick at every value.
+MAX_LABELLED = 9
+
+
 def _set_x_axis(ax: Axes, key: str, values: np.ndarray) -> None:
     """Label the x axis; a log axis only for a wide grid (>= 4 values spanning >= 10x),
-    ticked with plain numbers, else linear with a tick at every value (<= 9 values)."""
+    ticked with plain numbers, else linear. Up to :data:`MAX_LABELLED` values every grid
+    value is ticked and labelled; a longer log grid is ticked at 1, 2, 5 x 10^k."""
     label, _ = AXES.get(key, (key, 1.0))
     ax.set_xlabel(label)
     values = np.unique(values)
     if len(values) >= 4 and values.min() > 0 and values.max() / values.min() >= 10:
         ax.set_xscale("log")
-        ticks = [v for m in (1, 2, 5) for v in m * 10.0 ** np.arange(-3, 7)
-                 if values.min() <= v <= values.max()]
+        ticks = values if len(values) <= MAX_LABELLED else [
+            v for m in (1, 2, 5) for v in m * 10.0 ** np.arange(-3, 7)
+            if values.min() <= v <= values.max()]
         ax.set_xticks(sorted(ticks))
         ax.xaxis.set_minor_formatter(NullFormatter())
-    elif len(values) <= 9:
+    elif len(values) <= MAX_LABELLED:
         ax.set_xticks(values)
     ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
 
@@ -549,7 +598,9 @@ def _rate_figure(run: RunData, group: str) -> Figure | str:
         return f"{len(panels)} panels (more than 9 combinations of the other swept keys)"
     ncols = min(len(panels), 3 if x else 2)
     height = 3.4 if x else 0.5 * len(names) + 1.6
-    fig, axes = new_figure(ncols=ncols, nrows=-(-len(panels) // ncols), width=4.6 if x else 5.2,
+    # one curve panel alone gets the width its two-line title needs
+    width = (4.6 if ncols > 1 else 6.4) if x else 5.2
+    fig, axes = new_figure(ncols=ncols, nrows=-(-len(panels) // ncols), width=width,
                            height=height)
     axes = np.atleast_1d(axes)
     paper_x = _paper_setting_x(run, x) if group == "correct_rate" else None
@@ -565,7 +616,23 @@ def _rate_figure(run: RunData, group: str) -> Figure | str:
     handles, labels = axes[0].get_legend_handles_labels()
     _legend_below(fig, handles, labels)
     fig.suptitle(_rate_title(run, group, x))
+    if x:
+        _upright_crowded_ticks(fig, axes[:len(panels)])
     return fig
+
+
+def _upright_crowded_ticks(fig: Figure, axes: Sequence[Axes]) -> None:
+    """Turn the x tick labels of ``axes`` upright when two neighbours would touch
+    (every grid value is labelled: 750 / 1000 / 1500 / 2000 m on a log axis)."""
+    if not hasattr(fig.canvas, "get_renderer"):
+        FigureCanvasAgg(fig)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    for ax in axes:
+        boxes = sorted((t.get_window_extent(renderer) for t in ax.get_xticklabels()
+                        if t.get_visible() and t.get_text()), key=lambda b: b.x0)
+        if any(a.x1 + 2 > b.x0 for a, b in zip(boxes, boxes[1:], strict=False)):
+            ax.tick_params(axis="x", labelrotation=90)
 
 
 def _legend_below(fig: Figure, handles: list, labels: list[str]) -> None:
@@ -746,6 +813,8 @@ def _manoeuvre_figure(run: RunData) -> Figure | str:
     groups = _esm_groups(run, esm)
     if len(groups) > 9:
         return f"{len(groups)} settings of the ESM track (more than 9 curves per panel)"
+    # long or many curve labels: one legend below both panels (per-panel ones would not fit)
+    long_words = len(groups) > 4 or any(len(words) > 30 for words, _, _ in groups)
     fig, (ax, ax2) = new_figure(ncols=2, width=5.0, height=3.8 + 0.15 * len(groups))
     colours = ["0.2"] if len(groups) == 1 else [
         matplotlib.colormaps["viridis"](i / (len(groups) - 1) * 0.9) for i in range(len(groups))]
@@ -759,12 +828,7 @@ def _manoeuvre_figure(run: RunData) -> Figure | str:
             weight_name = weights[0]
             _series_band(ax2, t, weights[1], words, colour, shade)
     params = run.point_params(groups[0][1])
-    if params["alpha.index"] == "nis_tdoa":
-        ax.axhline(1.0, color="0.5", linestyle="--", linewidth=1.0,
-                   label="no-manoeuvre expectation E[α] = 1")
-    a_max, mode = alpha_max(params)
-    if mode == "fixed":
-        ax.axhline(a_max, color="k", linestyle=":", linewidth=1.0, label="α_max")
+    indices = _index_references(ax, [run.point_params(p) for _, p, _ in groups])
     ax.set_yscale("log")
     ax2.axhline(static_weights(FACTORS, params["weights"])[0], color="k", linestyle=":",
                 linewidth=1.0, label="static AHP range weight")
@@ -776,11 +840,33 @@ def _manoeuvre_figure(run: RunData) -> Figure | str:
         a.set_xlabel("time (s)")
         a.set_ylabel(ylabel)
         a.set_title(title, fontsize=8)
-        a.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncols=2, fontsize=7)
+        if not long_words:
+            a.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncols=2, fontsize=7)
+    if long_words:  # one legend for both panels, below them
+        found = dict(zip(*reversed(ax.get_legend_handles_labels()), strict=True))
+        found.update(zip(*reversed(ax2.get_legend_handles_labels()), strict=True))
+        _legend_below(fig, list(found.values()), list(found))
     n = len(groups[0][2])
-    fig.suptitle(f"Manoeuvre index ({params['alpha.index']}) and range weight per scan "
+    fig.suptitle(f"Manoeuvre index ({' and '.join(indices)}) and range weight per scan "
                  f"(no paper figure)\nmean over {n} trials with 95 % t bands")
     return fig
+
+
+def _index_references(ax: Axes, settings: Sequence[Mapping[str, Any]]) -> list[str]:
+    """Draw the no-manoeuvre expectation (NIS index) and each fixed ``alpha_max`` of the
+    ``settings`` (point params); return the indices used, in order of appearance."""
+    indices = list(dict.fromkeys(p["alpha.index"] for p in settings))
+    if "nis_tdoa" in indices:
+        ax.axhline(1.0, color="0.5", linestyle="--", linewidth=1.0,
+                   label="no-manoeuvre expectation E[α] = 1")
+    limits = dict.fromkeys((*alpha_max(p), p["alpha.index"]) for p in settings)
+    for (a_max, mode, index), style in zip(limits, (":", "-.", (0, (1, 3))) * 3,
+                                           strict=False):
+        if mode == "fixed":
+            ax.axhline(a_max, color="k", linestyle=style, linewidth=1.0,
+                       label="α_max" if len(indices) == 1 else
+                       f"α_max, {_value_words('alpha.index', index)}")
+    return indices
 
 
 def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure | str]:
