@@ -334,8 +334,9 @@ def _scale_figure(summary: pd.DataFrame, metrics: pd.DataFrame, config: dict) ->
     """Three panels against the number of targets N, PGA at its final checkpoint.
 
     Solve time per scan (ms, log axis; from the timing summary), objective gap ``J* - J``
-    (nats, symlog axis; PGA variants only; 95 % percentile bootstrap band from ``metrics``,
-    see :func:`checkpoint_metrics`) and measurement-level accuracy (fraction), the exact
+    (nats, symlog axis; PGA variants only; 95 % bootstrap-t band from ``metrics``, see
+    :func:`checkpoint_metrics`, left open where its upper end is infinite) and
+    measurement-level accuracy (fraction), the exact
     optimum included. The N axis is linear with a tick per value unless N spans >= 10x
     over >= 4 values.
     """
