@@ -13,7 +13,7 @@ order, so results agree with the reference to about 1e-12 relative, not bit for 
 run, whatever the executor, worker count or batch split.
 
 The compiled code is cached on disk beside this module (``cache=True``): the first run on a
-machine compiles it (about 10 s), later processes load it.
+machine compiles it (about 25 s), later processes load it.
 """
 
 from __future__ import annotations
