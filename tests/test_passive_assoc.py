@@ -175,6 +175,7 @@ def test_gap_interval_is_a_bootstrap_t_interval_that_cannot_go_below_zero():
     assert 0.0 < low < gaps.mean() < high < np.inf
     assert gap_interval(gaps) == (low, high)  # fixed resampling seed: same table on redraw
     assert gap_interval(np.zeros(20)) == (0.0, 0.0)
+    assert np.isnan(gap_interval([5.0])).all()  # one run does not bound the mean
     assert gap_interval(np.r_[np.zeros(49), 3.0])[1] == np.inf  # one run off J*: unbounded
     # the studentized interval of a small symmetric sample reaches below 0: clipped there
     small = np.array([0.0, 0.0, 1.0, 1.0, 2.0, 2.0])

@@ -7,6 +7,8 @@ import pytest
 from scipy import stats
 
 from trackfuse.stats import (
+    _bootstrap_t,
+    _resample_counts,
     bootstrap_t_mean_intervals,
     mcnemar_p,
     nees_band,
@@ -122,9 +124,8 @@ def test_p_values_are_nan_when_the_spread_is_undefined():
 
 def _percentile_rmse_intervals(squared: np.ndarray, resamples: int, seed: int) -> np.ndarray:
     """The percentile bootstrap that :func:`rmse_intervals` replaced, ``(R, n) -> (R, 2)``."""
-    r, n = squared.shape
-    idx = np.random.default_rng(seed).integers(0, n, (resamples, n))
-    means = squared[:, idx].mean(axis=2)  # (R, resamples)
+    n = squared.shape[1]
+    means = squared @ _resample_counts(n, resamples, seed).T / n  # (R, resamples)
     return np.sqrt(np.quantile(means, [0.025, 0.975], axis=1).T)
 
 
@@ -171,3 +172,11 @@ def test_bootstrap_t_interval_edge_cases():
     sq = np.random.default_rng(3).normal(0, 1, 8) ** 2
     mse = bootstrap_t_mean_intervals([sq])[0]
     np.testing.assert_allclose(rmse_intervals([sq])[0], np.sqrt(np.clip(mse, 0, None)))
+
+
+def test_a_resample_of_one_repeated_value_has_an_infinite_t_not_a_huge_one():
+    # 46 equal values: many resamples draw only them; rounding must not give them a spread
+    x = np.array([[1.7] * 46 + [3.1, 0.2, 5.9, 2.2]])
+    t = _bootstrap_t(x, _resample_counts(50, 4000, 0))
+    assert (~np.isfinite(t)).sum() > 0
+    assert np.abs(t[np.isfinite(t)]).max() < 100

@@ -182,10 +182,13 @@ def bootstrap_t_mean_intervals(groups, level: float = 0.95, resamples: int = 200
     the ``alpha', 1 - alpha'`` quantiles of the resampled t values (Efron & Tibshirani 1993,
     ch. 12.5), where ``alpha' = Phi(sqrt(n / (n - 1)) t_{n-1}((1 - level) / 2))`` is
     Hesterberg's expansion for small samples (Hesterberg 2015, Am. Stat. 69, 371-386),
-    which widens it at n = 8 and hardly at all at n = 50. A resample with no spread has an
-    infinite t (``+-inf``, 0 when its mean is the sample's), so with few distinct values a
-    bound can be infinite: the data do not bound the mean. A sample with no spread gives
-    ``(mean, mean)``.
+    which widens it at n = 8 and hardly at all at n = 50. Hesterberg proposes it for the
+    percentile interval; on a bootstrap-t it is our choice, made on the coverage measured
+    below (without it: 0.91-0.93 at n = 8, 0.93-0.96 at n = 50), and it errs on the wide
+    side (at n = 8 the tail quantiles rest on about 11 of 2000 resamples). A resample with
+    no spread has an infinite t (``+-inf``, 0 when its mean is the sample's), so with few
+    distinct values a bound can be infinite: the data do not bound the mean. A sample with
+    no spread gives ``(mean, mean)``.
 
     groups : sequence of ``(n_i,)`` arrays (non-finite values dropped); groups of equal
         size share one draw of resampling indices (generator ``seed``), the draw a separate
@@ -231,11 +234,13 @@ def _bootstrap_t(x: np.ndarray, counts: np.ndarray) -> np.ndarray:
     ``x: (groups, n)`` resampled by ``counts: (resamples, n)``; ``+-inf`` (0 at the
     sample's mean) where a resample has no spread."""
     n = x.shape[1]
-    centred = x - x.mean(axis=1, keepdims=True)  # variance from centred values: no cancellation
+    centred = x - x.mean(axis=1, keepdims=True)  # smaller cancellation than raw values
     scale = np.abs(centred).max(axis=1, keepdims=True)
     mean = centred @ counts.T / n
     var = np.maximum(centred**2 @ counts.T / n - mean**2, 0.0) * n / (n - 1)
-    tiny = 1e-12 * scale
+    # E[c^2] - mean^2 of a resample of one repeated value leaves rounding residue of about
+    # 1e-16 scale^2, not 0: a variance below (1e-6 scale)^2 counts as no spread
+    tiny = 1e-6 * scale
     with np.errstate(divide="ignore", invalid="ignore"):
         t = mean / np.sqrt(var / n)
     degenerate = np.where(mean > tiny, np.inf, np.where(mean < -tiny, -np.inf, 0.0))

@@ -262,11 +262,12 @@ def _drawable(values: np.ndarray) -> np.ndarray:
 
 def _rmse_band(sq: pd.Series) -> pd.DataFrame:
     """Per group of the squared errors ``sq`` (grouped Series, m^2): RMSE and its 95 %
-    interval ``lo``, ``hi`` (m), the tables' bootstrap-t interval (:func:`_rmse_intervals`),
+    interval ``lo``, ``hi`` (m), the tables' bootstrap-t interval
+    (:func:`trackfuse.stats.rmse_intervals`),
     which does not assume zero-mean errors; an unbounded end (very few runs) is NaN, not
     drawn."""
     groups = [g.to_numpy() for _, g in sq]
-    ci = _drawable(_rmse_intervals(groups))
+    ci = _drawable(rmse_intervals(groups))
     return pd.DataFrame({"rmse": [np.sqrt(np.nanmean(g)) for g in groups], "lo": ci[:, 0],
                          "hi": ci[:, 1]}, index=[key for key, _ in sq])
 
@@ -648,7 +649,7 @@ def _draw_final(ax: Axes, run: RunData, frame: pd.DataFrame, x_key: str,
         rows = frame[frame["algorithm"] == name]
         groups = list(rows.groupby(x_key)["range_sq_err_m2"])
         stats_ = [(x, np.sqrt(g.mean()), *ci) for (x, g), ci in zip(
-            groups, _drawable(_rmse_intervals([g.to_numpy() for _, g in groups])),
+            groups, _drawable(rmse_intervals([g.to_numpy() for _, g in groups])),
             strict=True)]
         x, rmse, lo, hi = (np.array(c, dtype=float) for c in zip(*stats_, strict=True))
         top = max(top, float(rmse.max()) / 1e3)
@@ -731,13 +732,6 @@ def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure | str]:
 # Tables
 
 
-def _rmse_intervals(groups: Sequence[np.ndarray]) -> np.ndarray:
-    """``(len(groups), 2)`` 95 % intervals (m) of the RMSE of each array of squared errors
-    (m^2): :func:`trackfuse.stats.rmse_intervals`, expanded bootstrap-t on the mean square
-    with a fixed seed (deterministic); assumes neither zero-mean nor Gaussian errors."""
-    return rmse_intervals([np.asarray(g, dtype=float) for g in groups])
-
-
 def _with_interval(table: pd.DataFrame, name: str, value: Any, lo: Any, hi: Any) -> None:
     table[name], table[f"{name}_ci_low"], table[f"{name}_ci_high"] = value, lo, hi
 
@@ -772,7 +766,7 @@ def final_scan_table(run: RunData) -> pd.DataFrame:
         lo, hi = wilson_interval(k, n)
         _with_interval(table, f"{rule}_pct", 100 * k / n, 100 * lo, 100 * hi)
     sq = grouped["range_sq_err_m2"]
-    boot = _rmse_intervals([g.to_numpy() for _, g in sq]) / 1e3
+    boot = rmse_intervals([g.to_numpy() for _, g in sq]) / 1e3
     _with_interval(table, "range_rmse_km", np.sqrt(sq.mean().to_numpy()) / 1e3, boot[:, 0],
                    boot[:, 1])
     params = [run.point_params(int(pt)) for pt in table["point"]]
@@ -814,30 +808,37 @@ def _levels_text(levels: Sequence[float]) -> str:
         (" or " if len(values) > 1 else "") + f"{values[-1]:g}"
 
 
-def _fig1_rows(name: str, rows: pd.DataFrame) -> list[dict[str, Any]]:
+def _fig1_rows(name: str, rows: pd.DataFrame, other_swept: Sequence[str] = ()
+               ) -> list[dict[str, Any]]:
     """Claim 1 (loss below 5 % up to 9) and claim 2 (the curve rises) for ``name``, by the
     angle rule.
 
     Claim 1 takes the trial as the independent unit: the levels of one trial share its
     truth and noise (common random numbers), so pooling trials x levels as independent
     overstates the sample. The fraction of trials that lost a track at any level up to 9,
-    with its Wilson interval, bounds every such level's loss rate from above; the claim
-    "agrees" when that bound is below 5 %, "differs" when the interval's lower end is at or
-    above it, else "not comparable" (the run is too small to tell)."""
+    with its Wilson interval, bounds every such level's loss rate from above, so the claim
+    "agrees" when that bound is below 5 %; it "differs" when some level's own interval lies
+    at or above 5 % (a high fraction at *any* level does not show that one level is high);
+    else "not comparable" (the run is too small to tell). Also "not comparable" when another
+    swept key (``other_swept``) varies across these points: their trials are not distinct
+    runs of one setting."""
     rate = _rates(rows, "clutter.mean", MAIN_RULE)
     upto = rate[rate.index <= CLAIM_UP_TO]
     per_trial = rows[rows["clutter.mean"] <= CLAIM_UP_TO].groupby("trial")[MAIN_RULE].max()
     k, n = int(per_trial.sum()), len(per_trial)
     lo, hi = (100 * float(v) for v in wilson_interval(k, n))
     limit = 100 * CLAIM.value
-    verdict = "agrees" if hi < limit else "differs" if lo >= limit else "not comparable"
+    varying = [key for key in other_swept if rows[key].nunique() > 1]
+    verdict = "not comparable" if varying else "agrees" if hi < limit \
+        else "differs" if bool((upto["lo"] >= limit).any()) else "not comparable"
     levels = _levels_text(upto.index)
     worst_text = (f"; worst level {upto['pct'].max():.1f} % at {upto['pct'].idxmax():g}"
                   if k else "")
     reason = (f"{k} of {n} runs lost a track at any level of {levels}{worst_text}"
-              + (f"; upper bound {hi:.1f} % is not below {limit:g} %: {n} runs cannot show "
-                 f"it (>= {_runs_to_show(limit / 100)} with no loss)"
-                 if verdict == "not comparable" else ""))
+              + (f"; {', '.join(varying)} also swept: not one setting" if varying
+                 else f"; upper bound {hi:.1f} % is not below {limit:g} % and no level is "
+                 f"above it: {n} runs cannot show it (>= {_runs_to_show(limit / 100)} with "
+                 "no loss)" if verdict == "not comparable" else ""))
     first, end = rate.iloc[0], rate.iloc[-1]
     rises = bool(end["lo"] > first["hi"])
     rise_reason = (f"{first['pct']:.1f} % at {rate.index[0]:g} -> {end['pct']:.1f} % at "
@@ -869,7 +870,7 @@ def _fig2_row(run: RunData, name: str, rows: pd.DataFrame) -> dict[str, Any]:
     level = float(levels.iloc[(levels - CLAIM_UP_TO).abs().argmin()])
     at = rows[levels == level]
     sq = at["range_sq_err_m2"].to_numpy()
-    lo, hi = (v / 1e3 for v in _rmse_intervals([sq])[0])
+    lo, hi = (v / 1e3 for v in rmse_intervals([sq])[0])
     bound = bounds(run.point_params(int(at["point"].iloc[0])))[0][-1] / 1e3
     where = "inside" if lo <= bound <= hi else "below" if bound < lo else "above"
     return _headline_row(
@@ -898,8 +899,9 @@ def paper_vs_reproduced(run: RunData) -> pd.DataFrame:
     if last["clutter.mean"].nunique() < 2:
         return pd.DataFrame(columns=list(HEADLINE_COLUMNS))
     algorithms = run.params["algorithms"]
+    other = [key for key in swept_keys(run.config) if key != "clutter.mean"]
     rows = [row for name in _main_algorithms(algorithms)
-            for row in _fig1_rows(name, last[last["algorithm"] == name])]
+            for row in _fig1_rows(name, last[last["algorithm"] == name], other)]
     paper_filter = _headline_pair(algorithms)[0]
     rows.append(_fig2_row(run, paper_filter, last[last["algorithm"] == paper_filter]))
     return pd.DataFrame(rows, columns=list(HEADLINE_COLUMNS))
