@@ -40,6 +40,22 @@ def test_a_wanted_figure_the_report_cannot_draw_is_listed_with_its_reason(toy_ru
     assert "Not drawn" in (toy_run.path / "index.html").read_text()
 
 
+def test_the_report_draws_by_default_what_the_config_asks_for_in_its_order(toy_run):
+    """``wanted_figures`` is the one choice of figures (the reproduce report reads it too):
+    ``all`` means every declared figure, a list is kept as given, unknown names included."""
+    listed = dataclasses.replace(toy_run, config={
+        **toy_run.config, "outputs": {**toy_run.config.get("outputs", {}),
+                                      "figures": ["not_a_figure_of_this_run", "estimate"]}})
+    assert reports.wanted_figures(listed) == ["not_a_figure_of_this_run", "estimate"]
+    report = write_report(listed)
+    assert [p.stem for p in report.figures] == ["estimate", "estimate"]
+    assert list(report.not_drawn) == ["not_a_figure_of_this_run"]
+    every = dataclasses.replace(toy_run, config={
+        **toy_run.config, "outputs": {**toy_run.config.get("outputs", {}), "figures": "all"}})
+    assert reports.wanted_figures(every) == list(toy_run.experiment.figures) == ["estimate"]
+    assert write_report(every).not_drawn == {}
+
+
 def test_the_index_written_while_the_run_finishes_prints_no_none(toy_run):
     """The runner writes the report before it marks the run complete, so its manifest has
     no finishing time yet; a package that is not installed has no version. Neither may be

@@ -293,18 +293,23 @@ def load_drawing(report_module: str | None, formats: Sequence[str],
             module.prepare(load(folder, require_complete=False))
 
 
+def wanted_figures(run: RunData) -> list[str]:
+    """The figures the run's config asks for, in its order: ``outputs.figures``, or every
+    figure the experiment declares, in its declared order, when that says ``all`` (the
+    default)."""
+    choice = (run.config.get("outputs") or {}).get("figures", "all")
+    return list(run.experiment.figures) if choice == "all" else list(choice)
+
+
 def write_report(run: RunData, wanted: Collection[str] | None = None,
                  formats: Sequence[str] | None = None) -> Report:
     """Draw the tables and figures of ``run`` and write ``index.md`` and ``index.html``.
 
-    ``wanted``: figure names (default: the config's ``outputs.figures``, ``"all"`` meaning
-    every figure the experiment declares); ``formats``: default the config's.
+    ``wanted``: figure names (default: :func:`wanted_figures`); ``formats``: default the
+    config's.
     """
-    outputs = run.config.get("outputs") or {}
-    declared = list(run.experiment.figures)
     if wanted is None:
-        choice = outputs.get("figures", "all")
-        wanted = declared if choice == "all" else list(choice)
+        wanted = wanted_figures(run)
     formats = list(formats or figure_formats(run.config))
     report = Report()
     module = _module(run, report)

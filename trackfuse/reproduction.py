@@ -31,7 +31,7 @@ import pandas as pd
 
 import trackfuse
 from trackfuse.reported import PAPERS, Paper
-from trackfuse.reports import HEADLINE_COLUMNS, HEADLINE_TABLE, VERDICTS
+from trackfuse.reports import HEADLINE_COLUMNS, HEADLINE_TABLE, VERDICTS, wanted_figures
 from trackfuse.results import atomic_write
 from trackfuse.rundata import RunData, load
 
@@ -88,13 +88,6 @@ def _headline(run: RunData) -> pd.DataFrame:
 def _config_name(run: RunData) -> str:
     source = str(run.manifest.get("config_file") or run.path.parent.name)
     return Path(source).stem
-
-
-def wanted_figures(run: RunData) -> list[str]:
-    """The figures the run's config asks for, in its order (``outputs.figures``; the
-    experiment's declared order when it says ``all``)."""
-    choice = (run.config.get("outputs") or {}).get("figures", "all")
-    return list(run.experiment.figures) if choice == "all" else list(choice)
 
 
 def main_figure_names(wanted: Sequence[str], drawn: Collection[str],
