@@ -5,6 +5,7 @@ import re
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
@@ -15,6 +16,7 @@ from trackfuse.plots.algorithms import look
 from trackfuse.plots.style import inside_canvas, text_overlaps
 from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS
 from trackfuse.rundata import RunData
+from trackfuse.stats import bootstrap_t_mean_intervals
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = sorted(ROOT.glob("configs/passive_*.yaml"))
@@ -119,3 +121,19 @@ def test_every_table_has_rows_or_says_why_not(shipped_run):
     at_paper = shipped_run.params["scene.mode"] == "paper" \
         and "exact" in shipped_run.params["algorithms"]
     assert isinstance(tables["versus_exact"], str) != at_paper  # the scale study: a reason
+
+
+def test_checkpoint_gap_bounds_are_each_groups_own_bootstrap_to_the_last_bit():
+    """The table's gap interval of a (point, algorithm, checkpoint) group is exactly the one
+    that group alone gives (a batched bootstrap would differ in the last digits)."""
+    rng = np.random.default_rng(3)
+    trials = pd.DataFrame({"point": 0, "algorithm": np.repeat(["a", "b", "c", "d"], 50),
+                           "ops": 100, "gap": rng.exponential(5.0, 200)})
+    for metric in (*report.MEAN_METRICS, *report.RATE_METRICS, "pairs"):
+        trials[metric] = rng.integers(0, 2, 200).astype(float)
+    table = report.checkpoint_metrics(trials, {"params": {}, "sweep": {}})
+    for row, (_, group) in zip(table.itertuples(), trials.groupby("algorithm"), strict=True):
+        low, high = bootstrap_t_mean_intervals([group["gap"].to_numpy()], 0.95,
+                                               report.BOOTSTRAP_RESAMPLES,
+                                               report.BOOTSTRAP_SEED)[0]
+        assert (row.gap_ci_low, row.gap_ci_high) == (max(low, 0.0), high)
