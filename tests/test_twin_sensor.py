@@ -28,7 +28,7 @@ from trackfuse.plots.style import text_overlaps
 from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS
 from trackfuse.rundata import RunData
 from trackfuse.seeding import trial_streams
-from trackfuse.stats import nees_band
+from trackfuse.stats import nees_band, wilson_interval
 from trackfuse.tracking.models import cv_noise_gain, cv_transition, wrap
 from trackfuse.tracking.pda import PDAOptions
 from trackfuse.tracking.sensors import azel
@@ -546,3 +546,20 @@ def test_text_overlaps_reports_text_that_runs_off_the_figure():
     ax.plot([0, 1], [1, 0], label="a legend entry far too long for a two-inch-wide figure")
     legend_in_strip(fig, *ax.get_legend_handles_labels(), ncols=2)
     assert (ax.get_legend_handles_labels()[1][1], OUTSIDE) in text_overlaps(fig)
+
+
+def test_runs_to_show_is_the_first_run_count_a_search_finds_for_every_limit():
+    """The closed form (with its boundary guard) against the plain search from n = 1, for
+    limits 0.001-0.5 and for limits exactly at an upper bound, or one step above it (where
+    rounding decides: the unguarded closed form is one short at most of these)."""
+    upper = np.array([float(wilson_interval(0, n)[1]) for n in range(1, 4001)])
+
+    def search(limit):
+        return int(np.argmax(upper < limit)) + 1
+
+    assert upper[-1] < 0.001  # the search finds every answer within the table
+    limits = [*np.linspace(0.001, 0.5, 400), *upper[upper <= 0.5][::7],
+              *np.nextafter(upper[upper <= 0.5][::11], 1.0)]
+    for limit in limits:
+        assert report.runs_to_show(limit) == search(limit), limit
+    assert report.runs_to_show(0.05) == 73  # 3.84 / (73 + 3.84) = 4.99 %, at 72: 5.06 %

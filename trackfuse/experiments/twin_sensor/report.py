@@ -59,8 +59,10 @@ PCRLB references are recomputed, from the config alone, by
 
 from __future__ import annotations
 
+import math
 import textwrap
 from collections.abc import Callable, Collection, Sequence
+from statistics import NormalDist
 from typing import Any
 
 import numpy as np
@@ -837,7 +839,7 @@ def _fig1_rows(name: str, rows: pd.DataFrame, other_swept: Sequence[str] = ()
     reason = (f"{k} of {n} runs lost a track at any level of {levels}{worst_text}"
               + (f"; {', '.join(varying)} also swept: not one setting" if varying
                  else f"; upper bound {hi:.1f} % is not below {limit:g} % and no level is "
-                 f"above it: {n} runs cannot show it (>= {_runs_to_show(limit / 100)} with "
+                 f"above it: {n} runs cannot show it (>= {runs_to_show(limit / 100)} with "
                  "no loss)" if verdict == "not comparable" else ""))
     first, end = rate.iloc[0], rate.iloc[-1]
     rises = bool(end["lo"] > first["hi"])
@@ -855,9 +857,19 @@ def _fig1_rows(name: str, rows: pd.DataFrame, other_swept: Sequence[str] = ()
     ]
 
 
-def _runs_to_show(limit: float) -> int:
-    """Fewest runs whose 95 % Wilson upper bound with none flagged is below ``limit``."""
-    n = 1
+def runs_to_show(limit: float) -> int:
+    """Fewest runs whose 95 % Wilson upper bound with none flagged is below ``limit``
+    (a fraction in (0, 1]).
+
+    With none of n flagged the upper bound is ``z^2 / (n + z^2)``, below ``limit`` for
+    ``n > z^2 (1 - limit) / limit``: the next integer, then moved while the bound as
+    :func:`~trackfuse.stats.wilson_interval` rounds it says otherwise (a limit at the
+    boundary), so the answer is the one a search from n = 1 finds.
+    """
+    z = NormalDist().inv_cdf(0.975)
+    n = max(1, math.floor(z * z * (1 - limit) / limit) + 1)
+    while n > 1 and wilson_interval(0, n - 1)[1] < limit:
+        n -= 1
     while wilson_interval(0, n)[1] >= limit:
         n += 1
     return n
