@@ -13,7 +13,7 @@ from trackfuse import harness
 from trackfuse.config import load
 from trackfuse.experiments.esm_radar import EXPERIMENT, model, report
 from trackfuse.plots.style import inside_canvas, text_overlaps
-from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS
+from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS, save_figure
 from trackfuse.rundata import RunData
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -212,6 +212,45 @@ def test_every_grid_value_of_a_log_axis_is_labelled(tmp_path):
         ticks = [t.get_text() for t in fig.axes[0].get_xticklabels() if t.get_text()]
         assert ticks == [f"{scale * v:g}" for v in grid], key
         assert text_overlaps(fig) == [], key
+
+
+def _upright_after_a_full_draw(fig, axes):
+    """The measure as it was: draw the whole figure, then read the tick label boxes."""
+    FigureCanvasAgg(fig)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    for ax in axes:
+        boxes = sorted((t.get_window_extent(renderer) for t in ax.get_xticklabels()
+                        if t.get_visible() and t.get_text()), key=lambda b: b.x0)
+        if any(a.x1 + 2 > b.x0 for a, b in zip(boxes, boxes[1:], strict=False)):
+            ax.tick_params(axis="x", labelrotation=90)
+
+
+def test_tick_labels_measured_by_the_layout_alone_give_the_bytes_of_a_full_draw(
+        tmp_path, monkeypatch):
+    """Crowded (Fig. 3 grid, two panels) and nearly crowded x labels: the figure files are the
+    same whether the labels are measured after the layout alone or after a full draw. The
+    second grid's labels keep ~7 px apart once laid out but would touch at the panels' places
+    before the layout, so the layout cannot be skipped."""
+    grids = {"crowded": [50.0, 100.0, 200.0, 300.0, 500.0, 750.0, 1000.0, 1500.0, 2000.0],
+             "nearly": [100.0, 200.0, 300.0, 500.0, 750.0, 1000.0, 2000.0]}
+    for name, grid in grids.items():
+        run = harness.run_data(tmp_path / name, "esm_radar",
+                               {"algorithms": ["traditional", "improved"]},
+                               {"target.separation": grid, "radar.factor_model":
+                                ["table", "derived"]}, trials=2, seed=1)
+        fig = report.figures(run, ["correct_rate"])["correct_rate"]
+        rotations = {t.get_rotation() for ax in fig.axes if ax.get_visible()
+                     for t in ax.get_xticklabels()}
+        assert rotations == ({90.0} if name == "crowded" else {0.0}), name
+        save_figure(fig, tmp_path, f"{name}_layout", ["png", "pdf"])
+        with monkeypatch.context() as patched:
+            patched.setattr(report, "_upright_crowded_ticks", _upright_after_a_full_draw)
+            fig = report.figures(run, ["correct_rate"])["correct_rate"]
+        save_figure(fig, tmp_path, f"{name}_draw", ["png", "pdf"])
+        for fmt in ("png", "pdf"):
+            assert (tmp_path / f"{name}_layout.{fmt}").read_bytes() == \
+                (tmp_path / f"{name}_draw.{fmt}").read_bytes(), (name, fmt)
 
 
 def test_headline_rows_name_the_radar_factor_model(tmp_path):

@@ -623,11 +623,16 @@ def _rate_figure(run: RunData, group: str) -> Figure | str:
 
 def _upright_crowded_ticks(fig: Figure, axes: Sequence[Axes]) -> None:
     """Turn the x tick labels of ``axes`` upright when two neighbours would touch
-    (every grid value is labelled: 750 / 1000 / 1500 / 2000 m on a log axis)."""
+    (every grid value is labelled: 750 / 1000 / 1500 / 2000 m on a log axis).
+
+    Only the layout is computed to measure them (the panels placed where drawing places
+    them), not a full draw: saving lays the figure out again from there, as after a draw.
+    """
     if not hasattr(fig.canvas, "get_renderer"):
         FigureCanvasAgg(fig)
-    fig.canvas.draw()
     renderer = fig.canvas.get_renderer()
+    if (engine := fig.get_layout_engine()) is not None:
+        engine.execute(fig)
     for ax in axes:
         boxes = sorted((t.get_window_extent(renderer) for t in ax.get_xticklabels()
                         if t.get_visible() and t.get_text()), key=lambda b: b.x0)
