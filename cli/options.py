@@ -7,6 +7,7 @@ argument), is printed as one line ``error: ...`` on stderr; usage errors exit wi
 from __future__ import annotations
 
 import gc
+import signal
 import sys
 from enum import StrEnum
 from pathlib import Path
@@ -16,9 +17,15 @@ import typer
 from typer.core import TyperGroup
 
 
+def _stop(signum: int, frame: object) -> None:
+    """A termination request (``kill``, a batch scheduler's time limit, ``docker stop``)
+    stops a command as Ctrl-C does: saved work stays resumable, one line, exit 130."""
+    raise KeyboardInterrupt
+
+
 class OneLineErrors(TyperGroup):
     """Usage errors (a bad option value, a missing argument) as one ``error:`` line, exit 2;
-    a Ctrl-C as one ``interrupted:`` line, exit 130."""
+    a Ctrl-C or SIGTERM as one ``interrupted:`` line, exit 130."""
 
     def invoke(self, ctx):
         """A Ctrl-C that no command turned into its own message is one line too."""
@@ -32,6 +39,7 @@ class OneLineErrors(TyperGroup):
              **extra):
         if not standalone_mode:
             return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        signal.signal(signal.SIGTERM, _stop)
         try:
             code = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
         except typer.TyperException as err:  # click's ClickException and UsageError

@@ -214,3 +214,23 @@ def test_workers_import_this_trackfuse_not_one_in_the_working_directory(tmp_path
                          text=True, check=True, timeout=120).stdout.split()
     assert len(out) == 3 and "checkout" not in out[0]
     assert out[1] == out[2] == out[0]
+
+
+def test_an_aborted_pool_ends_its_busy_workers_at_once():
+    """An interrupted run closed its pool by waiting for the workers; a worker caught while
+    the pool handed it work waited forever, and so did the run's exit (Python waits for
+    every child): 1 of 12 runs stopped by SIGINT hung. Aborting ends the workers instead."""
+    code = ("import time\n"
+            "from trackfuse.executors import ProcessExecutor\n"
+            "from multiprocessing import active_children\n"
+            "if __name__ == '__main__':\n"
+            "    pool = ProcessExecutor(2)\n"
+            "    busy = pool.imap_unordered(time.sleep, [0.0, 60.0, 60.0])\n"
+            "    next(busy)\n"
+            "    start = time.monotonic()\n"
+            "    pool.close(abort=True)\n"
+            "    print(time.monotonic() - start, len(active_children()))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, timeout=50).stdout
+    seconds, children = out.split()
+    assert float(seconds) < 10 and int(children) == 0

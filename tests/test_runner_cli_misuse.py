@@ -203,3 +203,24 @@ def test_more_workers_than_cores_is_said_in_one_line():
     result = trackfuse("run", PASSIVE, "--workers", "64", "--dry-run")
     assert result.returncode == 0, result.stderr
     assert result.stderr.startswith("warning: --workers 64: more than the"), result.stderr
+
+
+def test_sigterm_stops_a_run_as_ctrl_c_does(tmp_path):
+    """A batch scheduler's time limit (or ``kill``, ``docker stop``) sends SIGTERM: the run
+    died with exit 143, a resource-tracker warning about leaked semaphores and a manifest
+    left 'running' with no trial counted, though its saved batches were resumable."""
+    out = tmp_path / "out"
+    proc = _start(out)
+    try:
+        deadline = time.monotonic() + 60
+        while len(list(out.glob("*/*/parts/*.csv"))) < 2 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130, err
+    assert err.strip().startswith("interrupted:") and "\n" not in err.strip(), err
+    manifest = json.loads(next(out.glob("*/*/manifest.json")).read_text())
+    assert manifest["status"] == "interrupted" and manifest["trials_done"] > 0  # parts saved

@@ -62,7 +62,7 @@ class SerialExecutor:
         for task in tasks:
             yield fn(task)
 
-    def close(self) -> None:
+    def close(self, abort: bool = False) -> None:
         pass
 
 
@@ -184,8 +184,18 @@ class ProcessExecutor:
         self._pool = ProcessPoolExecutor(self.workers, mp_context=self._ctx,
                                          initializer=setup_child, initargs=(os.getpid(),))
 
-    def close(self) -> None:
-        self._pool.shutdown(wait=True, cancel_futures=True)
+    def close(self, abort: bool = False) -> None:
+        """Shut the pool down once its workers are idle; with ``abort`` (the run stops on an
+        interrupt or an error) end them at once instead: their batches are lost anyway, and
+        a worker caught while the pool hands it work can wait for it forever, so that
+        Python's exit, which waits for every child process, would never come."""
+        if not abort:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            return
+        self._pool.shutdown(wait=False, cancel_futures=True)
+        for process in multiprocessing.active_children():
+            process.terminate()
+            process.join()
 
 
 class DaskExecutor:
@@ -232,7 +242,7 @@ class DaskExecutor:
             yield future.result()
             future.release()
 
-    def close(self) -> None:
+    def close(self, abort: bool = False) -> None:
         self._client.close()
         if self._cluster is not None:
             self._cluster.close()

@@ -338,6 +338,7 @@ class Runner:
         last = time.monotonic()
         label = f"{self.config.experiment.name} [{self.run_id}]"
         loading = self._load_finishing_code(executor.kind)
+        stopped = True  # by an interrupt or an error, until the loop ends
         try:
             with RunProgress(self.total_trials, session.done, label, self.progress) as bar:
                 for res in executor.imap_unordered(execute_batch, self._tasks(todo)):
@@ -351,8 +352,9 @@ class Runner:
                     if time.monotonic() - last > MANIFEST_EVERY_S:
                         last = time.monotonic()
                         self.folder.write_manifest(self._manifest(RunStatus.RUNNING, session))
+            stopped = False
         finally:
-            executor.close()
+            executor.close(abort=stopped)
             if loading is not None:
                 loading.join()
 
