@@ -224,3 +224,14 @@ def test_sigterm_stops_a_run_as_ctrl_c_does(tmp_path):
     assert err.strip().startswith("interrupted:") and "\n" not in err.strip(), err
     manifest = json.loads(next(out.glob("*/*/manifest.json")).read_text())
     assert manifest["status"] == "interrupted" and manifest["trials_done"] > 0  # parts saved
+
+
+@pytest.mark.parametrize("value", ["[1, 2]", "[1, 2, 3, 4]"])
+def test_a_position_without_three_coordinates_is_refused_before_the_run(value):
+    """`validate` accepted `target.position: [1, 2]`; `run` then failed every trial and
+    wrote a 'complete' manifest of failed trials."""
+    result = trackfuse("validate", ROOT / "configs" / "twin_sensor_orbit.yaml", "--set",
+                       f"target.position={value}")
+    assert result.returncode == 2, result.stdout
+    assert result.stderr.count("\n") == 1, result.stderr
+    assert "target.position" in result.stderr and "a list of 3 numbers" in result.stderr

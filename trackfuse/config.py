@@ -114,7 +114,8 @@ def allowed_text(p: Param) -> str:
             return f"a non-empty list drawn from {options}"
         return f"one of {options}"
     names = {float: "a number", int: "an integer", bool: "true or false", str: "a string",
-             list: "a non-empty list of numbers"}
+             list: "a non-empty list of numbers" if p.length is None
+             else f"a list of {p.length} numbers"}
     text = names.get(p.kind, p.kind.__name__)
     if p.low is not None and p.high is not None:
         text += f" in [{p.low:g}, {p.high:g}]"
@@ -163,7 +164,7 @@ def check_value(p: Param, value: Any) -> Any:
     """Return ``value`` coerced to the parameter's type, or raise ``ValueError``."""
     if p.kind is list:
         items = value if isinstance(value, list) else [value]
-        if not items:
+        if not items or (p.length is not None and len(items) != p.length):
             raise ValueError
         return [_scalar(p, v, _element_kind(p)) for v in items]
     return _scalar(p, value, p.kind)

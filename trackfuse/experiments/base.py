@@ -66,7 +66,8 @@ class Param:
     unit ``""``. ``kind`` is one of ``float``, ``int``, ``bool``, ``str`` or ``list`` (a
     non-empty list of numbers, or of strings when ``choices`` is given); ``low``/``high`` are
     inclusive bounds for numbers (and for every element of a list); ``choices`` restricts
-    strings (or numbers, or every element of a list) to a fixed set.
+    strings (or numbers, or every element of a list) to a fixed set; ``length`` fixes the
+    number of items of a list (a position's 3 coordinates).
     """
 
     key: str
@@ -77,6 +78,7 @@ class Param:
     low: float | None = None
     high: float | None = None
     choices: tuple[Any, ...] | None = None
+    length: int | None = None
 
 
 Better = Literal["lower", "higher"]

@@ -125,13 +125,15 @@ PARAMS = (
     Param("scan.count", 20, "Number of scans after initialization at t = 0", "scans", kind=int,
           low=1, high=1000),
     Param("target.position", [0.0, 128558.0, 4000.0], "True target position at t = 0 (x, y, z)",
-          "m", kind=list),
-    Param("target.velocity", [0.0, 0.0, 0.0], "True target velocity at t = 0", "m/s", kind=list),
+          "m", kind=list, length=3),
+    Param("target.velocity", [0.0, 0.0, 0.0], "True target velocity at t = 0 (x, y, z)", "m/s",
+          kind=list, length=3),
     Param("target.q", 0.0, "Truth process-noise acceleration variance (0 = stationary or exact "
           "CV truth)", "m^2/s^4", low=0.0, high=1e6),
     Param("platform.motion", "orbit", "Platform trajectory of sensor 1", kind=str,
           choices=("orbit", "straight")),
-    Param("platform.start", [153209.0, 0.0, 2000.0], "Platform position at t = 0", "m", kind=list),
+    Param("platform.start", [153209.0, 0.0, 2000.0], "Platform position at t = 0 (x, y, z)", "m",
+          kind=list, length=3),
     Param("platform.speed", 500.0, "Horizontal platform speed", "m/s", low=0.0, high=5000.0),
     Param("platform.climb", 50.0, "Vertical platform rate", "m/s", low=-1000.0, high=1000.0),
     Param("platform.direction", 1, "Orbit sense: +1 counter-clockwise, -1 clockwise", "1", kind=int,
@@ -240,9 +242,6 @@ class Scenario:
 
 def build_scenario(params: dict[str, Any]) -> Scenario:
     """The deterministic part of the experiment for resolved ``params``."""
-    for key in ("target.position", "target.velocity", "platform.start"):
-        if len(params[key]) != 3:
-            raise ValueError(f"{key} must have 3 components (x, y, z), got {params[key]!r}")
     T, K = float(params["scan.period"]), int(params["scan.count"])
     times = T * np.arange(K + 1)
     target = np.asarray(params["target.position"], dtype=float)
