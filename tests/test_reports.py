@@ -56,6 +56,25 @@ def test_the_report_draws_by_default_what_the_config_asks_for_in_its_order(toy_r
     assert write_report(every).not_drawn == {}
 
 
+@pytest.mark.parametrize(("formats", "shown", "linked"), [
+    (["pdf"], "", "figures/estimate.pdf"), (["svg", "pdf"], "figures/estimate.svg", ""),
+    (["pdf", "png"], "figures/estimate.png", "")])
+def test_the_index_shows_a_figure_in_a_format_that_was_written(toy_run, formats, shown,
+                                                               linked):
+    """With `outputs.formats: [pdf]` both index pages embedded figures/*.png, which did not
+    exist: every image of the report was broken."""
+    write_report(toy_run, formats=formats)
+    markdown = (toy_run.path / "index.md").read_text()
+    page = (toy_run.path / "index.html").read_text()
+    if shown:
+        assert f"![estimate]({shown})" in markdown and f"<img src='{shown}'" in page
+    else:
+        assert "![" not in markdown and "<img" not in page
+        assert f"[estimate]({linked})" in markdown and f"<a href='{linked}'>" in page
+    assert (toy_run.path / (shown or linked)).exists()
+    write_report(toy_run)  # the other tests read the default report
+
+
 def test_the_index_written_while_the_run_finishes_prints_no_none(toy_run):
     """The runner writes the report before it marks the run complete, so its manifest has
     no finishing time yet; a package that is not installed has no version. Neither may be

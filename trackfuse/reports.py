@@ -363,6 +363,18 @@ def _figure_names(report: Report) -> list[str]:
     return list(dict.fromkeys(p.stem for p in report.figures))
 
 
+#: Figure formats a browser shows as an image, best first; a figure written in none of them
+#: (``outputs.formats: [pdf]``) is linked, not shown.
+SHOWN_FORMATS = ("png", "svg")
+
+
+def _figure_link(report: Report, name: str) -> tuple[str, bool]:
+    """``(path relative to the run folder, shown as an image?)`` of figure ``name``."""
+    written = {p.suffix.lstrip("."): p for p in report.figures if p.stem == name}
+    fmt = next((f for f in SHOWN_FORMATS if f in written), None) or next(iter(written))
+    return f"figures/{written[fmt].name}", fmt in SHOWN_FORMATS
+
+
 def index_markdown(run: RunData, tables: dict[str, pd.DataFrame], report: Report) -> str:
     """The run's report as Markdown (what was run, headline table, figures, files)."""
     lines = [f"# {run.config.get('title') or run.config['experiment']}", ""]
@@ -371,8 +383,9 @@ def index_markdown(run: RunData, tables: dict[str, pd.DataFrame], report: Report
         lines += [f"## Table: {name}", "", markdown_table(display_table(tables[name]))]
     captions = _captions(run)
     for name in _figure_names(report):
-        lines += [f"## Figure: {name}", "", f"![{name}](figures/{name}.png)", "",
-                  captions.get(name, ""), ""]
+        path, shown = _figure_link(report, name)
+        lines += [f"## Figure: {name}", "", f"![{name}]({path})" if shown else
+                  f"[{name}]({path})", "", captions.get(name, ""), ""]
     for heading, reasons in (("Not drawn", report.not_drawn),
                              ("Not tabulated", report.not_tabulated)):
         if reasons:
@@ -417,7 +430,10 @@ def index_html(run: RunData, tables: dict[str, pd.DataFrame], report: Report) ->
                                                          float_format="{:.4g}".format))
     captions = _captions(run)
     for name in _figure_names(report):
-        parts.append(f"<figure><img src='figures/{esc(name)}.png' alt='{esc(name)}'>"
+        path, shown = _figure_link(report, name)
+        body = (f"<img src='{esc(path)}' alt='{esc(name)}'>" if shown
+                else f"<a href='{esc(path)}'>{esc(path)}</a>")
+        parts.append(f"<figure>{body}"
                      f"<figcaption><b>{esc(name)}</b>: {esc(captions.get(name, ''))}"
                      "</figcaption></figure>")
     for heading, reasons in (("Not drawn", report.not_drawn),
