@@ -235,3 +235,17 @@ def test_a_position_without_three_coordinates_is_refused_before_the_run(value):
     assert result.returncode == 2, result.stdout
     assert result.stderr.count("\n") == 1, result.stderr
     assert "target.position" in result.stderr and "a list of 3 numbers" in result.stderr
+
+
+def test_running_a_no_plots_run_again_draws_its_report(tmp_path):
+    """After `run --no-plots`, the same command without it printed `already complete` and
+    drew nothing: the run never got its figures, tables or index unless the user found
+    `trackfuse plot`."""
+    args = ("run", PASSIVE, "--out", tmp_path, "--set", "trials=2", "--executor", "serial",
+            "--no-progress")
+    assert trackfuse(*args, "--no-plots").returncode == 0
+    assert not list(tmp_path.glob("*/*/index.html"))
+    again = trackfuse(*args)
+    assert again.returncode == 0, again.stderr
+    index = next(tmp_path.glob("*/*/index.html"))
+    assert f"report: {index}" in again.stdout and list(index.parent.glob("figures/*.png"))

@@ -267,11 +267,17 @@ class Runner:
                 self.folder.remove_temporaries()
                 self.folder.drop_resume_state()
                 index = self.folder.path / INDEX_HTML
-                return RunOutcome(self.folder.path, RunStatus.ALREADY_COMPLETE,
-                                  self.total_trials, 0,
-                                  _int_or(previous.get("trials_failed"), 0),
-                                  _int_or(previous.get("rows"), 0),
-                                  report=index if index.exists() else None)
+                outcome = RunOutcome(self.folder.path, RunStatus.ALREADY_COMPLETE,
+                                     self.total_trials, 0,
+                                     _int_or(previous.get("trials_failed"), 0),
+                                     _int_or(previous.get("rows"), 0),
+                                     report=index if index.exists() else None)
+                if self.plots and outcome.report is None:  # it finished with --no-plots
+                    self.on_phase("drawing figures and tables")
+                    report = write_report(load(self.folder.path))
+                    outcome.figures, outcome.figure_errors = report.figures, report.errors
+                    outcome.report = report.index
+                return outcome
             self.warn(f"{problem}; rebuilding the final files (from parts/ where they are "
                       "still there, else by recomputing)")
         session = _Session(previous, _now(), self.folder.prepare(self.resolved),
