@@ -3,11 +3,16 @@
 from __future__ import annotations
 
 import json
+import os
+import platform
+import subprocess
+import sys
 
 from typer.testing import CliRunner
 
 from trackfuse.catalog import find_runs
 from trackfuse.config import load
+from trackfuse.runlock import HOLDER_FILE
 from trackfuse.runner import Runner
 from trackfuse_cli.main import app
 
@@ -29,3 +34,27 @@ def test_runs_lists_run_folders_with_their_name_and_plot_lists_a_folder_of_runs(
     plotted = CliRunner().invoke(app, ["plot", str(out / "gauss")])  # lists them, draws none
     assert plotted.exit_code == 2 and "first try" in plotted.stdout
     assert "a folder of 2 runs, not a run" in plotted.stderr
+
+
+def test_a_run_whose_process_has_ended_is_listed_as_stopped_not_running(write_config,
+                                                                        tmp_path):
+    """After kill -9 (or a full disk) `trackfuse runs` showed `running 0/N` for good."""
+    cfg = write_config("experiment: toy_gaussian\ntrials: 4\nseed: 1\n", name="gauss")
+    runner = Runner(load(cfg), tmp_path, progress=False, plots=False)
+    runner.run()
+    path = runner.folder.path
+    manifest = json.loads((path / "manifest.json").read_text())
+    (path / "manifest.json").write_text(json.dumps({**manifest, "status": "running"}))
+    holder = path / HOLDER_FILE
+
+    def status_with(pid: int | None) -> str:
+        holder.unlink(missing_ok=True)
+        if pid is not None:
+            holder.write_text(json.dumps({"pid": pid, "host": platform.node()}))
+        return find_runs(tmp_path)[0].status
+
+    ended = subprocess.Popen([sys.executable, "-c", "pass"])
+    ended.wait()
+    assert status_with(os.getpid()) == "running"  # its process is alive
+    assert status_with(ended.pid) == "stopped"  # killed while holding the folder
+    assert status_with(None) == "stopped"  # ended without marking the run

@@ -13,7 +13,12 @@ from datetime import datetime
 from pathlib import Path
 from typing import Any
 
-from trackfuse.results import MANIFEST, RunFolder, RunFolderError
+from trackfuse.results import MANIFEST, RunFolder, RunFolderError, RunStatus
+from trackfuse.runlock import held_by_a_live_process
+
+#: Shown for a run whose manifest says running but whose process has ended (killed, or
+#: stopped by a full disk): resumable by running the same command again.
+STOPPED = "stopped"
 
 
 @dataclass(frozen=True)
@@ -45,9 +50,16 @@ def _int(value: Any) -> int:
     return value if isinstance(value, int) and not isinstance(value, bool) else 0
 
 
+def _status(path: Path, manifest: dict[str, Any]) -> str:
+    status = str(manifest.get("status", ""))
+    if status == RunStatus.RUNNING and not held_by_a_live_process(path):
+        return STOPPED
+    return status
+
+
 def _info(path: Path, manifest: dict[str, Any]) -> RunInfo:
     return RunInfo(path, path.parent.name, str(manifest.get("experiment", "")),
-                   str(manifest.get("name") or ""), str(manifest.get("status", "")),
+                   str(manifest.get("name") or ""), _status(path, manifest),
                    _int(manifest.get("trials_done")), _int(manifest.get("trials_total")),
                    str(manifest.get("first_started") or manifest.get("started") or ""),
                    _wall_seconds(manifest))

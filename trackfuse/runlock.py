@@ -122,3 +122,22 @@ class RunLock:
             (self.path / HOLDER_FILE).unlink(missing_ok=True)
         self._lock.release()
         self._lock = None
+
+
+def held_by_a_live_process(path: Path) -> bool:
+    """Whether run folder ``path`` looks held, read from its holder file alone (a listing
+    must not take the lock, which would get in the way of a run starting): a holder is
+    recorded and, on this host, its process is alive; on another host it is taken as alive."""
+    holder = RunLock(path, lambda _: None).holder()
+    if holder is None:
+        return False
+    pid = holder.get("pid")
+    if holder.get("host") != platform.node() or not isinstance(pid, int):
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # alive, under another user
+        return True
+    return True
