@@ -186,9 +186,13 @@ def exit_status(outcomes: list[RunOutcome]) -> int:
     return 1 if any(o.figure_errors for o in outcomes) else 0
 
 
+def _points(n: int) -> str:
+    return f"{n} point" if n == 1 else f"{n} points"
+
+
 def _print_plan(runner: Runner) -> None:
     config = runner.config
-    print(f"# {config.source}: {len(runner.points)} points x {config.trials} trials = "
+    print(f"# {config.source}: {_points(len(runner.points))} x {config.trials} trials = "
           f"{runner.total_trials} trials in batches of {config.batch_size}; "
           f"output: {runner.folder.path}")
 
@@ -516,7 +520,7 @@ def validate(
     from trackfuse.sweep import count_points
     config = _load(cfg, _overrides(sets, overrides), sweeps)
     points = count_points(config.sweep, config.sweep_mode)
-    print(f"ok: {cfg}: {config.experiment.name}, {points} points x {config.trials} trials")
+    print(f"ok: {cfg}: {config.experiment.name}, {_points(points)} x {config.trials} trials")
 
 
 @app.command("list")

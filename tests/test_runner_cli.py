@@ -49,7 +49,7 @@ def test_reproduce_dry_run_and_set_apply_per_experiment(tmp_path):
                        "sigma=3", "--out", tmp_path / "out")
     assert result.returncode == 0, result.stderr
     lines = result.stdout.splitlines()
-    assert len(lines) == 2 and all("1 points x 2 trials" in line for line in lines)
+    assert len(lines) == 2 and all("1 point x 2 trials" in line for line in lines)
     assert not (tmp_path / "out").exists()
     unknown = trackfuse("reproduce", folder, "--dry-run", "--set", "sigam=1")
     assert unknown.returncode == 2
