@@ -441,6 +441,11 @@ def _print_comparison(result, shown: int = 30) -> None:
     print(f"{'paired' if result.paired else 'unpaired'} comparison, {len(cells)} cells, "
           f"{result.gated} gated (family-wise alpha {result.alpha:g}): "
           + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())))
+    ungated = len(cells) - result.gated
+    if counts.get("differs"):
+        print(f"'differs': a diagnostic metric's 95 % interval excludes no change, cell by cell "
+              f"and not adjusted: about 5 % of the {ungated} ungated cells would differ by chance "
+              "when nothing has changed")
     if result.only_base or result.only_new:
         print(f"not compared: {result.only_base} cells only in BASE, {result.only_new} only "
               "in NEW (sweep points or row keys the other run lacks)")
