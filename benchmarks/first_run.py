@@ -80,7 +80,7 @@ def main() -> None:
     for line, per_version in times.items():
         for version, values in per_version.items():
             cells = [f"{statistics.median(v):6.2f} [{min(v):.2f}, {max(v):.2f}]"
-                     for v in zip(*values)]
+                     for v in zip(*values, strict=True)]
             print(f"{line:<13} {version:<9} wall {cells[0]}  cpu {cells[1]}")
 
 
