@@ -50,6 +50,8 @@ def callee_args() -> dict:
         k._geometry: (x, P, x, R, lin, s), k._in_gate: (x, lin, s, 0.0),
         k._place_returns: (x, False, z, ok, 0.0, False, 0.0, 0.0, lin, s, z, ok),
         k._linearize: (z, ok, 0.0, 0.0, False, False, lin, s),
+        k._copy_state: (x, P, x, P), k._predict: (x, P, P, P, x, P),
+        k._symmetrize_and_check: (x, P),
     }
 
 
