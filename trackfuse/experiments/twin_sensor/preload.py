@@ -2,8 +2,9 @@
 
 The fork server imports this module (``Experiment.preload``) before it forks workers: the
 compiled kernel (:mod:`.kernel`) is loaded from numba's on-disk cache, or compiled on the
-first run on a machine, here once, and every worker inherits it in memory instead of
-loading it (about 0.6 s each) or compiling it (about 25 s each) on its own.
+first run on a machine, here once (on two cores: :mod:`.cold_compile`), and every worker
+inherits it in memory instead of loading it (about 0.6 s each) or compiling it (about 25 s
+each) on its own.
 """
 
 from __future__ import annotations
