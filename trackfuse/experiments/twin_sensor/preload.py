@@ -2,12 +2,14 @@
 
 The fork server imports this module (``Experiment.preload``) before it forks workers: the
 compiled kernel (:mod:`.kernel`) is loaded from numba's on-disk cache, or compiled on the
-first run on a machine, here once, and every worker inherits it in memory instead of
-loading it (about 0.6 s each) or compiling it (about 25 s each) on its own.
+first run on a machine, here once (on two cores: :mod:`.cold_compile`), and every worker
+inherits it in memory instead of loading it (about 0.6 s each) or compiling it (about 25 s
+each) on its own.
 """
 
 from __future__ import annotations
 
+from trackfuse.experiments.twin_sensor.cold_compile import compile_on_two_cores, kernel_cached
 from trackfuse.experiments.twin_sensor.kernel import run_filter_compiled
 from trackfuse.experiments.twin_sensor.model import (
     ALGORITHMS,
@@ -28,6 +30,8 @@ def load_kernel() -> None:
     sc = build_scenario(params)
     batch = stack([simulate(sc, trial_streams(0, 0, 0))])
     assoc, filt = ALGORITHMS[0].split("/")
+    if not kernel_cached():
+        compile_on_two_cores()
     run_filter_compiled(sc, batch, PDAOptions(assoc, FILTERS[filt], P_G=sc.P_G))
 
 

@@ -1,0 +1,68 @@
+"""The first-run compile of the twin-sensor kernel on two cores (cold_compile)."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numba
+import pytest
+
+from trackfuse.experiments.twin_sensor import cold_compile
+from trackfuse.experiments.twin_sensor import kernel as k
+from trackfuse.experiments.twin_sensor.cold_compile import (
+    HELPER,
+    callee_args,
+    compile_in,
+    compile_on_two_cores,
+)
+from trackfuse.experiments.twin_sensor.preload import load_kernel
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_the_callees_are_compiled_for_the_signatures_filter_batch_asks_for():
+    """Compiling ``_filter_batch`` anew adds no signature to a callee compiled from
+    ``callee_args`` (a mismatch would compile that callee twice on the first run)."""
+    load_kernel()  # loads _filter_batch for its one signature
+    for dispatcher, args in callee_args().items():
+        compile_in(dispatcher, args)
+    before = {d: list(d.signatures) for d in callee_args()}
+    fresh = numba.njit(**{**k.JIT, "cache": False})(k._filter_batch.py_func)
+    fresh.compile(k._filter_batch.signatures[0])
+    assert {d: list(d.signatures) for d in callee_args()} == before
+
+
+def test_the_helper_stops_when_its_parent_closes_its_stdin(tmp_path):
+    """A helper whose fork server is gone stops before it has compiled anything."""
+    helper = subprocess.Popen([sys.executable, "-c", HELPER, *sys.path],
+                              stdin=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                              env=dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path)))
+    helper.stdin.close()
+    assert helper.wait(timeout=120) != 0
+    assert not list(tmp_path.rglob("*_pair_update*.nbi"))
+
+
+@pytest.mark.parametrize("owner, name, value", [(cold_compile, "HELPER", "raise SystemExit(3)"),
+                                               (sys, "executable", "/nonexistent/python")],
+                         ids=["helper-exits-3", "no-python"])
+def test_a_failing_helper_does_not_fail_the_load(monkeypatch, owner, name, value):
+    monkeypatch.setattr(owner, name, value)
+    compile_on_two_cores()
+    load_kernel()
+
+
+@pytest.mark.skipif(not os.environ.get("TRACKFUSE_COLD_COMPILE"),
+                    reason="compiles the kernel from an empty cache (25-40 s on two cores); "
+                           "set TRACKFUSE_COLD_COMPILE=1")
+def test_a_cold_two_core_compile_loads_the_pair_update_and_equals_the_reference(tmp_path):
+    """From an empty cache: the fork server's load takes ``_pair_update`` from the helper's
+    cache entry (never compiles it), and the kernel so compiled passes the kernel tests
+    (numpy reference to 1e-9)."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    probe = ("import trackfuse.experiments.twin_sensor.preload; "
+             "from trackfuse.experiments.twin_sensor import kernel as k; "
+             "s = k._pair_update.stats; assert s.cache_hits and not s.cache_misses, s")
+    subprocess.run([sys.executable, "-c", probe], env=env, check=True)
+    subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
+                    str(ROOT / "tests" / "test_twin_sensor_kernel.py")], env=env, check=True)

@@ -1,0 +1,82 @@
+"""Compile the twin-sensor kernel on two cores when numba's on-disk cache lacks it.
+
+numba compiles one function at a time in a process, so the fork server (:mod:`.preload`)
+compiled the whole kernel on one core on the first run after installing. Here a helper
+process compiles the two-sensor update :func:`.kernel._pair_update` (with its callees, about
+half the work) into numba's cache, while this process compiles the other callees of
+:func:`.kernel._filter_batch`; compiled last, ``_filter_batch`` loads ``_pair_update`` from
+the cache. Whatever the helper does (fails, or loses a race with another run), the result is
+the same: numba compiles here what the cache lacks.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import threading
+from pathlib import Path
+
+import numpy as np
+from numba import typeof
+
+from trackfuse.experiments.twin_sensor import kernel as k
+
+#: The helper's program: this process's module path (its argument list) first, so that it
+#: imports the same kernel file, whose path names its folder in numba's cache.
+HELPER = ("import sys; sys.path[:] = sys.argv[1:]; "
+          "from trackfuse.experiments.twin_sensor.cold_compile import compile_pair_update; "
+          "compile_pair_update()")
+
+
+def kernel_cached() -> bool:
+    """Whether numba's cache holds an index of ``_filter_batch`` written after the kernel's
+    source (numba's own file name; a stale index only means compiling on one core)."""
+    source_time = Path(k.__file__).stat().st_mtime
+    index = Path(k._filter_batch.stats.cache_path).glob("*._filter_batch-*.nbi")
+    return any(p.stat().st_mtime >= source_time for p in index)
+
+
+def callee_args() -> dict:
+    """Dummy arguments typed exactly as ``_filter_batch`` passes them to its main callees,
+    ``{dispatcher: args}`` (only their numba types are used; nothing runs on them)."""
+    lin, mom = k.Linearized.py_func(2, 2), k.Moments.py_func()
+    x, P, R, s = np.empty(6), np.empty((6, 6)), np.empty((2, 2)), 0
+    z, ok = np.empty((2, 2)), np.empty(2, np.bool_)
+    return {
+        k._pair_update: (x, P, np.empty((2, 2, 2)), x, 0.0, 0, False, False, lin, mom, x, P),
+        k.Linearized: (2, 2), k.Moments: (),
+        k._single_update: (x, P, R, 0.0, 0.0, False, False, lin, s, mom),
+        k._geometry: (x, P, x, R, lin, s), k._in_gate: (x, lin, s, 0.0),
+        k._place_returns: (x, False, z, ok, 0.0, False, 0.0, 0.0, lin, s, z, ok),
+        k._linearize: (z, ok, 0.0, 0.0, False, False, lin, s),
+        k._copy_state: (x, P, x, P), k._predict: (x, P, P, P, x, P),
+        k._symmetrize_and_check: (x, P),
+    }
+
+
+def compile_in(dispatcher, args: tuple) -> None:
+    """Compile (or load from the cache) ``dispatcher`` for the numba types of ``args``."""
+    dispatcher.compile(tuple(typeof(a) for a in args))
+
+
+def compile_pair_update() -> None:
+    """The helper process: put ``_pair_update`` into numba's cache; it exits as soon as its
+    parent closes its stdin (or dies), so it never outlives the fork server."""
+    threading.Thread(target=lambda: (sys.stdin.read(), os._exit(1)), daemon=True).start()
+    compile_in(k._pair_update, callee_args()[k._pair_update])
+
+
+def compile_on_two_cores() -> None:
+    """Compile the kernel's callees with a helper process, then wait for it; the caller
+    then compiles ``_filter_batch`` (:func:`.preload.load_kernel`)."""
+    try:
+        helper = subprocess.Popen([sys.executable, "-c", HELPER, *sys.path], stdin=subprocess.PIPE,
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    except OSError:  # no helper: _filter_batch compiles everything here
+        return
+    with helper:  # on an error here, closing stdin stops the helper
+        for dispatcher, args in callee_args().items():
+            if dispatcher is not k._pair_update:
+                compile_in(dispatcher, args)
+        helper.wait()
