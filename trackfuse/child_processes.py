@@ -40,14 +40,15 @@ def _exit_with(pid: int) -> None:
     try:
         handle = os.pidfd_open(pid)
     except (AttributeError, OSError):  # not Linux, or ``pid`` is gone already
-        while _alive(pid):
+        while process_alive(pid):
             time.sleep(1.0)
     else:
         select.select([handle], [], [])
     os._exit(1)
 
 
-def _alive(pid: int) -> bool:
+def process_alive(pid: int) -> bool:
+    """Whether process ``pid`` exists on this host."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:

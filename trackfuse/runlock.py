@@ -28,6 +28,7 @@ from typing import Any
 
 from filelock import FileLock, Timeout
 
+from trackfuse.child_processes import process_alive
 from trackfuse.results import RunFolderError, atomic_write
 
 LOCK_FILE = ".lock"
@@ -134,10 +135,4 @@ def held_by_a_live_process(path: Path) -> bool:
     pid = holder.get("pid")
     if holder.get("host") != platform.node() or not isinstance(pid, int):
         return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # alive, under another user
-        return True
-    return True
+    return process_alive(pid)
