@@ -280,13 +280,21 @@ def _config_paths(folder: Path | None) -> list[Path]:
 def _load_all(paths: list[Path], sets: dict[str, Any]) -> list[Config]:
     """Every config with the overrides that apply to it: top-level keys to all, a parameter
     to the configs whose experiment has it; a key no config accepts is an error."""
-    from trackfuse.config import OVERRIDABLE_TOP_LEVEL
-    configs, used = [], set()
-    for path in paths:
-        schema = _load(path, {}, []).experiment.schema
-        mine = {k: v for k, v in sets.items() if k in OVERRIDABLE_TOP_LEVEL or k in schema}
-        used |= set(mine)
-        configs.append(_load(path, mine, []))
+    from trackfuse.config import OVERRIDABLE_TOP_LEVEL, ConfigError, load
+    from trackfuse.shipped import config_path
+    configs, used, problems = [], set(), []
+    for path in paths:  # every bad config is named, one line each, before any runs
+        try:
+            schema = load(config_path(path)).experiment.schema
+            mine = {k: v for k, v in sets.items() if k in OVERRIDABLE_TOP_LEVEL or k in schema}
+            used |= set(mine)
+            configs.append(load(config_path(path), mine))
+        except ConfigError as err:
+            problems.append(str(err))
+    for message in problems[:-1]:
+        print_error(message)
+    if problems:
+        fail(problems[-1])
     unused = sorted(set(sets) - used)
     if unused:
         fail(f"--set: {unused[0]}: no config has this parameter (see `trackfuse list "

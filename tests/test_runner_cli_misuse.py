@@ -249,3 +249,15 @@ def test_running_a_no_plots_run_again_draws_its_report(tmp_path):
     assert again.returncode == 0, again.stderr
     index = next(tmp_path.glob("*/*/index.html"))
     assert f"report: {index}" in again.stdout and list(index.parent.glob("figures/*.png"))
+
+
+def test_reproduce_names_every_bad_config_before_running_any(tmp_path):
+    """`reproduce` stopped at the first bad config, so several were found one run at a time."""
+    (tmp_path / "a.yaml").write_text("experiment: nope\n")
+    (tmp_path / "b.yaml").write_text(PASSIVE.read_text().replace("trials:", "trials: 0 #"))
+    (tmp_path / "c.yaml").write_text(PASSIVE.read_text())
+    result = trackfuse("reproduce", tmp_path, "--out", tmp_path / "out", "--no-progress")
+    assert result.returncode == 2, result.stdout
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 2 and "a.yaml" in lines[0] and "b.yaml: trials" in lines[1], lines
+    assert not (tmp_path / "out").exists()
