@@ -176,7 +176,8 @@ def _execute(runner: Runner) -> RunOutcome:
         fail(str(err))
     except OSError as err:
         where = f"{err.filename}: " if err.filename else ""
-        fail(f"{where}{err.strerror or type(err).__name__} (while writing {runner.folder.path})")
+        fail(f"{where}{err.strerror or type(err).__name__} (while writing {runner.folder.path}); "
+             "the batches saved so far are kept: fix the disk and run the same command again")
 
 
 def exit_status(outcomes: list[RunOutcome]) -> int:

@@ -4,6 +4,7 @@ page as a browser shows it."""
 from __future__ import annotations
 
 import dataclasses
+import errno
 import os
 
 import pandas as pd
@@ -72,6 +73,24 @@ def test_the_index_shows_a_figure_in_a_format_that_was_written(toy_run, formats,
         assert "![" not in markdown and "<img" not in page
         assert f"[estimate]({linked})" in markdown and f"<a href='{linked}'>" in page
     assert (toy_run.path / (shown or linked)).exists()
+    write_report(toy_run)  # the other tests read the default report
+
+
+def test_a_full_disk_while_saving_a_figure_stops_the_report_before_its_index(toy_run,
+                                                                          monkeypatch):
+    """A full disk was recorded as one figure's fault ('Not drawn: OSError [Errno 28]') and
+    an index was written beside the missing figures, as if the report were complete."""
+    for index in ("index.html", "index.md"):
+        (toy_run.path / index).unlink(missing_ok=True)
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(reports, "save_figure", full)
+    with pytest.raises(OSError, match="No space left"):
+        write_report(toy_run)
+    assert not (toy_run.path / "index.html").exists()
+    monkeypatch.undo()
     write_report(toy_run)  # the other tests read the default report
 
 

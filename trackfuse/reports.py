@@ -204,6 +204,8 @@ def _draw(run: RunData, module: ModuleType, names: Sequence[str],
             continue
         try:
             part.figures += save_figure(fig, run.path / "figures", name, formats)
+        except OSError:  # the disk (full, unwritable), not the figure: the run stops, resumable
+            raise
         except Exception as err:  # noqa: BLE001 - one figure's bug must not lose the others
             part.errors.append(f"figure {name}: {type(err).__name__}: {err}")
     return part
