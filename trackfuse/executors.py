@@ -130,6 +130,8 @@ class ProcessExecutor:
         self.workers = workers
         start_fork_server(preload)
         self._ctx = multiprocessing.get_context("forkserver")
+        # this process's children before the pool: an aborted pool ends only its own
+        self._other_children = set(multiprocessing.active_children())
         self._pool = ProcessPoolExecutor(workers, mp_context=self._ctx,
                                          initializer=setup_child, initargs=(os.getpid(),))
 
@@ -193,7 +195,7 @@ class ProcessExecutor:
             self._pool.shutdown(wait=True, cancel_futures=True)
             return
         self._pool.shutdown(wait=False, cancel_futures=True)
-        for process in multiprocessing.active_children():
+        for process in set(multiprocessing.active_children()) - self._other_children:
             process.terminate()
             process.join()
 
