@@ -269,7 +269,7 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
         raise ConfigError(source, "sweep", f"the {mode} has {count_points(sweep, mode)} points;"
                                            f" allowed: at most {MAX_POINTS}")
     figures, formats = _outputs(source, exp, raw.get("outputs") or {})
-    problem = exp.check(params, sweep) if exp.check is not None else None
+    problem = exp.check(params, sweep, mode) if exp.check is not None else None
     if problem is not None:
         key, message = problem
         raise ConfigError(source, _dotted("sweep" if key in sweep else "params", key), message)

@@ -123,9 +123,10 @@ class Experiment:
     run_batch: Callable[[Params, Sequence[TrialStreams]], list[list[Row]]] | None = None
     row_keys: tuple[str, ...] = ("algorithm",)
     batch_size: int = 25
-    #: Optional last check of a config: ``check(params, sweep)`` returns ``(key, problem)``
-    #: for a choice this machine cannot run (a missing optional dependency), else ``None``.
-    check: Callable[[Params, Mapping[str, list[Any]]], tuple[str, str] | None] | None = None
+    #: Optional last check of a config: ``check(params, sweep, sweep_mode)`` returns
+    #: ``(key, problem)`` for a config that cannot run (a missing optional dependency, a
+    #: degenerate geometry), else ``None``.
+    check: Callable[[Params, Mapping[str, list[Any]], str], tuple[str, str] | None] | None = None
     #: Modules the process pool's fork server imports before it forks workers (a module
     #: that loads a compiled kernel, say), so every worker starts with them in memory.
     preload: tuple[str, ...] = ()

@@ -7,8 +7,8 @@ are :mod:`.report`, which reads saved runs only. See ``docs/papers/twin_sensor.m
 from __future__ import annotations
 
 from trackfuse.experiments.base import Experiment, FigureSpec
+from trackfuse.experiments.twin_sensor.checks import config_problem
 from trackfuse.experiments.twin_sensor.model import PARAMS, ROW_METRICS, run_batch, run_trial
-from trackfuse.experiments.twin_sensor.stonesoup import missing_stonesoup
 
 FIGURES = {
     "loss_vs_clutter": FigureSpec(
@@ -52,7 +52,7 @@ EXPERIMENT = Experiment(
     figures=FIGURES,
     row_keys=("algorithm", "scan"),
     batch_size=100,
-    check=missing_stonesoup,
+    check=config_problem,
     preload=("trackfuse.experiments.twin_sensor.preload",),
 )
 

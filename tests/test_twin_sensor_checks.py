@@ -1,0 +1,62 @@
+"""A twin_sensor config whose geometry has no bearing is refused before any trial runs."""
+
+from __future__ import annotations
+
+import pytest
+
+from trackfuse.config import ConfigError, build
+
+PLATFORM_START = [153209.0, 0.0, 2000.0]
+
+
+def _raw(params: dict, sweep: dict | None = None, mode: str = "grid") -> dict:
+    return {"experiment": "twin_sensor", "params": params, "sweep": sweep or {},
+            "sweep_mode": mode}
+
+
+def test_a_target_on_the_orbit_centre_line_is_a_config_error():
+    raw = _raw({"target.position": [153209.0, 0.0, 9000.0]})
+    with pytest.raises(ConfigError, match=r"cfg\.yaml: params\.target\.position: the orbit "
+                                          r"starts 0 m .*allowed: platform\.start at least 1 m"):
+        build(raw, "cfg.yaml")
+
+
+def test_a_target_on_the_platform_in_straight_flight_is_a_config_error():
+    raw = _raw({"platform.motion": "straight", "target.position": PLATFORM_START})
+    with pytest.raises(ConfigError, match=r"the target is 0 m from sensor 1 at scan 0"):
+        build(raw, "cfg.yaml")
+
+
+def test_a_platform_flying_through_the_target_is_caught_at_that_scan():
+    # 500 m/s along +y from the start, level: the platform reaches the target at scan 10.
+    raw = _raw({"platform.motion": "straight", "platform.climb": 0.0,
+                "target.position": [153209.0, 5000.0, 2000.0]})
+    with pytest.raises(ConfigError, match=r"0 m from sensor 1 at scan 10"):
+        build(raw, "cfg.yaml")
+    raw["params"]["target.position"] = [153209.0, 5000.0, 2002.0]
+    build(raw, "cfg.yaml")
+
+
+def test_the_second_sensor_is_checked_too():
+    # Sensor 2 sits 1000 m from sensor 1 along the initial line of sight: on the target.
+    raw = _raw({"platform.motion": "straight", "platform.speed": 0.0, "platform.climb": 0.0,
+                "sensors.baseline": 1000.0, "sensors.baseline_angle": 0.0,
+                "target.position": [153209.0, 1000.0, 2000.0]})
+    with pytest.raises(ConfigError, match=r"from sensor 2 at scan 0"):
+        build(raw, "cfg.yaml")
+    raw["params"]["sensors.count"] = 1
+    build(raw, "cfg.yaml")
+
+
+@pytest.mark.parametrize("mode", ["grid", "zip"])
+def test_a_degenerate_sweep_point_names_the_swept_key_and_the_point(mode):
+    sweep = {"platform.start": [[0.0, 0.0, 2000.0], [0.0, 128558.0, 1000.0]],
+             "clutter.mean": [1.0, 2.0]}
+    with pytest.raises(ConfigError, match=r"sweep\.platform\.start: the orbit starts 0 m .*"
+                                          r"at the sweep point platform\.start=\[0\.0, "
+                                          r"128558\.0, 1000\.0\]"):
+        build(_raw({}, sweep, mode), "cfg.yaml")
+
+
+def test_the_shipped_orbit_geometry_passes():
+    assert build(_raw({}), "cfg.yaml").params["target.position"] == [0.0, 128558.0, 4000.0]
