@@ -156,3 +156,24 @@ def test_a_table_without_rows_is_not_written_as_a_result(toy_run, monkeypatch):
     assert "## Not tabulated" in text and "- why: nothing at the setting" in text
     assert "## Table: empty" not in text
     assert "Not tabulated" in (toy_run.path / "index.html").read_text()
+
+
+def test_the_headline_table_comes_before_the_figures_and_detail_tables_after(toy_run,
+                                                                             monkeypatch):
+    """A reader sees the paper comparison, then the figures; long per-point tables come last,
+    and ``index.html`` folds them (a closed ``<details>`` linking the CSV)."""
+    tables = toy_report.tables(toy_run)
+    long = pd.DataFrame({"point": range(reports.FOLDED_TABLE_ROWS + 1), "x": 1.5})
+    short = pd.DataFrame({"point": [0], "x": [2.5]})
+    monkeypatch.setattr(toy_report, "tables", lambda run: {"long_detail": long,
+                                                           "short_detail": short, **tables})
+    write_report(toy_run)
+    md = (toy_run.path / "index.md").read_text()
+    order = [md.index(h) for h in ("## Table: paper_vs_reproduced", "## Figure: estimate",
+                                   "## Table: long_detail", "## Table: short_detail")]
+    assert order == sorted(order)
+    page = (toy_run.path / "index.html").read_text()
+    assert page.index("Table: paper_vs_reproduced") < page.index("<figure>") < page.index(
+        "<details><summary><h2 style='display:inline'>Table: long_detail</h2> (31 rows; also "
+        "<a href='tables/long_detail.csv'>") < page.index("<h2>Table: short_detail</h2>")
+    assert page.count("<details>") == 1

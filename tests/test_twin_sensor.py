@@ -283,6 +283,15 @@ def test_fig2_shows_the_bound_single_runs_and_three_clutter_levels(shipped):
     assert any(look("paper_approx/ekf").label == t for t in texts)
 
 
+def test_the_final_rmse_figure_shows_the_papers_method_beside_ours(shipped):
+    fig = report.figures(shipped("twin_sensor_orbit"),
+                         ["final_range_rmse_vs_sweep"])["final_range_rmse_vs_sweep"]
+    texts = _legend_texts(fig)
+    for name in ("paper_approx/mgekf", "paper_approx/ekf", "mspda_parallel/mgekf"):
+        assert look(name).label in texts, name
+    assert look("nn/mgekf").label not in texts
+
+
 def test_figures_use_time_axes_and_accept_a_swept_string_key(tmp_path):
     """Regression: the RMSE curve was drawn against the scan index while its PCRLB was drawn
     against time, and a swept string key crashed the loss-figure titles."""

@@ -57,6 +57,8 @@ PNG_COMPRESSION = 1
 #: At most this many processes draw one run's figures (one per core when fewer).
 MAX_DRAWING_PROCESSES = 4
 HEADLINE_TABLE = "paper_vs_reproduced"
+#: A report table longer than this is folded (closed ``<details>``) in ``index.html``.
+FOLDED_TABLE_ROWS = 30
 #: Columns of every experiment's headline table, one row per paper item compared:
 #: ``paper_item`` the paper's figure or table ("Table 3"); ``quantity`` in words;
 #: ``algorithm`` our algorithm name; ``paper_value`` what the paper reports (number or words);
@@ -378,16 +380,20 @@ def _figure_link(report: Report, name: str) -> tuple[str, bool]:
 
 
 def index_markdown(run: RunData, tables: dict[str, pd.DataFrame], report: Report) -> str:
-    """The run's report as Markdown (what was run, headline table, figures, files)."""
+    """The run's report as Markdown: what was run, the headline table, the figures, the
+    other tables, then what was not drawn and the files."""
     lines = [f"# {run.config.get('title') or run.config['experiment']}", ""]
     lines += [f"- **{k}**: {v}" for k, v in _run_facts(run)] + [""]
-    for name in _ordered_tables(tables):
+    headline, others = _split_tables(tables)
+    for name in headline:
         lines += [f"## Table: {name}", "", markdown_table(display_table(tables[name]))]
     captions = _captions(run)
     for name in _figure_names(report):
         path, shown = _figure_link(report, name)
         lines += [f"## Figure: {name}", "", f"![{name}]({path})" if shown else
                   f"[{name}]({path})", "", captions.get(name, ""), ""]
+    for name in others:
+        lines += [f"## Table: {name}", "", markdown_table(display_table(tables[name]))]
     for heading, reasons in (("Not drawn", report.not_drawn),
                              ("Not tabulated", report.not_tabulated)):
         if reasons:
@@ -399,8 +405,11 @@ def index_markdown(run: RunData, tables: dict[str, pd.DataFrame], report: Report
     return "\n".join(lines) + "\n"
 
 
-def _ordered_tables(tables: dict[str, pd.DataFrame]) -> list[str]:
-    return sorted(tables, key=lambda n: (n != HEADLINE_TABLE, list(tables).index(n)))
+def _split_tables(tables: dict[str, pd.DataFrame]) -> tuple[list[str], list[str]]:
+    """``(headline, others)``: the paper-vs-reproduced table goes before the figures, every
+    other table (per-point detail) after them, in the report module's order."""
+    headline = [n for n in tables if n == HEADLINE_TABLE]
+    return headline, [n for n in tables if n != HEADLINE_TABLE]
 
 
 def _file_list(run: RunData, report: Report) -> list[tuple[str, str]]:
@@ -426,10 +435,8 @@ def index_html(run: RunData, tables: dict[str, pd.DataFrame], report: Report) ->
              f"</title><style>{_CSS}</style></head><body><h1>{title}</h1><dl>"]
     parts += [f"<dt>{esc(k)}</dt><dd>{esc(v)}</dd>" for k, v in _run_facts(run)]
     parts.append("</dl>")
-    for name in _ordered_tables(tables):
-        parts.append(f"<h2>Table: {esc(name)}</h2>")
-        parts.append(display_table(tables[name]).to_html(index=False, na_rep="",
-                                                         float_format="{:.4g}".format))
+    headline, others = _split_tables(tables)
+    parts += [f"<h2>Table: {esc(name)}</h2>" + _html_table(tables[name]) for name in headline]
     captions = _captions(run)
     for name in _figure_names(report):
         path, shown = _figure_link(report, name)
@@ -438,6 +445,14 @@ def index_html(run: RunData, tables: dict[str, pd.DataFrame], report: Report) ->
         parts.append(f"<figure>{body}"
                      f"<figcaption><b>{esc(name)}</b>: {esc(captions.get(name, ''))}"
                      "</figcaption></figure>")
+    for name in others:
+        rows = len(tables[name])
+        if rows > FOLDED_TABLE_ROWS:
+            parts.append(f"<details><summary><h2 style='display:inline'>Table: {esc(name)}</h2>"
+                         f" ({rows} rows; also <a href='tables/{esc(name)}.csv'>tables/"
+                         f"{esc(name)}.csv</a>)</summary>{_html_table(tables[name])}</details>")
+        else:
+            parts.append(f"<h2>Table: {esc(name)}</h2>" + _html_table(tables[name]))
     for heading, reasons in (("Not drawn", report.not_drawn),
                              ("Not tabulated", report.not_tabulated)):
         if reasons:
@@ -450,3 +465,7 @@ def index_html(run: RunData, tables: dict[str, pd.DataFrame], report: Report) ->
         f"<li><code>{esc(f)}</code>: {esc(d)}</li>" for f, d in _file_list(run, report))
         + "</ul></body></html>")
     return "\n".join(parts) + "\n"
+
+
+def _html_table(table: pd.DataFrame) -> str:
+    return display_table(table).to_html(index=False, na_rep="", float_format="{:.4g}".format)

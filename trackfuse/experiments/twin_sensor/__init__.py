@@ -38,7 +38,7 @@ FIGURES = {
     "final_range_rmse_vs_sweep": FigureSpec(
         "Range RMSE at the last scan against the swept axis (clutter, baseline, range cue) "
         "with 95 % bootstrap intervals beside the square-root PCRLB of the truth and filter "
-        "models (W000-2)"),
+        "models, MGEKF beside EKF and the paper's method beside our parallel PDA (W000-2)"),
 }
 
 EXPERIMENT = Experiment(

@@ -33,7 +33,8 @@ Figures (the keys of :func:`figures`, which name the files; see ``docs/papers/tw
     Diagnostic: 6-state ANEES against time with its 95 % chi-square band, same panels.
 ``final_range_rmse_vs_sweep``
     Range RMSE (km) at the last scan against the swept axis (clutter, baseline, range cue)
-    with 95 % bootstrap-t intervals beside the square-root PCRLB (truth and filter models);
+    with 95 % bootstrap-t intervals beside the square-root PCRLB (truth and filter models),
+    MGEKF beside EKF and the Fig. 1 main curves (paper's method and our parallel PDA);
     the main figure of ``configs/twin_sensor_rmse_vs_bound.yaml``.
 
 A wanted figure that a run cannot draw is returned as a one-line reason (a ``str``).
@@ -625,7 +626,8 @@ def _final_figure(run: RunData) -> Figure | str:
     if isinstance(facets, str):
         return facets
     algorithms = run.params["algorithms"]
-    names = list(dict.fromkeys(_headline_pair(algorithms) + _other_filters(algorithms)))
+    names = list(dict.fromkeys(_headline_pair(algorithms) + _main_algorithms(algorithms)
+                               + _other_filters(algorithms)))
     title = [("Paper Fig. 2 quantified: final" if x_key == "clutter.mean" else "Final")
              + f" range RMSE ({_runs(last)} runs per point)",
              _context(run, "95 % bootstrap-t intervals")]
