@@ -58,3 +58,26 @@ def test_a_run_whose_process_has_ended_is_listed_as_stopped_not_running(write_co
     assert status_with(os.getpid()) == "running"  # its process is alive
     assert status_with(ended.pid) == "stopped"  # killed while holding the folder
     assert status_with(None) == "stopped"  # ended without marking the run
+
+
+def test_a_stopped_run_shows_the_trials_its_saved_parts_hold(write_config, tmp_path):
+    """The manifest's trials_done is written when a session starts or ends, so a killed run
+    showed the count at its start; the saved batches are what a resume keeps."""
+    cfg = write_config("experiment: toy_gaussian\ntrials: 10\nseed: 1\nbatch_size: 3\n"
+                       "sweep:\n  mu: [0.0, 1.0]\n", name="gauss")
+    runner = Runner(load(cfg), tmp_path, progress=False, plots=False)
+    runner.run()
+    path = runner.folder.path
+    manifest = json.loads((path / "manifest.json").read_text())
+    assert find_runs(tmp_path)[0].trials_done == 20
+    (path / "manifest.json").write_text(json.dumps({**manifest, "status": "running",
+                                                    "trials_done": 0}))
+    parts = path / "parts"
+    parts.mkdir()
+    for name in ("p000000-b0000000.trials", "p000000-b0000000.timings",  # 3 trials
+                 "p000000-b0000003.trials", "p000000-b0000003.timings",  # the last: 1 trial
+                 "p000001-b0000001.trials",  # its timings part is missing: not saved
+                 ".p000001-b0000002.trials.csv.tmp"):  # a temporary file
+        (parts / f"{name}.csv").write_text("")
+    stopped = find_runs(tmp_path)[0]
+    assert (stopped.status, stopped.trials_done, stopped.trials_total) == ("stopped", 4, 20)

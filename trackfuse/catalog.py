@@ -13,7 +13,7 @@ from datetime import datetime
 from pathlib import Path
 from typing import Any
 
-from trackfuse.results import MANIFEST, RunFolder, RunFolderError, RunStatus
+from trackfuse.results import MANIFEST, PART_KINDS, RunFolder, RunFolderError, RunStatus, part_names
 from trackfuse.runlock import held_by_a_live_process
 
 #: Shown for a run whose manifest says running but whose process has ended (killed, or
@@ -57,10 +57,27 @@ def _status(path: Path, manifest: dict[str, Any]) -> str:
     return status
 
 
+def _saved_trials(path: Path, manifest: dict[str, Any]) -> int:
+    """Trials of the batches whose two parts are in ``parts/`` (names only, none read): what
+    a running or stopped run has saved, which its manifest (written when a session starts
+    or ends) does not say."""
+    per_point, batch = _int(manifest.get("trials_per_point")), _int(manifest.get("batch_size"))
+    if batch < 1:
+        return _int(manifest.get("trials_done"))
+    kinds: dict[tuple[int, int], set[str]] = {}
+    for point, number, kind in part_names(path / "parts"):
+        kinds.setdefault((point, number), set()).add(kind)
+    return sum(max(0, min(batch, per_point - number * batch))
+               for (_, number), found in kinds.items() if found == set(PART_KINDS))
+
+
 def _info(path: Path, manifest: dict[str, Any]) -> RunInfo:
+    status = _status(path, manifest)
+    done = (_saved_trials(path, manifest) if status in (RunStatus.RUNNING, STOPPED)
+            else _int(manifest.get("trials_done")))
     return RunInfo(path, path.parent.name, str(manifest.get("experiment", "")),
-                   str(manifest.get("name") or ""), _status(path, manifest),
-                   _int(manifest.get("trials_done")), _int(manifest.get("trials_total")),
+                   str(manifest.get("name") or ""), status,
+                   done, _int(manifest.get("trials_total")),
                    str(manifest.get("first_started") or manifest.get("started") or ""),
                    _wall_seconds(manifest))
 

@@ -37,7 +37,7 @@ import math
 import os
 import re
 import shutil
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
 from operator import itemgetter
@@ -165,6 +165,18 @@ class BatchSpan:
     @property
     def trials(self) -> int:
         return self.stop - self.first
+
+
+def part_names(folder: Path) -> Iterator[tuple[int, int, str]]:
+    """``(point, batch, kind)`` of every part file named in ``folder`` (none if missing)."""
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return
+    for entry in entries:
+        match = _PART_NAME.match(entry.name)
+        if match:
+            yield int(match.group(1)), int(match.group(2)), match.group(3)
 
 
 class PartDamaged(Exception):
