@@ -316,7 +316,10 @@ def test_final_scan_intervals_are_numeric_and_hold_their_value(small_run):
     assert {"lost_gate_pct", "lost_angle_pct", "inconsistent_nees_pct", "range_rmse_km",
             "range_pcrlb_km", "range_bias_scan1_km", "range_bias_final_km"} <= set(table)
     lows = [c for c in table if c.endswith("_ci_low")]
-    assert len(lows) == 6
+    assert {c[: -len("_ci_low")] for c in lows} == {
+        "lost_gate_pct", "lost_angle_pct", "inconsistent_nees_pct", "range_rmse_km",
+        "range_rmse_not_lost_km", "range_bias_scan1_km", "range_bias_final_km", "pos_rmse_km",
+        "n_valid"}
     for low in lows:
         value, high = low[: -len("_ci_low")], low.replace("_ci_low", "_ci_high")
         assert pd.api.types.is_float_dtype(table[low]) and high in table and value in table
@@ -324,6 +327,9 @@ def test_final_scan_intervals_are_numeric_and_hold_their_value(small_run):
             (table[value] <= table[high] + 1e-12).all(), value
     assert (table["range_pcrlb_km"] > 0).all()
     assert not any("ci95" in c for c in table)
+    band = table[["anees_consistent_low", "anees_consistent_high"]].to_numpy()
+    np.testing.assert_allclose(band, [nees_band(6, 6)] * len(table))  # 6 runs per point
+    assert (band[:, 0] < 6.0).all() and (band[:, 1] > 6.0).all()
 
 
 def test_prepare_computes_every_bound_the_tables_use(shipped):

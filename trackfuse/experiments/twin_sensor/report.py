@@ -70,6 +70,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from pandas.api.typing import SeriesGroupBy
 
 from trackfuse.experiments.twin_sensor.model import PARAMS, bounds, build_scenario
 from trackfuse.plots.algorithms import GREYS, VERMILLION, line_kwargs, look
@@ -753,9 +754,12 @@ def final_scan_table(run: RunData) -> pd.DataFrame:
 
     Columns: the three 0/1 rules with 95 % Wilson intervals; range RMSE with its 95 %
     bootstrap-t interval beside the clutter-aware square-root PCRLB of the truth model and of
-    the filter's ``q``; RMSE over runs not lost (gate rule); signed range bias at scan 1 and
-    at the last scan with 95 % t intervals; position RMSE; 6-state ANEES; validated returns
-    per sensor and scan averaged over all scans. Intervals: ``<column>_ci_low/_ci_high``.
+    the filter's ``q``; the same RMSE over runs not lost (gate rule) and position RMSE, with
+    the same intervals; signed range bias at scan 1 and at the last scan with 95 % t
+    intervals; 6-state ANEES beside the 95 % chi-square band a consistent filter's ANEES
+    falls in (``anees_consistent_low/_high``); validated returns per sensor and scan
+    averaged over all scans, with a 95 % t interval over trials. Intervals:
+    ``<column>_ci_low/_ci_high``.
     """
     trials = run.trials
     last = _last(trials)
@@ -777,18 +781,30 @@ def final_scan_table(run: RunData) -> pd.DataFrame:
     table["range_pcrlb_km"] = [bounds(p)[0][-1] / 1e3 for p in params]
     table["range_pcrlb_filter_q_km"] = [bounds(p, q_model=float(p["filter.q"]))[0][-1] / 1e3
                                         for p in params]
-    kept = last[last["lost_gate"] == 0].groupby(keys)["range_sq_err_m2"].mean()
-    table["range_rmse_not_lost_km"] = np.sqrt(kept.reindex(grouped.size().index)
-                                              .to_numpy()) / 1e3
+    kept = last["range_sq_err_m2"].where(last["lost_gate"] == 0)  # NaN: dropped
+    _with_interval(table, "range_rmse_not_lost_km", *_rmse_km(kept.groupby(
+        [last["point"], last["algorithm"]], sort=True)))
     for label, rows in (("scan1", trials[trials["scan"] == 1]), ("final", last)):
         bias = _bias(rows).reindex(grouped.size().index)
         _with_interval(table, f"range_bias_{label}_km", bias["mean"].to_numpy(),
                        bias["lo"].to_numpy(), bias["hi"].to_numpy())
-    table["pos_rmse_km"] = np.sqrt(grouped["pos_sq_err_m2"].mean().to_numpy()) / 1e3
+    _with_interval(table, "pos_rmse_km", *_rmse_km(grouped["pos_sq_err_m2"]))
     table["anees"] = grouped["nees"].mean().to_numpy()
-    table["n_valid"] = (trials.groupby(keys)["n_valid"].mean()
-                        .reindex(grouped.size().index).to_numpy())
+    band = [nees_band(6, int(m)) if m else (np.nan, np.nan) for m in grouped["nees"].count()]
+    table["anees_consistent_low"], table["anees_consistent_high"] = np.array(band).T
+    mean = trials.groupby(keys)["n_valid"].mean().reindex(grouped.size().index)
+    per_trial = trials.groupby([*keys, "trial"])["n_valid"].mean().groupby(level=keys)
+    spread = per_trial.agg(["std", "count"]).reindex(grouped.size().index)
+    _with_interval(table, "n_valid", mean.to_numpy(),
+                   *t_interval(mean.to_numpy(), spread["std"], spread["count"]))
     return table
+
+
+def _rmse_km(squared_errors: SeriesGroupBy) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """RMSE (km) of each group of squared errors (m^2; NaN dropped) and its 95 % bootstrap-t
+    interval (NaN for a group of fewer than two values)."""
+    boot = rmse_intervals([g.to_numpy() for _, g in squared_errors]) / 1e3
+    return np.sqrt(squared_errors.mean().to_numpy()) / 1e3, boot[:, 0], boot[:, 1]
 
 
 def _headline_row(item: str, quantity: str, algorithm: str, paper_value: str, value: float,
