@@ -23,7 +23,7 @@ from trackfuse.reported import ESM_RADAR_WEIGHTS
 from trackfuse.results import rows_to_csv
 from trackfuse.rowtable import columns_csv
 from trackfuse.seeding import trial_streams
-from trackfuse.stats import wilson_interval
+from trackfuse.stats import holm_adjusted, wilson_interval
 
 ALL = list(ALGORITHMS)
 
@@ -209,9 +209,18 @@ def test_tables_from_saved_frames(tmp_path):
     np.testing.assert_allclose(t3["correct_rate"], t3["radar_track_2"] / t3["n"])
     assert (t3["correct_rate_ci_low"] <= t3["correct_rate"]).all()
     assert (t3["correct_rate"] <= t3["correct_rate_ci_high"]).all()
+    assert (t3["wrong_rate_ci_low"] <= t3["wrong_rate"]).all()
+    assert (t3["wrong_rate"] <= t3["wrong_rate_ci_high"]).all()
     abl = tabs["ablation"]
     imp = abl[abl.algorithm == "improved"]
     assert (imp["gain_vs_improved"] == 0).all() and (imp["mcnemar_p"] == 1).all()
+    assert (imp["mcnemar_p_holm"] == 1).all()
+    assert (abl["gain_vs_improved_ci_low"] <= abl["gain_vs_improved"]).all()
+    assert (abl["gain_vs_improved"] <= abl["gain_vs_improved_ci_high"]).all()
+    for _, rows in abl[abl.algorithm != "improved"].groupby("point"):
+        np.testing.assert_array_equal(rows["mcnemar_p_holm"],
+                                      holm_adjusted(rows["mcnemar_p"]))
+        assert (rows["mcnemar_p_holm"] >= rows["mcnemar_p"]).all()
     assert set(abl["weights"]) == {"static", "dynamic", "-"}
 
 

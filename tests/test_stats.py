@@ -10,6 +10,7 @@ from trackfuse.stats import (
     _bootstrap_t,
     _resample_counts,
     bootstrap_t_mean_intervals,
+    holm_adjusted,
     mcnemar_p,
     nees_band,
     paired_t_p,
@@ -180,3 +181,11 @@ def test_a_resample_of_one_repeated_value_has_an_infinite_t_not_a_huge_one():
     t = _bootstrap_t(x, _resample_counts(50, 4000, 0))
     assert (~np.isfinite(t)).sum() > 0
     assert np.abs(t[np.isfinite(t)]).max() < 100
+
+
+def test_holm_adjusts_step_down_and_keeps_the_input_order():
+    # sorted: 0.005 x 4 = 0.02, 0.01 x 3 = 0.03, 0.03 x 2 = 0.06, 0.04 x 1 -> max(0.06, 0.04)
+    np.testing.assert_allclose(holm_adjusted([0.01, 0.04, 0.03, 0.005]),
+                               [0.03, 0.06, 0.06, 0.02])
+    np.testing.assert_allclose(holm_adjusted([0.5, 0.9]), [1.0, 1.0])  # capped at 1
+    assert holm_adjusted([0.2]).tolist() == [0.2] and holm_adjusted([]).size == 0

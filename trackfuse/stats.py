@@ -150,6 +150,20 @@ def _paired_phi(a: np.ndarray, k1: np.ndarray, k2: np.ndarray, n: np.ndarray) ->
         return np.where(denom > 0, num / denom, 0.0)
 
 
+def holm_adjusted(p_values) -> np.ndarray:
+    """Holm's step-down adjusted p-values of one family of ``m`` tests (Holm 1979, Scand. J.
+    Stat. 6, 65-70): ``max over j <= i of min(1, (m - j + 1) p_(j))`` in ascending order of
+    ``p``, returned in the input order. Rejecting where it is below ``alpha`` keeps the
+    family-wise error rate at ``alpha`` under any dependence between the tests."""
+    p = np.asarray(p_values, dtype=float)
+    order = np.argsort(p, kind="stable")
+    m = len(p)
+    stepped = np.maximum.accumulate(np.minimum(1.0, (m - np.arange(m)) * p[order]))
+    out = np.empty(m)
+    out[order] = stepped
+    return out
+
+
 def mcnemar_p(b, c) -> np.ndarray:
     """Two-sided exact McNemar p-value from the discordant counts ``b`` and ``c``
     (McNemar 1947): the binomial test of ``b`` in ``b + c`` at one half; 1 when ``b + c = 0``."""

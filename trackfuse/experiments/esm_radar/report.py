@@ -70,7 +70,12 @@ from trackfuse.plots.style import band, new_figure, reference_line
 from trackfuse.reported import ESM_RADAR, ESM_RADAR_WEIGHTS
 from trackfuse.reports import HEADLINE_COLUMNS
 from trackfuse.rundata import RunData, swept_keys
-from trackfuse.stats import proportion_difference_interval, t_interval, wilson_interval
+from trackfuse.stats import (
+    holm_adjusted,
+    proportion_difference_interval,
+    t_interval,
+    wilson_interval,
+)
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -82,9 +87,9 @@ DOCS = "docs/papers/esm_radar.md"
 
 
 def table3(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
-    """Counts per chosen radar track (and "no decision"), correct rate with its Wilson 95 %
-    interval (``correct_rate_ci_low``/``_ci_high``), and the rate of wrong decisions, per
-    point and algorithm."""
+    """Counts per chosen radar track (and "no decision"), correct rate and rate of wrong
+    decisions with their Wilson 95 % intervals (``<rate>_ci_low``/``_ci_high``), per point
+    and algorithm."""
 
     keys = swept_keys(config)
     out = []
@@ -97,8 +102,10 @@ def table3(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
             row[f"radar_track_{track}"] = int((g["chosen"] == track).sum())
         row["no_decision"] = int((g["chosen"] == 0).sum())
         wrong = int(((g["chosen"] != 0) & (g["correct"] == 0)).sum())
+        wrong_lo, wrong_hi = wilson_interval(wrong, n)
         row.update(n=n, correct_rate=k / n, correct_rate_ci_low=float(lo),
-                   correct_rate_ci_high=float(hi), wrong_rate=wrong / n)
+                   correct_rate_ci_high=float(hi), wrong_rate=wrong / n,
+                   wrong_rate_ci_low=float(wrong_lo), wrong_rate_ci_high=float(wrong_hi))
         out.append(row)
     return pd.DataFrame(out).sort_values(["point"], kind="stable").reset_index(drop=True)
 
@@ -106,10 +113,12 @@ def table3(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
 def ablation(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
     """Each algorithm against ``improved`` on the same trials (paired, exact McNemar test).
 
-    ``gain_vs_improved`` is the variant's correct rate minus improved's; ``n_variant_only``
-    and ``n_improved_only`` count the discordant trials; ``mcnemar_p`` is the two-sided exact
-    binomial test of those counts (Q. McNemar, Psychometrika 12, 1947, 153-157). Empty when
-    ``improved`` was not run.
+    ``gain_vs_improved`` is the variant's correct rate minus improved's, with Newcombe's
+    paired 95 % interval; ``n_variant_only`` and ``n_improved_only`` count the discordant
+    trials; ``mcnemar_p`` is the two-sided exact binomial test of those counts (Q. McNemar,
+    Psychometrika 12, 1947, 153-157) and ``mcnemar_p_holm`` the same adjusted by Holm's method
+    over the variants compared at that point (``improved`` itself is not a test: 1). Empty
+    when ``improved`` was not run.
     """
 
     if "improved" not in set(trials["algorithm"]):
@@ -129,6 +138,9 @@ def ablation(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
             only_v = int(((x == 1) & (ref == 0)).sum())
             only_i = int(((x == 0) & (ref == 1)).sum())
             p = binomtest(only_v, only_v + only_i).pvalue if only_v + only_i else 1.0
+            both = int(((x == 1) & (ref == 1)).sum())
+            gain_lo, gain_hi = proportion_difference_interval(ref.sum(), len(ref), x.sum(),
+                                                              len(x), both)
             v = ALGORITHMS[name]
             member = params["membership_norm"] if v.membership == "param" else v.membership
             out.append({
@@ -139,9 +151,16 @@ def ablation(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
                 ("dynamic" if v.dynamic else "static"),
                 "correct_rate": x.mean(), "correct_rate_ci_low": float(lo),
                 "correct_rate_ci_high": float(hi), "gain_vs_improved": x.mean() - ref.mean(),
+                "gain_vs_improved_ci_low": float(gain_lo),
+                "gain_vs_improved_ci_high": float(gain_hi),
                 "n_variant_only": only_v, "n_improved_only": only_i, "mcnemar_p": float(p),
             })
-    return pd.DataFrame(out)
+    table = pd.DataFrame(out)
+    table["mcnemar_p_holm"] = 1.0
+    tested = table["algorithm"] != "improved"
+    for _, rows in table[tested].groupby(["point", *keys], sort=False):
+        table.loc[rows.index, "mcnemar_p_holm"] = holm_adjusted(rows["mcnemar_p"])
+    return table
 
 
 def manoeuvre_table(summary: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
