@@ -6,6 +6,7 @@ import pytest
 
 from trackfuse import harness
 from trackfuse.association.track_likelihood import abstaining_decision, ml_track_decision
+from trackfuse.compare import compare_runs
 from trackfuse.experiments import get
 from trackfuse.experiments.esm_radar import EXPERIMENT, report
 from trackfuse.experiments.esm_radar.model import (
@@ -222,6 +223,19 @@ def test_tables_from_saved_frames(tmp_path):
                                       holm_adjusted(rows["mcnemar_p"]))
         assert (rows["mcnemar_p_holm"] >= rows["mcnemar_p"]).all()
     assert set(abl["weights"]) == {"static", "dynamic", "-"}
+
+
+def test_the_chosen_track_is_a_label_counted_by_table3_never_averaged(tmp_path):
+    """A mean (and t interval) of track indices 0-3 means nothing: summary.csv has no row for
+    ``chosen`` and comparing two runs skips it; table3 counts its values."""
+    run = mini_run(tmp_path / "a", params(algorithms=["traditional", "improved"]), {}, 12)
+    assert "chosen" in set(run.trials.columns)
+    assert "chosen" not in set(run.summary["metric"])
+    assert {"correct", "margin"} <= set(run.summary["metric"])
+    other = mini_run(tmp_path / "b", params(algorithms=["traditional", "improved"]), {}, 12,
+                     seed=6)
+    cells = compare_runs(run, other).cells
+    assert "chosen" not in set(cells["metric"]) and "correct" in set(cells["metric"])
 
 
 def test_categorical_sweep_draws_one_row_per_method(tmp_path):

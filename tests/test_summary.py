@@ -101,3 +101,12 @@ def test_an_infinite_value_gives_the_same_summary_for_any_chunking(values):
     chunked, _ = summarize(frame, ["point", "algorithm"], chunk_rows=2)
     pd.testing.assert_frame_equal(whole, chunked)
     assert np.isnan(chunked["std"]).all() and np.isnan(chunked["ci_high"]).all()
+
+
+def test_a_skipped_column_gets_no_summary_row(tmp_path):
+    frame = pd.DataFrame({"point": 0, "algorithm": "a", "trial": range(4),
+                          "label": [0, 3, 3, 1], "x": [1.0, 2.0, 3.0, 4.0]})
+    summary, _ = summarize(frame, ["point", "algorithm"], skip=["label"])
+    assert summary["metric"].tolist() == ["x"]
+    everything, _ = summarize(frame, ["point", "algorithm"])
+    assert sorted(everything["metric"]) == ["label", "x"]

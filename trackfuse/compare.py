@@ -218,7 +218,9 @@ def compare_runs(base: RunData, new: RunData, tolerance: Mapping[str, float] | N
                              ">= 0 (in the metric's unit)")
     paired = (base.config.get("seed") == new.config.get("seed")
               and base.config.get("trials") == new.config.get("trials"))
-    return compare_trials(base.trials, new.trials, [*base.sweep, *experiment.row_keys],
-                          binary=experiment.binary_metrics, better=experiment.directions,
-                          paired=paired, tolerance=tolerance, alpha=alpha,
-                          family_wise=family_wise)
+    keys = [*base.sweep, *experiment.row_keys]
+    metrics = [m for m in metric_columns(base.trials, keys)
+               if m not in experiment.categorical_metrics]
+    return compare_trials(base.trials, new.trials, keys, binary=experiment.binary_metrics,
+                          better=experiment.directions, paired=paired, tolerance=tolerance,
+                          alpha=alpha, metrics=metrics, family_wise=family_wise)

@@ -406,7 +406,9 @@ class Runner:
         # a trials.csv of one summary chunk is read once, for the summary and the report
         source = run.trials if run is not None and files[TRIALS]["rows"] <= CHUNK_ROWS \
             else path / TRIALS
-        summary, failed_rows = summarize(source, keys, self.config.experiment.binary_metrics)
+        experiment = self.config.experiment
+        summary, failed_rows = summarize(source, keys, experiment.binary_metrics,
+                                         skip=experiment.categorical_metrics)
         files[SUMMARY] = _write_record(path / SUMMARY, frame_csv(summary))
         if timings["rows"]:
             timing_summary, _ = summarize(path / TIMINGS, keys, suffix=TIME_SUFFIX)

@@ -21,13 +21,15 @@ CHUNK_ROWS = 200_000
 
 
 def summarize(source: Path | pd.DataFrame, keys: Sequence[str], binary: Sequence[str] = (),
-              chunk_rows: int = CHUNK_ROWS, suffix: str = "") -> tuple[pd.DataFrame, int]:
+              chunk_rows: int = CHUNK_ROWS, suffix: str = "",
+              skip: Sequence[str] = ()) -> tuple[pd.DataFrame, int]:
     """Return ``(summary, failed_rows)`` for the CSV at ``source``, or for the CSV already
     read whole (``pd.read_csv(path, low_memory=False)``), taken in the same chunks.
 
     ``keys`` are the grouping columns (``point``, swept keys, the experiment's row keys);
-    every other numeric column whose name ends in ``suffix`` is a metric. ``binary`` metrics
-    get Wilson intervals, the rest Student-t intervals.
+    every other numeric column whose name ends in ``suffix`` and is not in ``skip`` (labels
+    such as a chosen track's index) is a metric. ``binary`` metrics get Wilson intervals, the
+    rest Student-t intervals.
     """
     partial: list[pd.DataFrame] = []
     failed = 0
@@ -46,7 +48,8 @@ def summarize(source: Path | pd.DataFrame, keys: Sequence[str], binary: Sequence
             chunk = chunk[~bad]
         group = [k for k in keys if k in chunk]
         metrics = [c for c in chunk.columns if c not in group and c not in RUNNER_COLUMNS
-                   and c.endswith(suffix) and pd.api.types.is_numeric_dtype(chunk[c])]
+                   and c not in skip and c.endswith(suffix)
+                   and pd.api.types.is_numeric_dtype(chunk[c])]
         if chunk.empty or not metrics:
             continue
         partial.append(_chunk_stats(chunk, group, metrics))

@@ -90,7 +90,9 @@ class Metric:
 
     ``unit``: its unit (``"1"`` for dimensionless); ``binary``: 0/1 per row (Wilson
     intervals); ``better``: ``"lower"`` or ``"higher"`` when a change in one direction is a
-    regression (``trackfuse.compare`` gates it), ``None`` for a diagnostic.
+    regression (``trackfuse.compare`` gates it), ``None`` for a diagnostic; ``categorical``:
+    a label stored as a number (a chosen track's index), counted per value by the report and
+    never averaged: ``summary.csv`` has no row for it and ``compare`` skips it.
     """
 
     name: str
@@ -98,6 +100,7 @@ class Metric:
     doc: str
     binary: bool = False
     better: Better | None = None
+    categorical: bool = False
 
 
 @dataclass(frozen=True)
@@ -143,6 +146,11 @@ class Experiment:
     def binary_metrics(self) -> tuple[str, ...]:
         """Names of the 0/1 metrics (Wilson intervals)."""
         return tuple(m.name for m in self.metrics if m.binary)
+
+    @property
+    def categorical_metrics(self) -> tuple[str, ...]:
+        """Names of the metrics that are labels, not quantities (never averaged)."""
+        return tuple(m.name for m in self.metrics if m.categorical)
 
     @property
     def directions(self) -> dict[str, Better]:

@@ -661,7 +661,8 @@ def run_trial(params: Mapping[str, Any], streams: TrialStreams) -> list[dict]:
 
 
 ROW_METRICS = (
-    Metric("chosen", "track", "radar track chosen, 1..3, or 0 for no decision"),
+    Metric("chosen", "track", "radar track chosen, 1..3, or 0 for no decision",
+           categorical=True),
     Metric("correct", "1", "the ESM track was associated with its radar track", binary=True,
            better="higher"),
     Metric("decided", "1", "a radar track was chosen (always 1 except for chi2_lrt)",
