@@ -14,6 +14,7 @@ functions that need them, so ``--help``, ``list`` and ``validate`` stay quick
 
 from __future__ import annotations
 
+import inspect
 import json
 import os
 import sys
@@ -490,10 +491,9 @@ def compare(
     """Compare two complete runs of one experiment, cell by cell.
 
     A cell is a sweep point x row key x metric: both means, the difference NEW - BASE with
-    its 95 % interval. Runs with the same
-    seed and trial count are paired (paired t, Newcombe and McNemar for 0/1 metrics);
-    otherwise unpaired (Welch, Newcombe hybrid score). Exit 0, 1 (regression, with
-    --fail-on-regression) or 2 (bad input)."""
+    its 95 % interval. Runs with the same seed and trial count are paired (paired t,
+    Newcombe and McNemar for 0/1 metrics); otherwise unpaired (Welch, Newcombe hybrid
+    score). Exit 0, 1 (regression, with --fail-on-regression) or 2 (bad input)."""
     from trackfuse.compare import compare_runs
     from trackfuse.results import RunFolderError
     from trackfuse.rundata import load as load_run
@@ -577,3 +577,13 @@ def list_experiments(
 
 if __name__ == "__main__":
     app()
+
+
+def _reflowed(doc: str) -> str:
+    """``doc`` with each paragraph on one line: typer keeps the line breaks of every paragraph
+    after the first, which then break mid-sentence where the terminal wraps them again."""
+    return "\n\n".join(" ".join(p.split()) for p in inspect.cleandoc(doc).split("\n\n"))
+
+
+for _command in app.registered_commands:
+    _command.help = _reflowed(_command.help or inspect.getdoc(_command.callback) or "")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import pytest
 from conftest import trackfuse
 from typer.testing import CliRunner
@@ -50,6 +52,18 @@ def test_help_shows_no_type_placeholders_or_contradicting_defaults(command):
         for placeholder in ("<bool>", "<int>", "<str>", "<float>", "<path>", "<list[str]>"):
             assert placeholder not in row, row
     assert "[default: 0]" not in result.stdout
+
+
+@pytest.mark.parametrize("command", ["reproduce", "plot", "compare", "validate", "list"])
+def test_help_paragraphs_are_reflowed_not_broken_mid_sentence(command):
+    """typer kept the source line breaks of a docstring's later paragraphs, so a sentence
+    broke after "first. Plotting" and went on in a new line."""
+    result = CliRunner().invoke(app, [command, "--help"], env={"COLUMNS": "400"})
+    text = result.stdout.split("╭")[0].split("Usage:")[1]
+    paragraphs = [p.strip().splitlines() for p in re.split(r"\n\s*\n", text) if p.strip()]
+    assert len(paragraphs) >= 3  # usage line, summary, at least one more paragraph
+    for lines in paragraphs[1:]:
+        assert len(lines) == 1 and lines[0].endswith("."), lines
 
 
 def test_reproduce_offers_the_run_options():
