@@ -575,10 +575,6 @@ def list_experiments(
         describe.print_experiment(exp)
 
 
-if __name__ == "__main__":
-    app()
-
-
 def _reflowed(doc: str) -> str:
     """``doc`` with each paragraph on one line: typer keeps the line breaks of every paragraph
     after the first, which then break mid-sentence where the terminal wraps them again."""
@@ -587,3 +583,7 @@ def _reflowed(doc: str) -> str:
 
 for _command in app.registered_commands:
     _command.help = _reflowed(_command.help or inspect.getdoc(_command.callback) or "")
+
+
+if __name__ == "__main__":
+    app()

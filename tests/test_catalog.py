@@ -77,6 +77,8 @@ def test_a_stopped_run_shows_the_trials_its_saved_parts_hold(write_config, tmp_p
     for name in ("p000000-b0000000.trials", "p000000-b0000000.timings",  # 3 trials
                  "p000000-b0000003.trials", "p000000-b0000003.timings",  # the last: 1 trial
                  "p000001-b0000001.trials",  # its timings part is missing: not saved
+                 "p000002-b0000000.trials", "p000002-b0000000.timings",  # no point 2
+                 "p000001-b0000004.trials", "p000001-b0000004.timings",  # no batch 4
                  ".p000001-b0000002.trials.csv.tmp"):  # a temporary file
         (parts / f"{name}.csv").write_text("")
     stopped = find_runs(tmp_path)[0]

@@ -214,11 +214,14 @@ def test_tables_from_saved_frames(tmp_path):
     assert (t3["wrong_rate"] <= t3["wrong_rate_ci_high"]).all()
     abl = tabs["ablation"]
     imp = abl[abl.algorithm == "improved"]
-    assert (imp["gain_vs_improved"] == 0).all() and (imp["mcnemar_p"] == 1).all()
-    assert (imp["mcnemar_p_holm"] == 1).all()
-    assert (abl["gain_vs_improved_ci_low"] <= abl["gain_vs_improved"]).all()
-    assert (abl["gain_vs_improved"] <= abl["gain_vs_improved_ci_high"]).all()
-    for _, rows in abl[abl.algorithm != "improved"].groupby("point"):
+    assert (imp["gain_vs_improved"] == 0).all()
+    # improved against itself is no comparison: no interval, no p-value
+    assert imp[["gain_vs_improved_ci_low", "gain_vs_improved_ci_high", "mcnemar_p",
+                "mcnemar_p_holm"]].isna().all().all()
+    variants = abl[abl.algorithm != "improved"]
+    assert (variants["gain_vs_improved_ci_low"] <= variants["gain_vs_improved"]).all()
+    assert (variants["gain_vs_improved"] <= variants["gain_vs_improved_ci_high"]).all()
+    for _, rows in variants.groupby("point"):
         np.testing.assert_array_equal(rows["mcnemar_p_holm"],
                                       holm_adjusted(rows["mcnemar_p"]))
         assert (rows["mcnemar_p_holm"] >= rows["mcnemar_p"]).all()
@@ -236,6 +239,8 @@ def test_the_chosen_track_is_a_label_counted_by_table3_never_averaged(tmp_path):
                      seed=6)
     cells = compare_runs(run, other).cells
     assert "chosen" not in set(cells["metric"]) and "correct" in set(cells["metric"])
+    with pytest.raises(ValueError, match="unknown metric 'chosen'"):
+        compare_runs(run, other, tolerance={"chosen": 1.0})
 
 
 def test_categorical_sweep_draws_one_row_per_method(tmp_path):

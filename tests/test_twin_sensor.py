@@ -332,6 +332,26 @@ def test_final_scan_intervals_are_numeric_and_hold_their_value(small_run):
     assert (band[:, 0] < 6.0).all() and (band[:, 1] > 6.0).all()
 
 
+def test_the_anees_band_counts_the_runs_with_a_nees(small_run):
+    """A failed filter's NEES is NaN: the ANEES and its band use the runs that have one."""
+    run = RunData(small_run.path, small_run.config, small_run.manifest)
+    trials = small_run.trials.copy()
+    last = trials["scan"] == trials["scan"].max()
+    hit = last & (trials["algorithm"] == "nn/mgekf") & (trials["point"] == 0) & \
+        trials["trial"].isin([0, 1])
+    trials.loc[hit, "nees"] = np.nan
+    run.trials = trials  # the cached frame, edited
+    table = report.tables(run)["final_scan"].set_index(["point", "algorithm"])
+    low, high = table.loc[(0, "nn/mgekf"), ["anees_consistent_low", "anees_consistent_high"]]
+    np.testing.assert_allclose([low, high], nees_band(6, 4))
+    cell = last & (trials["algorithm"] == "nn/mgekf") & (trials["point"] == 0)
+    assert trials.loc[cell, "nees"].notna().sum() == 4
+    np.testing.assert_allclose(table.loc[(0, "nn/mgekf"), "anees"],
+                               trials.loc[cell, "nees"].dropna().mean())
+    np.testing.assert_allclose(table.loc[(1, "nn/mgekf"), "anees_consistent_low"],
+                               nees_band(6, 6)[0])
+
+
 def test_prepare_computes_every_bound_the_tables_use(shipped):
     """After ``prepare`` (run while the workers compute, inherited by the drawing
     processes) the tables and the range-error figure compute no bound of their own."""

@@ -5,6 +5,8 @@ from __future__ import annotations
 import pytest
 
 from trackfuse.config import ConfigError, build
+from trackfuse.experiments.twin_sensor.checks import GEOMETRY_KEYS
+from trackfuse.experiments.twin_sensor.model import PARAMS, build_scenario, truth_trajectory
 
 PLATFORM_START = [153209.0, 0.0, 2000.0]
 
@@ -60,3 +62,38 @@ def test_a_degenerate_sweep_point_names_the_swept_key_and_the_point(mode):
 
 def test_the_shipped_orbit_geometry_passes():
     assert build(_raw({}), "cfg.yaml").params["target.position"] == [0.0, 128558.0, 4000.0]
+
+
+def test_the_error_names_the_key_the_config_changed_not_any_swept_one():
+    raw = _raw({"target.position": [153209.0, 0.0, 9000.0]},
+               {"sensors.baseline": [0.0, 500.0]})
+    with pytest.raises(ConfigError, match=r"cfg\.yaml: params\.target\.position: the orbit"):
+        build(raw, "cfg.yaml")
+    raw = _raw({"platform.start": [0.0, 128558.0, 1000.0]})
+    with pytest.raises(ConfigError, match=r"cfg\.yaml: params\.platform\.start: the orbit"):
+        build(raw, "cfg.yaml")
+
+
+#: Keys the scenario reads that place nothing (noise, detection, clutter, initialisation).
+NOT_GEOMETRY = {"sensors.sigma_az", "sensors.sigma_el_ratio", "sensor2.noise_ratio",
+                "sensors.pd", "sensor2.pd_ratio", "init.range_cue", "init.sigma_range",
+                "init.sigma_range_fraction", "init.sigma_angle", "init.sigma_velocity",
+                "filter.q", "target.q", "gate.pg", "clutter.model", "clutter.mean",
+                "clutter.window"}
+
+
+def test_every_key_that_places_target_platform_or_sensors_is_checked():
+    """A key the scenario reads is either a geometry key (checked at every swept value) or
+    known to place nothing: a new geometry key that nobody listed fails here."""
+    read: set[str] = set()
+
+    class Recording(dict):
+        def __getitem__(self, key):
+            read.add(key)
+            return super().__getitem__(key)
+
+    for motion in ("orbit", "straight"):
+        params = {p.key: p.default for p in PARAMS} | {"platform.motion": motion}
+        truth_trajectory(build_scenario(Recording(params)), None)
+    assert read - set(GEOMETRY_KEYS) == NOT_GEOMETRY
+    assert set(GEOMETRY_KEYS) <= read

@@ -58,16 +58,18 @@ def _status(path: Path, manifest: dict[str, Any]) -> str:
 
 
 def _saved_trials(path: Path, manifest: dict[str, Any]) -> int:
-    """Trials of the batches whose two parts are in ``parts/`` (names only, none read): what
-    a running or stopped run has saved, which its manifest (written when a session starts
-    or ends) does not say."""
+    """Trials of the batches of the run's plan whose two parts are in ``parts/`` (names only,
+    none read): what a running or stopped run has saved, which its manifest (rewritten at
+    most every few seconds) lags behind."""
     per_point, batch = _int(manifest.get("trials_per_point")), _int(manifest.get("batch_size"))
+    points = _int(manifest.get("points"))
     if batch < 1:
         return _int(manifest.get("trials_done"))
     kinds: dict[tuple[int, int], set[str]] = {}
-    for point, number, kind in part_names(path / "parts"):
-        kinds.setdefault((point, number), set()).add(kind)
-    return sum(max(0, min(batch, per_point - number * batch))
+    for point, number, kind in part_names(RunFolder(path).parts):
+        if point < points and number * batch < per_point:
+            kinds.setdefault((point, number), set()).add(kind)
+    return sum(min(batch, per_point - number * batch)
                for (_, number), found in kinds.items() if found == set(PART_KINDS))
 
 

@@ -139,7 +139,7 @@ def compare_trials(base: pd.DataFrame, new: pd.DataFrame, keys: Sequence[str],
                    binary: Sequence[str] = (), better: Mapping[str, str] | None = None,
                    paired: bool = True, tolerance: Mapping[str, float] | None = None,
                    alpha: float = 0.05, metrics: Sequence[str] | None = None,
-                   family_wise: bool = True) -> Comparison:
+                   family_wise: bool = True, skip: Sequence[str] = ()) -> Comparison:
     """Compare the trial rows of two runs (see the module docstring).
 
     Parameters
@@ -154,10 +154,12 @@ def compare_trials(base: pd.DataFrame, new: pd.DataFrame, keys: Sequence[str],
     metrics : compare only these metrics (default: every metric present in both runs).
     family_wise : Bonferroni-adjust the gate over the gated cells (default); ``False`` gates
         every cell at ``alpha`` on its own.
+    skip : columns that are labels, not quantities (categorical metrics): never compared.
     """
     keys, binary, better = list(keys), set(binary), dict(better or {})
     tolerance = dict(tolerance or {})
-    common = [m for m in metric_columns(base, keys) if m in set(metric_columns(new, keys))]
+    common = [m for m in metric_columns(base, keys)
+              if m in set(metric_columns(new, keys)) and m not in skip]
     if metrics is not None:
         common = [m for m in common if m in set(metrics)]
     b_long, n_long = _long(base, keys, common), _long(new, keys, common)
@@ -208,7 +210,7 @@ def compare_runs(base: RunData, new: RunData, tolerance: Mapping[str, float] | N
             raise ValueError(f"{run.path}: a sweep point comes twice (a run of a version "
                              "that allowed it); compare needs distinct points")
     experiment = base.experiment
-    names = [m.name for m in experiment.metrics]
+    names = [m.name for m in experiment.metrics if not m.categorical]
     for metric, value in (tolerance or {}).items():
         if metric not in names:
             raise ValueError(f"--tolerance: unknown metric {metric!r}"
@@ -218,9 +220,7 @@ def compare_runs(base: RunData, new: RunData, tolerance: Mapping[str, float] | N
                              ">= 0 (in the metric's unit)")
     paired = (base.config.get("seed") == new.config.get("seed")
               and base.config.get("trials") == new.config.get("trials"))
-    keys = [*base.sweep, *experiment.row_keys]
-    metrics = [m for m in metric_columns(base.trials, keys)
-               if m not in experiment.categorical_metrics]
-    return compare_trials(base.trials, new.trials, keys, binary=experiment.binary_metrics,
-                          better=experiment.directions, paired=paired, tolerance=tolerance,
-                          alpha=alpha, metrics=metrics, family_wise=family_wise)
+    return compare_trials(base.trials, new.trials, [*base.sweep, *experiment.row_keys],
+                          binary=experiment.binary_metrics, better=experiment.directions,
+                          paired=paired, tolerance=tolerance, alpha=alpha,
+                          family_wise=family_wise, skip=experiment.categorical_metrics)

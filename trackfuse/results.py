@@ -167,6 +167,12 @@ class BatchSpan:
         return self.stop - self.first
 
 
+def parse_part_name(name: str) -> tuple[int, int, str] | None:
+    """``(point, batch, kind)`` of a part file's name, else ``None``."""
+    match = _PART_NAME.match(name)
+    return (int(match.group(1)), int(match.group(2)), match.group(3)) if match else None
+
+
 def part_names(folder: Path) -> Iterator[tuple[int, int, str]]:
     """``(point, batch, kind)`` of every part file named in ``folder`` (none if missing)."""
     try:
@@ -174,9 +180,9 @@ def part_names(folder: Path) -> Iterator[tuple[int, int, str]]:
     except OSError:
         return
     for entry in entries:
-        match = _PART_NAME.match(entry.name)
-        if match:
-            yield int(match.group(1)), int(match.group(2)), match.group(3)
+        parsed = parse_part_name(entry.name)
+        if parsed is not None:
+            yield parsed
 
 
 class PartDamaged(Exception):
@@ -462,12 +468,12 @@ class RunFolder:
         candidates: set[BatchSpan] = set()
         stray: list[str] = []
         for entry in os.scandir(self.parts):
-            match = _PART_NAME.match(entry.name)
-            span = span_of(int(match.group(1)), int(match.group(2))) if match else None
+            parsed = parse_part_name(entry.name)
+            span = span_of(*parsed[:2]) if parsed else None
             if span is None:
                 if not _TEMPORARY.match(entry.name):
                     stray.append(entry.name)
-            elif match.group(3) == "trials":
+            elif parsed[2] == "trials":
                 candidates.add(span)
         scan = PartScan(set(), [], sorted(stray))
         for span in sorted(candidates):

@@ -117,8 +117,8 @@ def ablation(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
     paired 95 % interval; ``n_variant_only`` and ``n_improved_only`` count the discordant
     trials; ``mcnemar_p`` is the two-sided exact binomial test of those counts (Q. McNemar,
     Psychometrika 12, 1947, 153-157) and ``mcnemar_p_holm`` the same adjusted by Holm's method
-    over the variants compared at that point (``improved`` itself is not a test: 1). Empty
-    when ``improved`` was not run.
+    over the variants compared at that point. ``improved``'s own row is no comparison: its
+    gain is 0 with no interval and no p-value (NaN). Empty when ``improved`` was not run.
     """
 
     if "improved" not in set(trials["algorithm"]):
@@ -156,9 +156,10 @@ def ablation(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
                 "n_variant_only": only_v, "n_improved_only": only_i, "mcnemar_p": float(p),
             })
     table = pd.DataFrame(out)
-    table["mcnemar_p_holm"] = 1.0
-    tested = table["algorithm"] != "improved"
-    for _, rows in table[tested].groupby(["point", *keys], sort=False):
+    own = table["algorithm"] == "improved"
+    table.loc[own, ["gain_vs_improved_ci_low", "gain_vs_improved_ci_high", "mcnemar_p"]] = np.nan
+    table["mcnemar_p_holm"] = np.nan
+    for _, rows in table[~own].groupby(["point", *keys], sort=False):
         table.loc[rows.index, "mcnemar_p_holm"] = holm_adjusted(rows["mcnemar_p"])
     return table
 

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from trackfuse.experiments.twin_sensor.model import build_scenario, truth_trajectory
+from trackfuse.experiments.twin_sensor.model import PARAMS, build_scenario, truth_trajectory
 from trackfuse.experiments.twin_sensor.stonesoup import missing_stonesoup
 from trackfuse.sweep import expand
 
@@ -25,6 +25,8 @@ GEOMETRY_KEYS = ("scan.period", "scan.count", "target.position", "target.velocit
 #: Smallest distance (m) allowed between the noise-free target and a sensor, and smallest
 #: horizontal distance between an orbit's start and its centre (the target).
 MIN_SEPARATION_M = 1.0
+#: Each parameter's default (an error names a key the config changed, if one did).
+DEFAULTS = {p.key: p.default for p in PARAMS}
 
 
 def config_problem(params: Mapping[str, Any], sweep: Mapping[str, list[Any]],
@@ -40,32 +42,50 @@ def geometry_problem(params: Mapping[str, Any], sweep: Mapping[str, list[Any]],
     Each distinct combination of the swept :data:`GEOMETRY_KEYS` is checked once.
     """
     axes = {k: v for k, v in sweep.items() if k in GEOMETRY_KEYS}
+    checked: set[str] = set()
     for point in expand(axes, mode):
+        seen = repr(sorted(point.values.items()))
+        if seen in checked:
+            continue
+        checked.add(seen)
         problem = _separation_problem({**params, **point.values})
         if problem is not None:
+            keys, text = problem
             where = ", ".join(f"{k}={v}" for k, v in point.values.items())
-            key = next(iter(point.values), "target.position")
-            return key, problem + (f" (at the sweep point {where})" if where else "")
+            return _blamed(keys, params, sweep), text + (f" (at the sweep point {where})"
+                                                         if where else "")
     return None
 
 
-def _separation_problem(params: dict[str, Any]) -> str | None:
-    """What is degenerate about one point's geometry, else ``None``."""
+def _blamed(keys: tuple[str, ...], params: Mapping[str, Any],
+            sweep: Mapping[str, list[Any]]) -> str:
+    """The key an error names among those that together make a geometry degenerate: the
+    first swept, else the first the config changed from its default, else the first."""
+    return next((k for k in keys if k in sweep), None) or next(
+        (k for k in keys if params[k] != DEFAULTS[k]), keys[0])
+
+
+def _separation_problem(params: dict[str, Any]) -> tuple[tuple[str, ...], str] | None:
+    """``(keys that make it so, what is degenerate)`` about one point's geometry, else
+    ``None``."""
     target = np.asarray(params["target.position"], dtype=float)
     start = np.asarray(params["platform.start"], dtype=float)
     radius = float(np.hypot(*(start[:2] - target[:2])))
     if params["platform.motion"] == "orbit" and radius < MIN_SEPARATION_M:
-        return (f"the orbit starts {radius:.3g} m from the target's vertical line, its centre; "
-                f"allowed: platform.start at least {MIN_SEPARATION_M:g} m from target.position "
-                "horizontally")
+        return ("target.position", "platform.start"), (
+            f"the orbit starts {radius:.3g} m from the target's vertical line, its centre; "
+            f"allowed: platform.start at least {MIN_SEPARATION_M:g} m from target.position "
+            "horizontally")
     with np.errstate(divide="ignore", invalid="ignore"):
         sc = build_scenario(dict(params))
     truth = truth_trajectory(sc, None)[:, None, :3]
     distance = np.linalg.norm(truth - sc.sensor_pos, axis=-1)
     k, s = np.unravel_index(int(np.argmin(distance)), distance.shape)
     if distance[k, s] < MIN_SEPARATION_M:
-        return (f"the target is {distance[k, s]:.3g} m from sensor {s + 1} at scan {k}, where "
-                "it has no bearing; allowed: the target at least "
-                f"{MIN_SEPARATION_M:g} m from every sensor at every scan (move target.position "
-                "or platform.start, or change the platform's motion)")
+        return ("target.position", "platform.start", "sensors.baseline",
+                "sensors.baseline_angle", "platform.motion"), (
+            f"the target is {distance[k, s]:.3g} m from sensor {s + 1} at scan {k}, where it "
+            f"has no bearing; allowed: the target at least {MIN_SEPARATION_M:g} m from every "
+            "sensor at every scan (move target.position or platform.start, or change the "
+            "platform's motion)")
     return None

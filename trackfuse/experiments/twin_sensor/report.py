@@ -792,11 +792,10 @@ def final_scan_table(run: RunData) -> pd.DataFrame:
     table["anees"] = grouped["nees"].mean().to_numpy()
     band = [nees_band(6, int(m)) if m else (np.nan, np.nan) for m in grouped["nees"].count()]
     table["anees_consistent_low"], table["anees_consistent_high"] = np.array(band).T
-    mean = trials.groupby(keys)["n_valid"].mean().reindex(grouped.size().index)
     per_trial = trials.groupby([*keys, "trial"])["n_valid"].mean().groupby(level=keys)
-    spread = per_trial.agg(["std", "count"]).reindex(grouped.size().index)
-    _with_interval(table, "n_valid", mean.to_numpy(),
-                   *t_interval(mean.to_numpy(), spread["std"], spread["count"]))
+    valid = per_trial.agg(["mean", "std", "count"]).reindex(grouped.size().index)
+    _with_interval(table, "n_valid", valid["mean"].to_numpy(),
+                   *t_interval(valid["mean"].to_numpy(), valid["std"], valid["count"]))
     return table
 
 
