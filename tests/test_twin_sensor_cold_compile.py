@@ -1,9 +1,11 @@
 """The first-run compile of the twin-sensor kernel on two cores (cold_compile)."""
 
 import os
+import pickle
 import subprocess
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import numba
 import pytest
@@ -31,6 +33,29 @@ def test_the_callees_are_compiled_for_the_signatures_filter_batch_asks_for():
     fresh = numba.njit(**{**k.JIT, "cache": False})(k._filter_batch.py_func)
     fresh.compile(k._filter_batch.signatures[0])
     assert {d: list(d.signatures) for d in callee_args()} == before
+
+
+def test_an_index_of_another_numba_version_or_python_is_not_the_kernel_cached(tmp_path,
+                                                                              monkeypatch):
+    """After a numba upgrade numba ignores the old index and compiles: that compile must
+    use both cores, so the old index must not count as cached."""
+    monkeypatch.setattr(k, "_filter_batch",
+                        SimpleNamespace(stats=SimpleNamespace(cache_path=str(tmp_path))))
+    name = f"kernel._filter_batch-1.py{sys.version_info.major}{sys.version_info.minor}.nbi"
+
+    def index(version, file_name=name) -> bool:
+        for old in tmp_path.iterdir():
+            old.unlink()
+        with (tmp_path / file_name).open("wb") as f:
+            pickle.dump(version, f, protocol=-1)
+            f.write(b"the rest of numba's index")
+        return cold_compile.kernel_cached()
+
+    assert index(numba.__version__)
+    assert not index("0.1.0")  # written by another numba
+    assert not index(numba.__version__, "kernel._filter_batch-1.py27.nbi")  # another Python
+    (tmp_path / name).write_bytes(b"not a pickle")
+    assert not cold_compile.kernel_cached()
 
 
 def test_the_helper_stops_when_its_parent_closes_its_stdin(tmp_path):

@@ -12,11 +12,13 @@ the same: numba compiles here what the cache lacks.
 from __future__ import annotations
 
 import os
+import pickle
 import subprocess
 import sys
 import threading
 from pathlib import Path
 
+import numba
 import numpy as np
 from numba import typeof
 
@@ -30,11 +32,26 @@ HELPER = ("import sys; sys.path[:] = sys.argv[1:]; "
 
 
 def kernel_cached() -> bool:
-    """Whether numba's cache holds an index of ``_filter_batch`` written after the kernel's
-    source (numba's own file name; a stale index only means compiling on one core)."""
+    """Whether numba's cache holds an index of ``_filter_batch`` that numba will use: one for
+    this Python (numba's file name), written by this numba version after the kernel's source.
+    A wrong answer costs time only: a stale index read as current means compiling on one
+    core; a current one read as stale, a helper process that loads from the cache."""
     source_time = Path(k.__file__).stat().st_mtime
-    index = Path(k._filter_batch.stats.cache_path).glob("*._filter_batch-*.nbi")
-    return any(p.stat().st_mtime >= source_time for p in index)
+    python = f".py{sys.version_info.major}{sys.version_info.minor}"
+    index = Path(k._filter_batch.stats.cache_path).glob(f"*._filter_batch-*{python}*.nbi")
+    return any(p.stat().st_mtime >= source_time and index_version(p) == numba.__version__
+               for p in index)
+
+
+def index_version(path: Path) -> str | None:
+    """The numba version that wrote the cache index ``path`` (numba pickles it first, and
+    ignores an index of another version), or ``None`` if it cannot be read."""
+    try:
+        with path.open("rb") as f:
+            version = pickle.load(f)  # numba's own cache file: numba unpickles it too
+    except (OSError, pickle.UnpicklingError, EOFError, ValueError):
+        return None
+    return version if isinstance(version, str) else None
 
 
 def callee_args() -> dict:
