@@ -2,13 +2,24 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
 import pytest
 
 from trackfuse.config import ConfigError, build
 from trackfuse.experiments.twin_sensor.checks import GEOMETRY_KEYS
-from trackfuse.experiments.twin_sensor.model import PARAMS, build_scenario, truth_trajectory
+from trackfuse.experiments.twin_sensor.model import (
+    PARAMS,
+    build_scenario,
+    placements,
+    truth_trajectory,
+)
 
 PLATFORM_START = [153209.0, 0.0, 2000.0]
+ORBIT = Path(__file__).resolve().parents[1] / "configs" / "twin_sensor_orbit.yaml"
 
 
 def _raw(params: dict, sweep: dict | None = None, mode: str = "grid") -> dict:
@@ -74,17 +85,9 @@ def test_the_error_names_the_key_the_config_changed_not_any_swept_one():
         build(raw, "cfg.yaml")
 
 
-#: Keys the scenario reads that place nothing (noise, detection, clutter, initialisation).
-NOT_GEOMETRY = {"sensors.sigma_az", "sensors.sigma_el_ratio", "sensor2.noise_ratio",
-                "sensors.pd", "sensor2.pd_ratio", "init.range_cue", "init.sigma_range",
-                "init.sigma_range_fraction", "init.sigma_angle", "init.sigma_velocity",
-                "filter.q", "target.q", "gate.pg", "clutter.model", "clutter.mean",
-                "clutter.window"}
-
-
 def test_every_key_that_places_target_platform_or_sensors_is_checked():
-    """A key the scenario reads is either a geometry key (checked at every swept value) or
-    known to place nothing: a new geometry key that nobody listed fails here."""
+    """The check sweeps over exactly the keys that place things: those ``placements`` reads
+    and the target's velocity. A new geometry key that nobody listed fails here."""
     read: set[str] = set()
 
     class Recording(dict):
@@ -93,7 +96,26 @@ def test_every_key_that_places_target_platform_or_sensors_is_checked():
             return super().__getitem__(key)
 
     for motion in ("orbit", "straight"):
-        params = {p.key: p.default for p in PARAMS} | {"platform.motion": motion}
-        truth_trajectory(build_scenario(Recording(params)), None)
-    assert read - set(GEOMETRY_KEYS) == NOT_GEOMETRY
-    assert set(GEOMETRY_KEYS) <= read
+        placements(Recording({p.key: p.default for p in PARAMS} | {"platform.motion": motion}))
+    assert read | {"target.velocity"} == set(GEOMETRY_KEYS)
+
+
+def test_the_check_places_things_as_the_simulation_does():
+    """The check's noise-free truth and sensors are the scenario's."""
+    params = {p.key: p.default for p in PARAMS} | {"target.velocity": [30.0, -20.0, 1.0],
+                                                    "sensors.baseline": 800.0}
+    sc = build_scenario(params)
+    times, platform, sensors = placements(params)
+    np.testing.assert_array_equal(sensors, sc.sensor_pos)
+    np.testing.assert_array_equal(platform, sc.platform)
+    truth = truth_trajectory(sc, None)[:, :3]
+    np.testing.assert_allclose(np.asarray(params["target.position"]) + times[:, None]
+                               * np.asarray(params["target.velocity"]), truth, atol=1e-6)
+
+
+def test_validating_a_config_does_not_import_scipy():
+    """The geometry check runs at every config load: it must not pull in scipy (0.2 s of
+    start-up before the workers can start)."""
+    probe = ("import sys; from trackfuse.config import load; "
+             f"load({str(ORBIT)!r}); assert 'scipy' not in sys.modules, 'scipy imported'")
+    subprocess.run([sys.executable, "-c", probe], check=True)

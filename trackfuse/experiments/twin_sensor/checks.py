@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from trackfuse.experiments.twin_sensor.model import PARAMS, build_scenario, truth_trajectory
+from trackfuse.experiments.twin_sensor.model import PARAMS, placements
 from trackfuse.experiments.twin_sensor.stonesoup import missing_stonesoup
 from trackfuse.sweep import expand
 
@@ -76,10 +76,10 @@ def _separation_problem(params: dict[str, Any]) -> tuple[tuple[str, ...], str] |
             f"the orbit starts {radius:.3g} m from the target's vertical line, its centre; "
             f"allowed: platform.start at least {MIN_SEPARATION_M:g} m from target.position "
             "horizontally")
-    with np.errstate(divide="ignore", invalid="ignore"):
-        sc = build_scenario(dict(params))
-    truth = truth_trajectory(sc, None)[:, None, :3]
-    distance = np.linalg.norm(truth - sc.sensor_pos, axis=-1)
+    times, _, sensors = placements(params)
+    velocity = np.asarray(params["target.velocity"], dtype=float)
+    truth = target + times[:, None] * velocity  # noise-free constant velocity, (K+1, 3)
+    distance = np.linalg.norm(truth[:, None, :] - sensors, axis=-1)
     k, s = np.unravel_index(int(np.argmin(distance)), distance.shape)
     if distance[k, s] < MIN_SEPARATION_M:
         return ("target.position", "platform.start", "sensors.baseline",

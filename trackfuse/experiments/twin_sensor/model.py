@@ -76,7 +76,7 @@ Choices the paper leaves open (and why)
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from itertools import product
@@ -240,8 +240,9 @@ class Scenario:
         return self.clutter_mean / (2.0 * self.window) ** 2
 
 
-def build_scenario(params: dict[str, Any]) -> Scenario:
-    """The deterministic part of the experiment for resolved ``params``."""
+def placements(params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where everything is, from resolved ``params``: ``times: (K+1,)`` s, the platform
+    ``(K+1, 3)`` m and the sensors ``(K+1, S, 3)`` m at every scan."""
     T, K = float(params["scan.period"]), int(params["scan.count"])
     times = T * np.arange(K + 1)
     target = np.asarray(params["target.position"], dtype=float)
@@ -258,7 +259,14 @@ def build_scenario(params: dict[str, Any]) -> Scenario:
     los_az = float(np.arctan2(target[1] - start[1], target[0] - start[0]))
     offsets = [np.zeros(3), baseline_offset(los_az, float(params["sensors.baseline"]),
                                             np.radians(float(params["sensors.baseline_angle"])))]
-    sensor_pos = np.stack([platform + offsets[s] for s in range(S)], axis=1)
+    return times, platform, np.stack([platform + offsets[s] for s in range(S)], axis=1)
+
+
+def build_scenario(params: dict[str, Any]) -> Scenario:
+    """The deterministic part of the experiment for resolved ``params``."""
+    times, platform, sensor_pos = placements(params)
+    T, K, S = float(params["scan.period"]), len(times) - 1, sensor_pos.shape[1]
+    target = np.asarray(params["target.position"], dtype=float)
     sigma_az = float(params["sensors.sigma_az"])
     sig = np.array([sigma_az, sigma_az * float(params["sensors.sigma_el_ratio"])])
     ratios = [1.0, float(params["sensor2.noise_ratio"])]
