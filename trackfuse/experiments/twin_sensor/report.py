@@ -575,7 +575,7 @@ def _range_figure(run: RunData) -> Figure:
     """Paper Fig. 2: range RMSE (km) against time (s)."""
     names = _headline_pair(run.config["params"]["algorithms"])
     title = [f"{_fig_words(run, 2)}: range RMSE against time ({_runs(run.trials)} runs per "
-             "point)", _context(run, "95 % bootstrap-t bands per scan; grey: single runs")]
+             "point)", _context(run, "95 % bootstrap-t bands; grey: single runs")]
     return _time_figure(run, lambda ax, f, p: _draw_range(ax, f, p, names), title,
                         "range RMSE (km)", len(names) + 3)
 
