@@ -287,10 +287,11 @@ def _load_all(paths: list[Path], sets: dict[str, Any]) -> list[Config]:
     configs, used, problems = [], set(), []
     for path in paths:  # every bad config is named, one line each, before any runs
         try:
-            schema = load(config_path(path)).experiment.schema
-            mine = {k: v for k, v in sets.items() if k in OVERRIDABLE_TOP_LEVEL or k in schema}
+            plain = load(config_path(path))
+            mine = {k: v for k, v in sets.items()
+                    if k in OVERRIDABLE_TOP_LEVEL or k in plain.experiment.schema}
             used |= set(mine)
-            configs.append(load(config_path(path), mine))
+            configs.append(load(config_path(path), mine) if mine else plain)
         except ConfigError as err:
             problems.append(str(err))
     for message in problems[:-1]:

@@ -158,8 +158,8 @@ def compare_trials(base: pd.DataFrame, new: pd.DataFrame, keys: Sequence[str],
     """
     keys, binary, better = list(keys), set(binary), dict(better or {})
     tolerance = dict(tolerance or {})
-    common = [m for m in metric_columns(base, keys)
-              if m in set(metric_columns(new, keys)) and m not in skip]
+    in_new = set(metric_columns(new, keys))
+    common = [m for m in metric_columns(base, keys) if m in in_new and m not in skip]
     if metrics is not None:
         common = [m for m in common if m in set(metrics)]
     b_long, n_long = _long(base, keys, common), _long(new, keys, common)

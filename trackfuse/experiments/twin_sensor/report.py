@@ -773,10 +773,7 @@ def final_scan_table(run: RunData) -> pd.DataFrame:
         k = grouped[rule].sum().to_numpy()
         lo, hi = wilson_interval(k, n)
         _with_interval(table, f"{rule}_pct", 100 * k / n, 100 * lo, 100 * hi)
-    sq = grouped["range_sq_err_m2"]
-    boot = rmse_intervals([g.to_numpy() for _, g in sq]) / 1e3
-    _with_interval(table, "range_rmse_km", np.sqrt(sq.mean().to_numpy()) / 1e3, boot[:, 0],
-                   boot[:, 1])
+    _with_interval(table, "range_rmse_km", *_rmse_km(grouped["range_sq_err_m2"]))
     params = [run.point_params(int(pt)) for pt in table["point"]]
     table["range_pcrlb_km"] = [bounds(p)[0][-1] / 1e3 for p in params]
     table["range_pcrlb_filter_q_km"] = [bounds(p, q_model=float(p["filter.q"]))[0][-1] / 1e3
