@@ -131,19 +131,6 @@ def reference_line(ax, y: float, label: str, **kw) -> None:
     ax.axhline(y, label=label, **kw)
 
 
-def legend_below(fig, ax, max_cols: int | None = None) -> None:
-    """One figure legend below the panels, built from ``ax``'s entries.
-
-    ``max_cols`` caps the legend's columns; by default as many as fit the figure width
-    (one per 2.8 inches).
-    """
-    handles, labels = ax.get_legend_handles_labels()
-    cap = max_cols if max_cols is not None else int(fig.get_figwidth() / 2.8)
-    fig.legend(handles, labels, loc="outside lower center",
-               ncols=max(1, min(len(labels), cap)))
-
-
-
 OUTSIDE = "<outside the figure>"
 """The partner :func:`text_overlaps` gives a text that runs off the figure."""
 
