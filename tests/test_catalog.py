@@ -10,7 +10,7 @@ import sys
 
 from typer.testing import CliRunner
 
-from trackfuse.catalog import find_runs
+from trackfuse.catalog import DAMAGED, NO_REPORT, find_runs
 from trackfuse.config import load
 from trackfuse.runlock import HOLDER_FILE
 from trackfuse.runner import Runner
@@ -25,7 +25,7 @@ def test_runs_lists_run_folders_with_their_name_and_plot_lists_a_folder_of_runs(
     Runner(load(cfg, {"seed": 2}), out, progress=False, plots=False).run()
     found = find_runs(out)
     assert sorted((r.stem, r.name, r.status, r.trials_done) for r in found) == \
-        [("gauss", "", "complete", 4), ("gauss", "first try", "complete", 4)]
+        [("gauss", "", NO_REPORT, 4), ("gauss", "first try", NO_REPORT, 4)]
     again = Runner(load(cfg), out, progress=False, plots=False)  # resume keeps the name
     again.run()
     assert json.loads((again.folder.path / "manifest.json").read_text())["name"] == "first try"
@@ -83,3 +83,37 @@ def test_a_stopped_run_shows_the_trials_its_saved_parts_hold(write_config, tmp_p
         (parts / f"{name}.csv").write_text("")
     stopped = find_runs(tmp_path)[0]
     assert (stopped.status, stopped.trials_done, stopped.trials_total) == ("stopped", 4, 20)
+
+
+def test_a_complete_run_renamed_by_name_keeps_its_results(write_config, tmp_path):
+    """--name on a complete run was ignored without a word (the run returned before its
+    manifest was written)."""
+    cfg = write_config("experiment: toy_gaussian\ntrials: 4\nseed: 1\n", name="gauss")
+    Runner(load(cfg), tmp_path, progress=False, plots=False).run()
+    again = Runner(load(cfg), tmp_path, progress=False, plots=False, name="relabelled")
+    trials = (again.folder.path / "trials.csv").read_bytes()
+    assert again.run().status == "already complete"
+    assert find_runs(tmp_path)[0].name == "relabelled"
+    assert (again.folder.path / "trials.csv").read_bytes() == trials
+
+
+def test_damaged_folders_and_runs_without_a_report_are_listed_as_such(write_config,
+                                                                      tmp_path):
+    """A run whose trials.csv had grown after it finished was listed `complete`; a folder
+    with a cut manifest was left out of the list (and `runs` on it said `no runs`)."""
+    cfg = write_config("experiment: toy_gaussian\ntrials: 4\nseed: 1\n", name="gauss")
+    runners = [Runner(load(cfg, {"seed": seed}), tmp_path, progress=False, plots=plots)
+               for seed, plots in ((1, True), (2, True), (3, True), (4, False))]
+    for runner in runners:
+        runner.run()
+    grown, cut, intact, no_plots = (r.folder.path for r in runners)
+    with open(grown / "trials.csv", "a") as fh:
+        fh.write("garbage\n")
+    manifest = (cut / "manifest.json").read_text()
+    (cut / "manifest.json").write_text(manifest[: len(manifest) // 2])
+    status = {r.path: r.status for r in find_runs(tmp_path)}
+    assert status == {grown: DAMAGED, cut: DAMAGED, intact: "complete", no_plots: NO_REPORT}
+    (intact / "index.html").unlink()  # stopped while drawing its report
+    assert {r.path: r.status for r in find_runs(intact)} == {intact: NO_REPORT}
+    listed = CliRunner().invoke(app, ["runs", str(cut)])
+    assert listed.exit_code == 0 and DAMAGED in listed.stdout

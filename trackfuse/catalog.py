@@ -1,9 +1,10 @@
 """Find the run folders under an output root and say what each one holds.
 
 A run folder is ``<root>/<config-stem>/<run-id>/`` with a ``manifest.json``; this module
-reads only manifests (never the CSVs), so listing thousands of runs is quick. Folders whose
-manifest is missing or unreadable are skipped, not reported as errors: the catalogue is a
-view, and :func:`trackfuse.rundata.load` is where a damaged run is refused.
+reads only manifests and file sizes (never the CSVs), so listing thousands of runs is quick.
+A folder whose manifest cannot be read, or a complete run whose final files are missing or
+of another size than its manifest records, is listed as :data:`DAMAGED`;
+:func:`trackfuse.rundata.load` (which also compares checksums) says what is wrong.
 """
 
 from __future__ import annotations
@@ -13,12 +14,26 @@ from datetime import datetime
 from pathlib import Path
 from typing import Any
 
-from trackfuse.results import MANIFEST, PART_KINDS, RunFolder, RunFolderError, RunStatus, part_names
+from trackfuse.results import (
+    INDEX_HTML,
+    MANIFEST,
+    PART_KINDS,
+    RunFolder,
+    RunFolderError,
+    RunStatus,
+    part_names,
+)
 from trackfuse.runlock import held_by_a_live_process
 
 #: Shown for a run whose manifest says running but whose process has ended (killed, or
 #: stopped by a full disk): resumable by running the same command again.
 STOPPED = "stopped"
+#: Shown for a folder whose manifest cannot be read, or a complete run whose final files do
+#: not match the sizes its manifest records.
+DAMAGED = "damaged"
+#: Shown for a complete run without a report (run with ``--no-plots``, or stopped while
+#: drawing): ``trackfuse plot`` writes it.
+NO_REPORT = "complete, no report"
 
 
 @dataclass(frozen=True)
@@ -54,6 +69,11 @@ def _status(path: Path, manifest: dict[str, Any]) -> str:
     status = str(manifest.get("status", ""))
     if status == RunStatus.RUNNING and not held_by_a_live_process(path):
         return STOPPED
+    if status == RunStatus.COMPLETE:
+        if RunFolder(path).check_final_files(manifest, checksums=False) is not None:
+            return DAMAGED
+        if not (path / INDEX_HTML).is_file():
+            return NO_REPORT
     return status
 
 
@@ -100,6 +120,7 @@ def find_runs(root: Path) -> list[RunInfo]:
         try:
             manifest = RunFolder(path).read_manifest()
         except RunFolderError:
+            found.append(RunInfo(path, path.parent.name, "", "", DAMAGED, 0, 0, "", None))
             continue
         if manifest is not None:
             found.append(_info(path, manifest))

@@ -132,7 +132,7 @@ def load(path: str | Path, require_complete: bool = True) -> RunData:
         problem = folder.check_final_files(manifest)
         if problem is not None:
             raise RunFolderError(f"{problem}; run the same `trackfuse run` command again to "
-                                 "rebuild the final files from parts/")
+                                 "rebuild the final files (it recomputes what it must)")
     config = _read_config(path / CONFIG)
     if not isinstance(config, dict) or not isinstance(config.get("experiment"), str) \
             or not isinstance(config.get("params"), dict):

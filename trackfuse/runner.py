@@ -266,6 +266,8 @@ class Runner:
             if problem is None:
                 self.folder.remove_temporaries()
                 self.folder.drop_resume_state()
+                if self.name is not None and self.name != previous.get("name"):
+                    self.folder.write_manifest({**previous, "name": self.name})
                 index = self.folder.path / INDEX_HTML
                 outcome = RunOutcome(self.folder.path, RunStatus.ALREADY_COMPLETE,
                                      self.total_trials, 0,
@@ -408,7 +410,8 @@ class Runner:
             else path / TRIALS
         experiment = self.config.experiment
         summary, failed_rows = summarize(source, keys, experiment.binary_metrics,
-                                         skip=experiment.categorical_metrics)
+                                         skip=experiment.categorical_metrics,
+                                         bounds=experiment.metric_bounds)
         files[SUMMARY] = _write_record(path / SUMMARY, frame_csv(summary))
         if timings["rows"]:
             timing_summary, _ = summarize(path / TIMINGS, keys, suffix=TIME_SUFFIX)
