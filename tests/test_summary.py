@@ -110,3 +110,21 @@ def test_a_skipped_column_gets_no_summary_row(tmp_path):
     assert summary["metric"].tolist() == ["x"]
     everything, _ = summarize(frame, ["point", "algorithm"])
     assert sorted(everything["metric"]) == ["label", "x"]
+
+
+def test_a_bounded_metric_has_its_interval_clipped_to_its_bounds():
+    """A Student-t interval of a fraction near 1 passed 1 (passive_noise's accuracy of the
+    exact solver: ci_high 1.001); a metric's bounds now clip it, and nothing else."""
+    frame = pd.DataFrame({"point": 0, "algorithm": "a", "trial": range(4),
+                          "fraction": [1.0, 1.0, 1.0, 0.9], "square": [0.0, 0.0, 0.1, 0.0],
+                          "free": [1.0, 1.0, 1.0, 0.9]})
+    bounds = {"fraction": (0.0, 1.0), "square": (0.0, np.inf)}
+    clipped, _ = summarize(frame, ["point", "algorithm"], bounds=bounds)
+    plain, _ = summarize(frame, ["point", "algorithm"])
+    low, high = (clipped.set_index("metric")[c] for c in ("ci_low", "ci_high"))
+    assert plain.set_index("metric").loc["fraction", "ci_high"] > 1.0
+    assert plain.set_index("metric").loc["square", "ci_low"] < 0.0
+    assert high["fraction"] == 1.0 and low["square"] == 0.0
+    assert low["fraction"] == plain.set_index("metric").loc["fraction", "ci_low"]
+    pd.testing.assert_series_equal(clipped.set_index("metric").loc["free"],
+                                   plain.set_index("metric").loc["free"])

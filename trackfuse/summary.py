@@ -8,7 +8,7 @@ does not depend on how the trials were scheduled. Rows of failed trials (``statu
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -21,15 +21,16 @@ CHUNK_ROWS = 200_000
 
 
 def summarize(source: Path | pd.DataFrame, keys: Sequence[str], binary: Sequence[str] = (),
-              chunk_rows: int = CHUNK_ROWS, suffix: str = "",
-              skip: Sequence[str] = ()) -> tuple[pd.DataFrame, int]:
+              chunk_rows: int = CHUNK_ROWS, suffix: str = "", skip: Sequence[str] = (),
+              bounds: Mapping[str, tuple[float, float]] | None = None
+              ) -> tuple[pd.DataFrame, int]:
     """Return ``(summary, failed_rows)`` for the CSV at ``source``, or for the CSV already
     read whole (``pd.read_csv(path, low_memory=False)``), taken in the same chunks.
 
     ``keys`` are the grouping columns (``point``, swept keys, the experiment's row keys);
     every other numeric column whose name ends in ``suffix`` and is not in ``skip`` (labels
     such as a chosen track's index) is a metric. ``binary`` metrics get Wilson intervals, the
-    rest Student-t intervals.
+    rest Student-t intervals, clipped to a metric's ``bounds`` ``(low, high)`` if given.
     """
     partial: list[pd.DataFrame] = []
     failed = 0
@@ -67,6 +68,10 @@ def summarize(source: Path | pd.DataFrame, keys: Sequence[str], binary: Sequence
     is_binary = stats["metric"].isin(list(binary)).to_numpy()
     w_low, w_high = wilson_interval(np.round(mean * n), n)
     t_low, t_high = t_interval(mean, std, n)
+    for metric, (low, high) in (bounds or {}).items():
+        mine = (stats["metric"] == metric).to_numpy()
+        t_low = np.where(mine, np.clip(t_low, low, high), t_low)
+        t_high = np.where(mine, np.clip(t_high, low, high), t_high)
     out = stats[group].copy()
     out["n"] = n.astype(int)
     out["mean"], out["std"] = mean, std

@@ -36,13 +36,15 @@ An experiment module is the only place that knows its science. It exposes one mo
 Row columns: the runner adds ``point``, ``trial`` and the swept parameter values; the
 experiment supplies ``algorithm``, the keys listed in ``row_keys`` and numeric metric columns.
 Metrics declared binary are 0/1 and get Wilson intervals in the summary; every other numeric
-column gets a mean with a Student-t interval. Columns whose name ends in
+column gets a mean with a Student-t interval, clipped to the metric's bounds if it declares
+them. Columns whose name ends in
 ``_time_s`` are wall/CPU-time measurements: the runner keeps them out of ``trials.csv`` (which
 must be byte-identical for any worker count) and writes them to ``timings.csv`` instead.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
@@ -92,7 +94,10 @@ class Metric:
     intervals); ``better``: ``"lower"`` or ``"higher"`` when a change in one direction is a
     regression (``trackfuse.compare`` gates it), ``None`` for a diagnostic; ``categorical``:
     a label stored as a number (a chosen track's index), counted per value by the report and
-    never averaged: ``summary.csv`` has no row for it and ``compare`` skips it.
+    never averaged: ``summary.csv`` has no row for it and ``compare`` skips it; ``bounds``:
+    ``(low, high)`` that every value lies in (:data:`FRACTION`, :data:`NON_NEGATIVE`), to
+    which ``summary.csv`` clips the mean's interval (a Student-t interval of a fraction near
+    1 otherwise passes 1).
     """
 
     name: str
@@ -101,6 +106,11 @@ class Metric:
     binary: bool = False
     better: Better | None = None
     categorical: bool = False
+    bounds: tuple[float, float] | None = None
+
+
+#: :attr:`Metric.bounds` of a fraction, and of a quantity that cannot be negative.
+FRACTION, NON_NEGATIVE = (0.0, 1.0), (0.0, math.inf)
 
 
 @dataclass(frozen=True)
@@ -146,6 +156,11 @@ class Experiment:
     def binary_metrics(self) -> tuple[str, ...]:
         """Names of the 0/1 metrics (Wilson intervals)."""
         return tuple(m.name for m in self.metrics if m.binary)
+
+    @property
+    def metric_bounds(self) -> dict[str, tuple[float, float]]:
+        """``{name: (low, high)}`` of the metrics with :attr:`Metric.bounds`."""
+        return {m.name: m.bounds for m in self.metrics if m.bounds is not None}
 
     @property
     def categorical_metrics(self) -> tuple[str, ...]:

@@ -110,7 +110,7 @@ from trackfuse.association.manoeuvre import (
 from trackfuse.association.tdoa_df import C
 from trackfuse.association.time_align import bracket, interpolate, interpolate_covariance
 from trackfuse.association.track_likelihood import abstaining_decision, ml_track_decision
-from trackfuse.experiments.base import Metric, Param
+from trackfuse.experiments.base import NON_NEGATIVE, Metric, Param
 from trackfuse.reported import ESM_RADAR_WEIGHTS
 from trackfuse.rowtable import RowTable
 from trackfuse.seeding import TrialStreams
@@ -672,7 +672,8 @@ ROW_METRICS = (
     Metric("range_weight_min", "1", "range factor's weight, minimum over the scans"),
     Metric("alpha_mean", "1", "manoeuvre index, mean over the scans where it is defined"),
     Metric("alpha_peak", "1", "manoeuvre index, maximum over the scans"),
-    Metric("esm_invalid", "samples", "TDOA-DF samples carried forward"),
-    Metric("esm_range_sigma_m", "m", "mean 1-sigma of the TDOA-DF range"),
+    Metric("esm_invalid", "samples", "TDOA-DF samples carried forward", bounds=NON_NEGATIVE),
+    Metric("esm_range_sigma_m", "m", "mean 1-sigma of the TDOA-DF range",
+           bounds=NON_NEGATIVE),
 )
 """Every metric column of the rows (see the module docstring)."""

@@ -56,7 +56,7 @@ import numpy as np
 from trackfuse.association.assignment import COSTS, EXACT, pair_weights, solve_exact
 from trackfuse.association.passive_scene import scene_targets, simulate_scan, true_partners
 from trackfuse.association.pga import CHECKPOINTS
-from trackfuse.experiments.base import Metric, Param
+from trackfuse.experiments.base import FRACTION, NON_NEGATIVE, Metric, Param
 from trackfuse.seeding import TrialStreams
 
 #: PGA variants: name -> options of :func:`trackfuse.association.pga.pga`.
@@ -208,11 +208,12 @@ def run_trial(params: dict[str, Any], streams: TrialStreams) -> list[dict[str, A
 
 ROW_METRICS = (
     Metric("accuracy", "1", "measurement-level accuracy: measurements given their true "
-           "partner (or the dummy)", better="higher"),
-    Metric("precision", "1", "declared pairs that are true pairs", better="higher"),
-    Metric("recall", "1", "true pairs that are declared", better="higher"),
+           "partner (or the dummy)", better="higher", bounds=FRACTION),
+    Metric("precision", "1", "declared pairs that are true pairs", better="higher",
+           bounds=FRACTION),
+    Metric("recall", "1", "true pairs that are declared", better="higher", bounds=FRACTION),
     Metric("correct", "1", "the whole assignment is right", binary=True, better="higher"),
-    Metric("pairs", "pairs", "declared pairs"),
+    Metric("pairs", "pairs", "declared pairs", bounds=NON_NEGATIVE),
     Metric("at_opt", "1", "the solution reaches the exact optimum J*", binary=True,
            better="higher"),
     Metric("gap", "1", "J* - J, the objective gap to the exact optimum (log-likelihood "

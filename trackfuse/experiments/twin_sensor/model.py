@@ -85,7 +85,7 @@ from typing import Any
 import numpy as np
 
 from trackfuse.chi2 import chi2_quantile
-from trackfuse.experiments.base import Metric, Param
+from trackfuse.experiments.base import NON_NEGATIVE, Metric, Param
 from trackfuse.experiments.twin_sensor.stonesoup import (
     STONESOUP_ALGORITHMS,
     STONESOUP_PARAMS,
@@ -415,12 +415,14 @@ ROW_METRICS = (
     Metric("range_err_m", "m", "signed range error from platform 1 (its mean is the range "
            "bias)"),
     Metric("range_sq_err_m2", "m^2", "squared range error (its mean is the range MSE)",
-           better="lower"),
+           better="lower", bounds=NON_NEGATIVE),
     Metric("pos_sq_err_m2", "m^2", "squared position error (its mean is the position MSE)",
-           better="lower"),
-    Metric("nees", "1", "6-state normalized estimation error squared"),
-    Metric("nees_pos", "1", "position normalized estimation error squared"),
-    Metric("n_valid", "returns", "validated returns per sensor (mean over sensors)"),
+           better="lower", bounds=NON_NEGATIVE),
+    Metric("nees", "1", "6-state normalized estimation error squared", bounds=NON_NEGATIVE),
+    Metric("nees_pos", "1", "position normalized estimation error squared",
+           bounds=NON_NEGATIVE),
+    Metric("n_valid", "returns", "validated returns per sensor (mean over sensors)",
+           bounds=NON_NEGATIVE),
     Metric("lost_gate", "1", "lost by the gate rule (permanent)", binary=True, better="lower"),
     Metric("lost_angle", "1", "lost by the angle rule (permanent)", binary=True,
            better="lower"),
