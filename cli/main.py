@@ -104,7 +104,10 @@ def _load(cfg: Path, sets: dict[str, Any], sweeps: list[str], **top) -> Config:
         axes = parse_sweeps(sweeps)
     except SweepError as err:
         fail(f"--sweep: {err}")
-    overrides = {**sets, **{k: v for k, v in top.items() if v is not None}}
+    given = {k: v for k, v in top.items() if v is not None}
+    for key in given.keys() & sets.keys():
+        fail(f"--{key} {given[key]} and --set {key}={sets[key]}: give {key} once")
+    overrides = {**sets, **given}
     try:
         return load(config_path(cfg), overrides, axes)
     except ConfigError as err:
@@ -188,15 +191,16 @@ def exit_status(outcomes: list[RunOutcome]) -> int:
     return 1 if any(o.figure_errors for o in outcomes) else 0
 
 
-def _points(n: int) -> str:
-    return f"{n} point" if n == 1 else f"{n} points"
+def _count(n: int, noun: str) -> str:
+    """``"1 point"``, ``"2 points"``."""
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
 
 
 def _print_plan(runner: Runner) -> None:
     config = runner.config
-    print(f"# {config.source}: {_points(len(runner.points))} x {config.trials} trials = "
-          f"{runner.total_trials} trials in batches of {config.batch_size}; "
-          f"output: {runner.folder.path}")
+    print(f"# {config.source}: {_count(len(runner.points), 'point')} x "
+          f"{_count(config.trials, 'trial')} = {_count(runner.total_trials, 'trial')} in "
+          f"batches of {config.batch_size}; output: {runner.folder.path}")
 
 
 # ---------------------------------------------------------------------------- run
@@ -294,6 +298,7 @@ def _load_all(paths: list[Path], sets: dict[str, Any]) -> list[Config]:
             configs.append(load(config_path(path), mine) if mine else plain)
         except ConfigError as err:
             problems.append(str(err))
+    problems = list(dict.fromkeys(problems))  # a bad --set fails every config alike
     for message in problems[:-1]:
         print_error(message)
     if problems:
@@ -535,7 +540,8 @@ def validate(
     from trackfuse.sweep import count_points
     config = _load(cfg, _overrides(sets, overrides), sweeps)
     points = count_points(config.sweep, config.sweep_mode)
-    print(f"ok: {cfg}: {config.experiment.name}, {_points(points)} x {config.trials} trials")
+    print(f"ok: {cfg}: {config.experiment.name}, {_count(points, 'point')} x "
+          f"{_count(config.trials, 'trial')}")
 
 
 @app.command("list")

@@ -23,6 +23,10 @@ def _stop(signum: int, frame: object) -> None:
     raise KeyboardInterrupt
 
 
+#: The commands that save work a second call resumes.
+RESUMABLE = ("run", "reproduce")
+
+
 class OneLineErrors(TyperGroup):
     """Usage errors (a bad option value, a missing argument) as one ``error:`` line, exit 2;
     a Ctrl-C or SIGTERM as one ``interrupted:`` line, exit 130."""
@@ -32,7 +36,9 @@ class OneLineErrors(TyperGroup):
         try:
             return super().invoke(ctx)
         except KeyboardInterrupt:
-            print("interrupted: run the same command again to resume", file=sys.stderr)
+            resumable = ctx.invoked_subcommand in RESUMABLE
+            print("interrupted" + (": run the same command again to resume" if resumable
+                                   else ""), file=sys.stderr)
             raise typer.Exit(130) from None
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True,
@@ -45,7 +51,9 @@ class OneLineErrors(TyperGroup):
         except typer.TyperException as err:  # click's ClickException and UsageError
             ctx = getattr(err, "ctx", None)
             hint = f" (see `{ctx.command_path} --help`)" if ctx is not None else ""
-            print_error(f"{err.format_message()}{hint}")
+            # typer words a bad choice "Invalid value for '--x': Value error, 'y' is not..."
+            message = err.format_message().replace(": Value error, ", ": ")
+            print_error(f"{message}{hint}")
             sys.exit(err.exit_code)
         except typer.Abort:
             print_error("aborted")
@@ -100,7 +108,7 @@ Overrides = Annotated[list[str] | None, typer.Argument(
     help="Overrides as in Hydra: clutter.mean=5 (same as --set).")]
 Sets = Annotated[list[str], typer.Option(
     "--set", metavar="KEY=VALUE", show_default=False,
-    help="Override a value: clutter.mean=5, 'algorithms=\\[nn/ekf,nn/mgekf]' "
+    help="Override a value: clutter.mean=5, a list in brackets: 'algorithms=\\[nn/ekf]' "
          "(repeatable).")]
 Sweeps = Annotated[list[str], typer.Option(
     "--sweep", metavar="KEY=V1,V2", show_default=False,
@@ -123,6 +131,9 @@ Scheduler = Annotated[str | None, typer.Option(metavar="ADDRESS", help="dask sch
 SchedulerFile = Annotated[str | None, typer.Option(metavar="FILE", help="dask scheduler file.")]
 DryRun = Annotated[bool, typer.Option("--dry-run", metavar="", help="Print the resolved "
                                       "config and the work; run nothing.")]
-NoPlots = Annotated[bool, typer.Option("--no-plots", metavar="", help="Skip figures.")]
+NoPlots = Annotated[bool, typer.Option(
+    "--no-plots", metavar="", help="Skip the report (figures, tables, index.html): only the "
+    "CSVs and summary.csv. `trackfuse plot RUN_DIR`, or the same command without it, writes "
+    "it later.")]
 NoProgress = Annotated[bool, typer.Option("--no-progress", metavar="",
                                           help="No progress output.")]

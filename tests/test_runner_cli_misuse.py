@@ -261,3 +261,48 @@ def test_reproduce_names_every_bad_config_before_running_any(tmp_path):
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 2 and "a.yaml" in lines[0] and "b.yaml: trials" in lines[1], lines
     assert not (tmp_path / "out").exists()
+
+
+def test_a_parameter_set_and_swept_in_one_file_is_refused(write_config):
+    """`params.clutter.mean: 3` beside `sweep: {clutter.mean: [0, 1]}` passed `validate`:
+    the sweep won and the resolved config still showed 3 under params."""
+    cfg = write_config("experiment: twin_sensor\nparams:\n  clutter:\n    mean: 3\n"
+                       "sweep:\n  clutter.mean: [0, 1]\n")
+    result = trackfuse("validate", cfg)
+    assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr
+    assert f"{cfg}: params.clutter.mean: also swept (sweep.clutter.mean)" in result.stderr
+    assert trackfuse("validate", cfg, "--set", "clutter.mean=2").returncode == 0  # settled
+
+
+def test_an_option_and_a_set_of_the_same_key_are_refused():
+    """`--trials 5 --set trials=7` ran 5 trials without a word."""
+    result = trackfuse("run", PASSIVE, "--trials", "5", "--set", "trials=7", "--dry-run")
+    assert result.returncode == 2, result.stdout
+    assert result.stderr == "error: --trials 5 and --set trials=7: give trials once\n"
+
+
+def test_a_bad_set_fails_reproduce_in_one_line_and_a_bad_choice_reads_plainly():
+    """A bad `--set` printed the same error once per config (7 lines); a bad choice said
+    "Invalid value for '--executor': Value error, 'foo' is not one of ..."."""
+    result = trackfuse("reproduce", CI, "--set", "clutter.mean=-1", "--dry-run")
+    assert result.returncode == 2
+    assert result.stderr == "error: --set: clutter.mean: got -1; allowed: a number in " \
+                            "[0, 200]\n"
+    choice = trackfuse("run", PASSIVE, "--executor", "foo", "--dry-run")
+    assert choice.returncode == 2 and "'--executor': 'foo' is not one of" in choice.stderr
+
+
+def test_an_interrupted_command_that_saves_nothing_does_not_speak_of_resuming(tmp_path):
+    """SIGTERM to `validate` (blocked reading a named pipe) said "run the same command again
+    to resume": validate has nothing to resume."""
+    fifo = tmp_path / "cfg.yaml"
+    os.mkfifo(fifo)
+    proc = subprocess.Popen([sys.executable, "-m", "trackfuse", "validate", str(fifo)],
+                            env=cli_env(), stderr=subprocess.PIPE, text=True)
+    wchan = Path(f"/proc/{proc.pid}/wchan")
+    deadline = time.monotonic() + 60
+    while wchan.read_text() != "wait_for_partner" and time.monotonic() < deadline:
+        time.sleep(0.05)  # until it blocks opening the pipe: its handlers are in place
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130 and err == "interrupted\n", err

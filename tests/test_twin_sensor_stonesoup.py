@@ -116,10 +116,10 @@ def test_a_stonesoup_algorithm_without_stonesoup_is_one_config_error(monkeypatch
     real = importlib.util.find_spec
     monkeypatch.setattr(importlib.util, "find_spec",
                         lambda name, *a: None if name == "stonesoup" else real(name, *a))
-    raw = {"experiment": "twin_sensor", "params": {"algorithms": ["mspda_parallel/ekf"]},
+    raw = {"experiment": "twin_sensor",
            "sweep": {"algorithms": [["mspda_parallel/ekf"], ["stonesoup_pda/ukf"]]}}
     with pytest.raises(ConfigError, match=r"sweep\.algorithms: stonesoup_pda/ukf needs "
                                           r"Stone Soup.*pip install 'trackfuse\[stonesoup\]'"):
         build(raw, "cfg.yaml")
-    raw["sweep"] = {}
+    raw = {"experiment": "twin_sensor", "params": {"algorithms": ["mspda_parallel/ekf"]}}
     assert build(raw, "cfg.yaml").params["algorithms"] == ["mspda_parallel/ekf"]

@@ -263,6 +263,8 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
     for key, value in sets.items():
         params[key] = _validated(SET, exp, "", key, value)
     sweep = _sweep(source, exp, raw.get("sweep") or {}, dict(sweeps or {}), dropped=set(sets))
+    _check_set_once(source, raw.get("params") or {}, raw.get("sweep") or {},
+                    overridden={*sets, *(sweeps or {})})
     mode = _sweep_mode(origin["sweep_mode"], raw.get("sweep_mode", "grid"), sweep)
     _check_distinct(source, sweep, mode, set(sweeps or {}))
     if count_points(sweep, mode) > MAX_POINTS:
@@ -309,6 +311,18 @@ def _sweep(source: str, exp: Experiment, sweep_raw: Any, sweeps: dict[str, Any],
             raise ConfigError(where, _dotted(section, key), str(err)) from None
         sweep[key] = [_validated(where, exp, section, key, v) for v in values]
     return sweep
+
+
+def _check_set_once(source: str, params_raw: Mapping, sweep_raw: Mapping,
+                    overridden: set[str]) -> None:
+    """Refuse a file that sets a parameter under ``params`` and sweeps it too (the sweep's
+    values would be used, the other never); an override of the key settles it."""
+    flat = flatten(params_raw)
+    both = [key for key in map(str, sweep_raw) if key in flat and key not in overridden]
+    if both:
+        raise ConfigError(source, f"params.{both[0]}", f"also swept (sweep.{both[0]}), whose "
+                          "values would be used and this one never; allowed: the key under "
+                          "params or under sweep, not both")
 
 
 def _dotted(section: str, key: str) -> str:

@@ -35,8 +35,10 @@ def _config(experiment: str | Experiment, params: Mapping[str, Any] | None,
         if experiment.name not in experiments.names():
             experiments.register(experiment)
         experiment = experiment.name
+    sweep = dict(sweep or {})
+    fixed = {k: v for k, v in (params or {}).items() if k not in sweep}
     raw: dict[str, Any] = {"experiment": experiment, "trials": trials, "seed": seed,
-                           "params": dict(params or {}), "sweep": dict(sweep or {}),
+                           "params": fixed, "sweep": sweep,
                            "sweep_mode": sweep_mode}
     if batch_size is not None:
         raw["batch_size"] = batch_size
@@ -48,9 +50,9 @@ def run_data(out: str | Path, experiment: str | Experiment,
              sweep: Mapping[str, list[Any]] | None = None, *, trials: int = 10, seed: int = 0,
              sweep_mode: str = "grid", batch_size: int | None = None) -> RunData:
     """Run ``experiment`` (a name or an :class:`Experiment`) into ``out`` and return the
-    complete run. ``params`` override defaults (dotted keys); ``sweep`` maps a key to its
-    values; ``trials`` per sweep point; ``seed`` the root seed; ``batch_size`` default: the
-    experiment's."""
+    complete run. ``params`` override defaults (dotted keys; a swept key's value is
+    ignored); ``sweep`` maps a key to its values; ``trials`` per sweep point; ``seed`` the
+    root seed; ``batch_size`` default: the experiment's."""
     config = _config(experiment, params, sweep, trials, seed, sweep_mode, batch_size)
     runner = Runner(config, Path(out), workers=1, executor="serial", plots=False,
                     progress=False, command=["trackfuse.harness"])
