@@ -80,6 +80,20 @@ def test_the_markdown_names_paper_value_our_interval_and_verdict(runs):
             assert (root / line.split("(")[1].rstrip(")")).is_file()
 
 
+def test_a_paper_none_of_whose_configs_ran_gets_no_empty_table(runs):
+    """A reproduce of configs that are not the paper's own (configs/ci) printed a header-only
+    table under "No paper item could be compared"."""
+    root, folders = runs
+    toy = TOY_PAPER["toy_gaussian"]
+    paper = {"toy_gaussian": Paper(toy.key, toy.citation, toy.results, ("not-run",))}
+    out = root / "none"
+    out.mkdir()
+    write_reproduction_report(folders, out, paper)
+    text = (out / REPORT_MD).read_text()
+    assert "No paper item could be compared" in text and "| config |" not in text
+    assert "<table>" not in (out / REPORT_HTML).read_text()
+
+
 @pytest.mark.skipif(chromium() is None, reason="no Chromium on this machine (.ci/run "
                     "installs Debian's chromium package)")
 def test_the_report_page_loads_in_a_browser_with_every_image_decoded(runs, tmp_path):

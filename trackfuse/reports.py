@@ -344,9 +344,9 @@ def _run_facts(run: RunData) -> list[tuple[str, str]]:
         ("run id", str(m.get("run_id", run.path.name))),
         ("code", _code_text(m)),
         ("versions", versions),
+        ("started", str(m.get("first_started") or m.get("started", ""))),
         # the runner writes the report before it records the finishing time
-        ("finished", str(m["finished"])) if m.get("finished")
-        else ("started", str(m.get("started", ""))),
+        *([("finished", str(m["finished"]))] if m.get("finished") else []),
     ]
 
 

@@ -253,8 +253,9 @@ def report_markdown(sections: Sequence[PaperSection], out: Path) -> str:
              "inside it, absolute otherwise.", ""]
     for s in sections:
         lines += [f"## {s.key}", "", f"*{s.citation}*", "", _summary_line(s), ""]
-        lines += ["| config | paper item | quantity | algorithm | paper | ours [95 % CI] "
-                  "| verdict | reason |", "|---|---|---|---|---|---|---|---|"]
+        if not s.rows.empty:
+            lines += ["| config | paper item | quantity | algorithm | paper | ours [95 % CI] "
+                      "| verdict | reason |", "|---|---|---|---|---|---|---|---|"]
         for _, r in s.rows.iterrows():
             link, text = _doc_link(r["docs"], out)
             reason = (f"{r['reason']} ([{text}]({link}))" if link
@@ -262,7 +263,7 @@ def report_markdown(sections: Sequence[PaperSection], out: Path) -> str:
             cells = [r["config"], r["paper_item"], r["quantity"], _text(r["algorithm"]),
                      _text(r["paper_value"]), _ours(r), f"**{r['verdict']}**", reason]
             lines.append("| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |")
-        lines.append("")
+        lines += [""] if not s.rows.empty else []
         lines += [f"- problem: {p}" for p in s.problems] + ([""] if s.problems else [])
         for f in s.figures:
             rel = os.path.relpath(f.png, out)
@@ -287,6 +288,8 @@ _CSS = ("body{font-family:sans-serif;max-width:80em;margin:2em auto;padding:0 1e
 
 def _html_rows(section: PaperSection, out: Path) -> str:
     esc = html.escape
+    if section.rows.empty:
+        return ""
     head = ("<tr><th>config</th><th>paper item</th><th>quantity</th><th>algorithm</th>"
             "<th>paper</th><th>ours [95 % CI]</th><th>verdict</th><th>reason</th></tr>")
     body = []
