@@ -272,6 +272,11 @@ def test_a_parameter_set_and_swept_in_one_file_is_refused(write_config):
     assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr
     assert f"{cfg}: params.clutter.mean: also swept (sweep.clutter.mean)" in result.stderr
     assert trackfuse("validate", cfg, "--set", "clutter.mean=2").returncode == 0  # settled
+    template = trackfuse("list", "twin_sensor", "--format", "yaml").stdout  # every default
+    swept = write_config(template.replace("sweep: {}", "sweep: {clutter.mean: [0, 1]}"),
+                         name="template")
+    assert "sweep: {clutter.mean" in swept.read_text()
+    assert trackfuse("validate", swept).returncode == 0  # a default left in place is no clash
 
 
 def test_an_option_and_a_set_of_the_same_key_are_refused():
