@@ -3,6 +3,7 @@ legend entry can be seen."""
 
 from dataclasses import replace
 
+import numpy as np
 import pandas as pd
 import pytest
 from matplotlib.colors import to_hex
@@ -10,7 +11,7 @@ from matplotlib.container import ErrorbarContainer
 
 from trackfuse import harness
 from trackfuse.experiments.twin_sensor import EXPERIMENT, report
-from trackfuse.plots.algorithms import line_kwargs
+from trackfuse.plots.algorithms import GREYS, line_kwargs, look
 from trackfuse.plots.style import text_overlaps
 from trackfuse.rundata import RunData
 
@@ -124,3 +125,89 @@ def test_loss_top_is_a_round_tick_above_the_intervals_unless_they_squash(highest
     points = pd.DataFrame({"pct": [0.0, highest], "hi": [1.0, upper], "bar": [True, True]})
     assert report._loss_top(points) == top
     assert report._tick_ceiling(upper) >= upper
+
+
+# --------------------------------------------------------------------------------------------
+# Fig. 2 redrawn: range RMSE and ANEES against time
+
+
+def _curve(ax, name: str):
+    label = look(name).label
+    return next(line for line in ax.get_lines() if line.get_label() == label)
+
+
+def _legend_handle(fig, label: str):
+    legend = fig.legends[0]
+    return next(h for h, t in zip(legend.legend_handles, legend.get_texts(), strict=True)
+                if t.get_text() == label)
+
+
+@pytest.mark.parametrize("figure", ["range_error_vs_time", "anees_vs_time"])
+def test_the_ekf_curve_shows_where_it_lies_on_the_mgekf(run_50, figure):
+    """The EKF curve (0.03 km from the MGEKF's in twin_sensor_orbit) lies above the MGEKF's,
+    thinner and dashed with white gaps, with larger open markers; its legend entry is
+    dashed like its band edges."""
+    fig = report.figures(run_50, [figure])[figure]
+    for ax in fig.axes:
+        mgekf, ekf = _curve(ax, "paper_approx/mgekf"), _curve(ax, "paper_approx/ekf")
+        assert ekf.get_zorder() > mgekf.get_zorder()
+        assert ekf.get_linestyle() == "--" and ekf.get_gapcolor() == "white"
+        assert ekf.get_linewidth() < mgekf.get_linewidth()
+        assert ekf.get_markersize() > mgekf.get_markersize()
+        assert ekf.get_markerfacecolor() == "none"
+    handle = _legend_handle(fig, look("paper_approx/ekf").label)
+    assert handle.get_linestyle() == "--"
+    if figure == "range_error_vs_time":
+        edges = _legend_handle(fig, "95 % band, EKF (dashed edges)")
+        assert edges.get_linestyle() == "--" and to_hex(edges.get_color()) == to_hex(
+            handle.get_color())
+        assert "95 % band, MGEKF (shaded)" in _legend(fig)
+    assert text_overlaps(fig) == []
+
+
+def _single_runs(ax) -> list:
+    return [line for line in ax.get_lines() if line.get_color() == GREYS[1]]
+
+
+def test_single_runs_fit_the_range_axis(run_50):
+    """The grey single runs used to be cut at 1.8 times the highest RMSE or bound; the axis
+    now reaches a round tick above them (at most 3 times that height)."""
+    fig = report.figures(run_50, ["range_error_vs_time"])["range_error_vs_time"]
+    for ax in fig.axes:
+        runs = _single_runs(ax)
+        assert len(runs) == report.SINGLE_RUNS
+        top = ax.get_ylim()[1]
+        assert max(float(np.max(line.get_ydata())) for line in runs) <= top
+        assert top in ax.get_yticks()
+        assert not any("cut" in t.get_text() for t in ax.texts)
+
+
+def test_a_single_run_far_above_the_curves_is_cut_and_the_panel_says_so(run_50):
+    trials = run_50.trials.copy()
+    first = (trials["algorithm"] == "paper_approx/mgekf") & (trials["trial"] == 0)
+    trials.loc[first, "range_err_m"] *= 20  # only the single run; the RMSE keeps its data
+    run = replace(run_50)
+    run.trials = trials
+    fig = report.figures(run, ["range_error_vs_time"])["range_error_vs_time"]
+    for ax in fig.axes:
+        top = ax.get_ylim()[1]
+        highest = max(float(np.max(line.get_ydata())) for line in _single_runs(ax))
+        assert highest > report.SINGLE_RUNS_REACH * top / 1.8  # far above: cut
+        notes = [t.get_text() for t in ax.texts if "cut" in t.get_text()]
+        assert notes == [f"single runs cut at {top:g} km (highest {highest:.0f} km)"]
+    assert text_overlaps(fig) == []
+
+
+def test_coinciding_bounds_are_drawn_once_and_said_so(run_50):
+    """With the filter's q equal to the truth's the two bounds are the same curve: one
+    dash-dot curve labelled for both, no dotted curve hidden under it."""
+    equal = replace(run_50)
+    equal.config = {**run_50.config, "params": {**run_50.config["params"],
+                                                "filter.q": run_50.params["target.q"]}}
+    fig = report.figures(equal, ["range_error_vs_time"])["range_error_vs_time"]
+    texts = _legend(fig)
+    assert report.PCRLB_BOTH in texts
+    assert report.PCRLB_FILTER not in texts and report.PCRLB_TRUTH not in texts
+    assert not any(line.get_linestyle() == ":" for ax in fig.axes for line in ax.get_lines())
+    apart = report.figures(run_50, ["range_error_vs_time"])["range_error_vs_time"]
+    assert {report.PCRLB_TRUTH, report.PCRLB_FILTER} <= set(_legend(apart))

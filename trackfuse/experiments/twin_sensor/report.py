@@ -74,7 +74,7 @@ from matplotlib.ticker import MaxNLocator
 from pandas.api.typing import SeriesGroupBy
 
 from trackfuse.experiments.twin_sensor.model import PARAMS, bounds, build_scenario
-from trackfuse.plots.algorithms import GREYS, VERMILLION, line_kwargs, look
+from trackfuse.plots.algorithms import FILTER_LABELS, GREYS, VERMILLION, line_kwargs, look
 from trackfuse.plots.style import Margins, context, fixed_figure, legend_in_strip
 from trackfuse.reported import TWIN_SENSOR
 from trackfuse.reports import HEADLINE_COLUMNS
@@ -433,8 +433,8 @@ LOSS_TICK_STEPS = [1, 2, 5, 10]
 
 
 def _tick_ceiling(value: float) -> float:
-    """The first tick at or above ``value`` (> 0) of a loss axis on ``[0, value]``
-    (:data:`LOSS_TICK_STEPS`, at most 6 intervals): a readable axis top."""
+    """The first tick at or above ``value`` (> 0) of an axis on ``[0, value]`` with steps
+    :data:`LOSS_TICK_STEPS` and at most 6 intervals: a readable axis top."""
     ticks = MaxNLocator(nbins=6, steps=LOSS_TICK_STEPS).tick_values(0.0, value)
     return float(min(t for t in ticks if t >= value * (1 - 1e-12)))
 
@@ -597,8 +597,10 @@ def _time_points(run: RunData) -> list[int]:
 
 
 def _time_figure(run: RunData, draw: Callable[[Axes, pd.DataFrame, dict[str, Any]], None],
-                 title: Sequence[str], y_label: str, legend_entries: int) -> Figure:
-    """One panel per :func:`_time_points` point against time (s)."""
+                 title: Sequence[str], y_label: str, legend_entries: int,
+                 everywhere: Collection[str] = ()) -> Figure:
+    """One panel per :func:`_time_points` point against time (s); the legend holds the
+    first panel's entries and those labelled one of ``everywhere`` in any panel."""
     points = _time_points(run)
     swept = swept_keys(run.config)
     per_row = 3 if len(points) % 3 == 0 or len(points) > 4 else len(points)
@@ -614,14 +616,69 @@ def _time_figure(run: RunData, draw: Callable[[Axes, pd.DataFrame, dict[str, Any
         ax.set_ylabel(y_label)
         ax.set_ylim(bottom=0)
         ax.set_title(panel_title)
-    return _finish(fig, axes[:1], cols)
+    return _finish(fig, axes[:1], cols, everywhere)
+
+
+def _time_curve_kwargs(name: str) -> dict[str, Any]:
+    """:func:`~trackfuse.plots.algorithms.line_kwargs` of a curve against time (3 pt
+    markers). An EKF curve (dashed, open markers) is thinner, has white dash gaps and larger
+    open markers and lies above the MGEKF: where the two coincide the MGEKF's thick line
+    shows around the EKF's dashes, and each filled marker inside an open one."""
+    kw = {**line_kwargs(name), "markersize": 3}
+    if name.endswith("/ekf"):
+        kw.update(linewidth=1.0, gapcolor="white", markersize=5.5, zorder=kw["zorder"] + 1)
+    return kw
+
+
+def _filter_words(name: str) -> str:
+    """The filter of ``association/filter`` in words ("MGEKF"), else the algorithm's label."""
+    return FILTER_LABELS.get(name.partition("/")[2], look(name).label)
+
+
+SINGLE_RUNS_REACH = 3.0
+"""The range axis shows the single runs in full up to this multiple of the highest RMSE or
+bound drawn; a run that goes higher is cut at the top (said in the panel) so that the RMSE
+curves and the bounds keep most of the panel's height."""
+
+
+def _range_ylim(ax: Axes, highest: float, single_runs: np.ndarray) -> None:
+    """y from 0 to a round tick above 1.8 times ``highest`` (km: the highest RMSE or bound
+    drawn) and above every single run (``single_runs``, km) unless one passes
+    :data:`SINGLE_RUNS_REACH` times ``highest``: then the panel says they are cut."""
+    reach = float(np.nanmax(single_runs, initial=0.0))
+    wanted = 1.8 * highest if reach > SINGLE_RUNS_REACH * highest else max(1.8 * highest, reach)
+    top = _tick_ceiling(wanted)
+    ax.set_ylim(0.0, top)
+    if reach > top:
+        ax.text(0.97, 0.96, f"single runs cut at {top:g} km (highest {reach:.0f} km)",
+                transform=ax.transAxes, fontsize=7, ha="right", va="top")
+
+
+PCRLB_TRUTH = "sqrt PCRLB (truth model, clutter-aware)"
+PCRLB_FILTER = "sqrt PCRLB (filter's q)"
+PCRLB_BOTH = "sqrt PCRLB (truth and filter's q, clutter-aware)"
+"""Legend labels of the bounds against time: apart, or drawn once where they coincide."""
+
+
+def _pcrlb_curves(params: dict[str, Any]) -> list[tuple[np.ndarray, str, str]]:
+    """``[(range bound (K,) km, line style, label)]`` of a sweep point: the truth model's
+    (dashed) and the filter's ``q``'s (dotted), or, where they differ by less than 1 % at
+    every scan (``filter.q`` equal to ``target.q``, or both near 0), the truth model's alone
+    as a dash-dot curve labelled :data:`PCRLB_BOTH` (a dotted curve under a dashed one
+    cannot be seen)."""
+    truth = bounds(params)[0] / 1e3
+    model = bounds(params, q_model=float(params["filter.q"]))[0] / 1e3
+    if np.all(np.abs(model - truth) < 0.01 * truth):
+        return [(truth, "-.", PCRLB_BOTH)]
+    return [(truth, "--", PCRLB_TRUTH), (model, ":", PCRLB_FILTER)]
 
 
 def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
                 names: Sequence[str]) -> None:
-    """Range RMSE (km) with 95 % bootstrap-t bands per scan (the MGEKF's filled, the EKF's
-    as thin edges), five single runs of the first algorithm, the square-root PCRLBs, and the
-    correlation of the first algorithm's errors between the first and the last scan."""
+    """Range RMSE (km) with 95 % bootstrap-t bands per scan (the first algorithm's filled,
+    the second's as dashed edges, each band in the legend), five single runs of the first
+    algorithm, the square-root PCRLBs, and the correlation of the first algorithm's errors
+    between the first and the last scan."""
     period = float(params["scan.period"])
     top = 0.0
     for i, name in enumerate(names):
@@ -629,12 +686,16 @@ def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
         band = _rmse_band(rows.groupby("scan")["range_sq_err_m2"]) / 1e3
         top = max(top, float(band["rmse"].max()))
         t = band.index.to_numpy(float) * period
-        kw = line_kwargs(name)
-        ax.plot(t, band["rmse"], **{**kw, "markersize": 3})
+        kw = _time_curve_kwargs(name)
+        ax.plot(t, band["rmse"], **kw)
+        label = f"95 % band, {_filter_words(name)}"
         if i == 0:
-            ax.fill_between(t, band["lo"], band["hi"], color=kw["color"], alpha=0.15, lw=0)
+            ax.fill_between(t, band["lo"], band["hi"], color=kw["color"], alpha=0.15, lw=0,
+                            label=f"{label} (shaded)")
         else:
-            ax.plot(t, band["lo"], t, band["hi"], color=kw["color"], lw=0.6, ls="--")
+            ax.plot(t, band["lo"], color=kw["color"], lw=0.6, ls="--",
+                    label=f"{label} (dashed edges)")
+            ax.plot(t, band["hi"], color=kw["color"], lw=0.6, ls="--")
     errors = frame[frame["algorithm"] == names[0]].pivot(index="trial", columns="scan",
                                                          values="range_err_m")
     single = errors.to_numpy()[:SINGLE_RUNS] / 1e3
@@ -643,11 +704,9 @@ def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
         ax.plot(t, run_err, color=GREYS[1], lw=0.6, alpha=0.8, zorder=1,
                 label=f"{SINGLE_RUNS} single runs, |range error|" if j == 0 else None)
     times = np.arange(1, int(params["scan.count"]) + 1) * period
-    ax.plot(times, bounds(params)[0] / 1e3, "k--", lw=1.0,
-            label="sqrt PCRLB (truth model, clutter-aware)")
-    ax.plot(times, bounds(params, q_model=float(params["filter.q"]))[0] / 1e3, "k:", lw=1.0,
-            label="sqrt PCRLB (filter's q)")
-    _band_ylim(ax, max(top, float(np.max(bounds(params)[0])) / 1e3))
+    for bound, style, label in _pcrlb_curves(params):
+        ax.plot(times, bound, color="k", ls=style, lw=1.0, label=label)
+    _range_ylim(ax, max(top, float(np.max(bounds(params)[0])) / 1e3), np.abs(single))
     corr = float(np.corrcoef(errors.iloc[:, 0], errors.iloc[:, -1])[0, 1])
     ax.text(0.03, 0.04, f"corr. of errors, scan 1 vs {errors.columns[-1]}: {corr:.2f}",
             transform=ax.transAxes, fontsize=7, va="bottom")
@@ -658,8 +717,10 @@ def _range_figure(run: RunData) -> Figure:
     names = _headline_pair(run.config["params"]["algorithms"])
     title = [f"{_fig_words(run, 2)}: range RMSE against time ({_runs(run.trials)} runs per "
              "point)", _context(run, "95 % bootstrap-t bands; grey: single runs")]
+    labels = {label for pt in _time_points(run)
+              for _, _, label in _pcrlb_curves(run.point_params(pt))}
     return _time_figure(run, lambda ax, f, p: _draw_range(ax, f, p, names), title,
-                        "range RMSE (km)", len(names) + 3)
+                        "range RMSE (km)", 2 * len(names) + 1 + len(labels), labels)
 
 
 def _nees_figure(run: RunData) -> Figure:
@@ -675,7 +736,7 @@ def _nees_figure(run: RunData) -> Figure:
         ax.axhline(6.0, color="k", lw=0.8)
         for name in names:
             anees = frame[frame["algorithm"] == name].groupby("scan")["nees"].mean()
-            ax.plot(anees.index * period, anees, **{**line_kwargs(name), "markersize": 3})
+            ax.plot(anees.index * period, anees, **_time_curve_kwargs(name))
 
     title = [f"Diagnostic: average NEES (6 states) against time ({_runs(run.trials)} runs per "
              "point)", _context(run, "a consistent filter stays inside the band")]
