@@ -144,9 +144,9 @@ def _legend_handle(fig, label: str):
 
 @pytest.mark.parametrize("figure", ["range_error_vs_time", "anees_vs_time"])
 def test_the_ekf_curve_shows_where_it_lies_on_the_mgekf(run_50, figure):
-    """The EKF curve (0.03 km from the MGEKF's in twin_sensor_orbit) lies above the MGEKF's,
-    thinner and dashed with white gaps, with larger open markers; its legend entry is
-    dashed like its band edges."""
+    """The EKF curve (within 0.41 km of the MGEKF's in twin_sensor_orbit) lies above the
+    MGEKF's, thinner and dashed with white gaps, with larger open markers; its legend entry
+    is dashed like its band edges."""
     fig = report.figures(run_50, [figure])[figure]
     for ax in fig.axes:
         mgekf, ekf = _curve(ax, "paper_approx/mgekf"), _curve(ax, "paper_approx/ekf")
