@@ -249,7 +249,7 @@ def _legend_texts(fig) -> list[str]:
 
 def test_main_fig1_shows_the_papers_claim_on_its_scale(tmp_path):
     """At the paper's scenario no PDA track is lost (docs: W000-5), so the axis stays on the
-    claim's scale."""
+    claim's scale (stretched only as far as the error bars of 10 runs reach)."""
     cfg = load_config(CONFIGS / "twin_sensor_orbit.yaml")
     run = harness.run_data(tmp_path, EXPERIMENT, {**cfg.params, "algorithms": [
         "mspda_parallel/mgekf", "paper_approx/mgekf"]}, {"clutter.mean": [0.0, 5.0, 9.0, 12.0]},
@@ -260,7 +260,8 @@ def test_main_fig1_shows_the_papers_claim_on_its_scale(tmp_path):
     claim = next(line for line in ax.get_lines() if line.get_label() == report.CLAIM_LABEL)
     np.testing.assert_allclose(claim.get_xdata(), [0.0, 9.0])
     np.testing.assert_allclose(claim.get_ydata(), [5.0, 5.0])
-    assert ax.get_ylim()[1] <= 20.0 and ax.get_ylim()[0] < 0.0  # 0 % stays visible
+    # 0 % stays visible; the top reaches the bound of 0 of 10 runs (27.8 %), not 100 %
+    assert 27.8 < ax.get_ylim()[1] <= 30.0 and ax.get_ylim()[0] < 0.0
     curves = {line.get_label(): line for line in ax.get_lines() if line.get_marker() != "None"}
     paper, ours = (curves[look(n).label] for n in ("paper_approx/mgekf",
                                                     "mspda_parallel/mgekf"))

@@ -70,10 +70,11 @@ import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 from pandas.api.typing import SeriesGroupBy
 
 from trackfuse.experiments.twin_sensor.model import PARAMS, bounds, build_scenario
-from trackfuse.plots.algorithms import GREYS, VERMILLION, line_kwargs, look
+from trackfuse.plots.algorithms import FILTER_LABELS, GREYS, VERMILLION, line_kwargs, look
 from trackfuse.plots.style import Margins, context, fixed_figure, legend_in_strip
 from trackfuse.reported import TWIN_SENSOR
 from trackfuse.reports import HEADLINE_COLUMNS
@@ -332,12 +333,15 @@ def _point_title(params: dict[str, Any], swept: Sequence[str]) -> str:
     return ", ".join(parts + [_value_text(k, params[k]) for k in keys]) or "all runs"
 
 
-def _finish(fig: Figure, axes: Sequence[Axes], legend_cols: int) -> Figure:
-    """``fig`` with one legend of the entries of ``axes`` (each label once)."""
+def _finish(fig: Figure, axes: Sequence[Axes], legend_cols: int,
+            everywhere: Collection[str] = ()) -> Figure:
+    """``fig`` with one legend of the entries of ``axes`` and of the entries labelled one of
+    ``everywhere`` in any panel of ``fig`` (each label once)."""
     entries: dict[str, Any] = {}
-    for ax in axes:
+    for ax in fig.axes:
         for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
-            entries.setdefault(label, handle)
+            if ax in axes or label in everywhere:
+                entries.setdefault(label, handle)
     legend_in_strip(fig, list(entries.values()), list(entries), legend_cols)
     return fig
 
@@ -366,31 +370,45 @@ def _runs(frame: pd.DataFrame) -> int:
 # Fig. 1: loss against clutter
 
 
-def _draw_rates(ax: Axes, frame: pd.DataFrame, x_key: str, rule: str,
-                names: Sequence[str], every_bar: bool) -> float:
-    """Rate of ``rule`` against ``x_key`` per algorithm with 95 % Wilson error bars (with
-    ``every_bar`` at every point, else only where a run was flagged, plus one dotted line at
-    the upper bound of "0 flagged"). Curves are offset slightly in x so that equal values
-    stay visible. Returns the highest rate drawn (%)."""
+def _rate_points(frame: pd.DataFrame, x_key: str, rule: str,
+                 names: Sequence[str]) -> pd.DataFrame:
+    """Rate of ``rule`` against ``x_key`` per algorithm of ``names``, one row per point and
+    algorithm: ``name``, ``x`` (offset slightly per algorithm so that equal values stay
+    visible), ``k`` flagged of ``n``, ``pct`` and its 95 % Wilson ``lo``, ``hi`` (%)."""
     values = frame[x_key].astype(float)
     unit = float(values.max() - values.min() or 1.0) * min(0.012, 0.03 / len(names))
-    top = 0.0
+    parts = []
     for i, name in enumerate(names):
         r = _rates(frame[frame["algorithm"] == name], x_key, rule)
-        x = r.index.to_numpy(float) + unit * (i - (len(names) - 1) / 2)
-        kw = line_kwargs(name)
-        ax.plot(x, r["pct"], **kw)
-        bars = np.ones(len(r), bool) if every_bar else (r["k"] > 0).to_numpy()
-        ax.errorbar(x[bars], r["pct"][bars], yerr=[(r["pct"] - r["lo"])[bars],
-                                                  (r["hi"] - r["pct"])[bars]],
+        parts.append(r.reset_index(drop=True).assign(
+            name=name, x=r.index.to_numpy(float) + unit * (i - (len(names) - 1) / 2)))
+    return pd.concat(parts, ignore_index=True)
+
+
+def _with_bars(points: pd.DataFrame, every_bar: bool) -> pd.DataFrame:
+    """``points`` with ``bar``: an error bar is drawn there (with ``every_bar`` at every
+    point, else only where a run was flagged)."""
+    return points.assign(bar=True if every_bar else points["k"] > 0)
+
+
+def _draw_rates(ax: Axes, points: pd.DataFrame) -> None:
+    """The curves of :func:`_rate_points` (with :func:`_with_bars`), each with its 95 %
+    Wilson error bars where ``bar``."""
+    for name, r in points.groupby("name", sort=False):
+        kw = line_kwargs(str(name))
+        ax.plot(r["x"], r["pct"], **kw)
+        bars = r[r["bar"]]
+        ax.errorbar(bars["x"], bars["pct"], yerr=[bars["pct"] - bars["lo"],
+                                                  bars["hi"] - bars["pct"]],
                     fmt="none", ecolor=kw["color"], capsize=1.5, zorder=kw["zorder"],
-                    elinewidth=0.8 if look(name).emphasised else 0.6)
-        top = max(top, float(r["pct"].max()))
-    if not every_bar:
-        n = int(frame.groupby([x_key, "algorithm"]).size().min())
-        ax.axhline(100 * float(wilson_interval(0, n)[1]), color=GREYS[1], lw=0.8, ls=":",
-                   label=f"upper 95 % bound when 0 of {n} are flagged")
-    return top
+                    elinewidth=0.8 if look(str(name)).emphasised else 0.6)
+
+
+def _zero_bound(frame: pd.DataFrame, x_key: str) -> tuple[int, float]:
+    """``(n, pct)``: the fewest runs of a point and the 95 % upper bound (%) of "0 of n
+    flagged", drawn as one dotted line where error bars are drawn only at flagged points."""
+    n = int(frame.groupby([x_key, "algorithm"]).size().min())
+    return n, 100 * float(wilson_interval(0, n)[1])
 
 
 def _draw_claim(ax: Axes) -> None:
@@ -402,12 +420,63 @@ def _draw_claim(ax: Axes) -> None:
             solid_capstyle="butt", label=CLAIM_LABEL, zorder=2)
 
 
-def _loss_ylim(ax: Axes, highest_pct: float) -> None:
-    """0-15 % (the paper's claim lives below 5 %) when every estimate is at most 10 %, else
-    up to the next 10 % above 1.3 times the highest estimate (at most 100); error bars may
-    run off the top."""
-    top = 15.0 if highest_pct <= 10.0 else min(100.0, 10 * np.ceil(1.3 * highest_pct / 10))
+STRETCH_LIMIT = 2.0
+"""A loss axis reaches up to its highest error-bar top (a tick above it) only when that is at
+most this multiple of the range its estimates need; beyond, the curves would be squeezed
+into the bottom of the panel, so the axis keeps the estimates' range and every error bar
+that passes its top is marked there (:func:`_fit_loss_axis`)."""
+PAST_TOP_LABEL = "95 % interval runs past the top of the axis"
+
+
+LOSS_TICK_STEPS = [1, 2, 5, 10]
+"""Tick steps of a loss axis (times a power of ten): whole per cent, no 2.5 or 7.5."""
+
+
+def _tick_ceiling(value: float) -> float:
+    """The first tick at or above ``value`` (> 0) of an axis on ``[0, value]`` with steps
+    :data:`LOSS_TICK_STEPS` and at most 6 intervals: a readable axis top."""
+    ticks = MaxNLocator(nbins=6, steps=LOSS_TICK_STEPS).tick_values(0.0, value)
+    return float(min(t for t in ticks if t >= value * (1 - 1e-12)))
+
+
+def _loss_top(points: pd.DataFrame, zero_bound: float = 0.0) -> float:
+    """Top (%) of a loss axis for ``points`` (:func:`_with_bars`) and the dotted "0 flagged"
+    line at ``zero_bound`` (%; 0 when not drawn).
+
+    The estimates need 0-15 % (the paper's claim lives below 5 %) when every estimate is at
+    most 10 %, else up to the next 10 % above 1.3 times the highest. The axis reaches the
+    highest drawn interval top, rounded up to a tick (:func:`_tick_ceiling`), when that is
+    at most :data:`STRETCH_LIMIT` times as high; at most 100 %."""
+    highest = float(points["pct"].max())
+    needed = 15.0 if highest <= 10.0 else min(100.0, 10 * np.ceil(1.3 * highest / 10))
+    reach = max(float(points.loc[points["bar"], "hi"].max()) if points["bar"].any() else 0.0,
+                zero_bound)
+    stretched = min(100.0, _tick_ceiling(reach)) if reach > needed else needed
+    return stretched if stretched <= STRETCH_LIMIT * needed else needed
+
+
+def _past_top(points: pd.DataFrame, top: float) -> pd.DataFrame:
+    """The drawn error bars of ``points`` whose upper end passes ``top`` (%)."""
+    return points[points["bar"] & (points["hi"] > top * (1 + 1e-9))]
+
+
+def _fit_loss_axis(ax: Axes, top: float, points: pd.DataFrame,
+                   zero_bound: tuple[int, float] | None) -> None:
+    """y from just below 0 to ``top`` (%; :func:`_loss_top`); the dotted line of "0 of n
+    flagged" (``zero_bound``, :func:`_zero_bound`) when it fits; every error bar that
+    passes the top marked there by an upward triangle in its curve's colour."""
     ax.set_ylim(-0.03 * top, top)
+    ax.yaxis.set_major_locator(MaxNLocator(nbins="auto", steps=LOSS_TICK_STEPS))
+    if zero_bound is not None and zero_bound[1] <= top:
+        ax.axhline(zero_bound[1], color=GREYS[1], lw=0.8, ls=":",
+                   label=f"upper 95 % bound when 0 of {zero_bound[0]} are flagged")
+    past = _past_top(points, top)
+    for name, rows in past.groupby("name", sort=False):
+        ax.plot(rows["x"], np.full(len(rows), top), ls="none", marker="^", markersize=5,
+                color=line_kwargs(str(name))["color"], clip_on=False, zorder=6)
+    if len(past):
+        ax.plot([], [], ls="none", marker="^", markersize=5, color=GREYS[0],
+                label=PAST_TOP_LABEL)
 
 
 Column = tuple[str, list[str], str]
@@ -431,8 +500,16 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
              _context(run, words[rules[0]] if len(rules) == 1 else "")]
     n_panels = len(facets) * len(columns)
     ncols = len(columns) if len(columns) > 1 else min(len(facets), MAX_FACETS)
-    entries = len({n for _, names, _ in columns for n in names}) + claim
     every_bar = max(len(names) for _, names, _ in columns) <= 2
+    panels = [(frame, rule, _with_bars(_rate_points(frame, "clutter.mean", rule,
+                                                    _emphasis_last(names)), every_bar))
+              for _, frame in facets for _, names, rule in columns]
+    zero = [None if every_bar else _zero_bound(frame, "clutter.mean") for frame, _, _ in panels]
+    tops = [_loss_top(points, z[1] if z else 0.0) for (_, _, points), z in zip(panels, zero,
+                                                                                strict=True)]
+    past = any(len(_past_top(points, top)) for (_, _, points), top in zip(panels, tops,
+                                                                           strict=True))
+    entries = len({n for _, names, _ in columns for n in names}) + claim + past
     panel = SINGLE_PANEL if n_panels == 1 else PANEL
     titles = _wrapped([", ".join(t for t in (
         col_title if len(rules) == 1 else f"{col_title}, {words[rule]}",
@@ -440,17 +517,16 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
         for facet_title, _ in facets for col_title, _, rule in columns], panel[0])
     fig, axes, cols = _figure(n_panels, ncols, panel, title, entries + (not every_bar),
                               _lines(titles))
-    for i, (_, frame) in enumerate(facets):
-        for j, (_, names, rule) in enumerate(columns):
-            ax = axes[i * len(columns) + j]
-            if claim and rule != "inconsistent_nees":
-                _draw_claim(ax)
-            _loss_ylim(ax, _draw_rates(ax, frame, "clutter.mean", rule,
-                                       _emphasis_last(names), every_bar))
-            ax.set_xlabel(_axis_label("clutter.mean", run.params))
-            ax.set_ylabel(RULES[rule][0])
-            ax.set_title(titles[i * len(columns) + j])
-    return _finish(fig, axes[:len(columns)], cols)
+    for ax, (_, rule, points), top, z, panel_title in zip(axes, panels, tops, zero, titles,
+                                                          strict=False):
+        if claim and rule != "inconsistent_nees":
+            _draw_claim(ax)
+        _draw_rates(ax, points)
+        _fit_loss_axis(ax, top, points, z)
+        ax.set_xlabel(_axis_label("clutter.mean", run.params))
+        ax.set_ylabel(RULES[rule][0])
+        ax.set_title(panel_title)
+    return _finish(fig, axes[:len(columns)], cols, everywhere=(PAST_TOP_LABEL,))
 
 
 def _manoeuvring_index(params: dict[str, Any]) -> float:
@@ -477,11 +553,17 @@ def _index_figure(run: RunData) -> Figure | str:
              "point)",
              _context(run, "truth q = filter q")]
     free = last[last["clutter.mean"] == 0]
-    fig, axes, cols = _figure(2, 2, PANEL, title, len(names) + 1 + (len(free) > 0), 1)
-    tops = [_draw_rates(ax, with_clutter, "index", rule, names, False)
-            for ax, rule in zip(axes, ("lost_angle", "lost_gate"), strict=True)]
-    for ax, rule in zip(axes, ("lost_angle", "lost_gate"), strict=True):
-        _loss_ylim(ax, max(tops))  # one y range: the same quantity in both panels
+    rules = ("lost_angle", "lost_gate")
+    points = [_with_bars(_rate_points(with_clutter, "index", rule, names), False)
+              for rule in rules]
+    zero = _zero_bound(with_clutter, "index")
+    top = _loss_top(pd.concat(points), zero[1])  # one y range: the same quantity
+    past = any(len(_past_top(p, top)) for p in points)
+    fig, axes, cols = _figure(2, 2, PANEL, title,
+                              len(names) + 1 + (len(free) > 0) + past, 1)
+    for ax, rule, drawn in zip(axes, rules, points, strict=True):
+        _draw_rates(ax, drawn)
+        _fit_loss_axis(ax, top, drawn, zero)
         if len(free):
             worst = free.groupby(["index", "algorithm"])[rule].mean().groupby(level=0).max()
             ax.plot(worst.index, 100 * worst, "x", color=GREYS[0], markersize=6,
@@ -489,7 +571,7 @@ def _index_figure(run: RunData) -> Figure | str:
         ax.set_xlabel("manoeuvring index sqrt(q) T^2 / (r sigma) (1)")
         ax.set_ylabel(RULES[rule][0])
         ax.set_title(_rule_text(rule, run.params, swept_keys(run.config)))
-    return _finish(fig, axes[:1], cols)
+    return _finish(fig, axes[:1], cols, everywhere=(PAST_TOP_LABEL,))
 
 
 # --------------------------------------------------------------------------------------------
@@ -515,8 +597,10 @@ def _time_points(run: RunData) -> list[int]:
 
 
 def _time_figure(run: RunData, draw: Callable[[Axes, pd.DataFrame, dict[str, Any]], None],
-                 title: Sequence[str], y_label: str, legend_entries: int) -> Figure:
-    """One panel per :func:`_time_points` point against time (s)."""
+                 title: Sequence[str], y_label: str, legend_entries: int,
+                 everywhere: Collection[str] = ()) -> Figure:
+    """One panel per :func:`_time_points` point against time (s); the legend holds the
+    first panel's entries and those labelled one of ``everywhere`` in any panel."""
     points = _time_points(run)
     swept = swept_keys(run.config)
     per_row = 3 if len(points) % 3 == 0 or len(points) > 4 else len(points)
@@ -532,14 +616,69 @@ def _time_figure(run: RunData, draw: Callable[[Axes, pd.DataFrame, dict[str, Any
         ax.set_ylabel(y_label)
         ax.set_ylim(bottom=0)
         ax.set_title(panel_title)
-    return _finish(fig, axes[:1], cols)
+    return _finish(fig, axes[:1], cols, everywhere)
+
+
+def _time_curve_kwargs(name: str) -> dict[str, Any]:
+    """:func:`~trackfuse.plots.algorithms.line_kwargs` of a curve against time (3 pt
+    markers). An EKF curve (dashed, open markers) is thinner, has white dash gaps and larger
+    open markers and lies above the MGEKF: where the two coincide the MGEKF's thick line
+    shows around the EKF's dashes, and each filled marker inside an open one."""
+    kw = {**line_kwargs(name), "markersize": 3}
+    if name.endswith("/ekf"):
+        kw.update(linewidth=1.0, gapcolor="white", markersize=5.5, zorder=kw["zorder"] + 1)
+    return kw
+
+
+def _filter_words(name: str) -> str:
+    """The filter of ``association/filter`` in words ("MGEKF"), else the algorithm's label."""
+    return FILTER_LABELS.get(name.partition("/")[2], look(name).label)
+
+
+SINGLE_RUNS_REACH = 3.0
+"""The range axis shows the single runs in full up to this multiple of the highest RMSE or
+bound drawn; a run that goes higher is cut at the top (said in the panel) so that the RMSE
+curves and the bounds keep most of the panel's height."""
+
+
+def _range_ylim(ax: Axes, highest: float, single_runs: np.ndarray) -> None:
+    """y from 0 to a round tick above 1.8 times ``highest`` (km: the highest RMSE or bound
+    drawn) and above every single run (``single_runs``, km) unless one passes
+    :data:`SINGLE_RUNS_REACH` times ``highest``: then the panel says they are cut."""
+    reach = float(np.nanmax(single_runs, initial=0.0))
+    wanted = 1.8 * highest if reach > SINGLE_RUNS_REACH * highest else max(1.8 * highest, reach)
+    top = _tick_ceiling(wanted)
+    ax.set_ylim(0.0, top)
+    if reach > top:
+        ax.text(0.97, 0.96, f"single runs cut at {top:g} km (highest {reach:.0f} km)",
+                transform=ax.transAxes, fontsize=7, ha="right", va="top")
+
+
+PCRLB_TRUTH = "sqrt PCRLB (truth model, clutter-aware)"
+PCRLB_FILTER = "sqrt PCRLB (filter's q)"
+PCRLB_BOTH = "sqrt PCRLB (truth and filter's q, clutter-aware)"
+"""Legend labels of the bounds against time: apart, or drawn once where they coincide."""
+
+
+def _pcrlb_curves(params: dict[str, Any]) -> list[tuple[np.ndarray, str, str]]:
+    """``[(range bound (K,) km, line style, label)]`` of a sweep point: the truth model's
+    (dashed) and the filter's ``q``'s (dotted), or, where they differ by less than 1 % at
+    every scan (``filter.q`` equal to ``target.q``, or both near 0), the truth model's alone
+    as a dash-dot curve labelled :data:`PCRLB_BOTH` (a dotted curve under a dashed one
+    cannot be seen)."""
+    truth = bounds(params)[0] / 1e3
+    model = bounds(params, q_model=float(params["filter.q"]))[0] / 1e3
+    if np.all(np.abs(model - truth) < 0.01 * truth):
+        return [(truth, "-.", PCRLB_BOTH)]
+    return [(truth, "--", PCRLB_TRUTH), (model, ":", PCRLB_FILTER)]
 
 
 def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
                 names: Sequence[str]) -> None:
-    """Range RMSE (km) with 95 % bootstrap-t bands per scan (the MGEKF's filled, the EKF's
-    as thin edges), five single runs of the first algorithm, the square-root PCRLBs, and the
-    correlation of the first algorithm's errors between the first and the last scan."""
+    """Range RMSE (km) with 95 % bootstrap-t bands per scan (the first algorithm's filled,
+    the second's as dashed edges, each band in the legend), five single runs of the first
+    algorithm, the square-root PCRLBs, and the correlation of the first algorithm's errors
+    between the first and the last scan."""
     period = float(params["scan.period"])
     top = 0.0
     for i, name in enumerate(names):
@@ -547,12 +686,16 @@ def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
         band = _rmse_band(rows.groupby("scan")["range_sq_err_m2"]) / 1e3
         top = max(top, float(band["rmse"].max()))
         t = band.index.to_numpy(float) * period
-        kw = line_kwargs(name)
-        ax.plot(t, band["rmse"], **{**kw, "markersize": 3})
+        kw = _time_curve_kwargs(name)
+        ax.plot(t, band["rmse"], **kw)
+        label = f"95 % band, {_filter_words(name)}"
         if i == 0:
-            ax.fill_between(t, band["lo"], band["hi"], color=kw["color"], alpha=0.15, lw=0)
+            ax.fill_between(t, band["lo"], band["hi"], color=kw["color"], alpha=0.15, lw=0,
+                            label=f"{label} (shaded)")
         else:
-            ax.plot(t, band["lo"], t, band["hi"], color=kw["color"], lw=0.6, ls="--")
+            ax.plot(t, band["lo"], color=kw["color"], lw=0.6, ls="--",
+                    label=f"{label} (dashed edges)")
+            ax.plot(t, band["hi"], color=kw["color"], lw=0.6, ls="--")
     errors = frame[frame["algorithm"] == names[0]].pivot(index="trial", columns="scan",
                                                          values="range_err_m")
     single = errors.to_numpy()[:SINGLE_RUNS] / 1e3
@@ -561,11 +704,9 @@ def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
         ax.plot(t, run_err, color=GREYS[1], lw=0.6, alpha=0.8, zorder=1,
                 label=f"{SINGLE_RUNS} single runs, |range error|" if j == 0 else None)
     times = np.arange(1, int(params["scan.count"]) + 1) * period
-    ax.plot(times, bounds(params)[0] / 1e3, "k--", lw=1.0,
-            label="sqrt PCRLB (truth model, clutter-aware)")
-    ax.plot(times, bounds(params, q_model=float(params["filter.q"]))[0] / 1e3, "k:", lw=1.0,
-            label="sqrt PCRLB (filter's q)")
-    _band_ylim(ax, max(top, float(np.max(bounds(params)[0])) / 1e3))
+    for bound, style, label in _pcrlb_curves(params):
+        ax.plot(times, bound, color="k", ls=style, lw=1.0, label=label)
+    _range_ylim(ax, max(top, float(np.max(bounds(params)[0])) / 1e3), np.abs(single))
     corr = float(np.corrcoef(errors.iloc[:, 0], errors.iloc[:, -1])[0, 1])
     ax.text(0.03, 0.04, f"corr. of errors, scan 1 vs {errors.columns[-1]}: {corr:.2f}",
             transform=ax.transAxes, fontsize=7, va="bottom")
@@ -576,8 +717,10 @@ def _range_figure(run: RunData) -> Figure:
     names = _headline_pair(run.config["params"]["algorithms"])
     title = [f"{_fig_words(run, 2)}: range RMSE against time ({_runs(run.trials)} runs per "
              "point)", _context(run, "95 % bootstrap-t bands; grey: single runs")]
+    labels = {label for pt in _time_points(run)
+              for _, _, label in _pcrlb_curves(run.point_params(pt))}
     return _time_figure(run, lambda ax, f, p: _draw_range(ax, f, p, names), title,
-                        "range RMSE (km)", len(names) + 3)
+                        "range RMSE (km)", 2 * len(names) + 1 + len(labels), labels)
 
 
 def _nees_figure(run: RunData) -> Figure:
@@ -593,7 +736,7 @@ def _nees_figure(run: RunData) -> Figure:
         ax.axhline(6.0, color="k", lw=0.8)
         for name in names:
             anees = frame[frame["algorithm"] == name].groupby("scan")["nees"].mean()
-            ax.plot(anees.index * period, anees, **{**line_kwargs(name), "markersize": 3})
+            ax.plot(anees.index * period, anees, **_time_curve_kwargs(name))
 
     title = [f"Diagnostic: average NEES (6 states) against time ({_runs(run.trials)} runs per "
              "point)", _context(run, "a consistent filter stays inside the band")]

@@ -1,0 +1,213 @@
+"""Axes of the twin_sensor figures: every drawn interval fits its axis or is marked, every
+legend entry can be seen."""
+
+from dataclasses import replace
+
+import numpy as np
+import pandas as pd
+import pytest
+from matplotlib.colors import to_hex
+from matplotlib.container import ErrorbarContainer
+
+from trackfuse import harness
+from trackfuse.experiments.twin_sensor import EXPERIMENT, report
+from trackfuse.plots.algorithms import GREYS, line_kwargs, look
+from trackfuse.plots.style import text_overlaps
+from trackfuse.rundata import RunData
+
+LOSS_FIGURES = ("loss_vs_clutter", "loss_vs_clutter_ablation", "loss_gate_and_nees_vs_clutter")
+ALGORITHMS = ["nn/mgekf", "mspda_parallel/mgekf", "paper_approx/mgekf", "paper_approx/ekf"]
+
+
+@pytest.fixture(scope="module")
+def run_50(tmp_path_factory) -> RunData:
+    """50 runs at the paper's scenario, three clutter levels (the real runner)."""
+    base = {**EXPERIMENT.defaults(), "algorithms": ALGORITHMS}
+    return harness.run_data(tmp_path_factory.mktemp("axes"), EXPERIMENT, base,
+                            {"clutter.mean": [0.0, 8.0, 15.0]}, trials=50, seed=3)
+
+
+def _flagged(run: RunData, flags: dict[tuple[str, float, str], int],
+             runs: int | None = None) -> RunData:
+    """``run`` (its first ``runs`` trials) whose last scan flags nothing except the first
+    ``k`` trials of each ``(algorithm, clutter level, rule): k`` of ``flags``."""
+    trials = run.trials if runs is None else run.trials[run.trials["trial"] < runs]
+    trials = trials.copy()
+    last = trials["scan"] == trials["scan"].max()
+    for rule in report.RULES:
+        trials[rule] = 0
+    for (name, level, rule), k in flags.items():
+        trials.loc[last & (trials["algorithm"] == name) & (trials["clutter.mean"] == level)
+                   & (trials["trial"] < k), rule] = 1
+    flagged = replace(run)
+    flagged.trials = trials
+    return flagged
+
+
+def _bar_tops(ax) -> list[tuple[float, float, str]]:
+    """``(x, upper end, colour)`` of every error bar drawn in ``ax``."""
+    tops = []
+    for container in ax.containers:
+        if isinstance(container, ErrorbarContainer):
+            for collection in container.lines[2]:
+                colour = to_hex(collection.get_color()[0])
+                tops += [(seg[:, 0].max(), seg[:, 1].max(), colour)
+                         for seg in collection.get_segments()]
+    return tops
+
+
+def _past_top_marks(ax) -> set[tuple[float, float, str]]:
+    """``(x, y, colour)`` of every triangle drawn outside the clipping (at the axis top)."""
+    return {(round(float(x), 9), round(float(y), 9), to_hex(line.get_color()))
+            for line in ax.get_lines() if line.get_marker() == "^" and not line.get_clip_on()
+            for x, y in zip(line.get_xdata(), line.get_ydata(), strict=True)}
+
+
+def _legend(fig) -> list[str]:
+    return [t.get_text() for legend in fig.legends for t in legend.get_texts()]
+
+
+def test_an_interval_past_15_percent_stretches_the_axis_to_a_round_tick(run_50):
+    """Nearest neighbour, 3 of 50 lost at 8 (gate rule, as in twin_sensor_orbit): the 95 %
+    Wilson upper bound 16.2 % used to run off the 0-15 % axis; now the axis ends at 20 %."""
+    run = _flagged(run_50, {("nn/mgekf", 8.0, "lost_gate"): 3,
+                            ("paper_approx/mgekf", 8.0, "lost_angle"): 3})
+    figs = report.figures(run, LOSS_FIGURES)
+    for name in LOSS_FIGURES:
+        axes = [ax for ax in figs[name].axes if ax.get_visible()]
+        assert any(_bar_tops(ax) for ax in axes), name
+        for ax in axes:
+            top = ax.get_ylim()[1]
+            assert all(t <= top for _, t, _ in _bar_tops(ax)), (name, ax.get_title())
+            assert top == 15.0 or top in ax.get_yticks(), (name, top)  # stretched: to a tick
+            assert not _past_top_marks(ax)
+        assert report.PAST_TOP_LABEL not in _legend(figs[name])
+        assert text_overlaps(figs[name]) == [], name
+    gate = figs["loss_gate_and_nees_vs_clutter"].axes[0]
+    assert max(t for _, t, _ in _bar_tops(gate)) == pytest.approx(16.2, abs=0.05)
+    assert gate.get_ylim()[1] == 20.0
+
+
+def test_an_interval_that_would_squash_the_curves_is_marked_at_the_top(run_50):
+    """With 5 runs, "1 of 5" reaches 62 %: stretching the 0-30 % axis to 70 % would
+    squeeze the curves, so each bar past the top gets a triangle there in its colour and
+    the legend says what it means."""
+    run = _flagged(run_50, {("nn/mgekf", 8.0, "lost_gate"): 1,
+                            ("paper_approx/mgekf", 8.0, "lost_angle"): 1}, runs=5)
+    figs = report.figures(run, LOSS_FIGURES)
+    marked = 0
+    for name in LOSS_FIGURES:
+        for ax in figs[name].axes:
+            if not ax.get_visible():
+                continue
+            top = ax.get_ylim()[1]
+            marks = _past_top_marks(ax)
+            for x, bar_top, colour in _bar_tops(ax):
+                if bar_top > top:
+                    assert (round(float(x), 9), round(top, 9), colour) in marks, (name, x)
+                    marked += 1
+            assert {m[2] for m in marks} <= {to_hex(line_kwargs(n)["color"]) for n in ALGORITHMS}
+        if any(_past_top_marks(ax) for ax in figs[name].axes):
+            assert report.PAST_TOP_LABEL in _legend(figs[name]), name
+        assert text_overlaps(figs[name]) == [], name
+    assert marked > 0
+
+
+@pytest.mark.parametrize(("highest", "upper", "top"), [
+    (0.0, 7.1, 15.0),    # 0 of 50: the claim's scale
+    (6.0, 16.2, 20.0),   # 3 of 50
+    (10.0, 21.4, 25.0),  # 5 of 50
+    (48.0, 61.4, 70.0),  # the NEES panel of twin_sensor_orbit
+    (2.0, 62.0, 15.0),   # 1 of 5 beside 2 %: would squash, marked instead
+    (95.0, 99.0, 100.0),
+])
+def test_loss_top_is_a_round_tick_above_the_intervals_unless_they_squash(highest, upper, top):
+    points = pd.DataFrame({"pct": [0.0, highest], "hi": [1.0, upper], "bar": [True, True]})
+    assert report._loss_top(points) == top
+    assert report._tick_ceiling(upper) >= upper
+
+
+# --------------------------------------------------------------------------------------------
+# Fig. 2 redrawn: range RMSE and ANEES against time
+
+
+def _curve(ax, name: str):
+    label = look(name).label
+    return next(line for line in ax.get_lines() if line.get_label() == label)
+
+
+def _legend_handle(fig, label: str):
+    legend = fig.legends[0]
+    return next(h for h, t in zip(legend.legend_handles, legend.get_texts(), strict=True)
+                if t.get_text() == label)
+
+
+@pytest.mark.parametrize("figure", ["range_error_vs_time", "anees_vs_time"])
+def test_the_ekf_curve_shows_where_it_lies_on_the_mgekf(run_50, figure):
+    """The EKF curve (within 0.41 km of the MGEKF's in twin_sensor_orbit) lies above the
+    MGEKF's, thinner and dashed with white gaps, with larger open markers; its legend entry
+    is dashed like its band edges."""
+    fig = report.figures(run_50, [figure])[figure]
+    for ax in fig.axes:
+        mgekf, ekf = _curve(ax, "paper_approx/mgekf"), _curve(ax, "paper_approx/ekf")
+        assert ekf.get_zorder() > mgekf.get_zorder()
+        assert ekf.get_linestyle() == "--" and ekf.get_gapcolor() == "white"
+        assert ekf.get_linewidth() < mgekf.get_linewidth()
+        assert ekf.get_markersize() > mgekf.get_markersize()
+        assert ekf.get_markerfacecolor() == "none"
+    handle = _legend_handle(fig, look("paper_approx/ekf").label)
+    assert handle.get_linestyle() == "--"
+    if figure == "range_error_vs_time":
+        edges = _legend_handle(fig, "95 % band, EKF (dashed edges)")
+        assert edges.get_linestyle() == "--" and to_hex(edges.get_color()) == to_hex(
+            handle.get_color())
+        assert "95 % band, MGEKF (shaded)" in _legend(fig)
+    assert text_overlaps(fig) == []
+
+
+def _single_runs(ax) -> list:
+    return [line for line in ax.get_lines() if line.get_color() == GREYS[1]]
+
+
+def test_single_runs_fit_the_range_axis(run_50):
+    """The grey single runs used to be cut at 1.8 times the highest RMSE or bound; the axis
+    now reaches a round tick above them (at most 3 times that height)."""
+    fig = report.figures(run_50, ["range_error_vs_time"])["range_error_vs_time"]
+    for ax in fig.axes:
+        runs = _single_runs(ax)
+        assert len(runs) == report.SINGLE_RUNS
+        top = ax.get_ylim()[1]
+        assert max(float(np.max(line.get_ydata())) for line in runs) <= top
+        assert top in ax.get_yticks()
+        assert not any("cut" in t.get_text() for t in ax.texts)
+
+
+def test_a_single_run_far_above_the_curves_is_cut_and_the_panel_says_so(run_50):
+    trials = run_50.trials.copy()
+    first = (trials["algorithm"] == "paper_approx/mgekf") & (trials["trial"] == 0)
+    trials.loc[first, "range_err_m"] *= 20  # only the single run; the RMSE keeps its data
+    run = replace(run_50)
+    run.trials = trials
+    fig = report.figures(run, ["range_error_vs_time"])["range_error_vs_time"]
+    for ax in fig.axes:
+        top = ax.get_ylim()[1]
+        highest = max(float(np.max(line.get_ydata())) for line in _single_runs(ax))
+        assert highest > report.SINGLE_RUNS_REACH * top / 1.8  # far above: cut
+        notes = [t.get_text() for t in ax.texts if "cut" in t.get_text()]
+        assert notes == [f"single runs cut at {top:g} km (highest {highest:.0f} km)"]
+    assert text_overlaps(fig) == []
+
+
+def test_coinciding_bounds_are_drawn_once_and_said_so(run_50):
+    """With the filter's q equal to the truth's the two bounds are the same curve: one
+    dash-dot curve labelled for both, no dotted curve hidden under it."""
+    equal = replace(run_50)
+    equal.config = {**run_50.config, "params": {**run_50.config["params"],
+                                                "filter.q": run_50.params["target.q"]}}
+    fig = report.figures(equal, ["range_error_vs_time"])["range_error_vs_time"]
+    texts = _legend(fig)
+    assert report.PCRLB_BOTH in texts
+    assert report.PCRLB_FILTER not in texts and report.PCRLB_TRUTH not in texts
+    assert not any(line.get_linestyle() == ":" for ax in fig.axes for line in ax.get_lines())
+    apart = report.figures(run_50, ["range_error_vs_time"])["range_error_vs_time"]
+    assert {report.PCRLB_TRUTH, report.PCRLB_FILTER} <= set(_legend(apart))
