@@ -160,6 +160,21 @@ def test_plot_of_forged_garbage_trials_draws_or_warns(data, finished, tmp_path):
     assert (result.exit_code == 1) == result.stderr.startswith("warning: ")
 
 
+@pytest.mark.parametrize("outputs", ["outputs: fig\n", "outputs: [png]\n"])
+def test_a_config_whose_outputs_is_no_mapping_fails_plot_in_one_line(outputs, finished,
+                                                                      tmp_path):
+    """A config.yaml cut inside `outputs` (found by the fuzz test below) made plot fail with
+    "'str' object has no attribute 'get'"."""
+    folder = tmp_path / "run"
+    shutil.copytree(finished, folder)
+    config = (folder / "config.yaml").read_text()
+    (folder / "config.yaml").write_text(config[: config.index("outputs:")] + outputs)
+    _forge(folder, "config.yaml")
+    result = plot(folder)
+    check(result)
+    assert result.exit_code == 2 and "outputs not a mapping" in result.stderr
+
+
 json_values = st.recursive(st.one_of(st.none(), st.booleans(), st.integers(), st.text(max_size=8),
                                      st.floats(allow_nan=False)),
                            lambda inner: st.one_of(st.lists(inner, max_size=3),

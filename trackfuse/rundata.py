@@ -135,9 +135,10 @@ def load(path: str | Path, require_complete: bool = True) -> RunData:
                                  "rebuild the final files (it recomputes what it must)")
     config = _read_config(path / CONFIG)
     if not isinstance(config, dict) or not isinstance(config.get("experiment"), str) \
-            or not isinstance(config.get("params"), dict):
+            or not isinstance(config.get("params"), dict) \
+            or not isinstance(config.get("outputs") or {}, dict):
         raise RunFolderError(f"{path / CONFIG}: not a trackfuse run's config (no experiment "
-                             "or params)")
+                             "or params, or outputs not a mapping)")
     return RunData(path, config, manifest)
 
 
