@@ -170,3 +170,18 @@ def test_exact_optimum_band_lies_light_and_behind_the_algorithms_bands(tmp_path)
     assert len(exact) == 1 and others
     assert all(exact[0].get_zorder() < c.get_zorder() for c in others)
     assert all(exact[0].get_facecolor()[0][3] < c.get_facecolor()[0][3] for c in others)
+
+
+def test_scale_time_labels_stay_apart_on_a_range_under_one_decade(tmp_path):
+    """Solve times between 0.03 and 0.2 ms (less than a decade): 0.08, 0.09 and 0.1 ms
+    labelled at once would overlap; the labels stay apart and at least 2 remain."""
+    run = _scale_run(tmp_path)
+    summary = run.summary.copy()
+    times = summary["metric"] == "solve_time_s"
+    mean = np.geomspace(0.03e-3, 0.19e-3, times.sum())
+    summary.loc[times, ["mean", "ci_low", "ci_high"]] = np.c_[mean, 0.9 * mean, 1.1 * mean]
+    run.__dict__["summary"] = summary
+    fig = drawn(report.figures(run, ["scale"])["scale"])
+    assert text_overlaps(fig) == []
+    low, high = fig.axes[0].get_ylim()
+    assert sum(low <= t <= high for t in fig.axes[0].get_yticks()) >= 2

@@ -188,14 +188,27 @@ def _count_axis(ax: Axes, values: ArrayLike, label: str) -> None:
     ax.set_xlabel(label)
 
 
+#: Log-axis tick sets (multiples of 10^k), sparsest first; :func:`_plain_log_axis` takes the
+#: sparsest that puts at least 2 ticks in view.
+LOG_TICK_SUBS = ((1.0,), (1.0, 2.0, 5.0), (1.0, 2.0, 3.0, 5.0), tuple(np.arange(1.0, 10.0)))
+
+
+def _ticks_in_view(subs: Sequence[float], low: float, high: float) -> int:
+    """How many of ``m x 10^k`` (``m`` in ``subs``) lie in ``[low, high]``."""
+    powers = 10.0 ** np.arange(np.floor(np.log10(low)), np.ceil(np.log10(high)) + 1)
+    return sum(low <= m * p <= high for m in subs for p in powers)
+
+
 def _plain_log_axis(ax: Axes) -> None:
     """A log y axis labelled with plain decimals (0.05, 0.1, 2, 10), no minor labels:
-    ticked at 1, 2 and 5 x 10^k, at 10^k only over more than 3 decades and at every
-    integer multiple of 10^k within less than one decade."""
+    ticked at 10^k over more than 3 decades, else at 1, 2, 5 x 10^k, or over less than a
+    decade at the sparsest set of :data:`LOG_TICK_SUBS` that puts 2 ticks in view (dense
+    sets only on narrow ranges, where their ticks stay apart)."""
     ax.set_yscale("log")
     low, high = ax.get_ylim()
     decades = np.log10(high / low)
-    subs = (1.0,) if decades > 3 else (1.0, 2.0, 5.0) if decades >= 1 else np.arange(1.0, 10.0)
+    subs = LOG_TICK_SUBS[0] if decades > 3 else LOG_TICK_SUBS[1] if decades >= 1 else next(
+        (s for s in LOG_TICK_SUBS[1:] if _ticks_in_view(s, low, high) >= 2), LOG_TICK_SUBS[-1])
     ax.yaxis.set_major_locator(LogLocator(subs=subs))
     ax.yaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
     ax.yaxis.set_minor_formatter(NullFormatter())
