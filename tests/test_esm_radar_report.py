@@ -8,10 +8,12 @@ import matplotlib.figure
 import numpy as np
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.colors import to_rgba
 
 from trackfuse import harness
 from trackfuse.config import load
 from trackfuse.experiments.esm_radar import EXPERIMENT, model, report
+from trackfuse.plots.algorithms import look
 from trackfuse.plots.style import inside_canvas, text_overlaps
 from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS, save_figure
 from trackfuse.rundata import RunData
@@ -76,9 +78,11 @@ def test_main_figure_draws_our_rates_the_papers_values_and_chance(shipped_run):
         # x is separation, radar range error or nothing: the Table 3 setting is on it
         run = {("improved", 74.0), ("traditional", 55.2)}
         run = {(n, v) for n, v in run if n in shipped_run.params["algorithms"]}
-        assert set(paper) == {f"paper's Table 3: {n} {v} %" for n, v in run}
+        # the label may add where the star is drawn (beside its setting on a curve panel)
+        found = {label.split(" %")[0] + " %": line for label, line in paper.items()}
+        assert set(found) == {f"paper's Table 3: {n} {v} %" for n, v in run}
         for label, value in run:
-            xy = paper[f"paper's Table 3: {label} {value} %"].get_xydata()
+            xy = found[f"paper's Table 3: {label} {value} %"].get_xydata()
             assert np.isclose(xy, value).any(axis=1).all()
     else:  # the paper gives no d/lambda and no amplitude axis: no value of its belongs on it
         assert not paper
@@ -280,3 +284,57 @@ def test_manoeuvre_table_gives_the_index_and_range_weight_per_point(tmp_path):
     assert (table["alpha_mean_ci_low"] <= table["alpha_mean"]).all()
     assert table.loc[1000.0, "alpha_mean"] > 10 * table.loc[0.0, "alpha_mean"]  # sees the weave
     assert table.loc[1000.0, "improved_range_weight"] < table.loc[0.0, "improved_range_weight"]
+
+
+def test_papers_values_sit_beside_our_markers_and_under_them(tmp_path):
+    """At the Table 3 setting the paper's open star must not hide our marker: it is drawn
+    under our curves (zorder) and to the right of our point (display x), its data kept."""
+    run = harness.run_data(tmp_path, "esm_radar", {"algorithms": ["traditional", "improved"]},
+                           {"target.separation": [100.0, 200.0, 300.0]}, trials=4, seed=2)
+    fig = drawn(report.figures(run, ["correct_rate"])["correct_rate"])
+    ax = fig.axes[0]
+    stars = [ln for ln in ax.get_lines() if ln.get_label().startswith("paper's Table 3")]
+    assert len(stars) == 2
+    for star in stars:
+        name = "improved" if "improved" in star.get_label() else "traditional"
+        (ours,) = [ln for ln in ax.get_lines() if ln.get_label() == look(name).label]
+        assert star.get_zorder() < ours.get_zorder()
+        (x, y), = star.get_xydata()
+        assert x == 200.0  # the data stay at the paper's setting
+        star_px = star.get_transform().transform((x, y))[0]
+        ours_px = ours.get_transform().transform((200.0, y))[0]
+        marker_pt = max(star.get_markersize(), ours.get_markersize())  # both diameters
+        assert star_px - ours_px >= marker_pt * fig.dpi / 72 / 1.5  # beside, not on top
+
+
+def test_trajectory_legend_tells_every_entry_apart(tmp_path):
+    """No two legend entries of the trajectory figure share colour, line style and marker
+    (the manoeuvre index and the RMS range error were both plain dark lines)."""
+    cfg = load(ROOT / "configs" / "esm_radar_snake_cross.yaml")
+    run = harness.run_data(tmp_path, "esm_radar", {**cfg.params, "algorithms": ["improved"]},
+                           None, trials=3, seed=cfg.seed)
+    fig = report.figures(run, ["trajectory"])["trajectory"]
+    (legend,) = fig.legends
+    looks = [(to_rgba(h.get_color()), h.get_linestyle(), h.get_marker())
+             for h in legend.legend_handles]
+    assert len(set(looks)) == len(looks), looks
+
+
+#: Words by which a caption names each ablation of ``correct_rate_ablations``.
+ABLATION_WORDS = {"traditional_5f": "5 factors", "improved_static": "static weights",
+                  "improved_no_range": "no range factor", "improved_3f": "3 factors",
+                  "improved_l2": "L2 membership"}
+
+
+def test_ablation_caption_names_only_ablations_every_drawing_config_runs():
+    """The caption is shared by every run: an ablation it names must be drawn in each
+    shipped config that draws the figure (snake_cross and separation do not run
+    improved_no_range)."""
+    assert set(ABLATION_WORDS) == set(report.GROUPS["correct_rate_ablations"][1:])
+    caption = EXPERIMENT.figures["correct_rate_ablations"].caption
+    for path in CONFIGS:
+        cfg = load(path)
+        if cfg.figures != "all" and "correct_rate_ablations" not in cfg.figures:
+            continue
+        for name, words in ABLATION_WORDS.items():
+            assert words not in caption or name in cfg.params["algorithms"], (path.stem, name)

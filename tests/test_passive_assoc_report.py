@@ -48,7 +48,8 @@ def test_every_figure_of_every_shipped_config_is_drawn_or_explained(shipped_run)
     assert set(figs) == set(EXPERIMENT.figures)  # nothing silently left out
     swept = shipped_run.sweep
     assert isinstance(figs["noise"], str) == ("noise.sigma" not in swept)
-    assert isinstance(figs["scale"], str) == ("targets.n" not in swept)
+    # scale: one curve per N, so only when N is the one swept key (passive_noise sweeps sigma)
+    assert isinstance(figs["scale"], str) == (set(swept) - {"algorithms"} != {"targets.n"})
     for name, fig in figs.items():
         if isinstance(fig, str):
             assert fig and "\n" not in fig
@@ -137,3 +138,50 @@ def test_checkpoint_gap_bounds_are_each_groups_own_bootstrap_to_the_last_bit():
                                                report.BOOTSTRAP_RESAMPLES,
                                                report.BOOTSTRAP_SEED)[0]
         assert (row.gap_ci_low, row.gap_ci_high) == (max(low, 0.0), high)
+
+
+def _scale_run(tmp_path):
+    return harness.run_data(tmp_path, "passive_assoc",
+                            {"pga.ops": 100, "pga.checkpoints": [100], "scene.mode": "random",
+                             "algorithms": ["exact", "pga_paper", "pga_evict"]},
+                            {"targets.n": [5, 10, 20, 50]}, trials=4, seed=5)
+
+
+def test_scale_time_axis_reads_in_plain_decimals_with_every_curve_banded(tmp_path):
+    """The solve-time axis is labelled 0.1, 1, 10 (no 4x10^-1 mathtext) and the exact
+    optimum's time has its interval band like the others."""
+    fig = drawn(report.figures(_scale_run(tmp_path), ["scale"])["scale"])
+    time_ax = fig.axes[0]
+    labels = [t.get_text() for t in (*time_ax.get_yticklabels(),
+                                     *time_ax.get_yticklabels(minor=True)) if t.get_text()]
+    assert len(labels) >= 2 and all(re.fullmatch(r"[0-9.]+", t) for t in labels), labels
+    exact = [c for c in time_ax.collections if np.allclose(c.get_facecolor()[0][:3], 0.0)]
+    assert len(exact) == 1  # the exact optimum's band (black at low alpha)
+    assert len(time_ax.collections) == 3  # and one band per PGA variant
+
+
+def test_exact_optimum_band_lies_light_and_behind_the_algorithms_bands(tmp_path):
+    """In the accuracy panel the exact optimum's grey band must not cover the others: it
+    is drawn under them and fainter than they are."""
+    fig = report.figures(_scale_run(tmp_path), ["scale"])["scale"]
+    bands = fig.axes[2].collections
+    exact = [c for c in bands if np.allclose(c.get_facecolor()[0][:3], 0.0)]
+    others = [c for c in bands if c not in exact]
+    assert len(exact) == 1 and others
+    assert all(exact[0].get_zorder() < c.get_zorder() for c in others)
+    assert all(exact[0].get_facecolor()[0][3] < c.get_facecolor()[0][3] for c in others)
+
+
+def test_scale_time_labels_stay_apart_on_a_range_under_one_decade(tmp_path):
+    """Solve times between 0.03 and 0.2 ms (less than a decade): 0.08, 0.09 and 0.1 ms
+    labelled at once would overlap; the labels stay apart and at least 2 remain."""
+    run = _scale_run(tmp_path)
+    summary = run.summary.copy()
+    times = summary["metric"] == "solve_time_s"
+    mean = np.geomspace(0.03e-3, 0.19e-3, times.sum())
+    summary.loc[times, ["mean", "ci_low", "ci_high"]] = np.c_[mean, 0.9 * mean, 1.1 * mean]
+    run.__dict__["summary"] = summary
+    fig = drawn(report.figures(run, ["scale"])["scale"])
+    assert text_overlaps(fig) == []
+    low, high = fig.axes[0].get_ylim()
+    assert sum(low <= t <= high for t in fig.axes[0].get_yticks()) >= 2

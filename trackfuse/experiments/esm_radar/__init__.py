@@ -13,12 +13,13 @@ from trackfuse.experiments.esm_radar.model import PARAMS, ROW_METRICS, run_batch
 FIGURES = {
     "correct_rate": FigureSpec(
         "correct-association rate (%) of the paper's method, its baseline and ours with 95 % "
-        "Wilson intervals: one row per method beside the paper's Table 3 values when nothing "
-        "numeric is swept, curves against separation (Fig. 3) or radar range error (Fig. 4) "
-        "otherwise", "Table 3, Figs. 3-4"),
+        "Wilson intervals: one row per method beside the paper's Table 3 values (open stars) "
+        "when nothing numeric is swept, curves against separation (Fig. 3) or radar range "
+        "error (Fig. 4) otherwise, the paper's values drawn just right of their setting",
+        "Table 3, Figs. 3-4"),
     "correct_rate_ablations": FigureSpec(
-        "the same for the ablations of the paper's method (static weights, no range factor, "
-        "3 factors, L2 membership, traditional on 5 factors)", ""),
+        "the same for the ablations of the paper's method that the config runs (each one "
+        "change to it, named in the legend) beside the paper's method", ""),
     "correct_rate_references": FigureSpec(
         "the same for the chi-square maximum-likelihood references beside the paper's two "
         "methods", ""),

@@ -16,11 +16,12 @@ correct_rate              the paper's main result: correct-association rate (%) 
                           per value of the other swept keys. Table 3 layout (one row per
                           method, the paper's 74.0 % and 55.2 % beside ours) when nothing
                           numeric is swept; Fig. 3 (separation) or Fig. 4 (radar range
-                          error) layout otherwise, the paper's Table 3 values marked at their
-                          setting. Chance between T1 and T2 is 1/2 (track 3 is never chosen).
-correct_rate_ablations    the same for the ablations (``traditional_5f``, ``improved_static``,
-                          ``improved_no_range``, ``improved_3f``, ``improved_l2``) beside
-                          ``improved``.
+                          error) layout otherwise, the paper's Table 3 values marked just
+                          right of their setting, under our markers. Chance between T1 and
+                          T2 is 1/2 (track 3 is never chosen).
+correct_rate_ablations    the same for those ablations the run has (``traditional_5f``,
+                          ``improved_static``, ``improved_no_range``, ``improved_3f``,
+                          ``improved_l2``) beside ``improved``.
 correct_rate_references   the same for the chi-square ML references beside the paper's two.
 trajectory                paper Figs. 1-2: true tracks and the ESM TDOA-DF location track of
                           one saved trial, its per-scan manoeuvre index and range weight, and
@@ -49,6 +50,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+from matplotlib.transforms import offset_copy
 from scipy.stats import binomtest
 
 from trackfuse.association import ahp
@@ -538,16 +540,29 @@ def _paper_setting_x(run: RunData, x: str | None) -> float | None:
     return AXES[x][1] * PAPER_TABLE3_SETTING[x]
 
 
+#: How far right of their setting the paper's values are drawn on a curve panel (points),
+#: so that our marker at that setting stays in sight beside the paper's.
+PAPER_DODGE_PT = 9.0
+#: Drawing order of the paper's values: above our bands (1), below our curves, markers and
+#: error bars (2 and 3, :func:`trackfuse.plots.algorithms.line_kwargs`).
+PAPER_ZORDER = 1.5
+
+
 def _paper_markers(ax: Axes, at: float, names: Sequence[str], horizontal: bool,
                    rows: dict[str, float] | None = None) -> None:
-    """The paper's Table 3 rates (%) as open stars in each method's colour: at x = ``at``
-    (curves) or beside the method's row ``rows[name]`` (dot plot)."""
+    """The paper's Table 3 rates (%) as open stars in each method's colour, under our
+    markers: at x = ``at`` drawn :data:`PAPER_DODGE_PT` to its right (curves; the data
+    stay at ``at``), or 0.3 below the method's row ``rows[name]`` (dot plot)."""
+    dot = horizontal and rows
+    where = "" if dot else ", drawn just right of its setting"
+    transform = ax.transData if dot else offset_copy(ax.transData, fig=ax.figure,
+                                                     x=PAPER_DODGE_PT, units="points")
     for name in (n for n in PAPER_PAIR if n in names):
         value = 100 * ESM_RADAR.result(f"{name}: correct rate").value
-        xy = (value, rows[name] - 0.3) if horizontal and rows else (at, value)
-        ax.plot(*xy, linestyle="none", marker="*", markersize=13, markerfacecolor="white",
-                markeredgecolor=look(name).colour, markeredgewidth=1.6, zorder=5,
-                label=f"paper's Table 3: {name} {value:.1f} %")
+        xy = (value, rows[name] - 0.3) if dot else (at, value)
+        ax.plot(*xy, linestyle="none", marker="*", markersize=11, markerfacecolor="white",
+                markeredgecolor=look(name).colour, markeredgewidth=1.4, zorder=PAPER_ZORDER,
+                transform=transform, label=f"paper's Table 3: {name} {value:.1f} %{where}")
 
 
 def _curve_panel(ax: Axes, rows: pd.DataFrame, x: str, names: Sequence[str],
@@ -764,8 +779,9 @@ def _range_error_panel(ax: Axes, esm: pd.DataFrame, params: Mapping[str, Any]) -
     """RMS and median absolute ESM range error (m, log) per scan over the saved trials."""
     t = esm_times(params)
     err = decode_series(esm["esm_range_error_per_scan_m"])
-    ax.plot(t, np.sqrt(np.nanmean(err**2, axis=0)), color="0.2", label="RMS ESM range error")
-    ax.plot(t, np.nanmedian(np.abs(err), axis=0), color="0.2", linestyle="--",
+    ax.plot(t, np.sqrt(np.nanmean(err**2, axis=0)), color=ESM_COLOUR,
+            label="RMS ESM range error")
+    ax.plot(t, np.nanmedian(np.abs(err), axis=0), color=ESM_COLOUR, linestyle="--",
             label="median |ESM range error|")
     ax.axhline(params["target.separation"], color="0.5", linewidth=1.0,
                label="T1-T2 separation")

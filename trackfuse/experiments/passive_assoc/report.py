@@ -20,7 +20,8 @@ figure the run cannot draw):
   with the two readings of the paper's noise figure (0.005 rad as a standard deviation or
   as a variance) marked.
 * ``scale``: no paper counterpart. Solve time, objective gap ``J* - J`` and accuracy
-  against the number of targets N (a linear axis ticked at each N unless N spans >= 10x).
+  against the number of targets N (a linear axis ticked at each N unless N spans >= 10x),
+  when N is the only swept key.
 
 Tables (returned by :func:`tables`), computed from the trial rows; every interval is two
 numeric columns ``<quantity>_ci_low``/``<quantity>_ci_high``:
@@ -54,7 +55,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
-from matplotlib.ticker import FuncFormatter, NullFormatter
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 from numpy.typing import ArrayLike
 
 from trackfuse.plots.algorithms import line_kwargs, look
@@ -148,20 +149,31 @@ def _clip(values: ArrayLike, metric: str) -> np.ndarray:
 # Shared drawing helpers
 
 
+#: Shading of the exact optimum's band: lighter than the algorithms' bands (alpha 0.18)
+#: and drawn behind them (their zorder is 1), so that a band over it keeps its colour.
+EXACT_BAND = {"color": "k", "alpha": 0.07, "linewidth": 0, "zorder": 0.5}
+#: Metrics whose exact-optimum curve gets a band: the rates and the solve time.
+EXACT_BANDED = (*BOUNDED, "solve_time_s")
+
+
 def _curve(ax: Axes, x: ArrayLike, rows: pd.DataFrame, name: str, metric: str,
            scale: float = 1.0, label: str | None = None) -> None:
     """Mean ``metric`` of ``name`` against ``x`` in the algorithm's look; a 95 % band for
-    the emphasised algorithms (paper, ours) and for the exact optimum's rates."""
+    the emphasised algorithms (paper, ours) and for the exact optimum's rates and solve
+    time (light grey, behind every other band: :data:`EXACT_BAND`)."""
     kw = line_kwargs(name)
     if name == "exact":  # thin and dashed: drawn on top so that a curve on it stays visible
         kw["zorder"] = 4
     if label is not None:
         kw["label"] = label
-    if look(name).emphasised or (name == "exact" and metric in BOUNDED):
-        band(ax, x, scale * rows["mean"], scale * _clip(rows["ci_low"], metric),
-             scale * _clip(rows["ci_high"], metric), **kw)
-    else:
-        ax.plot(np.asarray(x, dtype=float), scale * rows["mean"], **kw)
+    x = np.asarray(x, dtype=float)
+    low, high = scale * _clip(rows["ci_low"], metric), scale * _clip(rows["ci_high"], metric)
+    if look(name).emphasised:
+        band(ax, x, scale * rows["mean"], low, high, **kw)
+        return
+    ax.plot(x, scale * rows["mean"], **kw)
+    if name == "exact" and metric in EXACT_BANDED:
+        ax.fill_between(x, low, high, **EXACT_BAND)
 
 
 def _count_axis(ax: Axes, values: ArrayLike, label: str) -> None:
@@ -174,6 +186,32 @@ def _count_axis(ax: Axes, values: ArrayLike, label: str) -> None:
     ax.set_xticks(v)
     ax.xaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
     ax.set_xlabel(label)
+
+
+#: Log-axis tick sets (multiples of 10^k), sparsest first; :func:`_plain_log_axis` takes the
+#: sparsest that puts at least 2 ticks in view.
+LOG_TICK_SUBS = ((1.0,), (1.0, 2.0, 5.0), (1.0, 2.0, 3.0, 5.0), tuple(np.arange(1.0, 10.0)))
+
+
+def _ticks_in_view(subs: Sequence[float], low: float, high: float) -> int:
+    """How many of ``m x 10^k`` (``m`` in ``subs``) lie in ``[low, high]``."""
+    powers = 10.0 ** np.arange(np.floor(np.log10(low)), np.ceil(np.log10(high)) + 1)
+    return sum(low <= m * p <= high for m in subs for p in powers)
+
+
+def _plain_log_axis(ax: Axes) -> None:
+    """A log y axis labelled with plain decimals (0.05, 0.1, 2, 10), no minor labels:
+    ticked at 10^k over more than 3 decades, else at 1, 2, 5 x 10^k, or over less than a
+    decade at the sparsest set of :data:`LOG_TICK_SUBS` that puts 2 ticks in view (dense
+    sets only on narrow ranges, where their ticks stay apart)."""
+    ax.set_yscale("log")
+    low, high = ax.get_ylim()
+    decades = np.log10(high / low)
+    subs = LOG_TICK_SUBS[0] if decades > 3 else LOG_TICK_SUBS[1] if decades >= 1 else next(
+        (s for s in LOG_TICK_SUBS[1:] if _ticks_in_view(s, low, high) >= 2), LOG_TICK_SUBS[-1])
+    ax.yaxis.set_major_locator(LogLocator(subs=subs))
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
+    ax.yaxis.set_minor_formatter(NullFormatter())
 
 
 def _legend_below(fig: Figure, axes: Sequence[Axes]) -> None:
@@ -243,7 +281,7 @@ def _exact_reference(ax: Axes, exact: pd.DataFrame, metric: str,
     elif len(exact):
         e = exact.iloc[0]
         ax.axhline(float(e["mean"]), label=f"{look('exact').label}, 95 % interval grey", **kw)
-        ax.axhspan(*_clip([e["ci_low"], e["ci_high"]], metric), color="k", alpha=0.08, lw=0)
+        ax.axhspan(*_clip([e["ci_low"], e["ci_high"]], metric), **EXACT_BAND)
 
 
 def _convergence_figure(summary: pd.DataFrame, config: dict, metric: str, ylabel: str,
@@ -333,16 +371,22 @@ def _noise_figure(summary: pd.DataFrame, config: dict) -> Figure | str:
 def _scale_figure(summary: pd.DataFrame, metrics: pd.DataFrame, config: dict) -> Figure | str:
     """Three panels against the number of targets N, PGA at its final checkpoint.
 
-    Solve time per scan (ms, log axis; from the timing summary), objective gap ``J* - J``
-    (nats, symlog axis; PGA variants only; 95 % bootstrap-t band from ``metrics``, see
-    :func:`checkpoint_metrics`, left open where its upper end is infinite) and
-    measurement-level accuracy (fraction), the exact
-    optimum included. The N axis is linear with a tick per value unless N spans >= 10x
-    over >= 4 values.
+    Solve time per scan (ms, log axis; from the timing summary, 95 % t bands for the exact
+    optimum too, running to the panel's bottom where the lower end is <= 0), objective gap
+    ``J* - J`` (nats, symlog axis; PGA variants only; 95 % bootstrap-t band from
+    ``metrics``, see :func:`checkpoint_metrics`, left open where its upper end is infinite)
+    and measurement-level accuracy (fraction), the exact optimum included (its band light
+    grey, behind the others). The N axis is linear with a tick per value unless N spans
+    >= 10x over >= 4 values. A reason string instead when another key is swept too (its
+    points would give several values per N).
     """
     swept = config.get("sweep", {}).get("targets.n", [])
     if len(swept) < 2:
         return "targets.n is not swept over at least 2 values"
+    others = [k for k in _grouping_keys(config) if k != "targets.n"]
+    if others:  # several points per N: their curves would zigzag through every setting
+        return (f"targets.n is swept together with {', '.join(others)} (one curve per N "
+                "only when nothing else is swept)")
     names = ["exact", *_pga_names(summary)]
     fig, axes = new_figure(ncols=3, width=3.6, height=3.6)
     times = summary[summary["metric"] == "solve_time_s"]
@@ -352,8 +396,8 @@ def _scale_figure(summary: pd.DataFrame, metrics: pd.DataFrame, config: dict) ->
         if len(t):
             _curve(axes[0], t["targets.n"], t.assign(ci_low=np.maximum(t["ci_low"], 0)),
                    name, "solve_time_s", scale=1e3)
-    axes[0].set_yscale("log")
-    axes[0].set_ylabel("solve time per scan (ms)")
+    _plain_log_axis(axes[0])
+    axes[0].set_ylabel("solve time per scan (ms, log scale)")
     for name in names[1:]:
         s = metrics[(metrics["algorithm"] == name) & (metrics["ops"] == _final_ops(summary, name))]
         s = s.sort_values("targets.n").rename(columns={"gap": "mean", "gap_ci_low": "ci_low",
