@@ -104,6 +104,9 @@ def _load(cfg: Path, sets: dict[str, Any], sweeps: list[str], **top) -> Config:
         axes = parse_sweeps(sweeps)
     except SweepError as err:
         fail(f"--sweep: {err}")
+    for key in axes.keys() & sets.keys():
+        fail(f"--sweep {key} and --set {key}: give one (a set fixes the value, a sweep "
+             "varies it)")
     given = {k: v for k, v in top.items() if v is not None}
     for key in given.keys() & sets.keys():
         fail(f"--{key} {given[key]} and --set {key}={sets[key]}: give {key} once")

@@ -3,8 +3,12 @@ figure names checked at validation."""
 
 from __future__ import annotations
 
+import pytest
 import yaml
-from conftest import trackfuse
+from conftest import ROOT, trackfuse
+
+from trackfuse.config import build, load
+from trackfuse.sweep import SweepError, parse_sets, parse_sweeps
 
 CONFIG = "experiment: toy_experiments:GAUSSIAN\ntrials: 3\nsweep: {mu: [0, 1]}\n"
 
@@ -59,3 +63,20 @@ def test_a_typo_in_outputs_figures_is_refused_at_validation(write_config):
             result.stderr
     listed = trackfuse("list", "toy_experiments:GAUSSIAN")
     assert "\n  estimate (paper Fig. 1)\n" in listed.stdout  # every figure name is listed
+
+
+def test_a_resolved_config_with_a_swept_key_loads_again():
+    """`--sweep` over a key the file sets wrote that value under params in the run's
+    config.yaml, which the set-and-swept check then refused to load."""
+    config = load(ROOT / "configs" / "passive_scale.yaml", {},
+                  {"scene.mode": ["paper", "random"]})
+    assert config.params["scene.mode"] == config.experiment.schema["scene.mode"].default
+    again = build(config.to_dict(), "config.yaml")
+    assert again.to_dict() == config.to_dict()
+
+
+@pytest.mark.parametrize("items, parse", [(["a=1", "a=2"], "sets"), (["a=1", "a=2,3"], "sweeps")])
+def test_a_key_given_twice_on_the_command_line_is_refused(items, parse):
+    """`--set k=1 --set k=2` kept the last value without a word."""
+    with pytest.raises(SweepError, match="a: given twice"):
+        (parse_sets if parse == "sets" else parse_sweeps)(items)

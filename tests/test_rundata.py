@@ -160,7 +160,8 @@ def test_plot_of_forged_garbage_trials_draws_or_warns(data, finished, tmp_path):
     assert (result.exit_code == 1) == result.stderr.startswith("warning: ")
 
 
-@pytest.mark.parametrize("outputs", ["outputs: fig\n", "outputs: [png]\n"])
+@pytest.mark.parametrize("outputs", ["outputs: fig\n", "outputs: [png]\n",
+                                     "outputs: {figures: 5}\n", "outputs: {formats: png}\n"])
 def test_a_config_whose_outputs_is_no_mapping_fails_plot_in_one_line(outputs, finished,
                                                                       tmp_path):
     """A config.yaml cut inside `outputs` (found by the fuzz test below) made plot fail with

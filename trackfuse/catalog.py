@@ -31,8 +31,8 @@ STOPPED = "stopped"
 #: Shown for a folder whose manifest cannot be read, or a complete run whose final files do
 #: not match the sizes its manifest records.
 DAMAGED = "damaged"
-#: Shown for a complete run without a report (run with ``--no-plots``, or stopped while
-#: drawing): ``trackfuse plot`` writes it.
+#: Shown for a complete run without a report (run with ``--no-plots``, and perhaps stopped
+#: while its report was being added): ``trackfuse plot`` writes it.
 NO_REPORT = "complete, no report"
 
 

@@ -263,8 +263,10 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
     for key, value in sets.items():
         params[key] = _validated(SET, exp, "", key, value)
     sweep = _sweep(source, exp, raw.get("sweep") or {}, dict(sweeps or {}), dropped=set(sets))
-    _check_set_once(source, exp, raw.get("params") or {}, raw.get("sweep") or {},
+    _check_set_once(source, exp, params, raw.get("params") or {}, raw.get("sweep") or {},
                     overridden={*sets, *(sweeps or {})})
+    for key in sweep:  # the sweep's values are used: the resolved config holds no other
+        params[key] = exp.schema[key].default
     mode = _sweep_mode(origin["sweep_mode"], raw.get("sweep_mode", "grid"), sweep)
     _check_distinct(source, sweep, mode, set(sweeps or {}))
     if count_points(sweep, mode) > MAX_POINTS:
@@ -313,15 +315,15 @@ def _sweep(source: str, exp: Experiment, sweep_raw: Any, sweeps: dict[str, Any],
     return sweep
 
 
-def _check_set_once(source: str, exp: Experiment, params_raw: Mapping, sweep_raw: Mapping,
-                    overridden: set[str]) -> None:
+def _check_set_once(source: str, exp: Experiment, params: Mapping[str, Any],
+                    params_raw: Mapping, sweep_raw: Mapping, overridden: set[str]) -> None:
     """Refuse a file that sets a parameter under ``params`` to other than its default and
     sweeps it too (the sweep's values would be used, that one never); an override of the key
     settles it. A default left in place (``trackfuse list --format yaml`` writes every
     parameter) is no conflict."""
     flat = flatten(params_raw)
     both = [key for key in map(str, sweep_raw) if key in flat and key not in overridden
-            and _validated(source, exp, "params", key, flat[key]) != exp.schema[key].default]
+            and params[key] != exp.schema[key].default]
     if both:
         raise ConfigError(source, f"params.{both[0]}", f"also swept (sweep.{both[0]}), whose "
                           "values would be used and this one never; allowed: the key under "

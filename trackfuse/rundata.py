@@ -135,11 +135,23 @@ def load(path: str | Path, require_complete: bool = True) -> RunData:
                                  "rebuild the final files (it recomputes what it must)")
     config = _read_config(path / CONFIG)
     if not isinstance(config, dict) or not isinstance(config.get("experiment"), str) \
-            or not isinstance(config.get("params"), dict) \
-            or not isinstance(config.get("outputs") or {}, dict):
+            or not isinstance(config.get("params"), dict) or not _outputs_readable(config):
         raise RunFolderError(f"{path / CONFIG}: not a trackfuse run's config (no experiment "
-                             "or params, or outputs not a mapping)")
+                             "or params, or outputs not a mapping of figure names and "
+                             "formats)")
     return RunData(path, config, manifest)
+
+
+def _outputs_readable(config: dict[str, Any]) -> bool:
+    """Whether a saved config's ``outputs`` is what the report reads: a mapping whose
+    ``figures`` is ``"all"`` or a list of names and whose ``formats`` is a list of names."""
+    outputs = config.get("outputs") or {}
+    if not isinstance(outputs, dict):
+        return False
+    figures, formats = outputs.get("figures", "all"), outputs.get("formats") or []
+    return (figures == "all" or isinstance(figures, list)
+            and all(isinstance(f, str) for f in figures)) \
+        and isinstance(formats, list) and all(isinstance(f, str) for f in formats)
 
 
 def _read_config(path: Path) -> Any:

@@ -140,8 +140,13 @@ def parse_override(text: str) -> tuple[str, str]:
 
 
 def parse_sets(items: list[str]) -> dict[str, Any]:
-    """``--set`` items to ``{key: value}``."""
-    return {key: parse_scalar(value) for key, value in map(parse_override, items)}
+    """``--set`` items to ``{key: value}``; a key given twice is refused."""
+    sets: dict[str, Any] = {}
+    for key, value in map(parse_override, items):
+        if key in sets:
+            raise SweepError(f"{key}: given twice; allowed: one value per key")
+        sets[key] = parse_scalar(value)
+    return sets
 
 
 def parse_sweeps(items: list[str]) -> dict[str, Any]:
@@ -149,6 +154,8 @@ def parse_sweeps(items: list[str]) -> dict[str, Any]:
     axes: dict[str, Any] = {}
     for item in items:
         key, value = parse_override(item)
+        if key in axes:
+            raise SweepError(f"{key}: given twice; allowed: one axis per key")
         value = value.strip()
         if not value:
             raise SweepError(f"got {item!r}; the axis is empty")

@@ -217,7 +217,7 @@ ROW_METRICS = (
     Metric("at_opt", "1", "the solution reaches the exact optimum J*", binary=True,
            better="higher"),
     Metric("gap", "1", "J* - J, the objective gap to the exact optimum (log-likelihood "
-           "ratio)", better="lower"),
+           "ratio)", better="lower", bounds=NON_NEGATIVE),
     Metric("objective", "1", "the objective J of the solution (log-likelihood ratio)"),
     Metric("solve_time_s", "s", "wall seconds of the solver"),
     Metric("weights_time_s", "s", "wall seconds of the pair weights"),
