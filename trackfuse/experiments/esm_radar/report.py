@@ -548,12 +548,12 @@ PAPER_DODGE_PT = 9.0
 PAPER_ZORDER = 1.5
 
 
-def _paper_markers(ax: Axes, at: float, names: Sequence[str], horizontal: bool,
+def _paper_markers(ax: Axes, at: float, names: Sequence[str],
                    rows: dict[str, float] | None = None) -> None:
     """The paper's Table 3 rates (%) as open stars in each method's colour, under our
     markers: at x = ``at`` drawn :data:`PAPER_DODGE_PT` to its right (curves; the data
     stay at ``at``), or 0.3 below the method's row ``rows[name]`` (dot plot)."""
-    dot = horizontal and rows
+    dot = rows is not None
     where = "" if dot else ", drawn just right of its setting"
     transform = ax.transData if dot else offset_copy(ax.transData, fig=ax.figure,
                                                      x=PAPER_DODGE_PT, units="points")
@@ -577,7 +577,7 @@ def _curve_panel(ax: Axes, rows: pd.DataFrame, x: str, names: Sequence[str],
         else:
             ax.plot(xs, 100 * g["mean"], **kw)
     if paper_x is not None:
-        _paper_markers(ax, paper_x, names, horizontal=False)
+        _paper_markers(ax, paper_x, names)
     _set_x_axis(ax, x, scale * rows[x].to_numpy(float))
     reference_line(ax, 100 * CHANCE, "chance between T1 and T2 (50 %)", color="0.5")
     ax.set_ylabel("correct association rate (%)")
@@ -596,7 +596,7 @@ def _dot_panel(ax: Axes, rows: pd.DataFrame, names: Sequence[str], paper: bool) 
                     linewidth=2.0 if lk.emphasised else 1.0)
     ax.plot([], [], marker="o", color="k", label="this run: rate, 95 % Wilson interval")
     if paper:
-        _paper_markers(ax, 0.0, names, horizontal=True, rows=ys)
+        _paper_markers(ax, 0.0, names, rows=ys)
     ax.axvline(100 * CHANCE, color="0.5", linestyle="--", linewidth=1.0,
                label="chance between T1 and T2 (50 %)")
     ax.set_yticks(list(ys.values()), [look(n).label for n in names])

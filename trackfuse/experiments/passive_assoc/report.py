@@ -81,7 +81,9 @@ FIGURE_VARIANTS = ("pga_paper", "pga_repair", "pga_evict", "pga_anneal")
 KEY_WORDS = {"pga.p_m": "p_m", "pga.ops": "operations", "noise.sigma": "sigma (rad)",
              "sensor.p_d": "P_D",
              "clutter.p_f": "false-alarm rate", "assoc.cost": "cost", "assoc.tri": "triangulation"}
-#: Metrics that live in [0, 1] (fractions and rates); their interval ends are clipped.
+#: Metrics that live in [0, 1] (fractions and rates): their interval ends are clipped here
+#: too, for the tables' intervals computed from the trials and for run folders whose
+#: summary.csv predates Metric.bounds.
 BOUNDED = ("accuracy", "precision", "recall", "correct", "at_opt")
 
 

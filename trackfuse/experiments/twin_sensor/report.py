@@ -253,10 +253,14 @@ def _rates(frame: pd.DataFrame, x_key: str, rule: str) -> pd.DataFrame:
     return r.assign(pct=100 * r["k"] / r["n"], lo=100 * np.asarray(lo), hi=100 * np.asarray(hi))
 
 
+#: Room above the highest RMSE or bound drawn, as a multiple of it.
+RMSE_HEADROOM = 1.8
+
+
 def _band_ylim(ax: Axes, highest: float) -> None:
-    """y from 0 to 1.8 times ``highest`` (the highest RMSE or bound drawn, km): intervals of
-    a few runs may run off the top instead of squeezing the curves."""
-    ax.set_ylim(0.0, 1.8 * highest)
+    """y from 0 to :data:`RMSE_HEADROOM` times ``highest`` (the highest RMSE or bound drawn,
+    km): intervals of a few runs may run off the top instead of squeezing the curves."""
+    ax.set_ylim(0.0, RMSE_HEADROOM * highest)
 
 
 def _drawable(values: np.ndarray) -> np.ndarray:
@@ -642,11 +646,12 @@ curves and the bounds keep most of the panel's height."""
 
 
 def _range_ylim(ax: Axes, highest: float, single_runs: np.ndarray) -> None:
-    """y from 0 to a round tick above 1.8 times ``highest`` (km: the highest RMSE or bound
-    drawn) and above every single run (``single_runs``, km) unless one passes
+    """y from 0 to a round tick above :data:`RMSE_HEADROOM` times ``highest`` (km: the
+    highest RMSE or bound drawn) and above every single run (``single_runs``, km) unless one passes
     :data:`SINGLE_RUNS_REACH` times ``highest``: then the panel says they are cut."""
     reach = float(np.nanmax(single_runs, initial=0.0))
-    wanted = 1.8 * highest if reach > SINGLE_RUNS_REACH * highest else max(1.8 * highest, reach)
+    room = RMSE_HEADROOM * highest
+    wanted = room if reach > SINGLE_RUNS_REACH * highest else max(room, reach)
     top = _tick_ceiling(wanted)
     ax.set_ylim(0.0, top)
     if reach > top:
@@ -808,10 +813,10 @@ def _draw_final(ax: Axes, run: RunData, frame: pd.DataFrame, x_key: str,
     kind = SCHEMA[x_key].kind
     grid = np.unique(np.concatenate([np.linspace(values[0], values[-1], 41), values]))
     truth = [bounds({**base, x_key: kind(v)})[0][-1] / 1e3 for v in grid]
-    ax.plot(grid / scale, truth, "k--", lw=1.0, label="sqrt PCRLB (truth model, clutter-aware)")
+    ax.plot(grid / scale, truth, "k--", lw=1.0, label=PCRLB_TRUTH)
     model = [bounds({**base, x_key: kind(v)}, q_model=float(base["filter.q"]) if x_key !=
                     "filter.q" else float(v))[0][-1] / 1e3 for v in values]
-    ax.plot(values / scale, model, "k:", lw=1.0, label="sqrt PCRLB (filter's q)")
+    ax.plot(values / scale, model, "k:", lw=1.0, label=PCRLB_FILTER)
     _band_ylim(ax, max(top, max(truth)))
 
 
