@@ -77,5 +77,6 @@ def test_irf_sanity_values():
 
 
 @pytest.mark.parametrize("P_D", sorted(Q2_TABLES))
-def test_the_stored_q2_tables_equal_the_monte_carlo_bit_for_bit(P_D):
-    assert compute_q2_table(P_D).tolist() == list(Q2_TABLES[P_D])
+def test_the_stored_q2_tables_are_the_monte_carlo(P_D):
+    """To 1e-12, not bit for bit: np.exp's last bit depends on the CPU's vector unit."""
+    np.testing.assert_allclose(compute_q2_table(P_D), Q2_TABLES[P_D], rtol=1e-12, atol=0)

@@ -130,7 +130,9 @@ def irf_q2(lam_w: float, P_D: float = 1.0, n_samples: int = 20000, half_width: f
 
 #: ``_q2_table(P_D)`` for the detection probabilities of the shipped configs, as computed by
 #: :func:`irf_q2` (seed 0, 6000 samples per point); tests/test_tracking_pcrlb.py recomputes
-#: them bit for bit. Saves each process about 1.2 s of CPU per value of ``P_D``.
+#: them to 1e-12 (numpy's ``exp`` differs in the last bit between CPUs with and without
+#: AVX-512, so a recomputed table would too; the stored one is the same everywhere). Saves
+#: each process about 1.2 s of CPU per value of ``P_D``.
 Q2_TABLES: dict[float, tuple[float, ...]] = {
     1.0: (
         1.0, 1.0117041911020417, 1.0058804856065058, 0.9661613079584045, 0.9694959359726852,
