@@ -79,7 +79,7 @@ def test_an_interval_past_15_percent_stretches_the_axis_to_a_round_tick(run_50):
         for ax in axes:
             top = ax.get_ylim()[1]
             assert all(t <= top for _, t, _ in _bar_tops(ax)), (name, ax.get_title())
-            assert top == 15.0 or top in ax.get_yticks(), (name, top)  # stretched: to a tick
+            assert top in ax.get_yticks(), (name, top)  # the top is labelled
             assert not _past_top_marks(ax)
         assert report.PAST_TOP_LABEL not in _legend(figs[name])
         assert text_overlaps(figs[name]) == [], name
@@ -111,6 +111,11 @@ def test_an_interval_that_would_squash_the_curves_is_marked_at_the_top(run_50):
             assert report.PAST_TOP_LABEL in _legend(figs[name]), name
         assert text_overlaps(figs[name]) == [], name
     assert marked > 0
+    # "0 of 5 flagged" is bounded by 43 %, above the 0-30 % axis: said in the legend, with
+    # its value, where the dotted line cannot be drawn (four curves: bars only where flagged).
+    gate = figs["loss_gate_and_nees_vs_clutter"]
+    assert "upper 95 % bound when 0 of 5 are flagged: 43 %, above the axis" in _legend(gate)
+    assert not any(line.get_linestyle() == ":" for line in gate.axes[0].get_lines())
 
 
 @pytest.mark.parametrize(("highest", "upper", "top"), [
@@ -125,6 +130,18 @@ def test_loss_top_is_a_round_tick_above_the_intervals_unless_they_squash(highest
     points = pd.DataFrame({"pct": [0.0, highest], "hi": [1.0, upper], "bar": [True, True]})
     assert report._loss_top(points) == top
     assert report._tick_ceiling(upper) >= upper
+
+
+@pytest.mark.parametrize("highest", np.linspace(0.0, 80.0, 161))
+def test_every_loss_axis_top_is_a_labelled_tick(highest):
+    """The top comes from the same ticks the axis is labelled with, whatever the panel's
+    size (matplotlib's automatic ticks skipped a stretched 12 % or a 90 % top)."""
+    for upper in (highest + 1.0, 1.3 * highest + 4.0, 2.2 * highest + 9.0):
+        points = pd.DataFrame({"pct": [0.0, highest], "hi": [0.0, upper], "bar": [True, True]})
+        top = report._loss_top(points)
+        ticks = report._round_ticks(top)
+        assert ticks[0] == 0.0 and ticks[-1] == top and len(ticks) <= 8
+        assert set(np.diff(ticks) / 10 ** np.floor(np.log10(np.diff(ticks)))) <= {1, 2, 5}
 
 
 # --------------------------------------------------------------------------------------------
@@ -211,3 +228,20 @@ def test_coinciding_bounds_are_drawn_once_and_said_so(run_50):
     assert not any(line.get_linestyle() == ":" for ax in fig.axes for line in ax.get_lines())
     apart = report.figures(run_50, ["range_error_vs_time"])["range_error_vs_time"]
     assert {report.PCRLB_TRUTH, report.PCRLB_FILTER} <= set(_legend(apart))
+
+
+def test_coinciding_final_bounds_are_drawn_once_and_said_so(run_50):
+    """The final-RMSE figure too: one dash-dot bound for both when the filter's q is the
+    truth's, the dashed and dotted pair otherwise."""
+    equal = replace(run_50)
+    equal.config = {**run_50.config, "params": {**run_50.config["params"],
+                                                "filter.q": run_50.params["target.q"]}}
+    name = "final_range_rmse_vs_sweep"
+    fig = report.figures(equal, [name])[name]
+    assert report.PCRLB_BOTH in _legend(fig)
+    assert report.PCRLB_FILTER not in _legend(fig) and report.PCRLB_TRUTH not in _legend(fig)
+    assert not any(line.get_linestyle() == ":" for ax in fig.axes for line in ax.get_lines())
+    apart = report.figures(run_50, [name])[name]
+    assert {report.PCRLB_TRUTH, report.PCRLB_FILTER} <= set(_legend(apart))
+    assert report.PCRLB_BOTH not in _legend(apart)
+    assert text_overlaps(fig) == [] and text_overlaps(apart) == []

@@ -70,7 +70,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
-from matplotlib.ticker import MaxNLocator
+from matplotlib.ticker import FixedLocator, MaxNLocator
 from pandas.api.typing import SeriesGroupBy
 
 from trackfuse.experiments.twin_sensor.model import PARAMS, bounds, build_scenario
@@ -432,15 +432,21 @@ that passes its top is marked there (:func:`_fit_loss_axis`)."""
 PAST_TOP_LABEL = "95 % interval runs past the top of the axis"
 
 
-LOSS_TICK_STEPS = [1, 2, 5, 10]
-"""Tick steps of a loss axis (times a power of ten): whole per cent, no 2.5 or 7.5."""
+TICK_STEPS = [1, 2, 5, 10]
+"""Tick steps of a loss or range axis (times a power of ten): no 2.5 or 7.5."""
+
+
+def _round_ticks(top: float) -> np.ndarray:
+    """Ticks of an axis from 0 to ``top`` (> 0): steps :data:`TICK_STEPS`, at most 7
+    intervals, up to the first tick at or above ``top``."""
+    ticks = MaxNLocator(nbins=7, steps=TICK_STEPS).tick_values(0.0, top)
+    return ticks[(ticks >= 0) & (ticks <= min(t for t in ticks if t >= top * (1 - 1e-12)))]
 
 
 def _tick_ceiling(value: float) -> float:
-    """The first tick at or above ``value`` (> 0) of an axis on ``[0, value]`` with steps
-    :data:`LOSS_TICK_STEPS` and at most 6 intervals: a readable axis top."""
-    ticks = MaxNLocator(nbins=6, steps=LOSS_TICK_STEPS).tick_values(0.0, value)
-    return float(min(t for t in ticks if t >= value * (1 - 1e-12)))
+    """The first tick at or above ``value`` (> 0) of :func:`_round_ticks`: a readable axis
+    top, which is also the top tick of ``_round_ticks(top)``, so it is labelled."""
+    return float(_round_ticks(value)[-1])
 
 
 def _loss_top(points: pd.DataFrame, zero_bound: float = 0.0) -> float:
@@ -448,15 +454,24 @@ def _loss_top(points: pd.DataFrame, zero_bound: float = 0.0) -> float:
     line at ``zero_bound`` (%; 0 when not drawn).
 
     The estimates need 0-15 % (the paper's claim lives below 5 %) when every estimate is at
-    most 10 %, else up to the next 10 % above 1.3 times the highest. The axis reaches the
-    highest drawn interval top, rounded up to a tick (:func:`_tick_ceiling`), when that is
-    at most :data:`STRETCH_LIMIT` times as high; at most 100 %."""
+    most 10 %, else up to the next 10 % above 1.3 times the highest (90 % becomes 100 %, a
+    labelled tick). The axis reaches the highest drawn interval top, rounded up to a tick
+    (:func:`_tick_ceiling`), when that is at most :data:`STRETCH_LIMIT` times as high; at
+    most 100 %."""
     highest = float(points["pct"].max())
-    needed = 15.0 if highest <= 10.0 else min(100.0, 10 * np.ceil(1.3 * highest / 10))
+    needed = 15.0 if highest <= 10.0 else _tick_ceiling(min(100.0,
+                                                           10 * np.ceil(1.3 * highest / 10)))
     reach = max(float(points.loc[points["bar"], "hi"].max()) if points["bar"].any() else 0.0,
                 zero_bound)
     stretched = min(100.0, _tick_ceiling(reach)) if reach > needed else needed
     return stretched if stretched <= STRETCH_LIMIT * needed else needed
+
+
+def _zero_label(zero_bound: tuple[int, float], top: float) -> str:
+    """Legend label of the "0 of n flagged" bound (:func:`_zero_bound`) on an axis to
+    ``top`` (%): with its value when it lies above the axis."""
+    label = f"upper 95 % bound when 0 of {zero_bound[0]} are flagged"
+    return label if zero_bound[1] <= top else f"{label}: {zero_bound[1]:.0f} %, above the axis"
 
 
 def _past_top(points: pd.DataFrame, top: float) -> pd.DataFrame:
@@ -466,14 +481,17 @@ def _past_top(points: pd.DataFrame, top: float) -> pd.DataFrame:
 
 def _fit_loss_axis(ax: Axes, top: float, points: pd.DataFrame,
                    zero_bound: tuple[int, float] | None) -> None:
-    """y from just below 0 to ``top`` (%; :func:`_loss_top`); the dotted line of "0 of n
-    flagged" (``zero_bound``, :func:`_zero_bound`) when it fits; every error bar that
-    passes the top marked there by an upward triangle in its curve's colour."""
+    """y from just below 0 to ``top`` (%; :func:`_loss_top`), labelled at ``top``; the
+    dotted line of "0 of n flagged" (``zero_bound``, :func:`_zero_bound`), or, when it
+    passes the top, its value in the legend; every error bar that passes the top marked
+    there by an upward triangle in its curve's colour."""
     ax.set_ylim(-0.03 * top, top)
-    ax.yaxis.set_major_locator(MaxNLocator(nbins="auto", steps=LOSS_TICK_STEPS))
+    ax.yaxis.set_major_locator(FixedLocator(_round_ticks(top)))
     if zero_bound is not None and zero_bound[1] <= top:
         ax.axhline(zero_bound[1], color=GREYS[1], lw=0.8, ls=":",
-                   label=f"upper 95 % bound when 0 of {zero_bound[0]} are flagged")
+                   label=_zero_label(zero_bound, top))
+    elif zero_bound is not None:
+        ax.plot([], [], ls="none", label=_zero_label(zero_bound, top))
     past = _past_top(points, top)
     for name, rows in past.groupby("name", sort=False):
         ax.plot(rows["x"], np.full(len(rows), top), ls="none", marker="^", markersize=5,
@@ -530,7 +548,9 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
         ax.set_xlabel(_axis_label("clutter.mean", run.params))
         ax.set_ylabel(RULES[rule][0])
         ax.set_title(panel_title)
-    return _finish(fig, axes[:len(columns)], cols, everywhere=(PAST_TOP_LABEL,))
+    above = [_zero_label(z, top) for z, top in zip(zero, tops, strict=True)
+             if z is not None and z[1] > top]
+    return _finish(fig, axes[:len(columns)], cols, everywhere=(PAST_TOP_LABEL, *above))
 
 
 def _manoeuvring_index(params: dict[str, Any]) -> float:
@@ -654,6 +674,7 @@ def _range_ylim(ax: Axes, highest: float, single_runs: np.ndarray) -> None:
     wanted = room if reach > SINGLE_RUNS_REACH * highest else max(room, reach)
     top = _tick_ceiling(wanted)
     ax.set_ylim(0.0, top)
+    ax.yaxis.set_major_locator(FixedLocator(_round_ticks(top)))
     if reach > top:
         ax.text(0.97, 0.96, f"single runs cut at {top:g} km (highest {reach:.0f} km)",
                 transform=ax.transAxes, fontsize=7, ha="right", va="top")
@@ -782,19 +803,50 @@ def _final_figure(run: RunData) -> Figure | str:
              _context(run, "95 % bootstrap-t intervals")]
     panel = SINGLE_PANEL if len(facets) == 1 else PANEL
     titles = _wrapped([t if len(facets) > 1 else "" for t, _ in facets], panel[0])
-    fig, axes, cols = _figure(len(facets), min(len(facets), 3), panel, title, len(names) + 2,
-                              _lines(titles))
-    for ax, (_, frame), facet_title in zip(axes, facets, titles, strict=True):
-        _draw_final(ax, run, frame, x_key, names)
+    curves = [_final_bounds(run, frame, x_key) for _, frame in facets]
+    labels = {label for facet in curves for *_, label in facet}
+    fig, axes, cols = _figure(len(facets), min(len(facets), 3), panel, title,
+                              len(names) + len(labels), _lines(titles))
+    for ax, (_, frame), bound_curves, facet_title in zip(axes, facets, curves, titles,
+                                                         strict=True):
+        _draw_final(ax, frame, x_key, names, bound_curves)
         ax.set_xlabel(_axis_label(x_key, run.params))
         ax.set_ylabel("final range RMSE (km)")
         ax.set_ylim(bottom=0)
         ax.set_title(facet_title)
+    shown = {label for *_, label in curves[0]}
+    for _, _, style, label in (c for facet in curves[1:] for c in facet):
+        if label not in shown:  # a bound only another facet draws: its legend entry
+            axes[0].plot([], [], color="k", ls=style, lw=1.0, label=label)
+            shown.add(label)
     return _finish(fig, axes[:1], cols)
 
 
-def _draw_final(ax: Axes, run: RunData, frame: pd.DataFrame, x_key: str,
-                names: Sequence[str]) -> None:
+def _final_bounds(run: RunData, frame: pd.DataFrame, x_key: str
+                  ) -> list[tuple[np.ndarray, np.ndarray, str, str]]:
+    """``[(x, range bound at the last scan (km), line style, label)]`` of a facet: the truth
+    model's (dashed; 41 points across the swept values and the values themselves) and the
+    filter's ``q``'s (dotted, at the swept values), or the truth model's alone, dash-dot and
+    labelled :data:`PCRLB_BOTH`, where the two differ by less than 1 % at every swept value
+    (as :func:`_pcrlb_curves` does against time)."""
+    values = np.sort(frame[x_key].astype(float).unique())
+    base = run.point_params(int(frame["point"].iloc[0]))
+    kind = SCHEMA[x_key].kind
+    grid = np.unique(np.concatenate([np.linspace(values[0], values[-1], 41), values]))
+    truth = np.array([bounds({**base, x_key: kind(v)})[0][-1] / 1e3 for v in grid])
+    model = np.array([bounds({**base, x_key: kind(v)}, q_model=float(base["filter.q"])
+                             if x_key != "filter.q" else float(v))[0][-1] / 1e3
+                      for v in values])
+    at_values = truth[np.searchsorted(grid, values)]
+    if np.all(np.abs(model - at_values) < 0.01 * at_values):
+        return [(grid, truth, "-.", PCRLB_BOTH)]
+    return [(grid, truth, "--", PCRLB_TRUTH), (values, model, ":", PCRLB_FILTER)]
+
+
+def _draw_final(ax: Axes, frame: pd.DataFrame, x_key: str, names: Sequence[str],
+                bound_curves: Sequence[tuple[np.ndarray, np.ndarray, str, str]]) -> None:
+    """Final range RMSE (km) with intervals per algorithm, dodged along x, and the bounds
+    ``bound_curves`` (:func:`_final_bounds`)."""
     scale = _x_scale(x_key)
     values = np.sort(frame[x_key].astype(float).unique())
     top = 0.0
@@ -809,15 +861,9 @@ def _draw_final(ax: Axes, run: RunData, frame: pd.DataFrame, x_key: str,
         x = x / scale + 0.006 * (values[-1] - values[0]) / scale * (i - (len(names) - 1) / 2)
         ax.errorbar(x, rmse / 1e3, yerr=[(rmse - lo) / 1e3, (hi - rmse) / 1e3], capsize=2,
                     elinewidth=0.8, **line_kwargs(name))
-    base = run.point_params(int(frame["point"].iloc[0]))
-    kind = SCHEMA[x_key].kind
-    grid = np.unique(np.concatenate([np.linspace(values[0], values[-1], 41), values]))
-    truth = [bounds({**base, x_key: kind(v)})[0][-1] / 1e3 for v in grid]
-    ax.plot(grid / scale, truth, "k--", lw=1.0, label=PCRLB_TRUTH)
-    model = [bounds({**base, x_key: kind(v)}, q_model=float(base["filter.q"]) if x_key !=
-                    "filter.q" else float(v))[0][-1] / 1e3 for v in values]
-    ax.plot(values / scale, model, "k:", lw=1.0, label=PCRLB_FILTER)
-    _band_ylim(ax, max(top, max(truth)))
+    for x_bound, bound, style, label in bound_curves:
+        ax.plot(x_bound / scale, bound, color="k", ls=style, lw=1.0, label=label)
+    _band_ylim(ax, max(top, *(float(bound.max()) for _, bound, _, _ in bound_curves)))
 
 
 # --------------------------------------------------------------------------------------------
