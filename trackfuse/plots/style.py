@@ -115,6 +115,23 @@ def legend_in_strip(fig, handles: list, labels: list[str], ncols: int) -> None:
                    ncols=max(1, ncols), frameon=False, borderaxespad=0.3)
 
 
+def legend_entries(axes) -> tuple[list, list[str]]:
+    """``(handles, labels)`` of every labelled artist of ``axes``, each label once (the
+    first handle drawn with it)."""
+    entries: dict[str, object] = {}
+    for ax in axes:
+        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            entries.setdefault(label, handle)
+    return list(entries.values()), list(entries)
+
+
+def legend_below(fig, handles: list, labels: list[str], column_width: float = 3.4) -> None:
+    """One legend below the panels of a :func:`new_figure` (constrained layout), one column
+    per ``column_width`` inches of the figure's width, at most one per entry."""
+    ncols = max(1, min(len(labels), int(fig.get_figwidth() / column_width)))
+    fig.legend(handles, labels, loc="outside lower center", ncols=ncols)
+
+
 def band(ax, x, y, low, high, label: str, marker: str = "o", **kw) -> None:
     """Draw ``y`` against ``x`` with a shaded ``[low, high]`` confidence band."""
     x = np.asarray(x, dtype=float)

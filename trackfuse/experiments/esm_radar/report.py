@@ -68,7 +68,7 @@ from trackfuse.experiments.esm_radar.model import (
     static_weights,
 )
 from trackfuse.plots.algorithms import line_kwargs, look
-from trackfuse.plots.style import band, new_figure, reference_line
+from trackfuse.plots.style import band, legend_below, legend_entries, new_figure, reference_line
 from trackfuse.reported import ESM_RADAR, ESM_RADAR_WEIGHTS
 from trackfuse.reports import HEADLINE_COLUMNS
 from trackfuse.rundata import RunData, swept_keys
@@ -648,8 +648,7 @@ def _rate_figure(run: RunData, group: str) -> Figure | str:
     for ax in axes[len(panels):]:
         ax.set_visible(False)
     _share_rate_axis(axes[:len(panels)], "y" if x else "x", s)
-    handles, labels = axes[0].get_legend_handles_labels()
-    _legend_below(fig, handles, labels)
+    legend_below(fig, *legend_entries(axes[:1]))
     fig.suptitle(_rate_title(run, group, x))
     if x:
         _upright_crowded_ticks(fig, axes[:len(panels)])
@@ -673,12 +672,6 @@ def _upright_crowded_ticks(fig: Figure, axes: Sequence[Axes]) -> None:
                         if t.get_visible() and t.get_text()), key=lambda b: b.x0)
         if any(a.x1 + 2 > b.x0 for a, b in zip(boxes, boxes[1:], strict=False)):
             ax.tick_params(axis="x", labelrotation=90)
-
-
-def _legend_below(fig: Figure, handles: list, labels: list[str]) -> None:
-    """One legend below the panels, as many columns as fit (one per 3.4 inches)."""
-    ncols = max(1, min(len(labels), int(fig.get_figwidth() / 3.4)))
-    fig.legend(handles, labels, loc="outside lower center", ncols=ncols)
 
 
 def _share_rate_axis(axes: Sequence[Axes], which: str, summary: pd.DataFrame) -> None:
@@ -806,12 +799,7 @@ def _trajectory_figure(run: RunData) -> Figure | str:
     _tracks_panel(axes[0], params, row)
     _index_panel(axes[1], run, row, params)
     _range_error_panel(axes[2], esm[esm["point"] == point], params)
-    handles, labels = [], []
-    for ax in fig.axes:
-        h, lab = ax.get_legend_handles_labels()
-        handles += h
-        labels += lab
-    _legend_below(fig, handles, labels)
+    legend_below(fig, *legend_entries(fig.axes))
     where = _setting_words(params, swept_keys(run.config))
     fig.suptitle("Paper 001 Figs. 1-2 redrawn: true tracks and the ESM TDOA-DF location of "
                  "target 2\n" + (f"{where}; " if where else "")
@@ -884,9 +872,7 @@ def _manoeuvre_figure(run: RunData) -> Figure | str:
         if not long_words:
             a.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncols=2, fontsize=7)
     if long_words:  # one legend for both panels, below them
-        found = dict(zip(*reversed(ax.get_legend_handles_labels()), strict=True))
-        found.update(zip(*reversed(ax2.get_legend_handles_labels()), strict=True))
-        _legend_below(fig, list(found.values()), list(found))
+        legend_below(fig, *legend_entries([ax, ax2]))
     n = len(groups[0][2])
     fig.suptitle(f"Manoeuvre index ({' and '.join(indices)}) and range weight per scan "
                  f"(no paper figure)\nmean over {n} trials with 95 % t bands")

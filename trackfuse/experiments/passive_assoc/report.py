@@ -59,7 +59,7 @@ from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 from numpy.typing import ArrayLike
 
 from trackfuse.plots.algorithms import line_kwargs, look
-from trackfuse.plots.style import band, new_figure
+from trackfuse.plots.style import band, legend_below, legend_entries, new_figure
 from trackfuse.reported import PASSIVE_ASSOC
 from trackfuse.reports import HEADLINE_COLUMNS
 from trackfuse.results import FAILED_ROW
@@ -216,17 +216,6 @@ def _plain_log_axis(ax: Axes) -> None:
     ax.yaxis.set_minor_formatter(NullFormatter())
 
 
-def _legend_below(fig: Figure, axes: Sequence[Axes]) -> None:
-    """One legend below the panels from every panel's entries (first label wins), as many
-    columns as fit (one per 3.4 inches)."""
-    entries: dict[str, Any] = {}
-    for ax in axes:
-        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
-            entries.setdefault(label, handle)
-    ncols = max(1, min(len(entries), int(fig.get_figwidth() / 4.2)))
-    fig.legend(list(entries.values()), list(entries), loc="outside lower center", ncols=ncols)
-
-
 def _shared_y(fig: Figure, axes: np.ndarray, ylabel: str, low: float = -0.02,
               high: float = 1.04) -> None:
     """One y range for a grid of panels; only the first column keeps its tick labels, and
@@ -316,7 +305,7 @@ def _convergence_figure(summary: pd.DataFrame, config: dict, metric: str, ylabel
         for ax in axes[r, len(row):]:
             ax.set_visible(False)
     _shared_y(fig, axes, ylabel)
-    _legend_below(fig, axes.ravel())
+    legend_below(fig, *legend_entries(axes.ravel()), column_width=4.2)
     fixed = _point_label({}, config, noise=True).split(", ", 1)[1]
     fig.suptitle(f"{title}\n{config.get('trials', '')} runs per point, 95 % intervals; "
                  f"{fixed}")
@@ -359,7 +348,7 @@ def _noise_figure(summary: pd.DataFrame, config: dict) -> Figure | str:
         ax.tick_params(labelleft=False)
     for ax in axes.ravel():
         ax.set_ylim(-0.02, 1.04)
-    _legend_below(fig, axes.ravel())
+    legend_below(fig, *legend_entries(axes.ravel()), column_width=4.2)
     fig.suptitle("Paper 002 setting, no paper figure: accuracy vs angle noise (the exact "
                  f"optimum is the ceiling)\n{config.get('trials', '')} runs per point; dotted: "
                  "sigma = 0.005 and sqrt(0.005) rad, the two readings of the paper")
@@ -414,7 +403,7 @@ def _scale_figure(summary: pd.DataFrame, metrics: pd.DataFrame, config: dict) ->
     axes[2].set_ylabel("accuracy (fraction)")
     for ax in axes:
         _count_axis(ax, swept, "number of targets N (count)")
-    _legend_below(fig, axes)
+    legend_below(fig, *legend_entries(axes), column_width=4.2)
     p = config.get("params", {})
     budget = f"; PGA after {_final_ops(summary, names[1])} operations" if len(names) > 1 else ""
     fig.suptitle(f"Paper 002 setting, no paper figure: cost and accuracy vs number of targets\n"
