@@ -128,3 +128,14 @@ def test_a_bounded_metric_has_its_interval_clipped_to_its_bounds():
     assert low["fraction"] == plain.set_index("metric").loc["fraction", "ci_low"]
     pd.testing.assert_series_equal(clipped.set_index("metric").loc["free"],
                                    plain.set_index("metric").loc["free"])
+
+
+def test_one_pair_of_bounds_clips_every_metric():
+    """The runner's timings summary: a time is never negative, whatever its column."""
+    frame = pd.DataFrame({"point": 0, "algorithm": "a", "trial": range(4),
+                          "cpu_time_s": [0.0, 0.0, 0.1, 0.0], "wall_time_s": [0, 0, 0, 2.0]})
+    plain, _ = summarize(frame, ["point", "algorithm"])
+    clipped, _ = summarize(frame, ["point", "algorithm"], bounds=(0.0, np.inf))
+    assert (plain["ci_low"] < 0).all()
+    assert (clipped["ci_low"] == 0).all()
+    assert clipped["ci_high"].tolist() == plain["ci_high"].tolist()

@@ -43,6 +43,7 @@ import trackfuse
 from trackfuse.batch import BatchTask, execute_batch, watch_sigint
 from trackfuse.config import Config
 from trackfuse.executors import make_executor
+from trackfuse.experiments.base import NON_NEGATIVE
 from trackfuse.fingerprint import code_fingerprint
 from trackfuse.progress import RunProgress
 from trackfuse.reports import figure_formats, load_drawing, write_report
@@ -414,7 +415,8 @@ class Runner:
                                          bounds=experiment.metric_bounds)
         files[SUMMARY] = _write_record(path / SUMMARY, frame_csv(summary))
         if timings["rows"]:
-            timing_summary, _ = summarize(path / TIMINGS, keys, suffix=TIME_SUFFIX)
+            timing_summary, _ = summarize(path / TIMINGS, keys, suffix=TIME_SUFFIX,
+                                          bounds=NON_NEGATIVE)
             files[TIMING_SUMMARY] = _write_record(path / TIMING_SUMMARY,
                                                   frame_csv(timing_summary))
         else:

@@ -22,7 +22,7 @@ CHUNK_ROWS = 200_000
 
 def summarize(source: Path | pd.DataFrame, keys: Sequence[str], binary: Sequence[str] = (),
               chunk_rows: int = CHUNK_ROWS, suffix: str = "", skip: Sequence[str] = (),
-              bounds: Mapping[str, tuple[float, float]] | None = None
+              bounds: Mapping[str, tuple[float, float]] | tuple[float, float] | None = None
               ) -> tuple[pd.DataFrame, int]:
     """Return ``(summary, failed_rows)`` for the CSV at ``source``, or for the CSV already
     read whole (``pd.read_csv(path, low_memory=False)``), taken in the same chunks.
@@ -30,7 +30,8 @@ def summarize(source: Path | pd.DataFrame, keys: Sequence[str], binary: Sequence
     ``keys`` are the grouping columns (``point``, swept keys, the experiment's row keys);
     every other numeric column whose name ends in ``suffix`` and is not in ``skip`` (labels
     such as a chosen track's index) is a metric. ``binary`` metrics get Wilson intervals, the
-    rest Student-t intervals, clipped to a metric's ``bounds`` ``(low, high)`` if given.
+    rest Student-t intervals, clipped to a metric's ``bounds`` ``(low, high)`` if given
+    (one pair: every metric's).
     """
     partial: list[pd.DataFrame] = []
     failed = 0
@@ -68,6 +69,8 @@ def summarize(source: Path | pd.DataFrame, keys: Sequence[str], binary: Sequence
     is_binary = stats["metric"].isin(list(binary)).to_numpy()
     w_low, w_high = wilson_interval(np.round(mean * n), n)
     t_low, t_high = t_interval(mean, std, n)
+    if isinstance(bounds, tuple):
+        bounds = dict.fromkeys(stats["metric"].unique(), bounds)
     for metric, (low, high) in (bounds or {}).items():
         mine = (stats["metric"] == metric).to_numpy()
         t_low = np.where(mine, np.clip(t_low, low, high), t_low)
