@@ -130,3 +130,61 @@ def test_fingerprinting_runs_none_of_the_modules_it_hashes():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, cwd=ROOT).stdout.split()
     assert out == ["True", "False", "False"]
+
+
+def test_other_library_versions_give_a_new_folder_and_say_which(write_config, tmp_path,
+                                                                monkeypatch):
+    """numpy's last bits may change with its version: an upgrade computes anew beside the
+    old folder (never resumes into it nor serves it), and says which library changed."""
+    import trackfuse.runner as runner_module
+
+    config = load(write_config("experiment: toy_gaussian\ntrials: 6\nseed: 1\n"))
+    first = Runner(config, tmp_path, progress=False, plots=False).run()
+    upgraded = {**runner_module.library_versions(), "numpy": "99.0.0"}
+    monkeypatch.setattr(runner_module, "library_versions", lambda: upgraded)
+    notes: list[str] = []
+    second = Runner(config, tmp_path, progress=False, plots=False, warn=notes.append).run()
+    assert second.folder != first.folder and second.computed_trials == 6
+    assert len(notes) == 1 and "other library versions (numpy " in notes[0]
+    assert notes[0].split("(numpy ")[1].startswith(f"{first_numpy(first.folder)}, now 99.0.0")
+    manifest = json.loads((second.folder / "manifest.json").read_text())
+    assert manifest["versions"]["numpy"] == "99.0.0"
+    assert set(manifest["cpu"]) == {"model", "numpy_simd"}
+    assert (second.folder / "trials.csv").read_bytes() == (first.folder /
+                                                           "trials.csv").read_bytes()
+
+
+def first_numpy(folder: Path) -> str:
+    return json.loads((folder / "manifest.json").read_text())["versions"]["numpy"]
+
+
+def test_resuming_on_a_cpu_with_other_vector_extensions_says_so(write_config, tmp_path,
+                                                                monkeypatch):
+    from trackfuse.results import RunFolder
+    from trackfuse.runner import RunInterrupted
+
+    config = load(write_config("experiment: toy_gaussian\ntrials: 8\nseed: 1\n"
+                               "batch_size: 2\n"))
+    original = RunFolder.write_part
+    calls = {"n": 0}
+
+    def interrupted_at_the_third(self, *args):
+        calls["n"] += 1
+        if calls["n"] == 3:
+            raise KeyboardInterrupt
+        original(self, *args)
+
+    monkeypatch.setattr(RunFolder, "write_part", interrupted_at_the_third)
+    with pytest.raises(RunInterrupted) as err:
+        Runner(config, tmp_path, executor="serial", progress=False, plots=False).run()
+    monkeypatch.setattr(RunFolder, "write_part", original)
+    manifest_path = err.value.folder / "manifest.json"
+    manifest = json.loads(manifest_path.read_text())
+    manifest["cpu"] = {"model": "an older machine", "numpy_simd": ["SSE42"]}
+    manifest_path.write_text(json.dumps(manifest))
+    notes: list[str] = []
+    resumed = Runner(config, tmp_path, executor="serial", progress=False, plots=False,
+                     warn=notes.append).run()
+    assert resumed.computed_trials == 4
+    assert len(notes) == 1 and "resuming on a CPU with other vector extensions" in notes[0]
+    assert "the saved batches: SSE42" in notes[0]

@@ -101,12 +101,14 @@ def config_hash(resolved: dict[str, Any]) -> str:
     return hashlib.sha256(json.dumps(science, sort_keys=True, default=str).encode()).hexdigest()
 
 
-def run_id(resolved: dict[str, Any], version: str, code: str) -> str:
+def run_id(resolved: dict[str, Any], version: str, code: str,
+           libraries: dict[str, str | None]) -> str:
     """Stable id of everything that determines the numbers: the config's science, the
-    package version and ``code``, the fingerprint of the code that computes them
-    (:func:`trackfuse.fingerprint.code_fingerprint`)."""
-    blob = json.dumps({"config": config_hash(resolved), "version": version, "code": code},
-                      sort_keys=True)
+    package version, ``code``, the fingerprint of the code that computes them
+    (:func:`trackfuse.fingerprint.code_fingerprint`), and the versions of the ``libraries``
+    whose arithmetic and formatting write them (name -> version)."""
+    blob = json.dumps({"config": config_hash(resolved), "version": version, "code": code,
+                       "libraries": libraries}, sort_keys=True)
     return f"seed{resolved['seed']}-{hashlib.sha256(blob.encode()).hexdigest()[:10]}"
 
 

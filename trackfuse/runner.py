@@ -35,10 +35,6 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-import pandas as pd
-import scipy
-
 import trackfuse
 from trackfuse.batch import BatchTask, execute_batch, watch_sigint
 from trackfuse.config import Config
@@ -124,6 +120,33 @@ def _version(distribution: str) -> str | None:
         return None
 
 
+NUMERIC_LIBRARIES = ("numpy", "scipy", "pandas", "numba")
+"""Libraries whose arithmetic or CSV formatting writes the numbers: with Python's version,
+their versions are part of the run id (an upgrade computes anew, never mixes)."""
+
+
+def library_versions() -> dict[str, str | None]:
+    """Python's version and each of :data:`NUMERIC_LIBRARIES`' (``None``: not installed)."""
+    return {"python": platform.python_version(), **{d: _version(d) for d in NUMERIC_LIBRARIES}}
+
+
+def cpu() -> dict[str, Any]:
+    """This machine's CPU model and the vector extensions numpy dispatches to: another set
+    can change the last bit of a float (``np.exp`` with AVX-512 or without)."""
+    model = platform.processor() or platform.machine()
+    with contextlib.suppress(OSError):
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    try:
+        from numpy._core import _multiarray_umath as umath  # numpy's own list, no public API
+        simd = [k for k in umath.__cpu_dispatch__ if umath.__cpu_features__.get(k)]
+    except (ImportError, AttributeError):
+        simd = None
+    return {"model": model, "numpy_simd": simd}
+
+
 def _now() -> str:
     return datetime.now(UTC).isoformat(timespec="seconds")
 
@@ -162,7 +185,10 @@ class Runner:
         self.config = config
         self.resolved = config.to_dict()
         self.code = code_fingerprint(config.experiment)
-        self.run_id = run_id(self.resolved, trackfuse.__version__, self.code.digest)
+        self.libraries = library_versions()
+        self.run_id = run_id(self.resolved, trackfuse.__version__, self.code.digest,
+                             self.libraries)
+        self.cpu = cpu()
         self.out = Path(out)
         self.folder = RunFolder(self.out / folder_name(config.source) / self.run_id)
         self.points = expand(config.sweep, config.sweep_mode)
@@ -202,10 +228,8 @@ class Runner:
             yield BatchTask(cfg.experiment, {**cfg.params, **swept}, swept, cfg.seed, span)
 
     def _manifest(self, status: RunStatus, session: _Session, failed: int = 0) -> dict[str, Any]:
-        versions = {"trackfuse": trackfuse.__version__, "python": platform.python_version(),
-                    "numpy": np.__version__, "scipy": scipy.__version__,
-                    "pandas": pd.__version__, "matplotlib": _version("matplotlib"),
-                    "numba": _version("numba"),
+        versions = {"trackfuse": trackfuse.__version__, **self.libraries,
+                    "matplotlib": _version("matplotlib"),
                     "stonesoup": _version("stonesoup")}  # None when not installed
         previous = session.previous or {}
         return {
@@ -221,6 +245,7 @@ class Runner:
             "trackfuse_path": str(Path(trackfuse.__file__).resolve().parent),
             "versions": versions,
             "platform": platform.platform(),
+            "cpu": self.cpu,
             "host": platform.node(),
             "root_seed": self.config.seed,
             "executor": self.executor_used or previous.get("executor") or self.executor_kind,
@@ -262,6 +287,8 @@ class Runner:
         previous = self._previous_manifest()
         if previous is None:
             self._note_other_code()
+        elif previous.get("status") != RunStatus.COMPLETE:
+            self._note_other_cpu(previous)
         if previous is not None and previous.get("status") == RunStatus.COMPLETE:
             problem = self.folder.check_final_files(previous)
             if problem is None:
@@ -304,15 +331,36 @@ class Runner:
             raise
 
     def _note_other_code(self) -> None:
-        """Say in one line when a run of the same config from other code exists."""
+        """Say in one line when a run of the same config from other code or other library
+        versions exists."""
         mine = config_hash(self.resolved)
         others = [m for m in sibling_manifests(self.folder.path)
                   if m.get("config_sha256") == mine and m.get("run_id") != self.run_id]
         if others:
             latest = max(others, key=lambda m: str(m.get("started")))
             self.warn(f"{self.folder.path.parent / str(latest.get('run_id'))} holds this config "
-                      f"from other code ({len(others)} such run(s)); computing anew in "
-                      f"{self.folder.path.name}")
+                      f"from {self._what_differs(latest)} ({len(others)} such run(s)); "
+                      f"computing anew in {self.folder.path.name}")
+
+    def _what_differs(self, manifest: dict[str, Any]) -> str:
+        """"other code", or the libraries whose versions differ from ``manifest``'s."""
+        versions = manifest.get("versions") or {}
+        fingerprint = manifest.get("code_fingerprint") or {}
+        if (fingerprint.get("sha256") != self.code.digest
+                or versions.get("trackfuse") != trackfuse.__version__):
+            return "other code"
+        changed = [f"{lib} {versions.get(lib)}, now {now}" for lib, now in self.libraries.items()
+                   if versions.get(lib) != now]
+        return "other library versions (" + "; ".join(changed) + ")" if changed else "other code"
+
+    def _note_other_cpu(self, previous: dict[str, Any]) -> None:
+        """Say in one line when a run is resumed on a CPU with other vector extensions."""
+        before = previous.get("cpu")
+        if isinstance(before, dict) and before.get("numpy_simd") != self.cpu["numpy_simd"]:
+            self.warn(f"{self.folder.path}: resuming on a CPU with other vector extensions "
+                      f"({', '.join(self.cpu['numpy_simd'] or ['unknown'])}; the saved batches: "
+                      f"{', '.join(before.get('numpy_simd') or ['unknown'])}); the last bit of "
+                      "some floats may differ from a run on one machine")
 
     def _previous_manifest(self) -> dict[str, Any] | None:
         try:
