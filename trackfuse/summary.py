@@ -20,6 +20,20 @@ from trackfuse.stats import t_interval, wilson_interval
 CHUNK_ROWS = 200_000
 
 
+def _clipped(metrics: pd.Series, low: np.ndarray, high: np.ndarray,
+             bounds: Mapping[str, tuple[float, float]] | tuple[float, float] | None
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """Interval ends ``low, high`` (one per row of ``metrics``) clipped to each metric's
+    ``bounds`` (one pair: every metric's)."""
+    if isinstance(bounds, tuple):
+        bounds = dict.fromkeys(metrics.unique(), bounds)
+    for metric, (lo, hi) in (bounds or {}).items():
+        mine = (metrics == metric).to_numpy()
+        low = np.where(mine, np.clip(low, lo, hi), low)
+        high = np.where(mine, np.clip(high, lo, hi), high)
+    return low, high
+
+
 def summarize(source: Path | pd.DataFrame, keys: Sequence[str], binary: Sequence[str] = (),
               chunk_rows: int = CHUNK_ROWS, suffix: str = "", skip: Sequence[str] = (),
               bounds: Mapping[str, tuple[float, float]] | tuple[float, float] | None = None
@@ -68,13 +82,7 @@ def summarize(source: Path | pd.DataFrame, keys: Sequence[str], binary: Sequence
         std = np.where(n > 1, np.sqrt(stats["m2"].to_numpy(float) / (n - 1)), np.nan)
     is_binary = stats["metric"].isin(list(binary)).to_numpy()
     w_low, w_high = wilson_interval(np.round(mean * n), n)
-    t_low, t_high = t_interval(mean, std, n)
-    if isinstance(bounds, tuple):
-        bounds = dict.fromkeys(stats["metric"].unique(), bounds)
-    for metric, (low, high) in (bounds or {}).items():
-        mine = (stats["metric"] == metric).to_numpy()
-        t_low = np.where(mine, np.clip(t_low, low, high), t_low)
-        t_high = np.where(mine, np.clip(t_high, low, high), t_high)
+    t_low, t_high = _clipped(stats["metric"], *t_interval(mean, std, n), bounds)
     out = stats[group].copy()
     out["n"] = n.astype(int)
     out["mean"], out["std"] = mean, std
