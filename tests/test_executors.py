@@ -103,7 +103,7 @@ def test_kill_9_at_random_moments_then_resume_equals_uninterrupted(write_config,
     """Each run is killed at a random moment after it wrote its first new part (while the
     workers compute and the parent writes parts); every part left is whole."""
     path = write_config("experiment: toy_experiments:BURN\ntrials: 320\nseed: 9\n"
-                        "batch_size: 4\nparams: {work: 15}\n", "burn")
+                        "batch_size: 4\nparams: {work: 60}\n", "burn")
     out = tmp_path / "out"
     command = [sys.executable, "-m", "trackfuse", "run", str(path), "--out", str(out),
                "--workers", "2", "--no-plots", "--no-progress"]
