@@ -82,3 +82,21 @@ def test_the_plugin_example_runs_through_the_cli(tmp_path):
     listed = subprocess.run([sys.executable, "-m", "trackfuse", "list", "coin:EXPERIMENT"],
                             cwd=example, env=env, capture_output=True, text=True, timeout=60)
     assert listed.returncode == 0 and "error" in listed.stdout and "tosses" in listed.stdout
+
+
+def test_the_esm_radar_spread_example_runs_on_a_run_folder(tmp_path):
+    """examples/esm_radar_spread.py (docs/papers/esm_radar.md, W001-8) on a small run."""
+    env = cli_env()
+    proc = subprocess.run([sys.executable, "-m", "trackfuse", "run",
+                           "configs/esm_radar_baseline_spread.yaml", "--trials", "20",
+                           "--out", str(tmp_path), "--workers", "1", "--no-plots",
+                           "--no-progress"], cwd=ROOT, env=env, capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    folder = re.search(r"^wrote (.+?): \d+ rows", proc.stdout, flags=re.M).group(1)
+    proc = subprocess.run([sys.executable, "examples/esm_radar_spread.py", folder], cwd=ROOT,
+                          env=env, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.splitlines()
+    assert lines[0].startswith("correlation of the per-sample TDOA-DF range sd")
+    assert len(lines) == 3 and all("of 20 trials change" in line for line in lines[1:])
