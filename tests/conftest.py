@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import subprocess
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -15,6 +17,8 @@ sys.path.insert(0, str(TESTS))
 import toy_experiments  # noqa: E402,F401 - registers the toy experiments
 
 ROOT = TESTS.parent
+
+from trackfuse.results import RunFolder  # noqa: E402
 
 
 def cli_env() -> dict[str, str]:
@@ -41,3 +45,22 @@ def write_config(tmp_path):
         path.write_text(text)
         return path
     return write
+
+
+@contextlib.contextmanager
+def ctrl_c_at_part(n: int) -> Iterator[None]:
+    """Inside the block, a Ctrl-C (``KeyboardInterrupt``) as a run is about to store its
+    ``n``-th finished batch (``RunFolder.write_part``, in the run's own process)."""
+    original, calls = RunFolder.write_part, [0]
+
+    def write_part(self, *args) -> None:
+        calls[0] += 1
+        if calls[0] == n:
+            raise KeyboardInterrupt
+        original(self, *args)
+
+    RunFolder.write_part = write_part
+    try:
+        yield
+    finally:
+        RunFolder.write_part = original

@@ -9,13 +9,13 @@ import sys
 from pathlib import Path
 
 import pytest
-from conftest import ROOT, TESTS
+from conftest import ROOT, TESTS, ctrl_c_at_part
 from toy_experiments import GAUSSIAN
 
 from trackfuse.config import load
 from trackfuse.experiments import get
 from trackfuse.fingerprint import NUMBERS_PATH, code_fingerprint
-from trackfuse.runner import Runner
+from trackfuse.runner import RunInterrupted, Runner
 
 PLUGIN = '''
 from trackfuse.experiments.base import Experiment, Param
@@ -158,26 +158,11 @@ def first_numpy(folder: Path) -> str:
     return json.loads((folder / "manifest.json").read_text())["versions"]["numpy"]
 
 
-def test_resuming_on_a_cpu_with_other_vector_extensions_says_so(write_config, tmp_path,
-                                                                monkeypatch):
-    from trackfuse.results import RunFolder
-    from trackfuse.runner import RunInterrupted
-
+def test_resuming_on_a_cpu_with_other_vector_extensions_says_so(write_config, tmp_path):
     config = load(write_config("experiment: toy_gaussian\ntrials: 8\nseed: 1\n"
                                "batch_size: 2\n"))
-    original = RunFolder.write_part
-    calls = {"n": 0}
-
-    def interrupted_at_the_third(self, *args):
-        calls["n"] += 1
-        if calls["n"] == 3:
-            raise KeyboardInterrupt
-        original(self, *args)
-
-    monkeypatch.setattr(RunFolder, "write_part", interrupted_at_the_third)
-    with pytest.raises(RunInterrupted) as err:
+    with ctrl_c_at_part(3), pytest.raises(RunInterrupted) as err:
         Runner(config, tmp_path, executor="serial", progress=False, plots=False).run()
-    monkeypatch.setattr(RunFolder, "write_part", original)
     manifest_path = err.value.folder / "manifest.json"
     manifest = json.loads(manifest_path.read_text())
     manifest["cpu"] = {"model": "an older machine", "numpy_simd": ["SSE42"]}

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from conftest import cli_env, trackfuse
+from conftest import cli_env, ctrl_c_at_part, trackfuse
 from typer.testing import CliRunner
 
 from trackfuse.config import load
@@ -115,26 +115,14 @@ def test_batch_size_is_part_of_the_run_id_and_fixes_the_bytes(write_config, tmp_
     np.testing.assert_allclose(x[["y0", "y1", "y2"]], y[["y0", "y1", "y2"]], rtol=1e-12)
 
 
-def test_resume_after_interrupt_equals_uninterrupted(write_config, tmp_path, monkeypatch):
+def test_resume_after_interrupt_equals_uninterrupted(write_config, tmp_path):
     path = write_config(CFG)
     reference = run(path, tmp_path / "ref", executor="serial")
-    original = RunFolder.write_part
-    calls = {"n": 0}
-
-    def flaky(self, *args):
-        calls["n"] += 1
-        if calls["n"] == 5:
-            raise KeyboardInterrupt
-        original(self, *args)
-
-    monkeypatch.setattr(RunFolder, "write_part", flaky)
-
-    with pytest.raises(RunInterrupted) as err:
+    with ctrl_c_at_part(5), pytest.raises(RunInterrupted) as err:
         run(path, tmp_path / "res", executor="serial")
     folder = err.value.folder
     assert json.loads((folder / "manifest.json").read_text())["status"] == "interrupted"
     assert not (folder / "trials.csv").exists()
-    monkeypatch.setattr(RunFolder, "write_part", original)
     resumed = run(path, tmp_path / "res", executor="process", workers=2)
     assert resumed.computed_trials == 4 * 23 - 23  # point 0 (batches of 7, 7, 7, 2) was kept
     assert (resumed.folder / "trials.csv").read_bytes() == (reference.folder /

@@ -9,13 +9,13 @@ import json
 
 import numpy as np
 import pytest
+from conftest import ctrl_c_at_part
 
 pytest.importorskip("stonesoup")
 
 from trackfuse.config import ConfigError, build  # noqa: E402
 from trackfuse.experiments.twin_sensor import EXPERIMENT, model  # noqa: E402
 from trackfuse.experiments.twin_sensor.stonesoup import STONESOUP_ALGORITHMS  # noqa: E402
-from trackfuse.results import RunFolder  # noqa: E402
 from trackfuse.runner import RunInterrupted, Runner  # noqa: E402
 from trackfuse.seeding import trial_streams  # noqa: E402
 
@@ -88,24 +88,14 @@ def _run(out, **kw):
                   **kw).run()
 
 
-def test_rows_identical_across_executors_workers_and_resume(tmp_path, monkeypatch):
+def test_rows_identical_across_executors_workers_and_resume(tmp_path):
     serial = _run(tmp_path / "serial", executor="serial")
     reference = (serial.folder / "trials.csv").read_bytes()
     assert b"stonesoup_pda/pf" in reference and b"failed" not in reference
     pooled = _run(tmp_path / "pooled", executor="process", workers=2)
     assert (pooled.folder / "trials.csv").read_bytes() == reference
-    original, calls = RunFolder.write_part, {"n": 0}
-
-    def interrupt_third(self, *args):
-        calls["n"] += 1
-        if calls["n"] == 3:
-            raise KeyboardInterrupt
-        original(self, *args)
-
-    monkeypatch.setattr(RunFolder, "write_part", interrupt_third)
-    with pytest.raises(RunInterrupted):
+    with ctrl_c_at_part(3), pytest.raises(RunInterrupted):
         _run(tmp_path / "resumed", executor="serial")
-    monkeypatch.setattr(RunFolder, "write_part", original)
     resumed = _run(tmp_path / "resumed", executor="process", workers=1)
     assert 0 < resumed.computed_trials < 8
     assert (resumed.folder / "trials.csv").read_bytes() == reference
