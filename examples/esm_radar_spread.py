@@ -85,5 +85,6 @@ def main(folder: str) -> None:
               f"change their decision (correct {np.mean(base == TRUE_TRACK):.3f} -> "
               f"{np.mean(changed == TRUE_TRACK):.3f})")
 
+
 if __name__ == "__main__":
     main(*sys.argv[1:])

@@ -145,11 +145,11 @@ def test_other_library_versions_give_a_new_folder_and_say_which(write_config, tm
     notes: list[str] = []
     second = Runner(config, tmp_path, progress=False, plots=False, warn=notes.append).run()
     assert second.folder != first.folder and second.computed_trials == 6
-    assert len(notes) == 1 and "other library versions (numpy " in notes[0]
+    assert len(notes) == 1 and "other versions (numpy " in notes[0]
     assert notes[0].split("(numpy ")[1].startswith(f"{first_numpy(first.folder)}, now 99.0.0")
     manifest = json.loads((second.folder / "manifest.json").read_text())
     assert manifest["versions"]["numpy"] == "99.0.0"
-    assert set(manifest["cpu"]) == {"model", "numpy_simd"}
+    assert [set(c) for c in manifest["cpu"]] == [{"model", "numpy_simd", "settings"}]
     assert (second.folder / "trials.csv").read_bytes() == (first.folder /
                                                            "trials.csv").read_bytes()
 
@@ -165,11 +165,32 @@ def test_resuming_on_a_cpu_with_other_vector_extensions_says_so(write_config, tm
         Runner(config, tmp_path, executor="serial", progress=False, plots=False).run()
     manifest_path = err.value.folder / "manifest.json"
     manifest = json.loads(manifest_path.read_text())
-    manifest["cpu"] = {"model": "an older machine", "numpy_simd": ["SSE42"]}
-    manifest_path.write_text(json.dumps(manifest))
+    this_cpu = manifest["cpu"]
     notes: list[str] = []
+    with ctrl_c_at_part(1), pytest.raises(RunInterrupted):  # resumed on the same CPU: silent
+        Runner(config, tmp_path, executor="serial", progress=False, plots=False,
+               warn=notes.append).run()
+    assert notes == []
+    older = {"model": "an older machine", "numpy_simd": ["SSE42"], "settings": {}}
+    manifest_path.write_text(json.dumps({**manifest, "cpu": [older]}))  # an older run's
     resumed = Runner(config, tmp_path, executor="serial", progress=False, plots=False,
                      warn=notes.append).run()
     assert resumed.computed_trials == 4
-    assert len(notes) == 1 and "resuming on a CPU with other vector extensions" in notes[0]
-    assert "the saved batches: SSE42" in notes[0]
+    assert len(notes) == 1 and "resuming on another CPU" in notes[0]
+    assert "the saved batches: an older machine, numpy SSE42)" in notes[0]
+    assert json.loads(manifest_path.read_text())["cpu"] == [older, *this_cpu]
+
+
+def test_a_sibling_manifest_with_damaged_versions_is_just_other_code(write_config, tmp_path,
+                                                                      monkeypatch):
+    import trackfuse.runner as runner_module
+
+    config = load(write_config("experiment: toy_gaussian\ntrials: 4\nseed: 1\n"))
+    first = Runner(config, tmp_path, progress=False, plots=False).run()
+    manifest = json.loads((first.folder / "manifest.json").read_text())
+    (first.folder / "manifest.json").write_text(json.dumps({**manifest, "versions": [1, 2]}))
+    monkeypatch.setattr(runner_module, "library_versions",
+                        lambda: {"python": "3", "numpy": None})
+    notes: list[str] = []
+    Runner(config, tmp_path, progress=False, plots=False, warn=notes.append).run()
+    assert len(notes) == 1 and "from other code (1 such run(s))" in notes[0]

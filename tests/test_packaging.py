@@ -18,7 +18,7 @@ PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text())
 def test_every_package_is_listed_and_the_cli_is_renamed():
     listed = PYPROJECT["tool"]["setuptools"]["packages"]
     config_folders = [f"trackfuse.configs.{d.name}" for d in (ROOT / "configs").iterdir()
-                      if any(d.glob("*.yaml"))]
+                      if d.is_dir() and any(d.glob("*.yaml"))]
     assert sorted(listed) == sorted([*find_packages(str(ROOT), include=["trackfuse*"]),
                                      "trackfuse_cli", "trackfuse.configs", *config_folders])
     assert PYPROJECT["tool"]["setuptools"]["package-dir"] == {"trackfuse_cli": "cli",

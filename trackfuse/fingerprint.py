@@ -15,8 +15,8 @@ numbers. :func:`code_fingerprint` hashes the source of:
 Imports are found by reading the source (:mod:`ast`), so nothing is executed. A module
 without Python source (a compiled extension) contributes its file's bytes. Figures and
 report modules do not change numbers and are left out, so redrawing code can change without
-recomputing. Third-party libraries (numpy, scipy) are not hashed; their versions are in the
-manifest. See ``docs/runner.md`` (run id).
+recomputing. Third-party libraries are not hashed: the run id covers their versions
+(:mod:`trackfuse.environment`). See ``docs/runner.md`` (run id).
 """
 
 from __future__ import annotations

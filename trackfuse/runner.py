@@ -38,6 +38,7 @@ from typing import Any
 import trackfuse
 from trackfuse.batch import BatchTask, execute_batch, watch_sigint
 from trackfuse.config import Config
+from trackfuse.environment import cpu, library_versions, version
 from trackfuse.executors import make_executor
 from trackfuse.experiments.base import NON_NEGATIVE
 from trackfuse.fingerprint import code_fingerprint
@@ -112,39 +113,28 @@ def _git_state(where: Path) -> dict[str, Any] | None:
         return None
 
 
-def _version(distribution: str) -> str | None:
-    """Installed version of ``distribution`` without importing it."""
-    try:
-        return importlib.metadata.version(distribution)
-    except importlib.metadata.PackageNotFoundError:
-        return None
+def _said(value: Any) -> str:
+    """A version for a sentence: ``None`` (not installed, or not recorded) in words."""
+    return "not installed or not recorded" if value is None else str(value)
 
 
-NUMERIC_LIBRARIES = ("numpy", "scipy", "pandas", "numba")
-"""Libraries whose arithmetic or CSV formatting writes the numbers: with Python's version,
-their versions are part of the run id (an upgrade computes anew, never mixes)."""
+def _cpus(recorded: Any) -> list[dict[str, Any]]:
+    """The CPUs (:func:`cpu`) a manifest's ``cpu`` names: a list, or one (older runs)."""
+    found = recorded if isinstance(recorded, list) else [recorded]
+    return [c for c in found if isinstance(c, dict)]
 
 
-def library_versions() -> dict[str, str | None]:
-    """Python's version and each of :data:`NUMERIC_LIBRARIES`' (``None``: not installed)."""
-    return {"python": platform.python_version(), **{d: _version(d) for d in NUMERIC_LIBRARIES}}
+def _with_cpu(recorded: Any, current: dict[str, Any]) -> list[dict[str, Any]]:
+    """Every CPU that computed a run's batches, in order: ``recorded`` plus ``current``."""
+    cpus = _cpus(recorded)
+    return cpus if current in cpus else [*cpus, current]
 
 
-def cpu() -> dict[str, Any]:
-    """This machine's CPU model and the vector extensions numpy dispatches to: another set
-    can change the last bit of a float (``np.exp`` with AVX-512 or without)."""
-    model = platform.processor() or platform.machine()
-    with contextlib.suppress(OSError):
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                model = line.split(":", 1)[1].strip()
-                break
-    try:
-        from numpy._core import _multiarray_umath as umath  # numpy's own list, no public API
-        simd = [k for k in umath.__cpu_dispatch__ if umath.__cpu_features__.get(k)]
-    except (ImportError, AttributeError):
-        simd = None
-    return {"model": model, "numpy_simd": simd}
+def _cpu_words(machine: dict[str, Any]) -> str:
+    simd = machine.get("numpy_simd")
+    words = f"{machine.get('model')}, numpy {'/'.join(simd) if simd else 'baseline'}"
+    settings = machine.get("settings") or {}
+    return words + "".join(f", {k}={v}" for k, v in settings.items())
 
 
 def _now() -> str:
@@ -229,8 +219,7 @@ class Runner:
 
     def _manifest(self, status: RunStatus, session: _Session, failed: int = 0) -> dict[str, Any]:
         versions = {"trackfuse": trackfuse.__version__, **self.libraries,
-                    "matplotlib": _version("matplotlib"),
-                    "stonesoup": _version("stonesoup")}  # None when not installed
+                    "matplotlib": version("matplotlib")}  # None when not installed
         previous = session.previous or {}
         return {
             "status": status,
@@ -245,7 +234,7 @@ class Runner:
             "trackfuse_path": str(Path(trackfuse.__file__).resolve().parent),
             "versions": versions,
             "platform": platform.platform(),
-            "cpu": self.cpu,
+            "cpu": _with_cpu(previous.get("cpu"), self.cpu),
             "host": platform.node(),
             "root_seed": self.config.seed,
             "executor": self.executor_used or previous.get("executor") or self.executor_kind,
@@ -343,24 +332,25 @@ class Runner:
                       f"computing anew in {self.folder.path.name}")
 
     def _what_differs(self, manifest: dict[str, Any]) -> str:
-        """"other code", or the libraries whose versions differ from ``manifest``'s."""
-        versions = manifest.get("versions") or {}
-        fingerprint = manifest.get("code_fingerprint") or {}
-        if (fingerprint.get("sha256") != self.code.digest
+        """"other code", or the Python and library versions that differ from ``manifest``'s."""
+        versions, fingerprint = manifest.get("versions"), manifest.get("code_fingerprint")
+        if not isinstance(versions, dict) or not isinstance(fingerprint, dict) or (
+                fingerprint.get("sha256") != self.code.digest
                 or versions.get("trackfuse") != trackfuse.__version__):
             return "other code"
-        changed = [f"{lib} {versions.get(lib)}, now {now}" for lib, now in self.libraries.items()
-                   if versions.get(lib) != now]
-        return "other library versions (" + "; ".join(changed) + ")" if changed else "other code"
+        changed = [f"{lib} {_said(versions.get(lib))}, now {_said(now)}"
+                   for lib, now in self.libraries.items() if versions.get(lib) != now]
+        return "other versions (" + "; ".join(changed) + ")" if changed else "other code"
 
     def _note_other_cpu(self, previous: dict[str, Any]) -> None:
-        """Say in one line when a run is resumed on a CPU with other vector extensions."""
-        before = previous.get("cpu")
-        if isinstance(before, dict) and before.get("numpy_simd") != self.cpu["numpy_simd"]:
-            self.warn(f"{self.folder.path}: resuming on a CPU with other vector extensions "
-                      f"({', '.join(self.cpu['numpy_simd'] or ['unknown'])}; the saved batches: "
-                      f"{', '.join(before.get('numpy_simd') or ['unknown'])}); the last bit of "
-                      "some floats may differ from a run on one machine")
+        """Say in one line when a run resumes on a CPU its saved batches were not computed
+        on (another model, vector extensions or rounding settings: :func:`cpu`)."""
+        before = _cpus(previous.get("cpu"))
+        if before and self.cpu not in before:
+            self.warn(f"{self.folder.path}: resuming on another CPU ({_cpu_words(self.cpu)}; "
+                      f"the saved batches: {'; '.join(map(_cpu_words, before))}); the last "
+                      "bits of some results may differ from a run on one machine, and "
+                      "amplified ones more (docs/runner.md, run id)")
 
     def _previous_manifest(self) -> dict[str, Any] | None:
         try:

@@ -13,12 +13,14 @@ the reserved bottom strip with :func:`legend_in_strip`.
 from __future__ import annotations
 
 import io
+from collections.abc import Iterable
 from contextlib import AbstractContextManager
 from dataclasses import dataclass
 from functools import cache
 
 import matplotlib
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.text import Text
@@ -115,7 +117,7 @@ def legend_in_strip(fig, handles: list, labels: list[str], ncols: int) -> None:
                    ncols=max(1, ncols), frameon=False, borderaxespad=0.3)
 
 
-def legend_entries(axes) -> tuple[list, list[str]]:
+def legend_entries(axes: Iterable[Axes]) -> tuple[list, list[str]]:
     """``(handles, labels)`` of every labelled artist of ``axes``, each label once (the
     first handle drawn with it)."""
     entries: dict[str, object] = {}
@@ -125,7 +127,8 @@ def legend_entries(axes) -> tuple[list, list[str]]:
     return list(entries.values()), list(entries)
 
 
-def legend_below(fig, handles: list, labels: list[str], column_width: float = 3.4) -> None:
+def legend_below(fig: Figure, handles: list, labels: list[str], column_width: float = 3.4
+                 ) -> None:
     """One legend below the panels of a :func:`new_figure` (constrained layout), one column
     per ``column_width`` inches of the figure's width, at most one per entry."""
     ncols = max(1, min(len(labels), int(fig.get_figwidth() / column_width)))

@@ -531,13 +531,15 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
                                                                                 strict=True)]
     past = any(len(_past_top(points, top)) for (_, _, points), top in zip(panels, tops,
                                                                            strict=True))
-    entries = len({n for _, names, _ in columns for n in names}) + claim + past
+    zero_labels = {_zero_label(z, top) for z, top in zip(zero, tops, strict=True) if z}
+    entries = len({n for _, names, _ in columns for n in names}) + claim + past \
+        + len(zero_labels)
     panel = SINGLE_PANEL if n_panels == 1 else PANEL
     titles = _wrapped([", ".join(t for t in (
         col_title if len(rules) == 1 else f"{col_title}, {words[rule]}",
         facet_title if len(facets) > 1 else "") if t)
         for facet_title, _ in facets for col_title, _, rule in columns], panel[0])
-    fig, axes, cols = _figure(n_panels, ncols, panel, title, entries + (not every_bar),
+    fig, axes, cols = _figure(n_panels, ncols, panel, title, entries,
                               _lines(titles))
     for ax, (_, rule, points), top, z, panel_title in zip(axes, panels, tops, zero, titles,
                                                           strict=False):
@@ -548,9 +550,7 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
         ax.set_xlabel(_axis_label("clutter.mean", run.params))
         ax.set_ylabel(RULES[rule][0])
         ax.set_title(panel_title)
-    above = [_zero_label(z, top) for z, top in zip(zero, tops, strict=True)
-             if z is not None and z[1] > top]
-    return _finish(fig, axes[:len(columns)], cols, everywhere=(PAST_TOP_LABEL, *above))
+    return _finish(fig, axes[:len(columns)], cols, everywhere=(PAST_TOP_LABEL, *zero_labels))
 
 
 def _manoeuvring_index(params: dict[str, Any]) -> float:

@@ -1,0 +1,60 @@
+"""What a run's numbers depend on besides config, seed and code: library versions and the CPU.
+
+Kept out of the modules the code fingerprint hashes (``trackfuse.fingerprint.NUMBERS_PATH``),
+so that editing this module does not change every run id. See ``docs/runner.md`` (run id).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib
+import importlib.metadata
+import os
+import platform
+from pathlib import Path
+from typing import Any
+
+NUMERIC_LIBRARIES = ("numpy", "scipy", "pandas", "numba", "stonesoup")
+"""Libraries whose arithmetic or CSV formatting writes numbers (Stone Soup's in its own
+configs): with Python's version, their versions are part of the run id, so an upgrade (or
+installing Stone Soup) computes anew instead of serving or resuming an old folder."""
+
+ROUNDING_VARIABLES = ("NPY_DISABLE_CPU_FEATURES", "NPY_ENABLE_CPU_FEATURES", "OPENBLAS_CORETYPE")
+"""Environment variables that choose numpy's or OpenBLAS's vector code, recorded when set."""
+
+
+def version(distribution: str) -> str | None:
+    """Installed version of ``distribution`` without importing it (``None``: not installed)."""
+    try:
+        return importlib.metadata.version(distribution)
+    except importlib.metadata.PackageNotFoundError:
+        return None
+
+
+def library_versions() -> dict[str, str | None]:
+    """``{"python": ..., library: version or None}`` for :data:`NUMERIC_LIBRARIES`."""
+    return {"python": platform.python_version(), **{d: version(d) for d in NUMERIC_LIBRARIES}}
+
+
+def _numpy_simd() -> list[str] | None:
+    """The vector extensions numpy dispatches to on this CPU (numpy's own list; no public
+    API, so ``None`` where this numpy does not expose it)."""
+    for module in ("numpy._core._multiarray_umath", "numpy.core._multiarray_umath"):
+        with contextlib.suppress(ImportError, AttributeError):
+            umath = importlib.import_module(module)
+            return [k for k in umath.__cpu_dispatch__ if umath.__cpu_features__.get(k)]
+    return None
+
+
+def cpu() -> dict[str, Any]:
+    """This machine's CPU: ``model``, ``numpy_simd`` (:func:`_numpy_simd`) and ``settings``
+    (the :data:`ROUNDING_VARIABLES` that are set). Another CPU can round the last bit of
+    some results differently (numpy's ``exp``, ``arctan2`` with AVX-512 or without)."""
+    model = platform.processor() or platform.machine()
+    with contextlib.suppress(OSError):
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    settings = {v: os.environ[v] for v in ROUNDING_VARIABLES if v in os.environ}
+    return {"model": model, "numpy_simd": _numpy_simd(), "settings": settings}
