@@ -177,3 +177,17 @@ def test_the_headline_table_comes_before_the_figures_and_detail_tables_after(toy
         "<details><summary><h2 style='display:inline'>Table: long_detail</h2> (31 rows; also "
         "<a href='tables/long_detail.csv'>") < page.index("<h2>Table: short_detail</h2>")
     assert page.count("<details>") == 1
+
+
+def test_the_index_names_every_cpu_that_computed_the_run(toy_run):
+    """docs/runner.md (run id): the last bits depend on the CPU, so the report says which."""
+    m = toy_run.manifest
+    older = {"model": "an older machine", "numpy_simd": [], "settings": {"OPENBLAS_CORETYPE":
+                                                                        "Haswell"}}
+    mixed = dataclasses.replace(toy_run, manifest={**m, "cpu": [*m["cpu"], older]})
+    write_report(mixed)
+    facts = (toy_run.path / "index.md").read_text().split("\n## ")[0]
+    here = m["cpu"][0]
+    assert f"**CPU**: {here['model']}, numpy {'/'.join(here['numpy_simd'])}; an older " \
+           "machine, numpy baseline, OPENBLAS_CORETYPE=Haswell" in facts
+    write_report(toy_run)  # the other tests read the default report

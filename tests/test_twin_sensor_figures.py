@@ -132,11 +132,11 @@ def test_loss_top_is_a_round_tick_above_the_intervals_unless_they_squash(highest
     assert report._tick_ceiling(upper) >= upper
 
 
-@pytest.mark.parametrize("highest", np.linspace(0.0, 80.0, 161))
-def test_every_loss_axis_top_is_a_labelled_tick(highest):
+def test_every_loss_axis_top_is_a_labelled_tick():
     """The top comes from the same ticks the axis is labelled with, whatever the panel's
     size (matplotlib's automatic ticks skipped a stretched 12 % or a 90 % top)."""
-    for upper in (highest + 1.0, 1.3 * highest + 4.0, 2.2 * highest + 9.0):
+    for highest, upper in ((h, u) for h in np.linspace(0.0, 80.0, 161)
+                           for u in (h + 1.0, 1.3 * h + 4.0, 2.2 * h + 9.0)):
         points = pd.DataFrame({"pct": [0.0, highest], "hi": [0.0, upper], "bar": [True, True]})
         top = report._loss_top(points)
         ticks = report._round_ticks(top)

@@ -58,3 +58,17 @@ def cpu() -> dict[str, Any]:
                 break
     settings = {v: os.environ[v] for v in ROUNDING_VARIABLES if v in os.environ}
     return {"model": model, "numpy_simd": _numpy_simd(), "settings": settings}
+
+
+def recorded_cpus(recorded: Any) -> list[dict[str, Any]]:
+    """The CPUs (:func:`cpu`) a manifest's ``cpu`` names: a list, or one (older runs)."""
+    found = recorded if isinstance(recorded, list) else [recorded]
+    return [c for c in found if isinstance(c, dict)]
+
+
+def cpu_words(machine: dict[str, Any]) -> str:
+    """One CPU of :func:`cpu` in words: model, numpy's extensions, rounding settings."""
+    simd = machine.get("numpy_simd")
+    words = f"{machine.get('model')}, numpy {'/'.join(simd) if simd else 'baseline'}"
+    settings = machine.get("settings") or {}
+    return words + "".join(f", {k}={v}" for k, v in settings.items())

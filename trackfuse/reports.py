@@ -47,6 +47,7 @@ from typing import Any
 import pandas as pd
 
 from trackfuse.child_processes import setup_child
+from trackfuse.environment import cpu_words, recorded_cpus
 from trackfuse.results import INDEX_HTML, INDEX_MD, atomic_write
 from trackfuse.rowtable import frame_csv
 from trackfuse.rundata import RunData, load
@@ -344,6 +345,7 @@ def _run_facts(run: RunData) -> list[tuple[str, str]]:
         ("run id", str(m.get("run_id", run.path.name))),
         ("code", _code_text(m)),
         ("versions", versions),
+        ("CPU", "; ".join(map(cpu_words, recorded_cpus(m.get("cpu")))) or "not recorded"),
         ("started", str(m.get("first_started") or m.get("started", ""))),
         # the runner writes the report before it records the finishing time
         *([("finished", str(m["finished"]))] if m.get("finished") else []),

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import contextlib
 import importlib
-import importlib.metadata
 import math
 import platform
 import subprocess
@@ -38,7 +37,7 @@ from typing import Any
 import trackfuse
 from trackfuse.batch import BatchTask, execute_batch, watch_sigint
 from trackfuse.config import Config
-from trackfuse.environment import cpu, library_versions, version
+from trackfuse.environment import cpu, cpu_words, library_versions, recorded_cpus, version
 from trackfuse.executors import make_executor
 from trackfuse.experiments.base import NON_NEGATIVE
 from trackfuse.fingerprint import code_fingerprint
@@ -118,23 +117,10 @@ def _said(value: Any) -> str:
     return "not installed or not recorded" if value is None else str(value)
 
 
-def _cpus(recorded: Any) -> list[dict[str, Any]]:
-    """The CPUs (:func:`cpu`) a manifest's ``cpu`` names: a list, or one (older runs)."""
-    found = recorded if isinstance(recorded, list) else [recorded]
-    return [c for c in found if isinstance(c, dict)]
-
-
 def _with_cpu(recorded: Any, current: dict[str, Any]) -> list[dict[str, Any]]:
     """Every CPU that computed a run's batches, in order: ``recorded`` plus ``current``."""
-    cpus = _cpus(recorded)
+    cpus = recorded_cpus(recorded)
     return cpus if current in cpus else [*cpus, current]
-
-
-def _cpu_words(machine: dict[str, Any]) -> str:
-    simd = machine.get("numpy_simd")
-    words = f"{machine.get('model')}, numpy {'/'.join(simd) if simd else 'baseline'}"
-    settings = machine.get("settings") or {}
-    return words + "".join(f", {k}={v}" for k, v in settings.items())
 
 
 def _now() -> str:
@@ -345,10 +331,10 @@ class Runner:
     def _note_other_cpu(self, previous: dict[str, Any]) -> None:
         """Say in one line when a run resumes on a CPU its saved batches were not computed
         on (another model, vector extensions or rounding settings: :func:`cpu`)."""
-        before = _cpus(previous.get("cpu"))
+        before = recorded_cpus(previous.get("cpu"))
         if before and self.cpu not in before:
-            self.warn(f"{self.folder.path}: resuming on another CPU ({_cpu_words(self.cpu)}; "
-                      f"the saved batches: {'; '.join(map(_cpu_words, before))}); the last "
+            self.warn(f"{self.folder.path}: resuming on another CPU ({cpu_words(self.cpu)}; "
+                      f"the saved batches: {'; '.join(map(cpu_words, before))}); the last "
                       "bits of some results may differ from a run on one machine, and "
                       "amplified ones more (docs/runner.md, run id)")
 
