@@ -100,3 +100,24 @@ def test_the_esm_radar_spread_example_runs_on_a_run_folder(tmp_path):
     lines = proc.stdout.splitlines()
     assert lines[0].startswith("correlation of the per-sample TDOA-DF range sd")
     assert len(lines) == 3 and all("of 20 trials change" in line for line in lines[1:])
+
+
+def test_the_esm_radar_cv_nis_example_runs_on_a_run_folder(tmp_path):
+    """examples/esm_radar_cv_nis.py (docs/papers/esm_radar.md, W001-4) on a small run of the
+    weave config: it recomputes the run's own index, and the weave raises every NIS."""
+    env = cli_env()
+    proc = subprocess.run([sys.executable, "-m", "trackfuse", "run",
+                           "configs/esm_radar_weave.yaml", "--trials", "20",
+                           "--out", str(tmp_path), "--workers", "1", "--no-plots",
+                           "--no-progress"], cwd=ROOT, env=env, capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    folder = re.search(r"^wrote (.+?): \d+ rows", proc.stdout, flags=re.M).group(1)
+    proc = subprocess.run([sys.executable, "examples/esm_radar_cv_nis.py", folder], cwd=ROOT,
+                          env=env, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.splitlines()
+    assert lines[0] == "point 0, straight flight, 20 trials:"
+    means = [float(re.search(r"c dt ([\d.]+) \[", line).group(1)) for line in lines
+             if "mean NIS" in line]
+    assert len(means) == 8 and all(w > s for s, w in zip(means[:4], means[4:], strict=True))

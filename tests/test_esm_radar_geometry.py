@@ -19,7 +19,7 @@ from trackfuse.association.esm_scenario import (
 from trackfuse.association.manoeuvre import (
     FIRST_CA_INNOVATION,
     ca_innovations,
-    cv_residuals,
+    cv_innovations,
     manoeuvre_index,
     nis_threshold,
     windowed_nis,
@@ -185,25 +185,45 @@ def test_time_alignment_interpolation_and_variance():
         bracket(np.array([11.5]), 1.0, len(t_radar))
 
 
-def test_cv_residuals_zero_for_constant_velocity_and_alpha_near_one_for_noise():
+def test_cv_innovations_zero_for_constant_velocity_and_alpha_near_one_for_noise():
     t = np.arange(60.0)
     z = 20_000.0 - 150.0 * t
-    V = cv_residuals(z[None], np.full((1, 60), 1e4), 1.0, 0.0)
+    V = cv_innovations(z[None], np.full((1, 60), 1e4), 1.0, 0.0)[0]
     assert np.all(np.isnan(V[0, :2]))
     np.testing.assert_allclose(V[0, 2:], 0.0, atol=1e-8)
     rng = np.random.default_rng(2)
     R = np.full((400, 60), 300.0**2)
     zn = z + 300.0 * rng.standard_normal((400, 60))
-    alpha = manoeuvre_index(cv_residuals(zn, R, 1.0, 1.0), R, 5)
+    alpha = manoeuvre_index(cv_innovations(zn, R, 1.0, 1.0)[0], R, 5)
     assert np.isnan(alpha[:, :2]).all()
     assert 0.95 < alpha[:, 30:].mean() < 1.4  # residual variance is R plus prediction variance
+
+
+def test_cv_innovation_variance_is_the_spread_of_the_innovations():
+    """With the CV model true (white acceleration variance q), each scan's innovations have
+    the variance S the filter states, so the NIS has mean 1 (a wrong S, e.g. without the
+    prediction variance, fails: the two-point start alone makes it 6 R at scan 2)."""
+    rng = np.random.default_rng(6)
+    T, q, sigma = 2.0, 0.5, 9.0
+    F = np.array([[1.0, T], [0.0, 1.0]])
+    G = np.array([T * T / 2, T])
+    state = np.tile([4000.0, -30.0], (20_000, 1))
+    x = np.empty((20_000, 40))
+    for k in range(40):
+        x[:, k] = state[:, 0]
+        state = state @ F.T + np.sqrt(q) * rng.standard_normal((20_000, 1)) * G
+    nu, S = cv_innovations(x + sigma * rng.standard_normal(x.shape), sigma**2, T, q)
+    assert np.isnan(nu[:, :2]).all() and np.isnan(S[:, :2]).all()
+    for k in (2, 3, 10, 39):
+        assert np.var(nu[:, k]) == pytest.approx(S[0, k], rel=0.04), k
+    assert np.nanmean(nu**2 / S) == pytest.approx(1.0, abs=0.02)
 
 
 def test_manoeuvre_index_rises_with_acceleration():
     t = np.arange(60.0)
     z = 20_000.0 - 150.0 * t - 0.5 * 40.0 * np.clip(t - 30, 0, None) ** 2
     R = np.full((1, 60), 10.0**2)
-    alpha = manoeuvre_index(cv_residuals(z[None], R, 1.0, 1.0), R, 5)[0]
+    alpha = manoeuvre_index(cv_innovations(z[None], R, 1.0, 1.0)[0], R, 5)[0]
     assert alpha[25] < 1e-6 and alpha[40] > 10
 
 

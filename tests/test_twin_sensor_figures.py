@@ -245,3 +245,18 @@ def test_coinciding_final_bounds_are_drawn_once_and_said_so(run_50):
     assert {report.PCRLB_TRUTH, report.PCRLB_FILTER} <= set(_legend(apart))
     assert report.PCRLB_BOTH not in _legend(apart)
     assert text_overlaps(fig) == [] and text_overlaps(apart) == []
+
+
+def test_final_rmse_axis_top_is_a_labelled_tick_above_every_curve(run_50):
+    """The final-RMSE axis ends on a labelled tick at or above 1.8 times the highest RMSE or
+    bound drawn (it ended at exactly 1.8 times, between two ticks)."""
+    name = "final_range_rmse_vs_sweep"
+    ax = report.figures(run_50, [name])[name].axes[0]
+    top = ax.get_ylim()[1]
+    bounds = [line for line in ax.get_lines() if not line.get_label().startswith("_")]
+    rmse = [c.lines[0] for c in ax.containers if isinstance(c, ErrorbarContainer)]
+    assert bounds and rmse
+    curves = bounds + rmse  # not the interval caps: those may run off the top
+    highest = max(float(np.nanmax(line.get_ydata())) for line in curves)
+    assert top in ax.get_yticks()
+    assert report.RMSE_HEADROOM * highest <= top

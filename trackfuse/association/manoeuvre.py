@@ -24,11 +24,12 @@ Why this observable and this model (see ``docs/papers/esm_radar.md``, section
 the bearing 30 mrad, so a 1 km weave is buried in either; the range difference has 9 m of
 noise (30 ns) and swings by ~400 m with the weave. Its second derivative is not constant
 even for a target in straight flight (the hyperbolic geometry gives up to 1.2 m/s^2, changing
-by < 0.02 m/s^2 per second), so a constant-velocity filter sees a false manoeuvre; the
-constant-acceleration model absorbs it, while the weave changes the acceleration by
+by < 0.02 m/s^2 per second), so a constant-velocity filter fits straight flight only with
+a white-acceleration variance that absorbs most of the weave too; the constant-acceleration
+model absorbs the geometry with a small ``q``, while the weave changes the acceleration by
 ~2 m/s^2 per second.
 
-**The paper's literal index** (:func:`cv_residuals` + :func:`manoeuvre_index`). Eq. 12 takes
+**The paper's literal index** (:func:`cv_innovations` + :func:`manoeuvre_index`). Eq. 12 takes
 the mean square of the measurement residual ``V = Z - Zhat(k|k-1)`` of the ESM range as the
 manoeuvre-noise estimate, which mixes metres with accelerations (W001-4). The dimensionally
 consistent reading: a CV prediction under a constant acceleration ``a`` misses by
@@ -134,8 +135,9 @@ def nis_threshold(window: int, false_alarm: float) -> float:
     return chi2_quantile(1.0 - false_alarm, window) / window
 
 
-def cv_residuals(z: np.ndarray, R: np.ndarray, T: float, q: float) -> np.ndarray:
-    """Innovation sequence of a 1-D CV Kalman filter (the paper's literal index).
+def cv_innovations(z: np.ndarray, R: np.ndarray, T: float,
+                   q: float) -> tuple[np.ndarray, np.ndarray]:
+    """Innovations of a 1-D CV Kalman filter (the paper's literal index uses ``nu``).
 
     Parameters
     ----------
@@ -146,12 +148,14 @@ def cv_residuals(z: np.ndarray, R: np.ndarray, T: float, q: float) -> np.ndarray
 
     Returns
     -------
-    V : (..., K) residuals ``z(k) - H x(k|k-1)`` (m); NaN at scans 0 and 1.
+    nu : (..., K) residuals ``z(k) - H x(k|k-1)`` (m); NaN at scans 0 and 1.
+    S : (..., K) innovation variances (m^2); NaN at scans 0 and 1.
     """
     z = np.asarray(z, dtype=float)
     R = np.broadcast_to(np.asarray(R, dtype=float), z.shape)
     K = z.shape[-1]
     V = np.full(z.shape, np.nan)
+    S = np.full(z.shape, np.nan)
     # Two-point initialization at scan 1.
     r = z[..., 1].copy()
     v = (z[..., 1] - z[..., 0]) / T
@@ -165,12 +169,12 @@ def cv_residuals(z: np.ndarray, R: np.ndarray, T: float, q: float) -> np.ndarray
         p11, p12, p22 = (p11 + 2 * T * p12 + T * T * p22 + q11, p12 + T * p22 + q12, p22 + q22)
         # Update.
         V[..., k] = nu = z[..., k] - r
-        S = p11 + R[..., k]
-        k1, k2 = p11 / S, p12 / S
+        S[..., k] = p11 + R[..., k]
+        k1, k2 = p11 / S[..., k], p12 / S[..., k]
         r = r + k1 * nu
         v = v + k2 * nu
         p11, p12, p22 = (1 - k1) * p11, (1 - k1) * p12, p22 - k2 * p12
-    return V
+    return V, S
 
 
 def manoeuvre_index(V: np.ndarray, R: np.ndarray, window: int = 5) -> np.ndarray:

@@ -102,7 +102,7 @@ from trackfuse.association.fuzzy import (
 )
 from trackfuse.association.manoeuvre import (
     ca_innovations,
-    cv_residuals,
+    cv_innovations,
     manoeuvre_index,
     nis_threshold,
     windowed_nis,
@@ -302,7 +302,7 @@ def manoeuvre_alpha(params: Mapping[str, Any], x_esm: np.ndarray, P_esm: np.ndar
         return windowed_nis(nu, S, window)
     if index == "literal":
         R_n = P_esm[..., 0, 0]
-        return manoeuvre_index(cv_residuals(x_esm[..., 0], R_n, T, params["alpha.q"]), R_n,
+        return manoeuvre_index(cv_innovations(x_esm[..., 0], R_n, T, params["alpha.q"])[0], R_n,
                                window)
     raise ValueError(f"unknown manoeuvre index {index!r}")
 

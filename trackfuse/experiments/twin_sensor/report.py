@@ -259,8 +259,11 @@ RMSE_HEADROOM = 1.8
 
 def _band_ylim(ax: Axes, highest: float) -> None:
     """y from 0 to :data:`RMSE_HEADROOM` times ``highest`` (the highest RMSE or bound drawn,
-    km): intervals of a few runs may run off the top instead of squeezing the curves."""
-    ax.set_ylim(0.0, RMSE_HEADROOM * highest)
+    km), rounded up to a labelled tick: intervals of a few runs may run off the top instead
+    of squeezing the curves."""
+    top = _tick_ceiling(RMSE_HEADROOM * highest)
+    ax.set_ylim(0.0, top)
+    ax.yaxis.set_major_locator(FixedLocator(_round_ticks(top)))
 
 
 def _drawable(values: np.ndarray) -> np.ndarray:
