@@ -260,3 +260,51 @@ def test_final_rmse_axis_top_is_a_labelled_tick_above_every_curve(run_50):
     highest = max(float(np.nanmax(line.get_ydata())) for line in curves)
     assert top in ax.get_yticks()
     assert report.RMSE_HEADROOM * highest <= top
+
+
+def test_a_final_rmse_interval_past_the_top_is_marked_there(run_50):
+    """One diverged run (range error 1000 km at the last scan) sends its interval far past
+    the axis top: a triangle in its colour marks it at the top, with its legend entry (it
+    used to end at the frame without a sign)."""
+    name = "final_range_rmse_vs_sweep"
+    trials = run_50.trials.copy()
+    diverged = ((trials["scan"] == trials["scan"].max()) & (trials["trial"] == 0)
+                & (trials["algorithm"] == "mspda_parallel/mgekf")
+                & (trials["clutter.mean"] == 8.0))
+    trials.loc[diverged, "range_sq_err_m2"] = 1e6**2
+    bad = replace(run_50)
+    bad.trials = trials
+    fig = report.figures(bad, [name])[name]
+    ax = fig.axes[0]
+    top = ax.get_ylim()[1]
+    (x, y, colour), = _past_top_marks(ax)  # one mark: the interval is unbounded or past top
+    assert x == pytest.approx(8.0, abs=0.2) and y == top
+    assert colour == to_hex(line_kwargs("mspda_parallel/mgekf")["color"])
+    assert report.PAST_TOP_LABEL in _legend(fig)
+    clean = report.figures(run_50, [name])[name]
+    assert not _past_top_marks(clean.axes[0]) and report.PAST_TOP_LABEL not in _legend(clean)
+
+
+def test_fig2_draws_our_method_beside_the_papers_pair(run_50):
+    """Paper Fig. 2 redrawn shows the paper's fused-gate PDA (MGEKF band, EKF edges) and our
+    parallel PDA (MGEKF) as a thin curve on top of them (it was left out)."""
+    name = "range_error_vs_time"
+    fig = report.figures(run_50, [name])[name]
+    ours = look("mspda_parallel/mgekf").label
+    assert any(ours in text for text in _legend(fig))
+    for ax in fig.axes:
+        if not ax.get_visible():
+            continue
+        by_colour = {to_hex(line.get_color()): line for line in ax.get_lines()
+                     if line.get_marker() not in ("", "None")}
+        curve = by_colour[to_hex(line_kwargs("mspda_parallel/mgekf")["color"])]
+        paper = by_colour[to_hex(line_kwargs("paper_approx/mgekf")["color"])]
+        assert curve.get_zorder() > paper.get_zorder() and len(curve.get_xdata()) == 20
+
+
+def test_every_loss_figure_says_its_error_bars_are_wilson_intervals(run_50):
+    """The error bars of the loss figures are named in the legend (nothing said what they
+    were)."""
+    for name, fig in report.figures(run_50, LOSS_FIGURES).items():
+        assert report.WILSON_LABEL in _legend(fig), name
+        assert text_overlaps(fig) == [], name

@@ -29,7 +29,8 @@ FIGURES = {
         "index sqrt(q) T^2 / (r sigma) of the truth, with clutter; crosses: without clutter"),
     "range_error_vs_time": FigureSpec(
         "Paper Fig. 2 redrawn: range RMSE against time at a few clutter levels, MGEKF (band) "
-        "beside EKF (dashed band edges), the square-root PCRLB of the truth and filter "
+        "beside EKF (dashed band edges), the other of the paper's method and our parallel "
+        "PDA where run (MGEKF, curve), the square-root PCRLB of the truth and filter "
         "models, and five single runs: the per-scan bands are marginal, errors are strongly "
         "correlated across scans (correlation quoted per panel)", "Fig. 2"),
     "anees_vs_time": FigureSpec(

@@ -257,13 +257,37 @@ def _rates(frame: pd.DataFrame, x_key: str, rule: str) -> pd.DataFrame:
 RMSE_HEADROOM = 1.8
 
 
-def _band_ylim(ax: Axes, highest: float) -> None:
-    """y from 0 to :data:`RMSE_HEADROOM` times ``highest`` (the highest RMSE or bound drawn,
-    km), rounded up to a labelled tick: intervals of a few runs may run off the top instead
-    of squeezing the curves."""
-    top = _tick_ceiling(RMSE_HEADROOM * highest)
-    ax.set_ylim(0.0, top)
-    ax.yaxis.set_major_locator(FixedLocator(_round_ticks(top)))
+FinalPoints = dict[str, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]
+"""Per algorithm: swept values, final range RMSE and its 95 % interval ends (km; an end
+the runs do not bound is NaN), from :func:`_final_points`."""
+
+
+def _final_points(frame: pd.DataFrame, x_key: str, names: Sequence[str]) -> FinalPoints:
+    """:data:`FinalPoints` of the last-scan rows ``frame`` against ``x_key``."""
+    points = {}
+    for name in names:
+        groups = list(frame[frame["algorithm"] == name].groupby(x_key)["range_sq_err_m2"])
+        ci = _drawable(rmse_intervals([g.to_numpy() for _, g in groups])) / 1e3
+        points[name] = (np.array([x for x, _ in groups], dtype=float),
+                        np.array([np.sqrt(g.mean()) for _, g in groups]) / 1e3,
+                        ci[:, 0], ci[:, 1])
+    return points
+
+
+def _final_top(points: FinalPoints, bound_curves: Sequence[tuple[Any, np.ndarray, str, str]]
+               ) -> float:
+    """Top of a final-RMSE axis (km): :data:`RMSE_HEADROOM` times the highest RMSE or bound
+    drawn, rounded up to a labelled tick (intervals of a few runs may pass it instead of
+    squeezing the curves)."""
+    highest = max([float(rmse.max()) for _, rmse, _, _ in points.values()]
+                  + [float(bound.max()) for _, bound, _, _ in bound_curves])
+    return _tick_ceiling(RMSE_HEADROOM * highest)
+
+
+def _past_final_top(points: FinalPoints, top: float) -> list[tuple[str, np.ndarray]]:
+    """``(algorithm, swept values)`` whose interval passes ``top`` or is unbounded above."""
+    return [(name, x[(hi > top) | (np.isnan(hi) & np.isfinite(rmse))])
+            for name, (x, rmse, _, hi) in points.items()]
 
 
 def _drawable(values: np.ndarray) -> np.ndarray:
@@ -433,6 +457,7 @@ most this multiple of the range its estimates need; beyond, the curves would be 
 into the bottom of the panel, so the axis keeps the estimates' range and every error bar
 that passes its top is marked there (:func:`_fit_loss_axis`)."""
 PAST_TOP_LABEL = "95 % interval runs past the top of the axis"
+WILSON_LABEL = "95 % Wilson interval (error bar)"
 
 
 TICK_STEPS = [1, 2, 5, 10]
@@ -496,12 +521,25 @@ def _fit_loss_axis(ax: Axes, top: float, points: pd.DataFrame,
     elif zero_bound is not None:
         ax.plot([], [], ls="none", label=_zero_label(zero_bound, top))
     past = _past_top(points, top)
-    for name, rows in past.groupby("name", sort=False):
-        ax.plot(rows["x"], np.full(len(rows), top), ls="none", marker="^", markersize=5,
-                color=line_kwargs(str(name))["color"], clip_on=False, zorder=6)
-    if len(past):
+    _mark_past_top(ax, [(str(name), rows["x"].to_numpy()) for name, rows
+                        in past.groupby("name", sort=False)], top)
+
+
+def _mark_past_top(ax: Axes, marks: Sequence[tuple[str, np.ndarray]], top: float) -> None:
+    """An upward triangle at ``top`` in the curve's colour at each x of ``marks``
+    (``(algorithm, x values)``): error bars that pass the top of the axis; the legend entry
+    :data:`PAST_TOP_LABEL` when there is one."""
+    for name, x in marks:
+        ax.plot(x, np.full(len(x), top), ls="none", marker="^", markersize=5,
+                color=line_kwargs(name)["color"], clip_on=False, zorder=6)
+    if any(len(x) for _, x in marks):
         ax.plot([], [], ls="none", marker="^", markersize=5, color=GREYS[0],
                 label=PAST_TOP_LABEL)
+
+
+def _wilson_key(ax: Axes) -> None:
+    """The legend entry saying what a loss figure's error bars are (:data:`WILSON_LABEL`)."""
+    ax.plot([], [], ls="none", marker="|", markersize=9, color=GREYS[0], label=WILSON_LABEL)
 
 
 Column = tuple[str, list[str], str]
@@ -536,7 +574,7 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
                                                                            strict=True))
     zero_labels = {_zero_label(z, top) for z, top in zip(zero, tops, strict=True) if z}
     entries = len({n for _, names, _ in columns for n in names}) + claim + past \
-        + len(zero_labels)
+        + len(zero_labels) + 1
     panel = SINGLE_PANEL if n_panels == 1 else PANEL
     titles = _wrapped([", ".join(t for t in (
         col_title if len(rules) == 1 else f"{col_title}, {words[rule]}",
@@ -553,6 +591,7 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
         ax.set_xlabel(_axis_label("clutter.mean", run.params))
         ax.set_ylabel(RULES[rule][0])
         ax.set_title(panel_title)
+    _wilson_key(axes[0])
     return _finish(fig, axes[:len(columns)], cols, everywhere=(PAST_TOP_LABEL, *zero_labels))
 
 
@@ -587,7 +626,7 @@ def _index_figure(run: RunData) -> Figure | str:
     top = _loss_top(pd.concat(points), zero[1])  # one y range: the same quantity
     past = any(len(_past_top(p, top)) for p in points)
     fig, axes, cols = _figure(2, 2, PANEL, title,
-                              len(names) + 1 + (len(free) > 0) + past, 1)
+                              len(names) + 2 + (len(free) > 0) + past, 1)
     for ax, rule, drawn in zip(axes, rules, points, strict=True):
         _draw_rates(ax, drawn)
         _fit_loss_axis(ax, top, drawn, zero)
@@ -598,6 +637,7 @@ def _index_figure(run: RunData) -> Figure | str:
         ax.set_xlabel("manoeuvring index sqrt(q) T^2 / (r sigma) (1)")
         ax.set_ylabel(RULES[rule][0])
         ax.set_title(_rule_text(rule, run.params, swept_keys(run.config)))
+    _wilson_key(axes[0])
     return _finish(fig, axes[:1], cols, everywhere=(PAST_TOP_LABEL,))
 
 
@@ -703,13 +743,21 @@ def _pcrlb_curves(params: dict[str, Any]) -> list[tuple[np.ndarray, str, str]]:
 
 
 def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
-                names: Sequence[str]) -> None:
+                names: Sequence[str], beside: Sequence[str] = ()) -> None:
     """Range RMSE (km) with 95 % bootstrap-t bands per scan (the first algorithm's filled,
-    the second's as dashed edges, each band in the legend), five single runs of the first
-    algorithm, the square-root PCRLBs, and the correlation of the first algorithm's errors
-    between the first and the last scan."""
+    the second's as dashed edges, each band in the legend), the RMSE of the ``beside``
+    algorithms as thin curves on top without bands, five single runs of the first algorithm, the
+    square-root PCRLBs, and the correlation of the first algorithm's errors between the
+    first and the last scan."""
     period = float(params["scan.period"])
     top = 0.0
+    for name in beside:
+        rmse = np.sqrt(frame[frame["algorithm"] == name].groupby("scan")["range_sq_err_m2"]
+                       .mean()) / 1e3
+        top = max(top, float(rmse.max()))
+        kw = _time_curve_kwargs(name)  # thin and on top: it often lies on the pair's curves
+        kw.update(linewidth=1.0, zorder=kw["zorder"] + 2)
+        ax.plot(rmse.index.to_numpy(float) * period, rmse, **kw)
     for i, name in enumerate(names):
         rows = frame[frame["algorithm"] == name]
         band = _rmse_band(rows.groupby("scan")["range_sq_err_m2"]) / 1e3
@@ -743,13 +791,16 @@ def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
 
 def _range_figure(run: RunData) -> Figure:
     """Paper Fig. 2: range RMSE (km) against time (s)."""
-    names = _headline_pair(run.config["params"]["algorithms"])
+    algorithms = run.config["params"]["algorithms"]
+    names = _headline_pair(algorithms)
+    beside = [n for n in _main_algorithms(algorithms) if n not in names]
     title = [f"{_fig_words(run, 2)}: range RMSE against time ({_runs(run.trials)} runs per "
              "point)", _context(run, "95 % bootstrap-t bands; grey: single runs")]
     labels = {label for pt in _time_points(run)
               for _, _, label in _pcrlb_curves(run.point_params(pt))}
-    return _time_figure(run, lambda ax, f, p: _draw_range(ax, f, p, names), title,
-                        "range RMSE (km)", 2 * len(names) + 1 + len(labels), labels)
+    return _time_figure(run, lambda ax, f, p: _draw_range(ax, f, p, names, beside), title,
+                        "range RMSE (km)", 2 * len(names) + len(beside) + 1 + len(labels),
+                        labels)
 
 
 def _nees_figure(run: RunData) -> Figure:
@@ -808,21 +859,23 @@ def _final_figure(run: RunData) -> Figure | str:
     titles = _wrapped([t if len(facets) > 1 else "" for t, _ in facets], panel[0])
     curves = [_final_bounds(run, frame, x_key) for _, frame in facets]
     labels = {label for facet in curves for *_, label in facet}
+    points = [_final_points(frame, x_key, names) for _, frame in facets]
+    past = any(len(x) for p, c in zip(points, curves, strict=True)
+               for _, x in _past_final_top(p, _final_top(p, c)))
     fig, axes, cols = _figure(len(facets), min(len(facets), 3), panel, title,
-                              len(names) + len(labels), _lines(titles))
-    for ax, (_, frame), bound_curves, facet_title in zip(axes, facets, curves, titles,
-                                                         strict=True):
-        _draw_final(ax, frame, x_key, names, bound_curves)
+                              len(names) + len(labels) + past, _lines(titles))
+    for ax, facet_points, bound_curves, facet_title in zip(axes, points, curves, titles,
+                                                           strict=True):
+        _draw_final(ax, facet_points, x_key, bound_curves)
         ax.set_xlabel(_axis_label(x_key, run.params))
         ax.set_ylabel("final range RMSE (km)")
-        ax.set_ylim(bottom=0)
         ax.set_title(facet_title)
     shown = {label for *_, label in curves[0]}
     for _, _, style, label in (c for facet in curves[1:] for c in facet):
         if label not in shown:  # a bound only another facet draws: its legend entry
             axes[0].plot([], [], color="k", ls=style, lw=1.0, label=label)
             shown.add(label)
-    return _finish(fig, axes[:1], cols)
+    return _finish(fig, axes[:1], cols, everywhere=(PAST_TOP_LABEL,))
 
 
 def _final_bounds(run: RunData, frame: pd.DataFrame, x_key: str
@@ -846,27 +899,25 @@ def _final_bounds(run: RunData, frame: pd.DataFrame, x_key: str
     return [(grid, truth, "--", PCRLB_TRUTH), (values, model, ":", PCRLB_FILTER)]
 
 
-def _draw_final(ax: Axes, frame: pd.DataFrame, x_key: str, names: Sequence[str],
+def _draw_final(ax: Axes, points: FinalPoints, x_key: str,
                 bound_curves: Sequence[tuple[np.ndarray, np.ndarray, str, str]]) -> None:
-    """Final range RMSE (km) with intervals per algorithm, dodged along x, and the bounds
-    ``bound_curves`` (:func:`_final_bounds`)."""
+    """Final range RMSE (km) with intervals per algorithm (``points``), dodged along x, the
+    bounds ``bound_curves`` (:func:`_final_bounds`), y up to :func:`_final_top` and a
+    triangle there for each interval that passes it."""
     scale = _x_scale(x_key)
-    values = np.sort(frame[x_key].astype(float).unique())
-    top = 0.0
-    for i, name in enumerate(names):
-        rows = frame[frame["algorithm"] == name]
-        groups = list(rows.groupby(x_key)["range_sq_err_m2"])
-        stats_ = [(x, np.sqrt(g.mean()), *ci) for (x, g), ci in zip(
-            groups, _drawable(rmse_intervals([g.to_numpy() for _, g in groups])),
-            strict=True)]
-        x, rmse, lo, hi = (np.array(c, dtype=float) for c in zip(*stats_, strict=True))
-        top = max(top, float(rmse.max()) / 1e3)
-        x = x / scale + 0.006 * (values[-1] - values[0]) / scale * (i - (len(names) - 1) / 2)
-        ax.errorbar(x, rmse / 1e3, yerr=[(rmse - lo) / 1e3, (hi - rmse) / 1e3], capsize=2,
+    values = np.unique(np.concatenate([x for x, *_ in points.values()]))
+    dodge = {name: 0.006 * (values[-1] - values[0]) * (i - (len(points) - 1) / 2)
+             for i, name in enumerate(points)}
+    for name, (x, rmse, lo, hi) in points.items():
+        ax.errorbar((x + dodge[name]) / scale, rmse, yerr=[rmse - lo, hi - rmse], capsize=2,
                     elinewidth=0.8, **line_kwargs(name))
     for x_bound, bound, style, label in bound_curves:
         ax.plot(x_bound / scale, bound, color="k", ls=style, lw=1.0, label=label)
-    _band_ylim(ax, max(top, *(float(bound.max()) for _, bound, _, _ in bound_curves)))
+    top = _final_top(points, bound_curves)
+    ax.set_ylim(0.0, top)
+    ax.yaxis.set_major_locator(FixedLocator(_round_ticks(top)))
+    _mark_past_top(ax, [(name, (x + dodge[name]) / scale)
+                        for name, x in _past_final_top(points, top)], top)
 
 
 # --------------------------------------------------------------------------------------------
@@ -896,7 +947,9 @@ def _drawers(run: RunData) -> dict[str, Callable[[], Figure | str]]:
                                 f"{_fig_words(run, 1)}: tracks lost vs false returns",
                                 claim=True),
         "loss_vs_clutter_ablation": loss([c for c in by_filter if c[1]],
-                                         "Fig. 1 ablation: every algorithm"),
+                                         "Fig. 1 ablation: every algorithm")
+        if set(algorithms) - set(_main_algorithms(algorithms))
+        else (lambda: "no algorithm beyond loss_vs_clutter's was run"),
         "loss_gate_and_nees_vs_clutter": loss(
             [("lost", algorithms, "lost_gate"),
              ("inconsistent", algorithms, "inconsistent_nees")],
