@@ -609,3 +609,16 @@ def test_runs_to_show_is_the_first_run_count_a_search_finds_for_every_limit():
     for limit in limits:
         assert report.runs_to_show(limit) == search(limit), limit
     assert report.runs_to_show(0.05) == 73  # 3.84 / (73 + 3.84) = 4.99 %, at 72: 5.06 %
+
+
+def test_time_panels_of_a_departure_span_its_clutter_levels(shipped):
+    """Away from the paper's scenario the time figures show the lowest, middle and highest
+    clutter level of each facet (twin_sensor_close showed 0, 10 and 15 of 0-150, nearest
+    the paper's 0, 9, 15, and left out where tracks are lost); at the paper's scenario they
+    stay at the paper's levels."""
+    close = shipped("twin_sensor_close")
+    levels = [close.point_params(p)["clutter.mean"] for p in report._time_points(close)]
+    assert levels == [0, 20, 150, 0, 20, 150]
+    orbit = shipped("twin_sensor_orbit")
+    assert [orbit.point_params(p)["clutter.mean"] for p in report._time_points(orbit)] == \
+        [0, 9, 15]

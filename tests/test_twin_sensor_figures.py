@@ -308,3 +308,25 @@ def test_every_loss_figure_says_its_error_bars_are_wilson_intervals(run_50):
     for name, fig in report.figures(run_50, LOSS_FIGURES).items():
         assert report.WILSON_LABEL in _legend(fig), name
         assert text_overlaps(fig) == [], name
+
+
+def test_anees_axis_top_is_a_labelled_tick_above_every_curve(run_50):
+    """Each ANEES panel ends on a labelled tick at or above its band and curves (the top
+    was matplotlib's, between ticks)."""
+    fig = report.figures(run_50, ["anees_vs_time"])["anees_vs_time"]
+    for ax in (a for a in fig.axes if a.get_visible()):
+        top = ax.get_ylim()[1]
+        assert top in ax.get_yticks()
+        assert all(np.nanmax(line.get_ydata()) <= top for line in ax.get_lines()
+                   if len(line.get_ydata()))
+
+
+def test_a_panel_title_too_long_breaks_after_a_comma():
+    """"1 sensor, mean 150 false returns per scan" breaks after "1 sensor," instead of
+    leaving "scan" alone on the second line; titles that fit stay whole."""
+    assert report._wrapped(["1 sensor, mean 150 false returns per scan"], 3.1) == \
+        ["1 sensor,\nmean 150 false returns per scan"]
+    assert report._wrapped(["lost, gate rule: 3 scans outside every gate, 2 sensors"],
+                           3.9) == ["lost, gate rule: 3 scans outside every gate,\n2 sensors"]
+    assert report._wrapped(["mean 9 false returns per scan"], 3.1) == \
+        ["mean 9 false returns per scan"]

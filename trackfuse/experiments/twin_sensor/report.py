@@ -346,8 +346,25 @@ def _figure(n_panels: int, ncols: int, panel: tuple[float, float], title: Sequen
 
 
 def _wrapped(titles: Sequence[str], panel_width_in: float) -> list[str]:
-    """Panel ``titles`` wrapped to the panel width (about 13 characters per inch)."""
-    return [textwrap.fill(t, max(30, int(panel_width_in * 13))) for t in titles]
+    """Panel ``titles`` wrapped to the panel width (about 13 characters per inch): a title
+    that does not fit breaks after its commas (between the phrases of its parts), words
+    only where a part is itself too long."""
+    width = max(30, int(panel_width_in * 13))
+    return [_wrap_at_commas(t, width) for t in titles]
+
+
+def _wrap_at_commas(title: str, width: int) -> str:
+    parts = title.split(", ")
+    if len(title) <= width or len(parts) == 1 or max(map(len, parts)) > width - 1:
+        return textwrap.fill(title, width)
+    lines = [parts[0]]
+    for part in parts[1:]:
+        if len(lines[-1]) + 2 + len(part) <= width:
+            lines[-1] += ", " + part
+        else:
+            lines[-1] += ","
+            lines.append(part)
+    return "\n".join(lines)
 
 
 def _lines(titles: Sequence[str]) -> int:
@@ -647,17 +664,20 @@ def _index_figure(run: RunData) -> Figure | str:
 
 def _time_points(run: RunData) -> list[int]:
     """Sweep points of the time panels: per facet of the other swept keys the clutter
-    levels nearest :data:`FIG2_LEVELS` when ``clutter.mean`` is swept (grid), else at most
-    nine points evenly spread."""
+    levels nearest :data:`FIG2_LEVELS` (the paper's scenario) or the lowest, middle and
+    highest level (a departure) when ``clutter.mean`` is swept (grid), else at most nine
+    points evenly spread."""
     swept = swept_keys(run.config)
     points = pd.DataFrame(run.points)
     if "clutter.mean" in swept and run.config.get("sweep_mode", "grid") == "grid":
         others = [k for k in swept if k != "clutter.mean"]
         chosen: list[int] = []
         groups = points.groupby(others, sort=True) if others else [((), points)]
+        at_paper = bool(_at_paper(run).all())
         for _, g in list(groups)[:3]:
             levels = g["clutter.mean"].astype(float)
-            chosen += list(dict.fromkeys(int((levels - w).abs().idxmin()) for w in FIG2_LEVELS))
+            wanted = FIG2_LEVELS if at_paper else (levels.min(), levels.median(), levels.max())
+            chosen += list(dict.fromkeys(int((levels - w).abs().idxmin()) for w in wanted))
         return chosen
     idx = np.linspace(0, len(points) - 1, min(9, len(points))).round().astype(int)
     return sorted(set(int(i) for i in idx))
@@ -814,9 +834,14 @@ def _nees_figure(run: RunData) -> Figure:
         lo, hi = nees_band(6, n_runs)
         ax.axhspan(lo, hi, color="k", alpha=0.12, lw=0, label="95 % chi-square band")
         ax.axhline(6.0, color="k", lw=0.8)
+        highest = hi
         for name in names:
             anees = frame[frame["algorithm"] == name].groupby("scan")["nees"].mean()
             ax.plot(anees.index * period, anees, **_time_curve_kwargs(name))
+            highest = max(highest, float(anees.max()))
+        top = _tick_ceiling(highest)  # the top is a labelled tick
+        ax.set_ylim(0.0, top)
+        ax.yaxis.set_major_locator(FixedLocator(_round_ticks(top)))
 
     title = [f"Diagnostic: average NEES (6 states) against time ({_runs(run.trials)} runs per "
              "point)", _context(run, "a consistent filter stays inside the band")]
