@@ -1,11 +1,12 @@
 """The ``trackfuse`` command line: run, reproduce, plot, runs, compare, validate, list.
 
 Exit status: 0 success; 1 figures or tables could not be drawn (or, for ``compare
---fail-on-regression``, a regression); 2 bad input (config, override, option, run folder,
-output root) or a run folder in use by another process; 3 the run finished but some trials
-failed; 130 interrupted (re-run the same command to resume). Every error, usage errors
-included, is one line on stderr starting with ``error:``; repairs are announced with one
-line starting with ``warning:``.
+--fail-on-regression``, a regression, a cell of BASE missing from NEW, or nothing compared
+or gated); 2 bad input (config, override, option, run folder, output root) or a run folder
+in use by another process; 3 the run finished but some trials failed; 130 interrupted
+(re-run the same command to resume). Every error, usage errors included, is one line on
+stderr starting with ``error:``; repairs are announced with one line starting with
+``warning:``.
 
 Start-up: the commands import the runner, pandas, scipy and matplotlib only inside the
 functions that need them, so ``--help``, ``list`` and ``validate`` stay quick
@@ -48,6 +49,7 @@ from trackfuse_cli.options import (
 )
 
 if TYPE_CHECKING:
+    from trackfuse.compare import Comparison
     from trackfuse.config import Config
     from trackfuse.runner import Runner, RunOutcome
 
@@ -451,11 +453,25 @@ def _tolerances(specs: list[str]) -> dict[str, float]:
     return found
 
 
-def _print_comparison(result, shown: int = 30) -> None:
+def _left_out_line(result: Comparison) -> str:
+    """The cells only one run has, counted, with an example of each kind."""
+    from trackfuse.compare import cell_name
+    parts = []
+    for count, frame, run in ((result.only_base, result.only_base_cells, "BASE"),
+                              (result.only_new, result.only_new_cells, "NEW")):
+        example = f" (e.g. {cell_name(frame.iloc[0], list(frame.columns))})" if count else ""
+        parts.append(f"{count} cells only in {run}{example}")
+    return f"{', '.join(parts)}: sweep points, row keys or metrics the other run lacks"
+
+
+def _print_comparison(result: Comparison, shown: int = 30) -> None:
     """One summary line, then the cells that differ (most ``shown``)."""
     from rich.console import Console
     from rich.table import Table
     cells = result.cells
+    if cells.empty:
+        print(f"nothing compared: the runs share no cell; {_left_out_line(result)}")
+        return
     counts = cells["verdict"].value_counts().to_dict()
     print(f"{'paired' if result.paired else 'unpaired'} comparison, {len(cells)} cells, "
           f"{result.gated} gated (family-wise alpha {result.alpha:g}): "
@@ -466,8 +482,7 @@ def _print_comparison(result, shown: int = 30) -> None:
               f"and not adjusted: about 5 % of the {ungated} ungated cells would differ by chance "
               "when nothing has changed")
     if result.only_base or result.only_new:
-        print(f"not compared: {result.only_base} cells only in BASE, {result.only_new} only "
-              "in NEW (sweep points or row keys the other run lacks)")
+        print(f"not compared: {_left_out_line(result)}")
     notable = cells[~cells["verdict"].str.startswith("no significant")]
     if notable.empty:
         return
@@ -487,7 +502,9 @@ def compare(
     new: Annotated[Path, typer.Argument(metavar="NEW", help="The run folder to judge.")],
     fail_on_regression: Annotated[bool, typer.Option(
         "--fail-on-regression", metavar="", help="Exit 1 when a metric is significantly worse "
-                                                 "than BASE by more than its tolerance.")]
+                                                 "than BASE by more than its tolerance, when a "
+                                                 "cell of BASE is missing from NEW, or when "
+                                                 "nothing is compared or gated.")]
     = False,
     tolerance: Annotated[list[str], typer.Option(
         metavar="METRIC=NUMBER", show_default=False,
@@ -502,7 +519,11 @@ def compare(
     A cell is a sweep point x row key x metric: both means, the difference NEW - BASE with
     its 95 % interval. Runs with the same seed and trial count are paired (paired t,
     Newcombe and McNemar for 0/1 metrics); otherwise unpaired (Welch, Newcombe hybrid
-    score). Exit 0, 1 (regression, with --fail-on-regression) or 2 (bad input)."""
+    score).
+
+    Exit 0; 1 with --fail-on-regression on a regression, a cell of BASE missing from NEW,
+    nothing compared or nothing gated (the reason in one line on stderr; cells only NEW has
+    do not fail); 2 for bad input."""
     from trackfuse.compare import compare_runs
     from trackfuse.results import RunFolderError
     from trackfuse.rundata import load as load_run
@@ -513,17 +534,22 @@ def compare(
         result = compare_runs(load_run(base), load_run(new), tolerances, alpha=alpha)
     except (RunFolderError, ValueError) as err:
         fail(str(err))
+    failure = result.gate_failure()
     if as_json:
+        def records(frame) -> list[dict[str, Any]]:
+            return json.loads(frame.to_json(orient="records"))
+
         print(json.dumps({"paired": result.paired, "alpha": result.alpha,
-                          "gated": result.gated, "regressions": len(result.regressions),
+                          "compared": len(result.cells), "gated": result.gated,
+                          "regressions": len(result.regressions),
                           "only_base": result.only_base, "only_new": result.only_new,
-                          "cells": json.loads(result.cells.to_json(orient="records"))}))
+                          "gate_failure": failure, "cells": records(result.cells),
+                          "only_base_cells": records(result.only_base_cells),
+                          "only_new_cells": records(result.only_new_cells)}))
     else:
         _print_comparison(result)
-    if fail_on_regression and len(result.regressions):
-        if not as_json:
-            print_error(f"{len(result.regressions)} regressions")
-        raise typer.Exit(1)
+    if fail_on_regression and failure:
+        fail(failure, 1)
 
 
 # ---------------------------------------------------------------------------- validate, list

@@ -99,6 +99,8 @@ def test_failed_trials_are_left_out():
     base = frame(np.arange(10.0))
     new = frame(np.arange(10.0)).assign(status=["ok"] * 9 + ["failed"])
     assert gate(base, new).cells["n_new"].iloc[0] == 9
+    lost = gate(base, new.assign(status="failed"))  # every trial of the cell failed
+    assert lost.cells.empty and lost.only_base == 1 and lost.gate_failure() is not None
 
 
 def test_compare_runs_takes_binary_metrics_and_directions_from_the_experiment(tmp_path):
@@ -128,3 +130,27 @@ def test_a_single_trial_or_an_infinite_value_has_no_p_value(paired):
     assert np.isnan(one.loc[one.metric == "error_m", "p_value"]).all()
     inf = gate(frame([1.0, 2.0, 3.0]), frame([1.0, np.inf, 3.0]), paired=paired).cells
     assert np.isnan(inf.loc[inf.metric == "error_m", "p_value"]).all()
+
+
+def test_a_metric_new_no_longer_produces_is_missing_not_ignored():
+    """A metric column NEW lacks was dropped from both runs without a word (only_base 0)."""
+    rng = np.random.default_rng(5)
+    base = frame(rng.normal(10, 2, 30), (rng.random(30) < 0.7).astype(int))
+    result = gate(base, base.drop(columns="correct"))
+    assert (result.only_base, result.only_new, len(result.cells)) == (1, 0, 1)
+    assert result.gate_failure() == ("1 cells of BASE missing from NEW, e.g. sigma=1.0, "
+                                     "algorithm=a, metric=correct")
+    assert gate(base.drop(columns="correct"), base).gate_failure() is None
+
+
+def test_the_gate_fails_when_nothing_is_compared_or_gated():
+    rng = np.random.default_rng(6)
+    base = frame(rng.normal(10, 2, 30))
+    disjoint = gate(base, frame(rng.normal(10, 2, 30), algorithm="b"))
+    assert disjoint.cells.empty and (disjoint.only_base, disjoint.only_new) == (1, 1)
+    assert disjoint.gate_failure().startswith("nothing compared (the runs share no cell); 1 "
+                                              "cells of BASE missing from NEW, e.g. sigma=1.0, "
+                                              "algorithm=a, metric=error_m")
+    ungated = compare_trials(base, base.copy(), KEYS)
+    assert ungated.gated == 0 and ungated.gate_failure().startswith("nothing gated")
+    assert gate(base, base.copy()).gate_failure() is None

@@ -48,3 +48,52 @@ def test_bad_input_is_one_line_exit_2(write_config, tmp_path):
         result = _compare(*args)
         assert result.exit_code == 2, (args, result.stdout)
         assert len(result.stderr.strip().splitlines()) == 1 and "error:" in result.stderr
+
+
+def _swept(write_config, tmp_path, shifts: str, name: str):
+    cfg = write_config(f"experiment: toy_shifted\ntrials: 20\nseed: 1\n"
+                       f"sweep: {{shift: {shifts}}}\n", name=name)
+    return Runner(load(cfg), tmp_path / "out", progress=False, plots=False).run().folder
+
+
+def test_a_cell_of_base_missing_from_new_fails_the_gate_and_one_only_in_new_does_not(
+        write_config, tmp_path):
+    """NEW without BASE's point shift=0.5 (a sweep point lost to failed trials or a smaller
+    sweep) passed the gate: the missing cells were one line on stdout and exit 0."""
+    base = _swept(write_config, tmp_path, "[0.0, 0.5]", "base")
+    fewer = _swept(write_config, tmp_path, "[0.0]", "fewer")
+    gated = _compare(base, fewer, "--fail-on-regression")
+    assert gated.exit_code == 1, gated.stdout
+    assert gated.stderr.strip().splitlines() == [
+        "error: 1 cells of BASE missing from NEW, e.g. shift=0.5, algorithm=a, metric=miss"]
+    report = json.loads(_compare(base, fewer, "--fail-on-regression", "--json").stdout)
+    assert (report["compared"], report["only_base"], report["only_new"]) == (1, 1, 0)
+    assert report["only_base_cells"] == [{"shift": 0.5, "algorithm": "a", "metric": "miss"}]
+    assert report["gate_failure"].startswith("1 cells of BASE missing from NEW")
+    plain = _compare(base, fewer)
+    assert plain.exit_code == 0 and plain.stderr == ""
+    assert "not compared: 1 cells only in BASE (e.g. shift=0.5, algorithm=a" in plain.stdout
+    more = _compare(fewer, base, "--fail-on-regression", "--json")
+    assert more.exit_code == 0, more.stderr
+    assert json.loads(more.stdout)["only_new"] == 1
+    assert json.loads(more.stdout)["gate_failure"] is None
+
+
+def test_comparing_nothing_fails_the_gate(write_config, tmp_path):
+    """Two runs over disjoint sweeps share no cell: '0 cells, 0 gated' and exit 0 with
+    --fail-on-regression, "cells": [] with --json."""
+    base = _swept(write_config, tmp_path, "[0.0]", "base")
+    other = _swept(write_config, tmp_path, "[0.5, 1.0]", "other")
+    gated = _compare(base, other, "--fail-on-regression")
+    assert gated.exit_code == 1
+    assert len(gated.stderr.strip().splitlines()) == 1
+    assert gated.stderr.startswith("error: nothing compared (the runs share no cell); 1 cells "
+                                   "of BASE missing from NEW, e.g. shift=0.0")
+    report = json.loads(_compare(base, other, "--fail-on-regression", "--json").stdout)
+    assert report["compared"] == 0 and report["cells"] == []
+    assert (report["only_base"], report["only_new"]) == (1, 2)
+    plain = _compare(base, other)
+    assert plain.exit_code == 0
+    assert plain.stdout.startswith("nothing compared: the runs share no cell; 1 cells only "
+                                   "in BASE (e.g. shift=0.0, algorithm=a, metric=miss), 2 cells "
+                                   "only in NEW (e.g. shift=0.5")

@@ -105,3 +105,28 @@ def test_every_top_level_value_type_is_checked():
                        ("outputs", {"figures": 3}), ("sweep_mode", "cartesian")]:
         with pytest.raises(ConfigError, match=key.split(".")[0]):
             build({"experiment": "toy_gaussian", key: value}, "x.yaml")
+
+
+def test_a_parameter_given_dotted_and_nested_is_refused_and_an_override_is_not(write_config):
+    """``clutter.mean: 3`` beside ``clutter: {mean: 4}`` validated, and the later one won
+    unseen (4, or 3 with the order reversed); a literal duplicate key was refused already.
+    A ``--set`` of a key the file gives once (either spelling) stays an override."""
+    dotted_first = "params:\n  clutter.mean: 3\n  clutter:\n    mean: 4\n"
+    nested_first = "params:\n  clutter:\n    mean: 4\n  clutter.mean: 3\n"
+    for name, params in (("dotted_first", dotted_first), ("nested_first", nested_first)):
+        path = write_config(f"experiment: twin_sensor\ntrials: 4\n{params}", name)
+        for command in (["validate", path], ["run", path, "--dry-run"]):
+            result = trackfuse(*command)
+            assert result.returncode == 2, result.stdout
+            assert result.stderr.splitlines() == [
+                f"error: {path}: params.clutter.mean: given twice (dotted and nested); "
+                "allowed: one of the two"]
+    with pytest.raises(ConfigError, match=r"params\.clutter\.mean: given twice"):  # equal too
+        build({"experiment": "twin_sensor", "params": {"clutter.mean": 3,
+                                                       "clutter": {"mean": 3}}}, "x.yaml")
+    for name, params in (("nested", "{clutter: {mean: 4}}"), ("dotted", "{clutter.mean: 4}")):
+        path = write_config(f"experiment: twin_sensor\ntrials: 4\nparams: {params}\n", name)
+        assert load(path, sets={"clutter.mean": 5}).params["clutter.mean"] == 5
+        for override in (["--set", "clutter.mean=6"], ["clutter.mean=6"]):
+            result = trackfuse("run", path, "--dry-run", *override)
+            assert result.returncode == 0 and "clutter.mean: 6.0" in result.stdout, result.stderr

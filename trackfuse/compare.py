@@ -17,6 +17,10 @@ confidence: the one-sided bound of the difference on the good side lies beyond t
 tolerance. The bounds are Bonferroni-adjusted over the gated cells, so the chance that any
 cell of two runs of the same code is flagged stays below ``alpha`` (family-wise). An
 *improvement* is the mirror image. Metrics without a direction are reported, never gated.
+:meth:`Comparison.gate_failure` says why a gate fails: a regression, a cell of the base run
+that the new run lacks (a sweep point, row key or metric it no longer produces, or whose
+every trial failed), no cell compared at all, or no gated cell. Cells only the new run has
+are reported and never fail it.
 
 :func:`compare_runs` compares two run folders and takes the 0/1 metrics and the directions
 from the experiment's declared :class:`~trackfuse.experiments.base.Metric` list.
@@ -55,22 +59,58 @@ class Comparison:
     ``test`` and ``verdict`` (``regression``, ``improvement``, ``no significant change``,
     or for ungated metrics ``differs`` / ``no significant difference``).
     ``paired``: whether trials were paired. ``gated``: number of gated cells.
-    ``alpha``: the family-wise false-alarm level of the gate. ``only_base``,
-    ``only_new``: cells found in one run only (a sweep point or algorithm the other run
-    lacks), left out of the comparison.
+    ``alpha``: the family-wise false-alarm level of the gate. ``only_base_cells``,
+    ``only_new_cells``: the key columns and ``metric`` of the cells of one run that were not
+    compared (a sweep point, row key or metric the other run lacks).
     """
 
     cells: pd.DataFrame
     paired: bool
     gated: int
     alpha: float
-    only_base: int = 0
-    only_new: int = 0
+    only_base_cells: pd.DataFrame
+    only_new_cells: pd.DataFrame
 
     @property
     def regressions(self) -> pd.DataFrame:
         """The cells whose verdict is ``regression``."""
         return self.cells[self.cells["verdict"] == "regression"]
+
+    @property
+    def only_base(self) -> int:
+        """Number of cells of the base run missing from the comparison."""
+        return len(self.only_base_cells)
+
+    @property
+    def only_new(self) -> int:
+        """Number of cells of the new run missing from the comparison."""
+        return len(self.only_new_cells)
+
+    def gate_failure(self) -> str | None:
+        """Why the regression gate fails, in one line, or ``None`` when it passes.
+
+        It fails on a regression, on any cell of the base run left out (the new run no
+        longer produces it), when no cell was compared and when no compared cell is gated.
+        """
+        names = list(self.only_base_cells.columns)
+        reasons = []
+        if self.cells.empty:
+            reasons.append("nothing compared (the runs share no cell)")
+        elif not self.gated:
+            reasons.append(f"nothing gated (no metric of the {len(self.cells)} compared cells "
+                           "is declared better lower or higher)")
+        if len(self.regressions):
+            reasons.append(f"{len(self.regressions)} regressions, e.g. "
+                           f"{cell_name(self.regressions.iloc[0], names)}")
+        if self.only_base:
+            reasons.append(f"{self.only_base} cells of BASE missing from NEW, e.g. "
+                           f"{cell_name(self.only_base_cells.iloc[0], names)}")
+        return "; ".join(reasons) or None
+
+
+def cell_name(row: pd.Series, names: Sequence[str]) -> str:
+    """``key=value, ..., metric=name``: a cell named by its ``names`` columns."""
+    return ", ".join(f"{key}={row[key]}" for key in names)
 
 
 def metric_columns(frame: pd.DataFrame, keys: Sequence[str]) -> list[str]:
@@ -158,14 +198,17 @@ def compare_trials(base: pd.DataFrame, new: pd.DataFrame, keys: Sequence[str],
     """
     keys, binary, better = list(keys), set(binary), dict(better or {})
     tolerance = dict(tolerance or {})
-    in_new = set(metric_columns(new, keys))
-    common = [m for m in metric_columns(base, keys) if m in in_new and m not in skip]
-    if metrics is not None:
-        common = [m for m in common if m in set(metrics)]
-    b_long, n_long = _long(base, keys, common), _long(new, keys, common)
+    wanted = None if metrics is None else set(metrics)
+
+    def compared_metrics(frame: pd.DataFrame) -> list[str]:
+        return [m for m in metric_columns(frame, keys) if m not in skip
+                and (wanted is None or m in wanted)]
+
+    b_long = _long(base, keys, compared_metrics(base))
+    n_long = _long(new, keys, compared_metrics(new))
     cells_at = _paired_cells if paired else _unpaired_cells
     cells = cells_at(b_long, n_long, keys, binary, 0.95)
-    cells["better"] = cells["metric"].map(better).fillna("")
+    cells["better"] = cells["metric"].map(lambda metric: better.get(metric, ""))
     gated = cells["better"].isin(BETTER).to_numpy()
     m = int(gated.sum())
     # one-sided bounds at 1 - alpha/m are the ends of the two-sided 1 - 2 alpha/m interval
@@ -183,11 +226,17 @@ def compare_trials(base: pd.DataFrame, new: pd.DataFrame, keys: Sequence[str],
         "no significant difference")
     columns = [*keys, "metric", "better", "n_base", "n_new", "base", "new", "diff", "ci_low",
                "ci_high", "p_value", "test", "verdict"]
-    shared = len(cells)
-    only_base = b_long.groupby([*keys, "metric"], dropna=False).ngroups - shared
-    only_new = n_long.groupby([*keys, "metric"], dropna=False).ngroups - shared
-    return Comparison(cells[columns].reset_index(drop=True), paired, m, alpha, only_base,
-                      only_new)
+    return Comparison(cells[columns].reset_index(drop=True), paired, m, alpha,
+                      _left_out(b_long, cells, keys), _left_out(n_long, cells, keys))
+
+
+def _left_out(long: pd.DataFrame, cells: pd.DataFrame, keys: list[str]) -> pd.DataFrame:
+    """The cells (key columns and ``metric``) of one run's long rows that ``cells`` lacks."""
+    names = [*keys, "metric"]
+    present = long[names].drop_duplicates()
+    found = present.merge(cells[names].drop_duplicates(), on=names, how="left",
+                          indicator=True)
+    return found.loc[found["_merge"] == "left_only", names].reset_index(drop=True)
 
 
 def compare_runs(base: RunData, new: RunData, tolerance: Mapping[str, float] | None = None,

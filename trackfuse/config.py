@@ -171,14 +171,20 @@ def check_value(p: Param, value: Any) -> Any:
 
 
 def flatten(mapping: Mapping, prefix: str = "") -> dict[str, Any]:
-    """Flatten nested mappings into dotted keys: ``{a: {b: 1}} -> {"a.b": 1}``."""
+    """Flatten nested mappings into dotted keys: ``{a: {b: 1}} -> {"a.b": 1}``.
+
+    Raises :class:`KeyError` with the dotted key that two spellings give (``a.b: 1`` beside
+    ``a: {b: 2}``), of which the last would otherwise win unseen.
+    """
     flat: dict[str, Any] = {}
     for key, value in mapping.items():
         dotted = f"{prefix}{key}"
-        if isinstance(value, Mapping) and value:
-            flat.update(flatten(value, dotted + "."))
-        else:
-            flat[dotted] = value
+        items = flatten(value, dotted + ".") if isinstance(value, Mapping) and value \
+            else {dotted: value}
+        for name, item in items.items():
+            if name in flat:
+                raise KeyError(name)
+            flat[name] = item
     return flat
 
 
@@ -287,7 +293,12 @@ def _params(source: str, exp: Experiment, params_raw: Any) -> dict[str, Any]:
         raise ConfigError(source, "params", f"got {_describe(params_raw)}; allowed: a mapping "
                                             "of parameter names to values")
     params = exp.defaults()
-    for key, value in flatten(params_raw).items():
+    try:
+        given = flatten(params_raw)
+    except KeyError as err:
+        raise ConfigError(source, f"params.{err.args[0]}", "given twice (dotted and nested); "
+                                                           "allowed: one of the two") from None
+    for key, value in given.items():
         params[key] = _validated(source, exp, "params", str(key), value)
     return params
 
