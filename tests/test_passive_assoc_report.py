@@ -8,6 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.text import Text
 
 from trackfuse import harness
 from trackfuse.config import load
@@ -20,7 +21,7 @@ from trackfuse.stats import bootstrap_t_mean_intervals
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = sorted(ROOT.glob("configs/passive_*.yaml"))
-UNIT = re.compile(r"\(.+\)")
+UNIT = re.compile(r"\(.+\)", re.S)  # a unit in brackets, over 1 or 2 lines
 #: Small versions of the shipped configs: fewer runs, a smaller operation budget (checkpoints
 #: above it are ignored, the budget itself is scored), and the scale study's points above
 #: 50 targets left out.
@@ -43,6 +44,12 @@ def drawn(fig):
     return fig
 
 
+def _column_xlabel(fig, ax) -> str:
+    """The x label of ``ax``'s column: its own, or the one under the column's lowest panel."""
+    return " ".join(a.get_xlabel() for a in fig.axes
+                    if np.isclose(a.get_position().x0, ax.get_position().x0))
+
+
 def test_every_figure_of_every_shipped_config_is_drawn_or_explained(shipped_run):
     figs = report.figures(shipped_run, list(EXPERIMENT.figures))
     assert set(figs) == set(EXPERIMENT.figures)  # nothing silently left out
@@ -60,7 +67,7 @@ def test_every_figure_of_every_shipped_config_is_drawn_or_explained(shipped_run)
         assert fig.get_suptitle().count("\n") <= 1, name
         supy = fig._supylabel.get_text() if fig._supylabel else ""
         for ax in (a for a in fig.axes if a.has_data()):
-            assert UNIT.search(ax.get_xlabel()), (name, ax.get_xlabel())
+            assert UNIT.search(_column_xlabel(fig, ax)), (name, _column_xlabel(fig, ax))
             row = [a.get_ylabel() for a in fig.axes
                    if np.isclose(a.get_position().y0, ax.get_position().y0)]
             assert UNIT.search(ax.get_ylabel() or supy or " ".join(row)), (name, row)
@@ -74,6 +81,7 @@ def test_fig2_layout_one_column_per_target_count(shipped_run):
     targets = shipped_run.sweep["targets.n"]
     panels = [ax for ax in fig.axes if ax.has_data()]
     assert len(panels) == len(shipped_run.points)
+    assert fig.get_suptitle().startswith("Paper 002 Fig. 2 redrawn:")  # all at its setting
     titles = [ax.get_title() for ax in panels[:len(targets)]]
     assert [int(re.match(r"N = (\d+)", t).group(1)) for t in titles] == targets
     paper = look("pga_paper")
@@ -83,6 +91,88 @@ def test_fig2_layout_one_column_per_target_count(shipped_run):
         assert lines[paper.label].get_color() == paper.colour
         assert any(lab.startswith(look("exact").label) for lab in lines)
         assert ax.get_ylim() == panels[0].get_ylim()  # one scale for every panel
+
+
+def test_every_log_axis_says_so_in_its_label(shipped_run):
+    """A log axis says 'log scale' in its label; a symlog one (which reaches 0) says
+    'symlog' and where it is linear."""
+    for name, fig in report.figures(shipped_run, list(EXPERIMENT.figures)).items():
+        if isinstance(fig, str):
+            continue
+        for ax in (a for a in fig.axes if a.has_data()):
+            for scale, label in ((ax.get_xscale(), _column_xlabel(fig, ax)),
+                                 (ax.get_yscale(), ax.get_ylabel())):
+                assert scale != "log" or "log scale" in label, (name, label)
+                assert scale != "symlog" or ("symlog" in label and "linear" in label), \
+                    (name, label)
+
+
+def _marker_room(fig) -> float:
+    """Least room (pixels) between a drawn marker's edge and its panel's edges; < 0 when a
+    marker is cut by a spine."""
+    drawn(fig)
+    room = []
+    for ax in fig.axes:
+        for line in (ln for ln in ax.get_lines() if ln.get_marker() not in (None, "None", "")):
+            xy = ax.transData.transform(np.c_[line.get_xdata(), line.get_ydata()])
+            radius = (line.get_markersize() + line.get_markeredgewidth()) / 2 * fig.dpi / 72
+            box = ax.bbox
+            room += [xy[:, 0].min() - box.x0 - radius, box.x1 - xy[:, 0].max() - radius,
+                     xy[:, 1].min() - box.y0 - radius, box.y1 - xy[:, 1].max() - radius]
+    return min(room)
+
+
+def test_convergence_markers_are_drawn_whole(shipped_run):
+    """The first (0) and last checkpoints' markers, and rates of 0 or 1, clear the spines."""
+    for name, fig in report.figures(shipped_run, ["convergence", "at_optimum"]).items():
+        if not isinstance(fig, str):
+            assert _marker_room(fig) >= 0, name
+
+
+@pytest.fixture(scope="module")
+def random_run(tmp_path_factory) -> RunData:
+    """The scale study's shape: random scenes, 4 target counts, checkpoints past 0."""
+    return harness.run_data(tmp_path_factory.mktemp("random"), "passive_assoc",
+                            {"scene.mode": "random", "pga.ops": 200,
+                             "pga.checkpoints": [20, 50, 200],
+                             "algorithms": ["exact", "pga_paper", "pga_evict"]},
+                            {"targets.n": [5, 10, 20, 50]}, trials=2, seed=5)
+
+
+def test_checkpoints_past_0_fill_log_axes_in_rows_legible_7_inches_wide(random_run):
+    """No empty stretch from 0 to the first checkpoint: a log axis ticked at the checkpoints,
+    which span it; at most 3 panels a row; no text under 7 pt when printed 7 in wide; the
+    title does not call random scenes paper 002's Fig. 2."""
+    for name in ("convergence", "at_optimum"):
+        fig = drawn(report.figures(random_run, [name])[name])
+        panels = [ax for ax in fig.axes if ax.get_visible()]
+        assert len(panels) == 4
+        assert len({round(ax.get_position().y0, 3) for ax in panels}) == 2  # 3 + 1
+        for ax in panels:
+            assert ax.get_xscale() == "log"
+            low, high = ax.get_xlim()
+            assert [t for t in ax.get_xticks() if low <= t <= high] == [20, 50, 200]
+            ends = ax.transAxes.inverted().transform(ax.transData.transform([[20, 0], [200, 0]]))
+            assert ends[0, 0] < 0.1 and ends[1, 0] > 0.9
+        texts = [t for t in fig.findobj(Text) if t.get_visible() and t.get_text().strip()]
+        assert min(t.get_fontsize() for t in texts) * 7 / fig.get_figwidth() >= 7, name
+        assert _marker_room(fig) >= 0 and text_overlaps(fig) == [] and inside_canvas(fig)
+        title = fig.get_suptitle()
+        assert "Fig. 2 redrawn" not in title and title.startswith("No paper figure"), title
+        assert "M1-MN scenes" in title and "N = 5, 7, 10" in title
+
+
+def test_title_marks_the_panels_at_fig2_setting_when_only_some_are(tmp_path):
+    """8 targets is not one of Fig. 2's counts: only the 5-target panel is marked as at its
+    setting, and the title points to the mark."""
+    mixed = harness.run_data(tmp_path, "passive_assoc",
+                             {"pga.ops": 50, "pga.checkpoints": [0, 50],
+                              "algorithms": ["exact", "pga_paper"]},
+                             {"targets.n": [5, 8]}, trials=2, seed=1)
+    for name, fig in report.figures(mixed, ["convergence", "at_optimum"]).items():
+        assert f"panels marked '{report.FIG2_MARK}'" in fig.get_suptitle(), name
+        titles = [ax.get_title() for ax in fig.axes if ax.has_data()]
+        assert [t.endswith(report.FIG2_MARK) for t in titles] == [True, False], titles
 
 
 def test_scale_axis_is_linear_for_few_targets(tmp_path):

@@ -8,20 +8,26 @@ project's studies of the same experiment.
 Figures (returned by :func:`figures`, keyed by file name; a one-line reason string for a
 figure the run cannot draw):
 
-* ``convergence``: paper Fig. 2 redrawn. Mean correct association rate (measurement-level
-  accuracy) against the number of genetic operations, one column per target count (5, 7,
-  10 in the paper) and one row per setting of the other swept keys; the paper's PGA and
-  ours emphasised with 95 % bands, other variants thin, the exact optimum (LSA) dashed
-  with its interval shaded.
+* ``convergence``: paper Fig. 2 redrawn where the run is at its setting. Mean correct
+  association rate (measurement-level accuracy) against the number of genetic operations,
+  the target counts (5, 7, 10 in the paper) of one setting of the other swept keys side by
+  side, at most 3 panels a row; the paper's PGA and ours emphasised with 95 % bands, other
+  variants thin, the exact optimum (LSA) dashed with its interval shaded. The operation
+  axis is symlog (linear from 0 to 10, log above) when the checkpoints start at 0, else
+  log, and says so. The title reads "Fig. 2 redrawn" only when every point is at the
+  paper's setting (:data:`PAPER_SETTING`, 5, 7 or 10 targets); when some are, their
+  panels are marked; when none is, it says "No paper figure" and what the run lacks.
 * ``at_optimum``: no paper counterpart. The fraction of runs whose PGA solution reaches
   the exact optimum ``J*``, in the same layout.
 * ``noise``: no paper counterpart (E002-sigma). Accuracy and whole-solution-correct rate of
   the exact optimum and of the PGA at its final checkpoint, against the angle noise sigma,
   with the two readings of the paper's noise figure (0.005 rad as a standard deviation or
   as a variance) marked.
-* ``scale``: no paper counterpart. Solve time, objective gap ``J* - J`` and accuracy
-  against the number of targets N (a linear axis ticked at each N unless N spans >= 10x),
-  when N is the only swept key.
+* ``scale``: no paper counterpart. Solve time (log axis), objective gap ``J* - J`` (symlog,
+  linear below 1 nat) and accuracy against the number of targets N (a linear axis ticked
+  at each N unless N spans >= 10x, then log), when N is the only swept key.
+
+Every log or symlog axis says so in its label.
 
 Tables (returned by :func:`tables`), computed from the trial rows; every interval is two
 numeric columns ``<quantity>_ci_low``/``<quantity>_ci_high``:
@@ -151,6 +157,11 @@ def _clip(values: ArrayLike, metric: str) -> np.ndarray:
 # Shared drawing helpers
 
 
+#: Panel width (in) of the convergence figures: three make a figure 7.8 in wide, whose
+#: 9-pt tick labels print at 8 pt on a 7-in page width.
+PANEL_WIDTH = 2.6
+#: Legend column width (in) below the figures: two columns in 7.8 in.
+LEGEND_COLUMN = 3.9
 #: Shading of the exact optimum's band: lighter than the algorithms' bands (alpha 0.18)
 #: and drawn behind them (their zorder is 1), so that a band over it keeps its colour.
 EXACT_BAND = {"color": "k", "alpha": 0.07, "linewidth": 0, "zorder": 0.5}
@@ -178,16 +189,32 @@ def _curve(ax: Axes, x: ArrayLike, rows: pd.DataFrame, name: str, metric: str,
         ax.fill_between(x, low, high, **EXACT_BAND)
 
 
-def _count_axis(ax: Axes, values: ArrayLike, label: str) -> None:
+def _count_axis(ax: Axes, values: ArrayLike, quantity: str, unit: str) -> None:
     """An x axis over a positive grid: log only for >= 4 values spanning >= 10x, else
-    linear; a tick with a plain number at every value."""
+    linear; a tick with a plain number at every value; the label is ``quantity (unit)``,
+    ``quantity (unit, log scale)`` on a log axis."""
     v = np.unique(np.asarray(values, dtype=float))
     if len(v) >= 4 and v.min() > 0 and v.max() / v.min() >= 10:
         ax.set_xscale("log")
         ax.xaxis.set_minor_formatter(NullFormatter())
+        unit += ", log scale"
     ax.set_xticks(v)
     ax.xaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
-    ax.set_xlabel(label)
+    ax.set_xlabel(f"{quantity} ({unit})")
+
+
+#: Room left beyond the first and last x value, as a fraction of the span on the axis's
+#: scale: a marker there is drawn whole, not cut in half by the panel's edge.
+X_MARGIN = 0.04
+
+
+def _pad_x(ax: Axes, low: float, high: float) -> None:
+    """X limits ``low``-``high`` (data units) widened by :data:`X_MARGIN` of the span on
+    each side, the span measured on the axis's scale (linear, log or symlog)."""
+    scale = ax.xaxis.get_transform()
+    a, b = scale.transform(np.array([low, high], dtype=float))
+    pad = X_MARGIN * (b - a)
+    ax.set_xlim(*scale.inverted().transform(np.array([a - pad, b + pad])))
 
 
 #: Log-axis tick sets (multiples of 10^k), sparsest first; :func:`_plain_log_axis` takes the
@@ -216,12 +243,15 @@ def _plain_log_axis(ax: Axes) -> None:
     ax.yaxis.set_minor_formatter(NullFormatter())
 
 
-def _shared_y(fig: Figure, axes: np.ndarray, ylabel: str, low: float = -0.02,
-              high: float = 1.04) -> None:
-    """One y range for a grid of panels; only the first column keeps its tick labels, and
-    one y label for the whole figure."""
+#: Y range of the fraction panels: 0 to 1 with room for a marker at either end.
+FRACTION_LIMITS = (-0.04, 1.04)
+
+
+def _shared_y(fig: Figure, axes: np.ndarray, ylabel: str) -> None:
+    """One y range for a grid of panels (:data:`FRACTION_LIMITS`); only the first column
+    keeps its tick labels, and one y label for the whole figure."""
     for (_, col), ax in np.ndenumerate(axes):
-        ax.set_ylim(low, high)
+        ax.set_ylim(*FRACTION_LIMITS)
         if col:
             ax.tick_params(labelleft=False)
     fig.supylabel(ylabel, fontsize=9)
@@ -243,24 +273,41 @@ def _metric(summary: pd.DataFrame, point: int, algorithm: str, metric: str) -> p
     return _by_x(summary[summary["point"] == point], "ops", algorithm, metric, None)
 
 
+#: Most panels in a row of the convergence figures (:data:`PANEL_WIDTH`).
+MAX_COLUMNS = 3
+
+
 def _grid(summary: pd.DataFrame, config: dict) -> list[list[tuple[int, dict[str, Any]]]]:
-    """Sweep points as rows x columns: one column per target count, one row per setting of
-    the other swept keys."""
+    """Sweep points as rows of panels: the target counts of one setting of the other swept
+    keys side by side, at most :data:`MAX_COLUMNS` a row (more wrap onto further rows)."""
     rows: dict[tuple, list[tuple[int, dict[str, Any]]]] = {}
     for point, values in _points(summary, config):
         key = tuple(v for k, v in values.items() if k != "targets.n")
         rows.setdefault(key, []).append((point, values))
-    return list(rows.values())
+    return [row[i:i + MAX_COLUMNS] for row in rows.values()
+            for i in range(0, len(row), MAX_COLUMNS)]
 
 
-def _ops_axis(ax: Axes, top: float) -> None:
-    """Operation count axis: linear to 10, logarithmic above (symlog), plain numbers."""
-    ax.set_xscale("symlog", linthresh=10)
-    ax.set_xlim(0, top)
-    ax.set_xticks([t for t in (0, 10, 100, 1000, 10_000, 100_000) if t <= top])
+def _ops_axis(ax: Axes, checkpoints: np.ndarray) -> str:
+    """Operation count axis over the sorted ``checkpoints`` (plain numbers, a margin beyond
+    the first and last, :func:`_pad_x`): symlog (linear from 0 to 10, log above) when they
+    start at 0, else log. Ticked at each checkpoint when there are at most 5, else at 0 (if
+    a checkpoint) and the powers of 10 from 10 up. Returns the axis label, which names the
+    scale (over two lines for symlog)."""
+    low, high = float(checkpoints[0]), float(checkpoints[-1])
+    if low == 0:
+        ax.set_xscale("symlog", linthresh=10)
+        scale = "symlog:\nlinear from 0 to 10, log above"
+    else:
+        ax.set_xscale("log")
+        scale = "log scale"
+    powers = 10.0 ** np.arange(np.ceil(np.log10(max(low, 10.0))), np.floor(np.log10(high)) + 1)
+    few = len(checkpoints) <= 5 or not len(powers)
+    ax.set_xticks(checkpoints if few else [0.0] * (low == 0) + list(powers))
     ax.xaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
     ax.xaxis.set_minor_formatter(NullFormatter())
-    ax.set_xlabel("genetic operations (count)")
+    _pad_x(ax, low, high)
+    return f"genetic operations (count, {scale})"
 
 
 def _exact_reference(ax: Axes, exact: pd.DataFrame, metric: str,
@@ -275,24 +322,49 @@ def _exact_reference(ax: Axes, exact: pd.DataFrame, metric: str,
         ax.axhspan(*_clip([e["ci_low"], e["ci_high"]], metric), **EXACT_BAND)
 
 
+#: Panel-title mark of a point at paper 002's Fig. 2 setting, when only some points are.
+FIG2_MARK = "Fig. 2 setting"
+
+
+def _paper_title(misses: Collection[list[str]], subject: str, redraws: bool) -> str:
+    """First title line: ``subject`` after how the points stand to paper 002's Fig. 2
+    setting, given what each lacks of it (``misses``, :func:`_fig2_misses`). All at it:
+    Fig. 2 redrawn if the figure ``redraws`` it, else its setting; some: the panels marked
+    :data:`FIG2_MARK`; none: what Fig. 2's setting has that they lack."""
+    if not any(misses):
+        return ("Paper 002 Fig. 2 redrawn: " if redraws
+                else "Paper 002 Fig. 2 setting, no paper figure: ") + subject
+    if not all(misses):
+        where = "Paper 002 Fig. 2" if redraws else "No paper figure; Fig. 2 setting"
+        return f"{where} in the panels marked '{FIG2_MARK}': {subject}"
+    lacking = dict.fromkeys(word for miss in misses for word in miss)
+    return f"No paper figure (Fig. 2 has {', '.join(lacking)}): {subject}"
+
+
 def _convergence_figure(summary: pd.DataFrame, config: dict, metric: str, ylabel: str,
-                        title: str, reference: float | None) -> Figure | str:
-    """``metric`` (mean, 95 % band) of each PGA variant against the operation count: one
-    column per target count, one row per setting of the other swept keys; the exact
-    optimum as a dashed line (at ``reference`` if given, else at its own mean)."""
+                        subject: str, redraws: bool, reference: float | None
+                        ) -> Figure | str:
+    """``metric`` (mean, 95 % band) of each PGA variant against the operation count: a
+    panel per point, the target counts of one setting of the other swept keys side by side
+    (:func:`_grid`); the exact optimum as a dashed line (at ``reference`` if given, else at
+    its own mean). The title says how the points stand to paper 002's Fig. 2 setting
+    (:func:`_paper_title`; ``redraws``: the figure redraws Fig. 2 there)."""
     names = _pga_names(summary)
     if not names:
         return "no PGA variant was run"
-    if summary.loc[summary["algorithm"].isin(names), "ops"].nunique() < 2:
+    checkpoints = np.unique(summary.loc[summary["algorithm"].isin(names), "ops"].to_numpy(float))
+    if len(checkpoints) < 2:
         return ("one PGA checkpoint only (pga.checkpoints): nothing to draw against the "
                 "number of operations")
     grid = _grid(summary, config)
     ncols = max(len(r) for r in grid)
     if len(grid) * ncols > 24:
         return f"{len(grid) * ncols} sweep points (more than 24 panels)"
-    fig, axes = new_figure(ncols=ncols, nrows=len(grid), width=3.3,
+    fig, axes = new_figure(ncols=ncols, nrows=len(grid), width=PANEL_WIDTH,
                            height=2.4 + 1.6 / len(grid))
     axes = np.asarray(axes).reshape(len(grid), ncols)
+    misses = {point: _fig2_misses(values, config) for row in grid for point, values in row}
+    marked = any(misses.values()) and not all(misses.values())
     for r, row in enumerate(grid):
         for c, (point, values) in enumerate(row):
             ax = axes[r, c]
@@ -300,15 +372,19 @@ def _convergence_figure(summary: pd.DataFrame, config: dict, metric: str, ylabel
                 s = _metric(summary, point, name, metric)
                 _curve(ax, s["ops"], s, name, metric)
             _exact_reference(ax, _metric(summary, point, "exact", metric), metric, reference)
-            _ops_axis(ax, float(summary["ops"].max()))
-            ax.set_title(_cell_title(values, config), fontsize=8)
+            xlabel = _ops_axis(ax, checkpoints)
+            mark = f"; {FIG2_MARK}" if marked and not misses[point] else ""
+            ax.set_title(_cell_title(values, config) + mark, fontsize=8)
         for ax in axes[r, len(row):]:
             ax.set_visible(False)
+    for (r, c), ax in np.ndenumerate(axes):  # one x label under each column's lowest panel
+        if ax.get_visible() and (r + 1 == len(grid) or not axes[r + 1, c].get_visible()):
+            ax.set_xlabel(xlabel)
     _shared_y(fig, axes, ylabel)
-    legend_below(fig, *legend_entries(axes.ravel()), column_width=4.2)
+    legend_below(fig, *legend_entries(axes.ravel()), column_width=LEGEND_COLUMN)
     fixed = _point_label({}, config, noise=True).split(", ", 1)[1]
-    fig.suptitle(f"{title}\n{config.get('trials', '')} runs per point, 95 % intervals; "
-                 f"{fixed}")
+    fig.suptitle(f"{_paper_title(misses.values(), subject, redraws)}\n"
+                 f"{config.get('trials', '')} runs per point, 95 % intervals; {fixed}")
     return fig
 
 
@@ -340,15 +416,15 @@ def _noise_figure(summary: pd.DataFrame, config: dict) -> Figure | str:
                 _curve(ax, sel["noise.sigma"], sel, algorithm, metric, label=label)
             for x in (0.005, np.sqrt(0.005)):
                 ax.axvline(x, color="grey", lw=0.8, ls=":")
-            _count_axis(ax, part["noise.sigma"], "angle noise sd sigma (rad)")
+            _count_axis(ax, part["noise.sigma"], "angle noise sd sigma", "rad")
         axes[0, col].set_title(_point_label(values, config, noise=False), fontsize=7)
     for (_, ylabel), ax in zip(rows, axes[:, 0], strict=True):
         ax.set_ylabel(ylabel)
     for ax in axes[:, 1:].ravel():
         ax.tick_params(labelleft=False)
     for ax in axes.ravel():
-        ax.set_ylim(-0.02, 1.04)
-    legend_below(fig, *legend_entries(axes.ravel()), column_width=4.2)
+        ax.set_ylim(*FRACTION_LIMITS)
+    legend_below(fig, *legend_entries(axes.ravel()), column_width=LEGEND_COLUMN)
     fig.suptitle("Paper 002 setting, no paper figure: accuracy vs angle noise (the exact "
                  f"optimum is the ceiling)\n{config.get('trials', '')} runs per point; dotted: "
                  "sigma = 0.005 and sqrt(0.005) rad, the two readings of the paper")
@@ -395,18 +471,18 @@ def _scale_figure(summary: pd.DataFrame, metrics: pd.DataFrame, config: dict) ->
                                                       "gap_ci_high": "ci_high"})
         _curve(axes[1], s["targets.n"], s, name, "gap")
     axes[1].set_yscale("symlog", linthresh=1.0)
-    axes[1].set_ylabel("objective gap J* - J (nats)")
+    axes[1].set_ylabel("objective gap J* - J (nats,\nsymlog: linear below 1)")
     for name in names:
         ops = None if name == "exact" else _final_ops(summary, name)
         s = _by_x(summary, "targets.n", name, "accuracy", ops)
         _curve(axes[2], s["targets.n"], s, name, "accuracy")
     axes[2].set_ylabel("accuracy (fraction)")
     for ax in axes:
-        _count_axis(ax, swept, "number of targets N (count)")
-    legend_below(fig, *legend_entries(axes), column_width=4.2)
+        _count_axis(ax, swept, "number of targets N", "count")
+    legend_below(fig, *legend_entries(axes), column_width=LEGEND_COLUMN)
     p = config.get("params", {})
     budget = f"; PGA after {_final_ops(summary, names[1])} operations" if len(names) > 1 else ""
-    fig.suptitle(f"Paper 002 setting, no paper figure: cost and accuracy vs number of targets\n"
+    fig.suptitle(f"Paper 002 model, no paper figure: cost and accuracy vs number of targets\n"
                  f"{p.get('scene.mode', 'random')} scenes, sigma = "
                  f"{p.get('noise.sigma', 0.005)} rad, {config.get('trials', '')} runs per "
                  f"point{budget}")
@@ -503,10 +579,20 @@ COMPARED = ("pga_paper", "pga_evict", "pga_anneal")
 DOCS = "docs/papers/passive_assoc.md"
 
 
-def _at_paper_setting(values: dict[str, Any], config: dict) -> bool:
+#: Paper 002's Fig. 2 setting in words, by the parameter that sets it.
+FIG2_WORDS = {"scene.mode": "M1-MN scenes", "noise.sigma": "sigma = 0.005 rad",
+              "noise.reading": "sigma read as sd", "sensor.p_d": "P_D = 0.95",
+              "clutter.p_f": "false-alarm rate 0.05", "targets.n": "N = 5, 7, 10"}
+
+
+def _fig2_misses(values: dict[str, Any], config: dict) -> list[str]:
+    """What of paper 002's Fig. 2 setting (:data:`PAPER_SETTING`, 5, 7 or 10 targets) a
+    point (``values`` over ``config['params']``) lacks, in :data:`FIG2_WORDS`; empty at it."""
     p = {**config.get("params", {}), **values}
-    same = all(p[k] == v for k, v in PAPER_SETTING.items())
-    return same and int(p["targets.n"]) in (5, 7, 10)
+    keys = [k for k, v in PAPER_SETTING.items() if p[k] != v]
+    if int(p["targets.n"]) not in (5, 7, 10):
+        keys.append("targets.n")
+    return [FIG2_WORDS[k] for k in keys]
 
 
 def _versus_exact(runs: pd.DataFrame, exact: pd.DataFrame, metric: str) -> dict[str, Any]:
@@ -543,7 +629,7 @@ def _fig2_points(trials: pd.DataFrame, config: dict) -> list[tuple[int, dict, st
     if "exact" not in set(trials["algorithm"]):
         return out
     for point, values in _points(trials, config):
-        if not _at_paper_setting(values, config):
+        if _fig2_misses(values, config):
             continue
         at = trials[trials["point"] == point]
         exact = at[at["algorithm"] == "exact"]
@@ -635,8 +721,9 @@ def paper_vs_reproduced(trials: pd.DataFrame, config: dict) -> pd.DataFrame:
 def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure | str]:
     """The ``wanted`` figures; a one-line reason string for one this run cannot draw.
 
-    * ``convergence`` (paper Fig. 2 redrawn) and ``at_optimum`` (fraction of runs at the
-      exact optimum): one panel per sweep point, a column per target count.
+    * ``convergence`` (paper Fig. 2 redrawn at its setting) and ``at_optimum`` (fraction of
+      runs at the exact optimum): one panel per sweep point, target counts side by side,
+      at most 3 a row.
     * ``noise`` when ``noise.sigma`` is swept; ``scale`` when ``targets.n`` is swept.
 
     Mean accuracy is drawn with its 95 % Student-t band (a per-trial accuracy is not a 0/1
@@ -647,10 +734,10 @@ def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure | str]:
     drawers: dict[str, Callable[[], Figure | str]] = {
         "convergence": lambda: _convergence_figure(
             summary, config, "accuracy", "mean correct association rate (fraction)",
-            "Paper 002 Fig. 2 redrawn: association accuracy vs genetic operations", None),
+            "accuracy vs genetic operations", True, None),
         "at_optimum": lambda: _convergence_figure(
             summary, config, "at_opt", "runs at the exact optimum (fraction)",
-            "Paper 002 setting, no paper figure: runs whose PGA solution reaches J*", 1.0),
+            "runs whose PGA solution reaches J*", False, 1.0),
         "noise": lambda: _noise_figure(summary, config),
         "scale": lambda: _scale_figure(summary, checkpoint_metrics(run.trials, config),
                                        config),
