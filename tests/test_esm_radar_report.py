@@ -67,25 +67,68 @@ def test_every_figure_of_every_shipped_config_is_drawn_cleanly(shipped_run):
                 assert ax.get_shared_x_axes().get_siblings(ax) != [ax], name
 
 
+def _cut_markers(fig: matplotlib.figure.Figure) -> list[str]:
+    """Labels of the drawn lines with a marker that passes an edge of its axes and is
+    clipped there (cut); a drawn figure."""
+    renderer, cut = fig.canvas.get_renderer(), []
+    for ax in (a for a in fig.axes if a.get_visible()):
+        box = ax.get_window_extent(renderer)
+        for ln in ax.get_lines():
+            if ln.get_marker() in (None, "None", "none", "") or not ln.get_clip_on():
+                continue
+            r = ln.get_markersize() / 2 * fig.dpi / 72
+            xy = ln.get_transform().transform(ln.get_xydata())
+            x, y = xy[np.isfinite(xy).all(axis=1)].T
+            if ((x - r < box.x0 - 0.5) | (x + r > box.x1 + 0.5) | (y - r < box.y0 - 0.5)
+                    | (y + r > box.y1 + 0.5)).any():
+                cut.append(ln.get_label())
+    return cut
+
+
+def test_figures_say_log_scale_fit_their_labels_and_cut_no_marker(shipped_run):
+    """A log axis says so in its label; a y label is no taller than its axes (it ran into
+    the title); no marker is cut by an axes edge (a rate of 100 % sat on the top spine)."""
+    figs = report.figures(shipped_run, list(EXPERIMENT.figures))
+    for name, fig in ((n, drawn(f)) for n, f in figs.items() if not isinstance(f, str)):
+        renderer = fig.canvas.get_renderer()
+        assert _cut_markers(fig) == [], name
+        for ax in (a for a in fig.axes if a.get_visible() and a.has_data()):
+            for axis, label in ((ax.xaxis, ax.get_xlabel()), (ax.yaxis, ax.get_ylabel())):
+                if label and axis.get_scale() == "log":
+                    assert "log scale" in label, (name, label)
+            if ax.get_ylabel():
+                height = ax.yaxis.label.get_window_extent(renderer).height
+                assert height <= ax.get_window_extent(renderer).height, (name, ax.get_ylabel())
+
+
 def _lines(fig, prefix: str) -> list:
     return [ln for ax in fig.axes for ln in ax.get_lines() if ln.get_label().startswith(prefix)]
 
 
 def test_main_figure_draws_our_rates_the_papers_values_and_chance(shipped_run):
+    """The paper's Table 3 values are drawn at every point of the run at its setting (200 m,
+    1 %, the 1 km weave) whatever else is swept (d/lambda, the index), and nowhere else."""
     fig = report.figures(shipped_run, ["correct_rate"])["correct_rate"]
-    paper = {ln.get_label(): ln for ln in _lines(fig, "paper's Table 3")}
-    if not {"phase.d_over_lambda", "snake.amplitude"} & set(shipped_run.sweep):
-        # x is separation, radar range error or nothing: the Table 3 setting is on it
-        run = {("improved", 74.0), ("traditional", 55.2)}
-        run = {(n, v) for n, v in run if n in shipped_run.params["algorithms"]}
-        # the label may add where the star is drawn (beside its setting on a curve panel)
-        found = {label.split(" %")[0] + " %": line for label, line in paper.items()}
-        assert set(found) == {f"paper's Table 3: {n} {v} %" for n, v in run}
-        for label, value in run:
-            xy = found[f"paper's Table 3: {label} {value} %"].get_xydata()
-            assert np.isclose(xy, value).any(axis=1).all()
-    else:  # the paper gives no d/lambda and no amplitude axis: no value of its belongs on it
-        assert not paper
+    stars = _lines(fig, "paper's Table 3")
+    at = [p for p in shipped_run.points if report.at_paper_setting(p)]
+    values = {"improved": 74.0, "traditional": 55.2}
+    run = {n: v for n, v in values.items() if n in shipped_run.params["algorithms"]}
+    # the label may add where the star is drawn (beside its setting on a curve panel)
+    found = {ln.get_label().split(" %")[0] + " %" for ln in stars}
+    assert found == ({f"paper's Table 3: {n} {v} %" for n, v in run.items()} if at else set())
+    s = shipped_run.summary.query("metric == 'correct'")
+    x = report._numeric_axis(shipped_run.config, s)
+    for star in stars:
+        value = values[star.get_label().split(": ")[1].split(" ")[0]]
+        if x is None:  # one row per method: the star's x is the paper's rate
+            assert np.allclose(star.get_xdata(), value)
+        else:  # at the x of each point at the paper's setting, the paper's rate as y
+            scale = report.AXES[x][1]
+            assert set(star.get_xdata()) <= {scale * p[x] for p in at}
+            assert np.allclose(star.get_ydata(), value)
+    if x is not None and stars:
+        assert {v for ln in stars for v in ln.get_xdata()} == {
+            report.AXES[x][1] * p[x] for p in at}
     chance = _lines(fig, "chance between T1 and T2 (50 %)")
     assert chance and all(50.0 in np.ravel(ln.get_xydata()) for ln in chance)
     labels = {ln.get_label() for ax in fig.axes for ln in ax.get_lines()}

@@ -17,17 +17,21 @@ correct_rate              the paper's main result: correct-association rate (%) 
                           method, the paper's 74.0 % and 55.2 % beside ours) when nothing
                           numeric is swept; Fig. 3 (separation) or Fig. 4 (radar range
                           error) layout otherwise, the paper's Table 3 values marked just
-                          right of their setting, under our markers. Chance between T1 and
-                          T2 is 1/2 (track 3 is never chosen).
+                          right of every point at its setting (:func:`at_paper_setting`),
+                          under our markers. Chance between T1 and T2 is 1/2 (track 3 is
+                          never chosen).
 correct_rate_ablations    the same for those ablations the run has (``traditional_5f``,
                           ``improved_static``, ``improved_no_range``, ``improved_3f``,
-                          ``improved_l2``) beside ``improved``.
+                          ``improved_l2``) beside ``improved``; on curves the thin ones with
+                          Wilson error bars, shifted sideways (bands for the paper's).
 correct_rate_references   the same for the chi-square ML references beside the paper's two.
-trajectory                paper Figs. 1-2: true tracks and the ESM TDOA-DF location track of
-                          one saved trial, its per-scan manoeuvre index and range weight, and
-                          the RMS ESM range error per scan over all trials.
+trajectory                paper Figs. 1-2 (redrawn if point 0 has the paper's weave): true
+                          tracks and the ESM TDOA-DF location track of one saved trial, its
+                          per-scan manoeuvre index and range weight, and the RMS ESM range
+                          error per scan over all trials.
 manoeuvre                 mean manoeuvre index and mean range weight of ``improved`` per scan
-                          with 95 % t bands, one curve per setting of the ESM track.
+                          with 95 % t bands, one curve per setting of the ESM track (the
+                          index panel alone without a dynamic-weight algorithm).
 ========================  ==================================================================
 
 A figure that a run cannot draw (e.g. no algorithm of its group was run) is returned as a
@@ -49,6 +53,8 @@ import matplotlib
 import numpy as np
 import pandas as pd
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 from matplotlib.transforms import offset_copy
 from scipy.stats import binomtest
@@ -226,6 +232,13 @@ PAPER_SCENARIO = {"snake.amplitude": 1000.0}
 PAPER_PAIR = ("improved", "traditional")
 
 
+def at_paper_setting(params: Mapping[str, Any]) -> bool:
+    """Whether a point's params are the paper's Table 3 setting and scene
+    (:data:`PAPER_TABLE3_SETTING`, :data:`PAPER_SCENARIO`): where its 74.0 % / 55.2 % apply."""
+    setting = {**PAPER_TABLE3_SETTING, **PAPER_SCENARIO}
+    return all(np.isclose(float(params[k]), v) for k, v in setting.items())
+
+
 def printed_half_unit(value: float) -> float:
     """Half a unit in the last printed digit of ``value`` (0.053 -> 0.0005; 130 -> 0.5)."""
     text = repr(float(value)).rstrip("0").rstrip(".")
@@ -267,9 +280,8 @@ def _table3_rows(run: RunData) -> list[dict[str, Any]]:
     """Paper Table 3 correct rates against every point of the run at the paper's setting."""
     trials, out = run.trials, []
     keys = [k for k in swept_keys(run.config) if k not in PAPER_TABLE3_SETTING]
-    setting = {**PAPER_TABLE3_SETTING, **PAPER_SCENARIO}
     for point, params in enumerate(run.points):
-        if not all(np.isclose(float(params[k]), v) for k, v in setting.items()):
+        if not at_paper_setting(params):
             continue
         at = trials[trials["point"] == point]
         for name in (n for n in PAPER_PAIR if n in set(at["algorithm"])):
@@ -467,10 +479,19 @@ GROUPS = {"correct_rate": ("improved", "traditional", "improved_gauss"),
           "correct_rate_ablations": ("improved", "traditional_5f", "improved_static",
                                      "improved_no_range", "improved_3f", "improved_l2"),
           "correct_rate_references": ("improved", "traditional", "chi2", "chi2_lrt", "chi2_5f")}
-GROUP_TITLES = {"correct_rate": "paper's methods and ours",
-                "correct_rate_ablations": "ablations",
+#: What the other groups draw, in their titles (``correct_rate``: :func:`_methods_words`).
+GROUP_TITLES = {"correct_rate_ablations": "ablations",
                 "correct_rate_references": "chi-square ML references"}
 CHANCE = 0.5  # T1 or T2 at random: track 3 is never chosen
+#: How chance is drawn: dotted grey, apart from the dashed chi-square references.
+CHANCE_STYLE = {"color": "0.5", "linestyle": ":", "linewidth": 1.2}
+#: Marker and line style of each chi-square reference (their looks have no marker), in both
+#: layouts, so that the references stay apart from each other and from chance.
+REFERENCE_STYLES = {"chi2": ("o", "--"), "chi2_lrt": ("X", "-."),
+                    "chi2_5f": ("d", (0, (4, 1, 1, 1, 1, 1)))}
+#: End of the rate axis (%): a line at 100 % stays clear of the spine (markers there are
+#: drawn unclipped, whole, however short the axes).
+RATE_TOP = 104.0
 
 
 def _value_words(key: str, value: Any) -> str:
@@ -499,13 +520,17 @@ MAX_LABELLED = 9
 
 
 def _set_x_axis(ax: Axes, key: str, values: np.ndarray) -> None:
-    """Label the x axis; a log axis only for a wide grid (>= 4 values spanning >= 10x),
-    ticked with plain numbers, else linear. Up to :data:`MAX_LABELLED` values every grid
-    value is ticked and labelled; a longer log grid is ticked at 1, 2, 5 x 10^k."""
+    """Label the x axis; a log axis (its label says so) only for a wide grid (>= 4 values
+    spanning >= 10x), ticked with plain numbers, else linear. Up to :data:`MAX_LABELLED`
+    values every grid value is ticked and labelled; a longer log grid is ticked at 1, 2,
+    5 x 10^k."""
     label, _ = AXES.get(key, (key, 1.0))
-    ax.set_xlabel(label)
     values = np.unique(values)
-    if len(values) >= 4 and values.min() > 0 and values.max() / values.min() >= 10:
+    log = len(values) >= 4 and values.min() > 0 and values.max() / values.min() >= 10
+    if log:
+        label = f"{label[:-1]}, log scale)" if label.endswith(")") else f"{label} (log scale)"
+    ax.set_xlabel(label)
+    if log:
         ax.set_xscale("log")
         ticks = values if len(values) <= MAX_LABELLED else [
             v for m in (1, 2, 5) for v in m * 10.0 ** np.arange(-3, 7)
@@ -526,18 +551,12 @@ def _panels(summary: pd.DataFrame, keys: Sequence[str]) -> list[tuple[str, pd.Da
             for key, g in summary.groupby(list(keys), sort=False)]
 
 
-def _paper_setting_x(run: RunData, x: str | None) -> float | None:
-    """x value (scaled) at which the paper's Table 3 numbers apply, or None if the run's
-    fixed parameters are not at the Table 3 setting."""
-    fixed = {k: v for k, v in PAPER_TABLE3_SETTING.items() if k != x}
-    if not all(np.isclose(float(run.params[k]), v) for k, v in fixed.items()
-               if k not in run.sweep):
-        return None
-    if x is None:
-        return 0.0
-    if x not in PAPER_TABLE3_SETTING:
-        return None
-    return AXES[x][1] * PAPER_TABLE3_SETTING[x]
+def _paper_xs(run: RunData, rows: pd.DataFrame, x: str | None) -> list[float]:
+    """The x values (scaled; 0 with no x) of the points in ``rows`` at the paper's setting
+    (:func:`at_paper_setting`): where its Table 3 values belong."""
+    scale = AXES.get(x, (x, 1.0))[1]
+    points = (run.point_params(int(p)) for p in rows["point"].unique())
+    return sorted({scale * float(p[x]) if x else 0.0 for p in points if at_paper_setting(p)})
 
 
 #: How far right of their setting the paper's values are drawn on a curve panel (points),
@@ -546,41 +565,100 @@ PAPER_DODGE_PT = 9.0
 #: Drawing order of the paper's values: above our bands (1), below our curves, markers and
 #: error bars (2 and 3, :func:`trackfuse.plots.algorithms.line_kwargs`).
 PAPER_ZORDER = 1.5
+#: Sideways offsets (points) of the curves drawn with error bars (variants, references), by
+#: their order in the figure: beside the banded curves' markers and each other's, so that
+#: equal rates stay in sight; their data stay at the grid values.
+BAR_DODGE_PT = (-7.0, 7.0, -14.0, 14.0, -21.0, 21.0)
+#: Drawing order of the curves with error bars: thin, above the thick banded ones (3).
+BAR_ZORDER = 3.5
+#: Room (fraction of the data range) each side of a curve panel's x data, for the markers
+#: drawn aside (:data:`PAPER_DODGE_PT`, :data:`BAR_DODGE_PT`): about 19 points of a panel
+#: 4 inches wide.
+X_MARGIN = 0.08
 
 
-def _paper_markers(ax: Axes, at: float, names: Sequence[str],
+def _paper_markers(ax: Axes, at: Sequence[float], names: Sequence[str],
                    rows: dict[str, float] | None = None) -> None:
     """The paper's Table 3 rates (%) as open stars in each method's colour, under our
-    markers: at x = ``at`` drawn :data:`PAPER_DODGE_PT` to its right (curves; the data
-    stay at ``at``), or 0.3 below the method's row ``rows[name]`` (dot plot)."""
+    markers: at each x of ``at`` drawn :data:`PAPER_DODGE_PT` to its right (curves; the
+    data stay at ``at``), or 0.3 below the method's row ``rows[name]`` (dot plot)."""
     dot = rows is not None
     where = "" if dot else ", drawn just right of its setting"
     transform = ax.transData if dot else offset_copy(ax.transData, fig=ax.figure,
                                                      x=PAPER_DODGE_PT, units="points")
     for name in (n for n in PAPER_PAIR if n in names):
         value = 100 * ESM_RADAR.result(f"{name}: correct rate").value
-        xy = (value, rows[name] - 0.3) if dot else (at, value)
+        xy = ([value], [rows[name] - 0.3]) if dot else (list(at), [value] * len(at))
         ax.plot(*xy, linestyle="none", marker="*", markersize=11, markerfacecolor="white",
                 markeredgecolor=look(name).colour, markeredgewidth=1.4, zorder=PAPER_ZORDER,
                 transform=transform, label=f"paper's Table 3: {name} {value:.1f} %{where}")
 
 
 def _curve_panel(ax: Axes, rows: pd.DataFrame, x: str, names: Sequence[str],
-                 paper_x: float | None) -> None:
-    """Correct rate (%) of ``names`` against ``x``; bands for the emphasised methods."""
+                 paper_xs: Sequence[float]) -> None:
+    """Correct rate (%) of ``names`` against ``x`` with 95 % Wilson intervals: bands for
+    the emphasised methods, error bars for the others (:data:`BAR_DODGE_PT` aside); the
+    paper's values at ``paper_xs``."""
     scale = AXES.get(x, (x, 1.0))[1]
+    barred = [n for n in names if not look(n).emphasised]
     for name in names:
         g = rows[rows["algorithm"] == name].sort_values(x)
-        xs, kw = scale * g[x].to_numpy(float), line_kwargs(name)
-        if look(name).emphasised:
-            band(ax, xs, 100 * g["mean"], 100 * g["ci_low"], 100 * g["ci_high"], **kw)
-        else:
-            ax.plot(xs, 100 * g["mean"], **kw)
-    if paper_x is not None:
-        _paper_markers(ax, paper_x, names)
+        xs = scale * g[x].to_numpy(float)
+        mean, lo, hi = (100 * g[c].to_numpy(float) for c in ("mean", "ci_low", "ci_high"))
+        kw = {**line_kwargs(name), "clip_on": False}  # a marker at 100 % is drawn whole
+        if name not in barred:
+            band(ax, xs, mean, lo, hi, **kw)
+            continue
+        marker, style = REFERENCE_STYLES.get(name, (kw["marker"], kw["linestyle"]))
+        aside = offset_copy(ax.transData, fig=ax.figure,
+                            x=BAR_DODGE_PT[barred.index(name)], units="points")
+        ax.errorbar(xs, mean, yerr=[mean - lo, hi - mean], transform=aside, capsize=2,
+                    elinewidth=0.8, **{**kw, "marker": marker, "linestyle": style,
+                                       "zorder": BAR_ZORDER})
+    if paper_xs:
+        _paper_markers(ax, paper_xs, names)
     _set_x_axis(ax, x, scale * rows[x].to_numpy(float))
-    reference_line(ax, 100 * CHANCE, "chance between T1 and T2 (50 %)", color="0.5")
-    ax.set_ylabel("correct association rate (%)")
+    ax.margins(x=X_MARGIN)
+    reference_line(ax, 100 * CHANCE, "chance between T1 and T2 (50 %)", **CHANCE_STYLE)
+    ax.set_ylabel("correct association\nrate (%)")
+
+
+def _interval_entries(names: Sequence[str]) -> tuple[list, list[str]]:
+    """Legend entries saying what the intervals of a curve figure of ``names`` are: the
+    emphasised methods' shaded bands, the others' error bars."""
+    handles, labels = [], []
+    if any(look(n).emphasised for n in names):
+        handles.append(Patch(facecolor="0.5", alpha=0.3))
+        labels.append("shaded band: 95 % Wilson interval")
+    if not all(look(n).emphasised for n in names):
+        handles.append(Line2D([], [], color="0.3", marker="|", markersize=10, linestyle="none"))
+        labels.append("error bar: 95 % Wilson interval, shifted sideways")
+    return handles, labels
+
+
+def _place(i: int, n: int, ncols: int) -> str:
+    """Panel ``i`` of ``n`` (``ncols`` a row, row-major) in words."""
+    if n <= ncols:
+        return (("left", "right") if n == 2 else ("left", "middle", "right"))[i] + " panel"
+    return f"panel in row {i // ncols + 1}, column {i % ncols + 1}"
+
+
+def _coincidences(panels: Sequence[tuple[str, pd.DataFrame]], x: str, names: Sequence[str],
+                  ncols: int) -> list[str]:
+    """A sentence for each curve of ``names`` equal to an earlier one at every x of a panel
+    (their lines lie on each other there), naming the panels unless it is all of them."""
+    found: dict[tuple[str, str], list[int]] = {}
+    for i, (_, rows) in enumerate(panels):
+        means = {n: rows[rows["algorithm"] == n].sort_values(x)["mean"].to_numpy()
+                 for n in names}
+        for j, b in enumerate(names):
+            same = [a for a in names[:j] if len(means[b]) and np.array_equal(means[a],
+                                                                             means[b])]
+            if same:
+                found.setdefault((b, same[0]), []).append(i)
+    return [("" if len(at) == len(panels) else
+             " and ".join(_place(i, len(panels), ncols) for i in at) + ": ")
+            + f"{look(b).label} coincides with {look(a).label}" for (b, a), at in found.items()]
 
 
 def _dot_panel(ax: Axes, rows: pd.DataFrame, names: Sequence[str], paper: bool) -> None:
@@ -592,28 +670,61 @@ def _dot_panel(ax: Axes, rows: pd.DataFrame, names: Sequence[str], paper: bool) 
         lk = look(name)
         ax.errorbar(100 * g["mean"], ys[name], xerr=[[100 * (g["mean"] - g["ci_low"])],
                                                      [100 * (g["ci_high"] - g["mean"])]],
-                    fmt=lk.marker or "o", color=lk.colour, markersize=7, capsize=4,
-                    linewidth=2.0 if lk.emphasised else 1.0)
+                    fmt=REFERENCE_STYLES.get(name, (lk.marker or "o",))[0], color=lk.colour,
+                    markersize=7, capsize=4, linewidth=2.0 if lk.emphasised else 1.0,
+                    clip_on=False)
     ax.plot([], [], marker="o", color="k", label="this run: rate, 95 % Wilson interval")
     if paper:
-        _paper_markers(ax, 0.0, names, rows=ys)
-    ax.axvline(100 * CHANCE, color="0.5", linestyle="--", linewidth=1.0,
-               label="chance between T1 and T2 (50 %)")
+        _paper_markers(ax, [0.0], names, rows=ys)
+    ax.axvline(100 * CHANCE, label="chance between T1 and T2 (50 %)", **CHANCE_STYLE)
     ax.set_yticks(list(ys.values()), [look(n).label for n in names])
     ax.set_ylim(-0.8, len(names) - 0.4)
     ax.set_xlabel("correct association rate (%), 95 % Wilson interval")
 
 
-def _rate_title(run: RunData, group: str, x: str | None) -> str:
-    """Two-line suptitle: the paper item redrawn (or none), the trials and fixed settings."""
+def _rate_legend(axes: Sequence[Axes], names: Sequence[str], curves: bool
+                 ) -> tuple[list, list[str]]:
+    """Legend entries of a rate figure: the methods in the order of ``names``, then (curves)
+    what the intervals are, then the rest (the paper's values, chance)."""
+    handles, labels = legend_entries(axes)
+    order = [look(n).label for n in names]
+    if curves:
+        extra = _interval_entries(names)
+        handles, labels, order = handles + extra[0], labels + extra[1], order + extra[1]
+    ranked = sorted(zip(handles, labels, strict=True),
+                    key=lambda e: order.index(e[1]) if e[1] in order else len(order))
+    return [h for h, _ in ranked], [lab for _, lab in ranked]
+
+
+def _methods_words(names: Collection[str]) -> str:
+    """The ``correct_rate`` methods among ``names`` in words ("the paper's methods and
+    ours", "the paper's baseline", ...)."""
+    pair = tuple(n for n in PAPER_PAIR if n in names)
+    words = {PAPER_PAIR: "the paper's methods", ("improved",): "the paper's method",
+             ("traditional",): "the paper's baseline", (): ""}[pair]
+    if "improved_gauss" in names:
+        words = f"{words} and ours" if words else "ours"
+    return words
+
+
+def _rate_title(run: RunData, group: str, x: str | None, names: Sequence[str],
+                at_setting: bool) -> str:
+    """Two-line suptitle: the paper item redrawn (both of the paper's methods drawn, Table 3
+    only at its setting) or in its layout with what is drawn, else what is drawn; the trials
+    and fixed settings."""
     what = "correct association rate" + (f" vs {AXES.get(x, (x,))[0].split(' (')[0]}"
                                          if x else "")
     item = PAPER_FIGURE.get(x, "Table 3" if x is None else "")
-    paper = group == "correct_rate" and item
-    head = (f"Paper 001 {item} redrawn: {what}" if paper else
-            f"Paper 001, {GROUP_TITLES[group]}: {what}")
+    paper = group == "correct_rate" and item and (x is not None or at_setting)
+    drawn = _methods_words(names) if group == "correct_rate" else GROUP_TITLES[group]
+    if paper and set(PAPER_PAIR) <= set(names):
+        head, tail = f"Paper 001 {item} redrawn: {what}", ""
+    elif paper:
+        head, tail = f"Paper 001 {item} layout: {what}", f"{drawn.capitalize()} only; "
+    else:
+        head, tail = f"Paper 001, {drawn}: {what}", ""
     fixed = [_value_words(k, run.params[k]) for k in PAPER_TABLE3_SETTING if k not in run.sweep]
-    return (head + f"\n{run.config['trials']} trials per point; " + "; ".join(fixed)
+    return (f"{head}\n{tail}{run.config['trials']} trials per point; " + "; ".join(fixed)
             + ("" if paper else "; not a figure of the paper"))
 
 
@@ -632,27 +743,45 @@ def _rate_figure(run: RunData, group: str) -> Figure | str:
     if len(panels) > 9:
         return f"{len(panels)} panels (more than 9 combinations of the other swept keys)"
     ncols = min(len(panels), 3 if x else 2)
-    height = 3.4 if x else 0.5 * len(names) + 1.6
+    height = CURVE_ROW_IN if x else 0.5 * len(names) + 1.6
     # one curve panel alone gets the width its two-line title needs
     width = (4.6 if ncols > 1 else 6.4) if x else 5.2
     fig, axes = new_figure(ncols=ncols, nrows=-(-len(panels) // ncols), width=width,
                            height=height)
-    axes = np.atleast_1d(axes)
-    paper_x = _paper_setting_x(run, x) if group == "correct_rate" else None
-    for ax, (title, rows) in zip(axes, panels, strict=False):
+    axes = np.atleast_1d(axes)[:len(panels)]
+    paper_xs = [_paper_xs(run, rows, x) if group == "correct_rate" else [] for _, rows in panels]
+    for ax, (title, rows), at in zip(axes, panels, paper_xs, strict=True):
         if x:
-            _curve_panel(ax, rows, x, names, paper_x)
+            _curve_panel(ax, rows, x, names, at)
         else:
-            _dot_panel(ax, rows, names, paper_x is not None)
+            _dot_panel(ax, rows, names, bool(at))
         ax.set_title(title, fontsize=8)
-    for ax in axes[len(panels):]:
+    for ax in fig.axes[len(panels):]:
         ax.set_visible(False)
-    _share_rate_axis(axes[:len(panels)], "y" if x else "x", s)
-    legend_below(fig, *legend_entries(axes[:1]))
-    fig.suptitle(_rate_title(run, group, x))
+    _share_rate_axis(axes, "y" if x else "x", s)
+    legend_below(fig, *_rate_legend(axes, names, bool(x)))
+    if x and (same := _coincidences(panels, x, names, ncols)):  # said above the entries
+        fig.legends[-1].set_title("\n".join(same))
+    fig.suptitle(_rate_title(run, group, x, names, any(paper_xs)))
     if x:
-        _upright_crowded_ticks(fig, axes[:len(panels)])
+        _grow_for_legend(fig)
+        _upright_crowded_ticks(fig, axes)
     return fig
+
+
+#: Height (inches) of a row of curve panels with their titles and tick labels; the figure
+#: gets its legend's height on top (:func:`_grow_for_legend`).
+CURVE_ROW_IN = 3.0
+
+
+def _grow_for_legend(fig: Figure) -> None:
+    """Make ``fig`` taller by its legend's height (inches), so that a long legend (many
+    entries, a note on coinciding curves) leaves its panels the height of a short one's,
+    taller than their y labels."""
+    if not hasattr(fig.canvas, "get_renderer"):
+        FigureCanvasAgg(fig)
+    legend = fig.legends[-1].get_window_extent(fig.canvas.get_renderer())
+    fig.set_figheight(fig.get_figheight() + legend.height / fig.dpi)
 
 
 def _upright_crowded_ticks(fig: Figure, axes: Sequence[Axes]) -> None:
@@ -676,10 +805,10 @@ def _upright_crowded_ticks(fig: Figure, axes: Sequence[Axes]) -> None:
 
 def _share_rate_axis(axes: Sequence[Axes], which: str, summary: pd.DataFrame) -> None:
     """One rate range (%) for every panel, from just below the lowest interval (and below
-    chance) to 101 %; with shared y the inner panels drop their tick labels."""
+    chance) to :data:`RATE_TOP`; with shared y the inner panels drop their tick labels."""
     low = min(40.0, 10 * np.floor((100 * summary["ci_low"].min() - 2) / 10))
     for i, ax in enumerate(axes):
-        (ax.set_ylim if which == "y" else ax.set_xlim)(low, 101)
+        (ax.set_ylim if which == "y" else ax.set_xlim)(low, RATE_TOP)
         if which == "x" and i % 2:
             ax.tick_params(labelleft=False)
 
@@ -727,7 +856,8 @@ def _truth(params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
 def _tracks_panel(ax: Axes, params: Mapping[str, Any], row: pd.Series) -> None:
     """True tracks (km) and the ESM TDOA-DF location of target 2 in one saved trial."""
     t, p = _truth(params)
-    for j, name in enumerate(("T1 (weaving)", "T2 (weaving, the ESM's target)",
+    motion = "weaving" if params["snake.amplitude"] > 0 else "straight"
+    for j, name in enumerate((f"T1 ({motion})", f"T2 ({motion}, the ESM's target)",
                               "T3 (crossing)")):
         ax.plot(p[:, j, 0] / 1e3, p[:, j, 1] / 1e3, color=TARGET_COLOURS[j],
                 linestyle=("-", "-", "--")[j], label=name)
@@ -753,7 +883,7 @@ def _index_panel(ax: Axes, run: RunData, row: pd.Series, params: Mapping[str, An
         ax.axhline(a_max, color="0.2", linestyle=":", linewidth=1.0, label="α_max")
     ax.set_yscale("log")
     ax.set_xlabel("time (s)")
-    ax.set_ylabel("manoeuvre index α (1, log scale)")
+    ax.set_ylabel("manoeuvre index α\n(1, log scale)")
     weights = _weight_series(run.trials, int(row["point"]), [int(row["trial"])])
     if weights is not None:
         name, a1 = weights
@@ -765,7 +895,8 @@ def _index_panel(ax: Axes, run: RunData, row: pd.Series, params: Mapping[str, An
         twin.set_ylim(0, 0.7)
         twin.set_ylabel("range weight a₁ (1)")
         twin.grid(False)
-    ax.set_title("one trial: index and range weight per scan", fontsize=8)
+    ax.set_title("one trial: index" + (" and range weight" if weights else "") + " per scan"
+                 + ("" if weights else " (no dynamic-weight algorithm run)"), fontsize=8)
 
 
 def _range_error_panel(ax: Axes, esm: pd.DataFrame, params: Mapping[str, Any]) -> None:
@@ -783,12 +914,13 @@ def _range_error_panel(ax: Axes, esm: pd.DataFrame, params: Mapping[str, Any]) -
     ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
     ax.yaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("time (s)")
-    ax.set_ylabel("ESM TDOA-DF range error (m, log scale)")
+    ax.set_ylabel("ESM TDOA-DF range error\n(m, log scale)")
     ax.set_title(f"all {len(esm)} trials of this point", fontsize=8)
 
 
 def _trajectory_figure(run: RunData) -> Figure | str:
-    """Paper 001 Figs. 1-2 from ``trials.csv``: the first saved trial of point 0."""
+    """Paper 001 Figs. 1-2 from ``trials.csv``: the first saved trial of point 0 (the
+    paper's figures redrawn if that point has the paper's weave, :data:`PAPER_SCENARIO`)."""
     esm = _esm_rows(run.trials)
     if esm.empty:
         return NO_SERIES
@@ -801,8 +933,12 @@ def _trajectory_figure(run: RunData) -> Figure | str:
     _range_error_panel(axes[2], esm[esm["point"] == point], params)
     legend_below(fig, *legend_entries(fig.axes))
     where = _setting_words(params, swept_keys(run.config))
-    fig.suptitle("Paper 001 Figs. 1-2 redrawn: true tracks and the ESM TDOA-DF location of "
-                 "target 2\n" + (f"{where}; " if where else "")
+    amplitude = params["snake.amplitude"]
+    head = ("Paper 001 Figs. 1-2 redrawn" if np.isclose(amplitude, PAPER_SCENARIO[
+        "snake.amplitude"]) else f"Paper 001 Figs. 1-2 layout, snake amplitude {amplitude:g} m"
+            f" (not the paper's {PAPER_SCENARIO['snake.amplitude']:g} m weave)")
+    fig.suptitle(f"{head}: true tracks and the ESM TDOA-DF location of target 2\n"
+                 + (f"{where}; " if where else "")
                  + f"one saved trial (left, middle); error over all "
                  f"{len(esm[esm['point'] == point])} trials of this point (right)")
     return fig
@@ -835,47 +971,51 @@ def _esm_groups(run: RunData, esm: pd.DataFrame) -> list[tuple[str, int, pd.Data
 
 
 def _manoeuvre_figure(run: RunData) -> Figure | str:
-    """Mean manoeuvre index and mean range weight per scan, from ``trials.csv``."""
+    """Mean manoeuvre index and mean range weight per scan, from ``trials.csv``; the index
+    panel alone when no dynamic-weight algorithm was run."""
     esm = _esm_rows(run.trials)
     if esm.empty:
         return NO_SERIES
     groups = _esm_groups(run, esm)
     if len(groups) > 9:
         return f"{len(groups)} settings of the ESM track (more than 9 curves per panel)"
+    weights = [_weight_series(run.trials, p, rows["trial"].tolist()) for _, p, rows in groups]
+    weight_name = next((w[0] for w in weights if w is not None), "")
     # long or many curve labels: one legend below both panels (per-panel ones would not fit)
     long_words = len(groups) > 4 or any(len(words) > 30 for words, _, _ in groups)
-    fig, (ax, ax2) = new_figure(ncols=2, width=5.0, height=3.8 + 0.15 * len(groups))
+    fig, axes = new_figure(ncols=2 if weight_name else 1, width=5.0 if weight_name else 6.4,
+                           height=3.8 + 0.15 * len(groups))
+    axes = np.atleast_1d(axes)
+    ax = axes[0]
     colours = ["0.2"] if len(groups) == 1 else [
         matplotlib.colormaps["viridis"](i / (len(groups) - 1) * 0.9) for i in range(len(groups))]
-    weight_name = ""
-    for (words, point, rows), colour in zip(groups, colours, strict=True):
-        params, shade = run.point_params(point), len(groups) <= 3
-        t = esm_times(params)
+    for (words, point, rows), colour, w in zip(groups, colours, weights, strict=True):
+        t, shade = esm_times(run.point_params(point)), len(groups) <= 3
         _series_band(ax, t, decode_series(rows["alpha_per_scan"]), words, colour, shade)
-        weights = _weight_series(run.trials, point, rows["trial"].tolist())
-        if weights is not None:
-            weight_name = weights[0]
-            _series_band(ax2, t, weights[1], words, colour, shade)
-    params = run.point_params(groups[0][1])
+        if w is not None:
+            _series_band(axes[1], t, w[1], words, colour, shade)
     indices = _index_references(ax, [run.point_params(p) for _, p, _ in groups])
     ax.set_yscale("log")
-    ax2.axhline(static_weights(FACTORS, params["weights"])[0], color="k", linestyle=":",
-                linewidth=1.0, label="static AHP range weight")
-    ax2.set_ylim(0, 0.7)
-    weight_title = (f"range weight of {look(weight_name).label}" if weight_name
-                    else "no dynamic-weight algorithm was run")
-    for a, ylabel, title in ((ax, "manoeuvre index α (1, log scale)", "manoeuvre index"),
-                             (ax2, "range weight a₁ (1)", weight_title)):
+    panels = [(ax, "manoeuvre index α (1, log scale)", "manoeuvre index" + (
+        "" if weight_name else " (no range weight: no dynamic-weight algorithm was run)"))]
+    if weight_name:
+        static = static_weights(FACTORS, run.point_params(groups[0][1])["weights"])[0]
+        axes[1].axhline(static, color="k", linestyle=":", linewidth=1.0,
+                        label="static AHP range weight")
+        axes[1].set_ylim(0, 0.7)
+        panels.append((axes[1], "range weight a₁ (1)",
+                       f"range weight of {look(weight_name).label}"))
+    for a, ylabel, title in panels:
         a.set_xlabel("time (s)")
         a.set_ylabel(ylabel)
         a.set_title(title, fontsize=8)
         if not long_words:
             a.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncols=2, fontsize=7)
     if long_words:  # one legend for both panels, below them
-        legend_below(fig, *legend_entries([ax, ax2]))
-    n = len(groups[0][2])
-    fig.suptitle(f"Manoeuvre index ({' and '.join(indices)}) and range weight per scan "
-                 f"(no paper figure)\nmean over {n} trials with 95 % t bands")
+        legend_below(fig, *legend_entries(axes))
+    fig.suptitle(f"Manoeuvre index ({' and '.join(indices)})"
+                 + (" and range weight" if weight_name else "") + " per scan (no paper figure)"
+                 f"\nmean over {len(groups[0][2])} trials with 95 % t bands")
     return fig
 
 
