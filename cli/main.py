@@ -267,7 +267,15 @@ def _closing_lines(outcome: RunOutcome) -> None:
     if outcome.report is not None:
         print(f"report: {outcome.report}")
     if outcome.failed_trials:
-        print_error(f"{outcome.failed_trials} trials failed (status=failed in trials.csv)")
+        print_error(failed_trials_line(outcome.failed_trials, outcome.total_trials,
+                                       outcome.first_failure))
+
+
+def failed_trials_line(failed: int, total: int, first: str | None) -> str:
+    """``2 of 6 trials failed (status=failed in trials.csv); first: point 0 (...), trial 0:
+    ValueError: ...``: what ``run``, ``reproduce`` and ``plot`` say of failed trials."""
+    return (f"{failed} of {_count(total, 'trial')} failed (status=failed in trials.csv)"
+            + (f"; first: {first}" if first else ""))
 
 
 # ---------------------------------------------------------------------------- reproduce
@@ -325,6 +333,9 @@ def run_configs(configs: list[Config], options: RunOptions) -> list[RunOutcome]:
         outcomes.append(outcome)
         print(f"{config.source}: {outcome.folder} ({outcome.computed_trials} of "
               f"{outcome.total_trials} trials computed now, {outcome.failed_trials} failed)")
+        if outcome.failed_trials:
+            print_error(f"{config.source}: " + failed_trials_line(
+                outcome.failed_trials, outcome.total_trials, outcome.first_failure))
         for message in outcome.figure_errors:
             warn(message)
         if outcome.report is not None:
@@ -377,12 +388,16 @@ def plot(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR",
                                                  help="A finished run folder.")]) -> None:
     """Redraw every figure and table of RUN_DIR from its CSVs (nothing is recomputed).
 
-    The final files are checked against the checksums in the run's manifest first. Plotting
-    a run of a plugin experiment imports the plugin's module (a config is code)."""
+    The final files are checked against the checksums in the run's manifest first. The
+    figures show the successful trials; a run with none (or whose trials.csv lacks a column
+    the runner writes) is refused and its earlier report removed. Plotting a run of a plugin
+    experiment imports the plugin's module (a config is code)."""
     from trackfuse.catalog import find_runs, is_run_folder
+    from trackfuse.failures import first_failure
     from trackfuse.reports import write_report
-    from trackfuse.results import RunFolderError
+    from trackfuse.results import RunFolder, RunFolderError
     from trackfuse.rundata import load as load_run
+    from trackfuse.rundata import swept_keys
     from trackfuse.runlock import RunLock
     runs = find_runs(run_dir) if run_dir.is_dir() and not is_run_folder(run_dir) else []
     if runs:
@@ -393,6 +408,8 @@ def plot(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR",
         run = load_run(run_dir)
         with RunLock(run.path, warn):
             report = write_report(run)
+            RunFolder(run.path).write_manifest({**run.manifest,
+                                                **report.manifest_entries(run.path)})
     except RunFolderError as err:
         fail(str(err))
     except OSError as err:
@@ -401,6 +418,11 @@ def plot(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR",
         print("interrupted: run `trackfuse plot` again to redraw", file=sys.stderr)
         raise typer.Exit(130) from None
     print(f"drew {len(report.figures)} figure files in {run_dir / 'figures'}")
+    failed, total = run.manifest.get("trials_failed"), run.manifest.get("trials_total")
+    if isinstance(failed, int) and isinstance(total, int) and failed > 0:
+        first = first_failure(run.trials, swept_keys(run.config))
+        warn(f"{failed_trials_line(failed, total, first)}; the report shows the other "
+             f"{total - failed}")
     for message in report.errors:
         warn(message)
     print(f"report: {report.index}")

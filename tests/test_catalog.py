@@ -10,11 +10,14 @@ import sys
 
 from typer.testing import CliRunner
 
-from trackfuse.catalog import DAMAGED, NO_REPORT, find_runs
+from trackfuse.catalog import find_runs
 from trackfuse.config import load
 from trackfuse.runlock import HOLDER_FILE
 from trackfuse.runner import Runner
+from trackfuse.runstate import DAMAGED
 from trackfuse_cli.main import app
+
+NO_REPORT = "complete, no report"
 
 
 def test_runs_lists_run_folders_with_their_name_and_plot_lists_a_folder_of_runs(
@@ -117,3 +120,20 @@ def test_damaged_folders_and_runs_without_a_report_are_listed_as_such(write_conf
     assert {r.path: r.status for r in find_runs(intact)} == {intact: NO_REPORT}
     listed = CliRunner().invoke(app, ["runs", str(cut)])
     assert listed.exit_code == 0 and DAMAGED in listed.stdout
+
+
+def test_a_run_with_failed_trials_is_listed_with_their_count(write_config, tmp_path):
+    """`trackfuse runs` listed a run with failed trials as `complete, no report`, as if every
+    trial had given a result; its manifest says complete, with the failures counted."""
+    cfg = write_config("experiment: toy_gaussian\ntrials: 12\nseed: 11\n"
+                       "params: {fail_every: 3}\n", name="gauss")
+    plotted = Runner(load(cfg), tmp_path, progress=False).run()
+    bare = Runner(load(cfg, {"seed": 12}), tmp_path, progress=False, plots=False).run()
+    assert plotted.failed_trials and bare.failed_trials
+    status = {r.path: r.status for r in find_runs(tmp_path)}
+    assert status == {plotted.folder: f"complete, {plotted.failed_trials} failed",
+                      bare.folder: f"complete, {bare.failed_trials} failed, no report"}
+    manifest = json.loads((bare.folder / "manifest.json").read_text())
+    assert (manifest["status"], manifest["trials_failed"]) == ("complete", bare.failed_trials)
+    listed = CliRunner().invoke(app, ["runs", str(tmp_path)])
+    assert f"complete, {bare.failed_trials} failed, no report" in listed.stdout

@@ -191,3 +191,25 @@ def test_the_index_names_every_cpu_that_computed_the_run(toy_run):
     assert f"**CPU**: {here['model']}, numpy {'/'.join(here['numpy_simd'])}; an older " \
            "machine, numpy baseline, OPENBLAS_CORETYPE=Haswell" in facts
     write_report(toy_run)  # the other tests read the default report
+
+
+def test_a_redraw_removes_what_it_no_longer_draws_and_names_the_failing_figure(
+        toy_run, monkeypatch):
+    """A figure or table that raised on a redraw left the earlier draw's file in place (the
+    folder looked current) and was reported as `figures: KeyError: 'point'`."""
+    write_report(toy_run)
+    figures, tables = toy_run.path / "figures", toy_run.path / "tables"
+    assert (figures / "estimate.png").exists() and (tables / "paper_vs_reproduced.csv").exists()
+
+    def broken(*args):
+        raise KeyError("point")
+
+    monkeypatch.setattr(toy_report, "figures", broken)
+    monkeypatch.setattr(toy_report, "tables", broken)
+    report = write_report(toy_run)
+    assert sorted(report.errors) == ["figure estimate: KeyError: 'point'",
+                                     "tables: KeyError: 'point'"]
+    assert not list(figures.glob("estimate.*")) and not list(tables.glob("*"))
+    assert "figures/estimate" not in (toy_run.path / "index.md").read_text()
+    monkeypatch.undo()
+    write_report(toy_run)  # the other tests read the default report

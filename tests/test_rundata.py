@@ -147,17 +147,24 @@ def test_plot_on_a_bad_config_with_a_forged_checksum_is_one_line(case, finished,
     assert FORGED[case] in result.stderr, result.stderr
 
 
-@pytest.mark.parametrize("data", [b"", b"point,trial\n1\n", bytes(range(256)) * 3])
-def test_plot_of_forged_garbage_trials_draws_or_warns(data, finished, tmp_path):
-    """If the manifest was forged to match a garbage trials.csv, the report draws what does
-    not need it (exit 0) or fails with warnings (exit 1), never with a traceback."""
+@pytest.mark.parametrize("data", [b"", b"point,trial\n1\n", bytes(range(256)) * 3,
+                                  b"pt,trial,mu,algorithm,estimate\n0,0,0,mean,0.5\n"])
+def test_plot_of_forged_garbage_trials_refuses_and_removes_the_old_report(data, finished,
+                                                                          tmp_path):
+    """If the manifest was forged to match a garbage trials.csv (a renamed column, no rows),
+    plot printed a raw warning per figure and table (KeyError: 'point') and left the old
+    figures and tables in place, so the folder looked complete. Now: one line naming
+    trials.csv, and no report file left that could pass for this data's."""
     folder = tmp_path / "run"
     shutil.copytree(finished, folder)
+    assert any((folder / "figures").iterdir()) and any((folder / "tables").iterdir())
     (folder / "trials.csv").write_bytes(data)
     _forge(folder, "trials.csv")
     result = plot(folder)
-    check(result, allowed=(0, 1))
-    assert (result.exit_code == 1) == result.stderr.startswith("warning: ")
+    check(result, allowed=(2,))
+    assert "trials.csv" in result.stderr and "the earlier report was removed" in result.stderr
+    assert not any((folder / "figures").iterdir()) and not any((folder / "tables").iterdir())
+    assert not (folder / "index.html").exists() and not (folder / "index.md").exists()
 
 
 @pytest.mark.parametrize("outputs", ["outputs: fig\n", "outputs: [png]\n",

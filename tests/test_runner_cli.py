@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
+import pandas as pd
 from conftest import trackfuse
 
 from trackfuse_cli.main import exit_status
@@ -66,3 +67,61 @@ def test_reproduce_runs_every_config_and_resumes(tmp_path):
     assert "(3 of 3 trials computed now, 0 failed)" in first.stdout
     again = trackfuse(*args)
     assert again.returncode == 0 and again.stdout.count("(0 of ") == 2
+
+
+FAILING = "experiment: toy_experiments:GAUSSIAN\ntrials: 12\nseed: 11\nparams: {fail_every: 3}\n" \
+          "sweep: {mu: [0, 2.5]}\n"
+
+
+def test_failed_trials_are_reported_with_the_first_ones_point_trial_and_error(write_config,
+                                                                              tmp_path):
+    """`trackfuse run` said only `error: 4 trials failed (status=failed in trials.csv)`,
+    the same again when the run was found complete."""
+    path = write_config(FAILING)
+    result = trackfuse("run", path, "--out", tmp_path, "--workers", "2", "--no-progress")
+    assert result.returncode == 3, result.stderr
+    trials = pd.read_csv(next(tmp_path.glob("cfg/*/trials.csv")))
+    failed = trials[trials["status"] == "failed"]
+    first = failed.iloc[0]
+    mu = f"{first['mu']:g}"
+    want = (f"error: {len(failed)} of 24 trials failed (status=failed in trials.csv); first: "
+            f"point {first['point']} (mu={mu}), trial {first['trial']}: "
+            "FloatingPointError: synthetic divergence")
+    assert result.stderr.strip() == want
+    again = trackfuse("run", path, "--out", tmp_path, "--no-progress")
+    assert again.returncode == 3 and again.stderr.strip() == want
+
+
+def test_plot_of_a_run_with_failed_trials_draws_from_the_others_and_says_so(write_config,
+                                                                            tmp_path):
+    path = write_config(FAILING)
+    assert trackfuse("run", path, "--out", tmp_path, "--no-plots").returncode == 3
+    folder = next(tmp_path.glob("cfg/*"))
+    failed = int((pd.read_csv(folder / "trials.csv")["status"] == "failed").sum())
+    result = trackfuse("plot", folder)
+    assert result.returncode == 0, result.stderr
+    assert result.stderr.startswith(f"warning: {failed} of 24 trials failed (status=failed in "
+                                    "trials.csv); first: point ")
+    assert result.stderr.strip().endswith(f"; the report shows the other {24 - failed}")
+    assert (folder / "figures" / "estimate.png").exists()
+    facts = (folder / "index.md").read_text().split("\n## ")[0]
+    assert f"{failed} failed; first: point " in facts and "synthetic divergence" in facts
+
+
+def test_a_run_whose_every_trial_failed_has_no_report_and_plot_refuses(write_config,
+                                                                      tmp_path):
+    """Every trial failed: a report was drawn from no data (empty figures, a matplotlib
+    warning on stderr); now no report, the reason given once, and `plot` refuses in one
+    line."""
+    path = write_config("experiment: toy_experiments:GAUSSIAN\ntrials: 3\nseed: 1\n"
+                        "params: {fail_every: 1}\n")
+    result = trackfuse("run", path, "--out", tmp_path, "--no-progress")
+    assert result.returncode == 3
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 2 and lines[1].startswith("error: 3 of 3 trials failed")
+    assert lines[0].startswith("warning: every trial failed (3 of 3; first: point 0, trial 0:")
+    folder = next(tmp_path.glob("cfg/*"))
+    assert not (folder / "index.html").exists() and not any((folder / "figures").glob("*"))
+    plotted = trackfuse("plot", folder)
+    assert plotted.returncode == 2 and plotted.stderr.count("\n") == 1
+    assert plotted.stderr.startswith("error: every trial failed (3 of 3; first: point 0")

@@ -330,3 +330,30 @@ def test_a_panel_title_too_long_breaks_after_a_comma():
                            3.9) == ["lost, gate rule: 3 scans outside every gate,\n2 sensors"]
     assert report._wrapped(["mean 9 false returns per scan"], 3.1) == \
         ["mean 9 false returns per scan"]
+
+
+def _failed_at_point_0(run: RunData) -> RunData:
+    """``run`` as if every trial of sweep point 0 had failed: one ``failed`` row per trial
+    (as the runner writes it) instead of its rows, and no summary row of point 0."""
+    trials, summary = run.trials, run.summary
+    first = trials[trials["point"] == 0].drop_duplicates("trial")
+    failed = first[["point", "trial", "clutter.mean"]].assign(
+        algorithm="", status="failed", error="ValueError: math domain error")
+    broken = replace(run)
+    broken.trials = pd.concat([failed, trials[trials["point"] != 0]], ignore_index=True)
+    broken.summary = summary[summary["point"] != 0]
+    return broken
+
+
+@pytest.mark.parametrize("name", ["range_error_vs_time", "anees_vs_time"])
+def test_a_point_whose_every_trial_failed_gets_a_panel_that_says_so(run_50, name):
+    """`trackfuse plot` of a run whose clutter-0 trials had all failed lost the range figure
+    to `IndexError: single positional indexer is out-of-bounds`; the legend came from the
+    first panel, which had nothing drawn."""
+    fig = report.figures(_failed_at_point_0(run_50), [name])[name]
+    first = fig.axes[0]
+    assert [t.get_text() for t in first.texts] == ["all 50 trials failed\n(status=failed in "
+                                                   "trials.csv)"]
+    assert not first.lines and all(ax.lines for ax in fig.axes[1:3])
+    assert any(look(a).label in t.get_text() for t in fig.legends[0].get_texts()
+               for a in ALGORITHMS)

@@ -5,7 +5,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from trackfuse.experiments.twin_sensor import EXPERIMENT
+from trackfuse.experiments.twin_sensor import EXPERIMENT, kernel
 from trackfuse.experiments.twin_sensor.kernel import run_filter_compiled
 from trackfuse.experiments.twin_sensor.model import (
     ALGORITHMS,
@@ -78,6 +78,31 @@ def test_compiled_filter_equals_the_numpy_reference(algorithm, overrides):
     _assert_pinned(got, run_filter(sc, batch, options, rules))
     if p["clutter.mean"] > 0 and p["sensors.pd"] > 0:
         assert got["n_valid"].mean() > 1.0  # clutter really was gated
+
+
+@pytest.fixture
+def python_kernel(monkeypatch):
+    """The kernel's pure-Python path, what ``NUMBA_DISABLE_JIT=1`` runs: every compiled
+    function of the module replaced by its Python source."""
+    for name, value in vars(kernel).items():
+        if hasattr(value, "py_func"):
+            monkeypatch.setattr(kernel, name, value.py_func)
+
+
+ZERO_LOGS = [(a, {"clutter.mean": 0.0}) for a in ALGORITHMS] + [
+    ("paper_approx/ekf", {"sensors.pd": 0.0})]
+
+
+@pytest.mark.parametrize("algorithm, overrides", ZERO_LOGS,
+                         ids=[f"{a}-{k}={v}" for a, o in ZERO_LOGS for k, v in o.items()])
+def test_the_python_path_takes_the_log_of_zero_as_the_compiled_one(
+        python_kernel, algorithm, overrides):
+    """No clutter (clutter density 0) or no detection (P_D 0): the compiled ``log`` gives
+    -inf, Python's ``math.log`` raised ``ValueError: math domain error``."""
+    p, sc, batch, rules = _setup(overrides, trials=2)
+    options = _options(p, sc, algorithm)
+    got = score_estimates(sc, batch, kernel.run_filter_compiled(sc, batch, options), rules)
+    _assert_pinned(got, run_filter(sc, batch, options, rules))
 
 
 def test_a_diverged_trial_is_flagged_alike_and_leaves_the_others_untouched():

@@ -2,9 +2,10 @@
 
 A run folder is ``<root>/<config-stem>/<run-id>/`` with a ``manifest.json``; this module
 reads only manifests and file sizes (never the CSVs), so listing thousands of runs is quick.
-A folder whose manifest cannot be read, or a complete run whose final files are missing or
-of another size than its manifest records, is listed as :data:`DAMAGED`;
-:func:`trackfuse.rundata.load` (which also compares checksums) says what is wrong.
+Each run's status is :func:`trackfuse.runstate.run_state` in words, as ``plot`` and
+``compare`` decide it; a folder whose manifest cannot be read is listed as
+:data:`~trackfuse.runstate.DAMAGED`. :func:`trackfuse.rundata.load` (which also compares
+checksums) says what is wrong.
 """
 
 from __future__ import annotations
@@ -15,7 +16,6 @@ from pathlib import Path
 from typing import Any
 
 from trackfuse.results import (
-    INDEX_HTML,
     MANIFEST,
     PART_KINDS,
     RunFolder,
@@ -23,17 +23,7 @@ from trackfuse.results import (
     RunStatus,
     part_names,
 )
-from trackfuse.runlock import held_by_a_live_process
-
-#: Shown for a run whose manifest says running but whose process has ended (killed, or
-#: stopped by a full disk): resumable by running the same command again.
-STOPPED = "stopped"
-#: Shown for a folder whose manifest cannot be read, or a complete run whose final files do
-#: not match the sizes its manifest records.
-DAMAGED = "damaged"
-#: Shown for a complete run without a report (run with ``--no-plots``, and perhaps stopped
-#: while its report was being added): ``trackfuse plot`` writes it.
-NO_REPORT = "complete, no report"
+from trackfuse.runstate import DAMAGED, STOPPED, run_state
 
 
 @dataclass(frozen=True)
@@ -65,18 +55,6 @@ def _int(value: Any) -> int:
     return value if isinstance(value, int) and not isinstance(value, bool) else 0
 
 
-def _status(path: Path, manifest: dict[str, Any]) -> str:
-    status = str(manifest.get("status", ""))
-    if status == RunStatus.RUNNING and not held_by_a_live_process(path):
-        return STOPPED
-    if status == RunStatus.COMPLETE:
-        if RunFolder(path).check_final_files(manifest, checksums=False) is not None:
-            return DAMAGED
-        if not (path / INDEX_HTML).is_file():
-            return NO_REPORT
-    return status
-
-
 def _saved_trials(path: Path, manifest: dict[str, Any]) -> int:
     """Trials of the batches of the run's plan whose two parts are in ``parts/`` (names only,
     none read): what a running or stopped run has saved, which its manifest (rewritten at
@@ -94,11 +72,11 @@ def _saved_trials(path: Path, manifest: dict[str, Any]) -> int:
 
 
 def _info(path: Path, manifest: dict[str, Any]) -> RunInfo:
-    status = _status(path, manifest)
-    done = (_saved_trials(path, manifest) if status in (RunStatus.RUNNING, STOPPED)
+    state = run_state(path, manifest)
+    done = (_saved_trials(path, manifest) if state.status in (RunStatus.RUNNING, STOPPED)
             else _int(manifest.get("trials_done")))
     return RunInfo(path, path.parent.name, str(manifest.get("experiment", "")),
-                   str(manifest.get("name") or ""), status,
+                   str(manifest.get("name") or ""), str(state),
                    done, _int(manifest.get("trials_total")),
                    str(manifest.get("first_started") or manifest.get("started") or ""),
                    _wall_seconds(manifest))

@@ -9,7 +9,13 @@ experiment's report module (``Experiment.report``, a module path), which provide
 
 A figure or table that the run's config cannot give is returned as a one-line reason
 (``str``) and listed under "Not drawn" or "Not tabulated"; a table without rows is never
-written as if it were a result (it is listed too, and a stale file of that name removed).
+written as if it were a result (it is listed too). Each figure is drawn on its own, so a
+figure that raises costs only itself (one line naming it). A redraw removes the figures
+and tables of an earlier draw that it did not write again, so the folder never shows an
+old result beside the new index. The failed trials' rows are left to the report modules
+(they carry no metrics); a run the report cannot be drawn from at all (no rows, every trial
+failed, a column the runner writes missing) is refused with :class:`NothingToDraw` and its
+earlier report removed.
 
 ``prepare`` computes ahead, into the module's own caches, what both the tables and the
 figures derive from the config alone (the twin-sensor bounds at every sweep point): the
@@ -48,9 +54,19 @@ import pandas as pd
 
 from trackfuse.child_processes import setup_child
 from trackfuse.environment import cpu_words, recorded_cpus
-from trackfuse.results import INDEX_HTML, INDEX_MD, atomic_write
+from trackfuse.failures import first_failure
+from trackfuse.results import (
+    FAILED_ROW,
+    INDEX_FILES,
+    INDEX_HTML,
+    INDEX_MD,
+    TRIALS,
+    RunFolderError,
+    atomic_write,
+)
 from trackfuse.rowtable import frame_csv
-from trackfuse.rundata import RunData, load
+from trackfuse.rundata import RunData, load, swept_keys
+from trackfuse.runstate import REPORT_FILES
 
 PNG_DPI = 200
 #: zlib level of PNG files: 1 halves the encoding time of level 6 for files ~1.3x larger.
@@ -101,6 +117,17 @@ class Report:
     not_drawn: dict[str, str] = field(default_factory=dict)
     not_tabulated: dict[str, str] = field(default_factory=dict)
 
+    def manifest_entries(self, run_path: Path) -> dict[str, Any]:
+        """What the run's manifest records of this report: its problems and its files,
+        relative to the run folder ``run_path`` (:func:`trackfuse.runstate.has_report`)."""
+        files = [*self.figures, *self.tables, run_path / INDEX_MD, run_path / INDEX_HTML]
+        return {"figure_errors": list(self.errors),
+                REPORT_FILES: [p.relative_to(run_path).as_posix() for p in files]}
+
+
+class NothingToDraw(RunFolderError):
+    """A run no report can be drawn from (:func:`undrawable`); ``str(err)`` is one line."""
+
 
 def markdown_table(table: pd.DataFrame, digits: int = 4) -> str:
     """A GitHub-style Markdown table; floats with ``digits`` significant digits."""
@@ -150,6 +177,11 @@ def save_figure(fig, folder: Path, name: str, formats: Sequence[str]) -> list[Pa
     return written
 
 
+def _one_line(err: BaseException) -> str:
+    """``Type: message`` of an exception on one line, at most 300 characters."""
+    return " ".join(f"{type(err).__name__}: {err}".split())[:300]
+
+
 def _module(run: RunData, report: Report) -> ModuleType | None:
     """The experiment's report module, or ``None`` (no report declared, or it fails to
     import: one message in ``report.errors``)."""
@@ -158,8 +190,7 @@ def _module(run: RunData, report: Report) -> ModuleType | None:
     try:
         return importlib.import_module(run.experiment.report)
     except Exception as err:  # noqa: BLE001 - a report bug must not lose the run
-        report.errors.append(f"report module {run.experiment.report}: "
-                             f"{type(err).__name__}: {err}")
+        report.errors.append(f"report module {run.experiment.report}: {_one_line(err)}")
         return None
 
 
@@ -171,14 +202,12 @@ def _write_tables(run: RunData, module: ModuleType, report: Report) -> dict[str,
     try:
         made = module.tables(run)
     except Exception as err:  # noqa: BLE001 - a report bug must not lose the run
-        report.errors.append(f"tables: {type(err).__name__}: {err}")
+        report.errors.append(f"tables: {_one_line(err)}")
         return {}
     written = {}
     for name, table in made.items():
         if isinstance(table, str) or table.empty:
             report.not_tabulated[name] = table if isinstance(table, str) else NO_ROWS
-            for suffix in (".csv", ".md"):  # a redraw must not leave an old result behind
-                (folder / f"{name}{suffix}").unlink(missing_ok=True)
             continue
         for suffix, text in ((".csv", frame_csv(table)),
                              (".md", markdown_table(display_table(table)))):
@@ -190,27 +219,24 @@ def _write_tables(run: RunData, module: ModuleType, report: Report) -> dict[str,
 
 def _draw(run: RunData, module: ModuleType, names: Sequence[str],
           formats: Sequence[str]) -> Report:
-    """Draw and save the figures ``names`` (the report's ``figures``, ``errors`` and
-    ``not_drawn`` parts for them)."""
+    """Draw and save the figures ``names``, one at a time (the report's ``figures``,
+    ``errors`` and ``not_drawn`` parts for them)."""
     part = Report()
-    try:
-        made = module.figures(run, names)
-    except Exception as err:  # noqa: BLE001
-        part.errors.append(f"figures: {type(err).__name__}: {err}")
-        return part
     for name in names:
-        if name not in made:
-            part.not_drawn[name] = "the experiment's report drew nothing for this config"
-    for name, fig in made.items():
-        if isinstance(fig, str):
-            part.not_drawn[name] = fig
+        try:
+            fig = module.figures(run, [name]).get(name)
+        except Exception as err:  # noqa: BLE001 - one figure's bug must not lose the others
+            part.errors.append(f"figure {name}: {_one_line(err)}")
+            continue
+        if fig is None or isinstance(fig, str):
+            part.not_drawn[name] = fig or "the experiment's report drew nothing for this config"
             continue
         try:
             part.figures += save_figure(fig, run.path / "figures", name, formats)
         except OSError:  # the disk (full, unwritable), not the figure: the run stops, resumable
             raise
         except Exception as err:  # noqa: BLE001 - one figure's bug must not lose the others
-            part.errors.append(f"figure {name}: {type(err).__name__}: {err}")
+            part.errors.append(f"figure {name}: {_one_line(err)}")
     return part
 
 
@@ -306,13 +332,54 @@ def wanted_figures(run: RunData) -> list[str]:
     return list(run.experiment.figures) if choice == "all" else list(choice)
 
 
+def undrawable(run: RunData) -> str | None:
+    """Why no report can be drawn from ``run``'s ``trials.csv`` (unreadable, no rows, a
+    column the runner writes in every row missing, every trial failed), or ``None``."""
+    where = run.path / TRIALS
+    try:
+        trials = run.trials
+    except RunFolderError as err:
+        return str(err)
+    if trials.empty:
+        return f"{where}: no rows"
+    swept = swept_keys(run.config)
+    missing = [c for c in ("point", "trial", *swept) if c not in trials]
+    if missing:
+        return (f"{where}: no column {missing[0][:80]!r} (every row starts with point, trial "
+                "and the swept keys)")
+    if "status" in trials and (trials["status"].astype(str) == FAILED_ROW).all():
+        return (f"every trial failed ({len(trials)} of {len(trials)}; first: "
+                f"{first_failure(trials, swept)})")
+    return None
+
+
+def _report_files(run: RunData, keep: Collection[Path]) -> list[Path]:
+    """The files of ``figures/`` and ``tables/`` a report of ``run`` may have written,
+    other than ``keep``: figures named after the experiment's figures (or the config's), and
+    tables' ``.csv`` and ``.md`` files."""
+    names = {*run.experiment.figures, *wanted_figures(run)}
+    found = [p for p in (run.path / "figures").glob("*") if p.stem in names]
+    found += [p for p in (run.path / "tables").glob("*") if p.suffix in (".csv", ".md")]
+    return [p for p in found if p.is_file() and p not in keep]
+
+
 def write_report(run: RunData, wanted: Collection[str] | None = None,
                  formats: Sequence[str] | None = None) -> Report:
-    """Draw the tables and figures of ``run`` and write ``index.md`` and ``index.html``.
+    """Draw the tables and figures of ``run``, remove an earlier draw's that this one did not
+    write, and write ``index.md`` and ``index.html``.
 
     ``wanted``: figure names (default: :func:`wanted_figures`); ``formats``: default the
-    config's.
+    config's. Raises :class:`NothingToDraw` (having removed any earlier report) for a run
+    :func:`undrawable` names a reason for.
     """
+    why = undrawable(run)
+    if why is not None:
+        stale = _report_files(run, ()) + [run.path / n for n in INDEX_FILES
+                                          if (run.path / n).is_file()]
+        for path in stale:
+            path.unlink()
+        raise NothingToDraw(f"{why}: nothing to draw"
+                            + ("; the earlier report was removed" if stale else ""))
     if wanted is None:
         wanted = wanted_figures(run)
     formats = list(formats or figure_formats(run.config))
@@ -322,6 +389,8 @@ def write_report(run: RunData, wanted: Collection[str] | None = None,
     if module is not None:
         _write_figures(run, module, list(wanted), formats, report,
                        meanwhile=lambda: tables.update(_write_tables(run, module, report)))
+    for path in _report_files(run, {*report.figures, *report.tables}):
+        path.unlink()  # an earlier draw's: it would look like a result of this one
     md = index_markdown(run, tables, report)
     atomic_write(run.path / INDEX_MD, md)
     atomic_write(run.path / INDEX_HTML, index_html(run, tables, report))
@@ -340,7 +409,7 @@ def _run_facts(run: RunData) -> list[tuple[str, str]]:
         ("command", " ".join(m.get("command") or [])),
         ("sweep", sweep or "none (one point)"),
         ("trials", f"{c.get('trials')} per point, {m.get('trials_total')} in all, "
-                   f"{m.get('trials_failed', 0)} failed"),
+                   f"{m.get('trials_failed', 0)} failed{_first_failure_text(run)}"),
         ("root seed", str(c.get("seed"))),
         ("run id", str(m.get("run_id", run.path.name))),
         ("code", _code_text(m)),
@@ -350,6 +419,14 @@ def _run_facts(run: RunData) -> list[tuple[str, str]]:
         # the runner writes the report before it records the finishing time
         *([("finished", str(m["finished"]))] if m.get("finished") else []),
     ]
+
+
+def _first_failure_text(run: RunData) -> str:
+    """``; first: point 0 (...), trial 0: ValueError: ...`` for a run with failed trials."""
+    if not run.manifest.get("trials_failed"):
+        return ""
+    first = first_failure(run.trials, swept_keys(run.config))
+    return f"; first: {first}" if first else ""
 
 
 def _code_text(manifest: dict[str, Any]) -> str:

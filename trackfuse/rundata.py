@@ -14,8 +14,10 @@ write them in backticks: ``run.trials.query("`clutter.mean` == 5")``.
 
 :func:`load` of a complete run first checks every final file against the size and SHA-256
 that ``manifest.json`` recorded when the run finished, so a truncated or edited
-``trials.csv`` is refused (one line) rather than plotted. Plotting a run of a plugin
-experiment (``package.module:ATTR``) imports that module, as running it did.
+``trials.csv`` is refused (one line) rather than plotted; a run that is not complete is
+refused in the words of :func:`trackfuse.runstate.run_state` (``stopped`` after a kill).
+Plotting a run of a plugin experiment (``package.module:ATTR``) imports that module, as
+running it did.
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ from trackfuse.results import (
     RunFolderError,
     RunStatus,
 )
+from trackfuse.runstate import DAMAGED, STOPPED, run_state
 from trackfuse.safe_yaml import MAX_BYTES, YamlInputError, load_yaml
 from trackfuse.sweep import expand
 
@@ -125,14 +128,14 @@ def load(path: str | Path, require_complete: bool = True) -> RunData:
     if manifest is None:
         raise RunFolderError(f"{path}: not a run folder (no {MANIFEST})")
     if require_complete:
-        status = str(manifest.get("status"))[:40]
-        if status != RunStatus.COMPLETE:
-            raise RunFolderError(f"{path}: run is {status}, not complete; run the same "
-                                 "`trackfuse run` command again to finish it")
-        problem = folder.check_final_files(manifest)
-        if problem is not None:
-            raise RunFolderError(f"{problem}; run the same `trackfuse run` command again to "
-                                 "rebuild the final files (it recomputes what it must)")
+        state = run_state(path, manifest, checksums=True)
+        if state.status == DAMAGED:
+            raise RunFolderError(f"{state.problem}; run the same `trackfuse run` command "
+                                 "again to rebuild the final files (it recomputes what it "
+                                 "must)")
+        if not state.complete:
+            raise RunFolderError(f"{path}: run is {state.status[:40]}, not complete; "
+                                 + _NOT_COMPLETE.get(state.status, _FINISH))
     config = _read_config(path / CONFIG)
     if not isinstance(config, dict) or not isinstance(config.get("experiment"), str) \
             or not isinstance(config.get("params"), dict) or not _outputs_readable(config):
@@ -140,6 +143,15 @@ def load(path: str | Path, require_complete: bool = True) -> RunData:
                              "or params, or outputs not a mapping of figure names and "
                              "formats)")
     return RunData(path, config, manifest)
+
+
+_FINISH = "run the same `trackfuse run` command again to finish it"
+#: What to do about a run that is not complete, by its state (others: :data:`_FINISH`).
+_NOT_COMPLETE = {
+    RunStatus.RUNNING: "another process is computing it: wait for it to finish",
+    STOPPED: "its process ended before it finished (killed?): run the same `trackfuse run` "
+             "command again to resume it",
+}
 
 
 def _outputs_readable(config: dict[str, Any]) -> bool:

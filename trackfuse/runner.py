@@ -40,9 +40,10 @@ from trackfuse.config import Config
 from trackfuse.environment import cpu, cpu_words, library_versions, recorded_cpus, version
 from trackfuse.executors import make_executor
 from trackfuse.experiments.base import NON_NEGATIVE
+from trackfuse.failures import first_failure
 from trackfuse.fingerprint import code_fingerprint
 from trackfuse.progress import RunProgress
-from trackfuse.reports import figure_formats, load_drawing, write_report
+from trackfuse.reports import NothingToDraw, figure_formats, load_drawing, write_report
 from trackfuse.results import (
     CONFIG,
     INDEX_HTML,
@@ -66,6 +67,7 @@ from trackfuse.results import (
 from trackfuse.rowtable import frame_csv
 from trackfuse.rundata import RunData, load
 from trackfuse.runlock import RunLock
+from trackfuse.runstate import has_report
 from trackfuse.summary import CHUNK_ROWS, summarize
 from trackfuse.sweep import expand
 
@@ -90,6 +92,7 @@ class RunOutcome:
     total_trials: int
     computed_trials: int
     failed_trials: int = 0
+    first_failure: str | None = None  # the first failed trial in words (trackfuse.failures)
     rows: int = 0
     figures: list[Path] = field(default_factory=list)
     figure_errors: list[str] = field(default_factory=list)
@@ -270,19 +273,9 @@ class Runner:
                 self.folder.remove_temporaries()
                 self.folder.drop_resume_state()
                 if self.name is not None and self.name != previous.get("name"):
-                    self.folder.write_manifest({**previous, "name": self.name})
-                index = self.folder.path / INDEX_HTML
-                outcome = RunOutcome(self.folder.path, RunStatus.ALREADY_COMPLETE,
-                                     self.total_trials, 0,
-                                     _int_or(previous.get("trials_failed"), 0),
-                                     _int_or(previous.get("rows"), 0),
-                                     report=index if index.exists() else None)
-                if self.plots and outcome.report is None:  # it finished with --no-plots
-                    self.on_phase("drawing figures and tables")
-                    report = write_report(load(self.folder.path))
-                    outcome.figures, outcome.figure_errors = report.figures, report.errors
-                    outcome.report = report.index
-                return outcome
+                    previous = {**previous, "name": self.name}
+                    self.folder.write_manifest(previous)
+                return self._already_complete(previous)
             self.warn(f"{problem}; rebuilding the final files (from parts/ where they are "
                       "still there, else by recomputing)")
         session = _Session(previous, _now(), self.folder.prepare(self.resolved),
@@ -304,6 +297,35 @@ class Runner:
             with contextlib.suppress(OSError):
                 self.folder.write_manifest(self._manifest(RunStatus.INTERRUPTED, session))
             raise
+
+    def _already_complete(self, previous: dict[str, Any]) -> RunOutcome:
+        """The outcome of a run found complete; its report drawn if it has none (it finished
+        with --no-plots, or its report files were removed)."""
+        failed = _int_or(previous.get("trials_failed"), 0)
+        outcome = RunOutcome(self.folder.path, RunStatus.ALREADY_COMPLETE, self.total_trials,
+                             0, failed, rows=_int_or(previous.get("rows"), 0))
+        if failed:
+            outcome.first_failure = first_failure(self.folder.path / TRIALS,
+                                                  list(self.config.sweep))
+        if has_report(self.folder.path, previous):
+            outcome.report = self.folder.path / INDEX_HTML
+        elif self.plots:
+            drawn = self._draw_report(load(self.folder.path), outcome)
+            self.folder.write_manifest({**previous, **drawn})
+        return outcome
+
+    def _draw_report(self, run: RunData, outcome: RunOutcome) -> dict[str, Any]:
+        """Write the run's report into ``outcome``; return what the manifest records of it
+        (a run no report can be drawn from: that reason, as a figure error)."""
+        self.on_phase("drawing figures and tables")
+        try:
+            report = write_report(run)
+        except NothingToDraw as err:
+            outcome.figure_errors = [str(err)]
+            return {"figure_errors": outcome.figure_errors}
+        outcome.figures, outcome.figure_errors = report.figures, report.errors
+        outcome.report = report.index
+        return report.manifest_entries(run.path)
 
     def _note_other_code(self) -> None:
         """Say in one line when a run of the same config from other code or other library
@@ -446,16 +468,16 @@ class Runner:
         else:
             (path / TIMING_SUMMARY).unlink(missing_ok=True)
         outcome = RunOutcome(path, RunStatus.COMPLETE, self.total_trials, session.computed,
-                             failed_rows, files[TRIALS]["rows"])
+                             failed_rows, rows=files[TRIALS]["rows"])
+        if failed_rows:
+            outcome.first_failure = first_failure(source, list(self.config.sweep))
+        drawn: dict[str, Any] = {"figure_errors": []}
         if run is not None:  # before "complete": a Ctrl-C while drawing leaves a resumable run
-            self.on_phase("drawing figures and tables")
-            report = write_report(run)
-            outcome.figures, outcome.figure_errors = report.figures, report.errors
-            outcome.report = report.index
+            drawn = self._draw_report(run, outcome)
         session.done = self.total_trials
         manifest = self._manifest(RunStatus.COMPLETE, session, failed_rows)
         manifest["rows"] = outcome.rows
-        manifest["figure_errors"] = outcome.figure_errors
+        manifest.update(drawn)
         manifest["files"] = files
         self.folder.write_manifest(manifest)
         self.folder.drop_resume_state()

@@ -310,13 +310,17 @@ def _log_null(lin, s, P_D, P_G):
     """``log f_s(0)`` of sensor ``s``: zero when it validated nothing."""
     if lin.m[s] == 0:
         return 0.0
-    return math.log1p(-P_D * P_G) + math.log(lin.geom[s, LAM])
+    return math.log1p(-P_D * P_G) + _log(lin.geom[s, LAM])
 
 
 @njit(**JIT)
-def _log_or_minus_inf(p):
-    """``log p`` for a probability, ``-inf`` at zero."""
-    return math.log(p) if p > 0 else -np.inf
+def _log(x):
+    """``math.log(x)`` as compiled code computes it: ``-inf`` at zero, NaN below zero or at
+    NaN. Python's ``math.log`` raises at zero and below, and it runs the kernel under
+    ``NUMBA_DISABLE_JIT=1`` (a zero clutter density or detection probability)."""
+    if x > 0:
+        return math.log(x)
+    return -np.inf if x == 0 else np.nan
 
 
 @njit(**JIT)
@@ -360,7 +364,7 @@ def _single_update(X, P, R, P_D, P_G, nearest, mg_combined, lin, s, mom):
     (:func:`trackfuse.tracking.pda._single_update`)."""
     ok, w, m = lin.ok[s], lin.w[s], lin.m[s]
     log0 = _log_null(lin, s, P_D, P_G)
-    log_pd = _log_or_minus_inf(P_D)
+    log_pd = _log(P_D)
     top = log0
     for a in range(m):
         i = ok[a]
@@ -565,16 +569,16 @@ def _pair_log_weights(lin, S12inv, det12, P_D, P_G, method, joint_full):
         P_Gf = 1.0 - (1.0 - P_G) ** 2
         m_k, m_f = (m1 + 1) * (m2 + 1), m1 + m2
         lam_area = geom[0, LAM] * geom[0, AREA] + geom[1, LAM] * geom[1, AREA]
-        log00 = (math.log1p(-P_Dor * P_Gf) + math.log(lam_area) - math.log(m_f)
+        log00 = (math.log1p(-P_Dor * P_Gf) + _log(lam_area) - math.log(m_f)
                  if m_f > 0 else 0.0)
-        common = (math.log(P_Dor) + (math.log(geom[0, AREA]) + math.log(geom[1, AREA]))
+        common = (_log(P_Dor) + (math.log(geom[0, AREA]) + math.log(geom[1, AREA]))
                   - math.log(m_k - 1.0) if m_k > 1 else 0.0)
         off1, off2 = common - math.log(geom[1, AREA]), common - math.log(geom[0, AREA])
         pair_add = common
     else:
         f1 = _log_null(lin, _FIRST, P_D[0], P_G)
         f2 = _log_null(lin, _SECOND, P_D[1], P_G)
-        lp1, lp2 = _log_or_minus_inf(P_D[0]), _log_or_minus_inf(P_D[1])
+        lp1, lp2 = _log(P_D[0]), _log(P_D[1])
         log00 = f1 + f2
         off1, off2 = lp1 + f2, f1 + lp2
         pair_add = lp1 + lp2

@@ -78,6 +78,7 @@ from trackfuse.plots.algorithms import FILTER_LABELS, GREYS, VERMILLION, line_kw
 from trackfuse.plots.style import Margins, context, fixed_figure, legend_in_strip
 from trackfuse.reported import TWIN_SENSOR
 from trackfuse.reports import HEADLINE_COLUMNS
+from trackfuse.results import FAILED_ROW
 from trackfuse.rundata import RunData, swept_keys
 from trackfuse.stats import nees_band, rmse_intervals, t_interval, wilson_interval
 from trackfuse.tracking.pda import METHODS
@@ -237,8 +238,9 @@ def _facets(run: RunData, frame: pd.DataFrame, x_key: str,
     kept = [(", ".join(_value_text(k, v) for k, v in zip(others, values, strict=True)), g)
             for values, g in groups if g[x_key].nunique() >= min_levels]
     if not kept:
-        return (f"{x_key} takes fewer than {min_levels} values at fixed "
-                f"{', '.join(others)} (sweep_mode {run.config.get('sweep_mode', 'grid')})")
+        fixed = f" at fixed {', '.join(others)}" if others else ""
+        return (f"{x_key} has results at fewer than {min_levels} values{fixed} (sweep_mode "
+                f"{run.config.get('sweep_mode', 'grid')})")
     if len(kept) > MAX_FACETS:
         return (f"{len(kept)} combinations of {', '.join(others)}: more than {MAX_FACETS} "
                 "panels; sweep fewer values")
@@ -410,8 +412,14 @@ def _fig_words(run: RunData, number: int) -> str:
             else f"Fig. {number} analogue")
 
 
+def _succeeded(frame: pd.DataFrame) -> pd.DataFrame:
+    """The rows of ``frame`` (of ``trials.csv``) not left by a failed trial."""
+    return frame[frame["status"].astype(str) != FAILED_ROW] if "status" in frame else frame
+
+
 def _runs(frame: pd.DataFrame) -> int:
-    return int(frame.groupby("point")["trial"].nunique().min())
+    """Successful trials per point: the fewest of any point that has one."""
+    return int(_succeeded(frame).groupby("point")["trial"].nunique().min())
 
 
 # --------------------------------------------------------------------------------------------
@@ -696,14 +704,21 @@ def _time_figure(run: RunData, draw: Callable[[Axes, pd.DataFrame, dict[str, Any
     fig, axes, cols = _figure(len(points), per_row, TIME_PANEL, title, legend_entries,
                               _lines(titles))
     trials = run.trials
+    drawn = []
     for ax, pt, panel_title in zip(axes, points, titles, strict=True):
-        params = run.point_params(pt)
-        draw(ax, trials[trials["point"] == pt], params)
+        frame = trials[trials["point"] == pt]
+        if _succeeded(frame).empty:
+            ax.text(0.5, 0.5, f"all {frame['trial'].nunique()} trials failed\n(status=failed "
+                    "in trials.csv)", transform=ax.transAxes, ha="center", va="center",
+                    fontsize=8)
+        else:
+            draw(ax, frame, run.point_params(pt))
+            drawn.append(ax)
         ax.set_xlabel("time t (s)")
         ax.set_ylabel(y_label)
         ax.set_ylim(bottom=0)
         ax.set_title(panel_title)
-    return _finish(fig, axes[:1], cols, everywhere)
+    return _finish(fig, drawn[:1], cols, everywhere)
 
 
 def _time_curve_kwargs(name: str) -> dict[str, Any]:
