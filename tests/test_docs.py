@@ -84,20 +84,26 @@ def test_the_plugin_example_runs_through_the_cli(tmp_path):
     assert listed.returncode == 0 and "error" in listed.stdout and "tosses" in listed.stdout
 
 
-def test_the_esm_radar_spread_example_runs_on_a_run_folder(tmp_path):
-    """examples/esm_radar_spread.py (docs/papers/esm_radar.md, W001-8) on a small run."""
+def _example_on_a_small_run(tmp_path, config: str, example: str) -> list[str]:
+    """The output lines of ``examples/<example>`` on a 20-trial run of ``configs/<config>``
+    (both must exit 0)."""
     env = cli_env()
-    proc = subprocess.run([sys.executable, "-m", "trackfuse", "run",
-                           "configs/esm_radar_baseline_spread.yaml", "--trials", "20",
-                           "--out", str(tmp_path), "--workers", "1", "--no-plots",
-                           "--no-progress"], cwd=ROOT, env=env, capture_output=True, text=True,
-                          timeout=120)
+    proc = subprocess.run([sys.executable, "-m", "trackfuse", "run", f"configs/{config}",
+                           "--trials", "20", "--out", str(tmp_path), "--workers", "1",
+                           "--no-plots", "--no-progress"], cwd=ROOT, env=env,
+                          capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     folder = re.search(r"^wrote (.+?): \d+ rows", proc.stdout, flags=re.M).group(1)
-    proc = subprocess.run([sys.executable, "examples/esm_radar_spread.py", folder], cwd=ROOT,
+    proc = subprocess.run([sys.executable, f"examples/{example}", folder], cwd=ROOT,
                           env=env, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
-    lines = proc.stdout.splitlines()
+    return proc.stdout.splitlines()
+
+
+def test_the_esm_radar_spread_example_runs_on_a_run_folder(tmp_path):
+    """examples/esm_radar_spread.py (docs/papers/esm_radar.md, W001-8) on a small run."""
+    lines = _example_on_a_small_run(tmp_path, "esm_radar_baseline_spread.yaml",
+                                    "esm_radar_spread.py")
     assert lines[0].startswith("correlation of the per-sample TDOA-DF range sd")
     assert len(lines) == 3 and all("of 20 trials change" in line for line in lines[1:])
 
@@ -105,18 +111,7 @@ def test_the_esm_radar_spread_example_runs_on_a_run_folder(tmp_path):
 def test_the_esm_radar_cv_nis_example_runs_on_a_run_folder(tmp_path):
     """examples/esm_radar_cv_nis.py (docs/papers/esm_radar.md, W001-4) on a small run of the
     weave config: it recomputes the run's own index, and the weave raises every NIS."""
-    env = cli_env()
-    proc = subprocess.run([sys.executable, "-m", "trackfuse", "run",
-                           "configs/esm_radar_weave.yaml", "--trials", "20",
-                           "--out", str(tmp_path), "--workers", "1", "--no-plots",
-                           "--no-progress"], cwd=ROOT, env=env, capture_output=True, text=True,
-                          timeout=120)
-    assert proc.returncode == 0, proc.stderr
-    folder = re.search(r"^wrote (.+?): \d+ rows", proc.stdout, flags=re.M).group(1)
-    proc = subprocess.run([sys.executable, "examples/esm_radar_cv_nis.py", folder], cwd=ROOT,
-                          env=env, capture_output=True, text=True, timeout=120)
-    assert proc.returncode == 0, proc.stderr
-    lines = proc.stdout.splitlines()
+    lines = _example_on_a_small_run(tmp_path, "esm_radar_weave.yaml", "esm_radar_cv_nis.py")
     assert lines[0] == "point 0, straight flight, 20 trials:"
     means = [float(re.search(r"c dt ([\d.]+) \[", line).group(1)) for line in lines
              if "mean NIS" in line]
