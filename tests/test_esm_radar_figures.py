@@ -120,12 +120,19 @@ def test_exactly_equal_curves_are_said_to_coincide(curves):
 
 def test_titles_and_legends_follow_what_the_run_contains(baseline_only, tmp_path):
     """Not "ours" when ours was not run, not "Table 3 redrawn" for the baseline alone, not
-    "Figs. 1-2 redrawn" nor "weaving" for straight tracks."""
-    weave = harness.run_data(tmp_path, "esm_radar", {"algorithms": ["traditional", "improved"]},
+    "Figs. 1-2 redrawn" nor "weaving" for straight tracks; the trajectory is drawn at the
+    paper's weave where the run has it, though its first point flies straight."""
+    methods = {"algorithms": ["traditional", "improved"]}
+    weave = harness.run_data(tmp_path / "weave", "esm_radar", methods,
                              {"snake.amplitude": [0.0, 1000.0]}, trials=3, seed=2)
     title = report.figures(weave, ["correct_rate"])["correct_rate"].get_suptitle()
     assert "ours" not in title and "the paper's methods" in title
-    straight = report.figures(weave, ["trajectory"])["trajectory"]
+    at_weave = report.figures(weave, ["trajectory"])["trajectory"]
+    assert "Figs. 1-2 redrawn" in at_weave.get_suptitle()
+    assert "T1 (weaving)" in _legend_texts(at_weave)
+    other = harness.run_data(tmp_path / "other", "esm_radar", methods,
+                             {"snake.amplitude": [0.0, 500.0]}, trials=3, seed=2)
+    straight = report.figures(other, ["trajectory"])["trajectory"]
     assert "redrawn" not in straight.get_suptitle() and "0 m" in straight.get_suptitle()
     assert not any("weaving" in t for t in _legend_texts(straight))
     assert "T1 (straight)" in _legend_texts(straight)

@@ -919,12 +919,15 @@ def _range_error_panel(ax: Axes, esm: pd.DataFrame, params: Mapping[str, Any]) -
 
 
 def _trajectory_figure(run: RunData) -> Figure | str:
-    """Paper 001 Figs. 1-2 from ``trials.csv``: the first saved trial of point 0 (the
-    paper's figures redrawn if that point has the paper's weave, :data:`PAPER_SCENARIO`)."""
+    """Paper 001 Figs. 1-2 from ``trials.csv``: the first saved trial of the first point
+    with the paper's weave (:data:`PAPER_SCENARIO`; the paper's figures redrawn), else of
+    the first point."""
     esm = _esm_rows(run.trials)
     if esm.empty:
         return NO_SERIES
-    row = esm.iloc[0]
+    weave = [p for p in esm["point"].unique() if np.isclose(
+        run.point_params(int(p))["snake.amplitude"], PAPER_SCENARIO["snake.amplitude"])]
+    row = esm[esm["point"] == weave[0]].iloc[0] if weave else esm.iloc[0]
     point = int(row["point"])
     params = run.point_params(point)
     fig, axes = new_figure(ncols=3, width=4.3, height=4.2)
