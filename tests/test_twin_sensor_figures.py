@@ -296,10 +296,12 @@ def test_fig2_draws_our_method_beside_the_papers_pair(run_50):
         if not ax.get_visible():
             continue
         by_colour = {to_hex(line.get_color()): line for line in ax.get_lines()
-                     if line.get_marker() not in ("", "None")}
+                     if len(line.get_xdata()) == 20 and line.get_linestyle() == "-"}
         curve = by_colour[to_hex(line_kwargs("mspda_parallel/mgekf")["color"])]
         paper = by_colour[to_hex(line_kwargs("paper_approx/mgekf")["color"])]
-        assert curve.get_zorder() > paper.get_zorder() and len(curve.get_xdata()) == 20
+        assert curve.get_zorder() > paper.get_zorder()
+        assert curve.get_marker() in ("", "None")  # bare: it must not hide what it lies on
+        assert curve.get_linewidth() < paper.get_linewidth()
 
 
 def test_every_loss_figure_says_its_error_bars_are_wilson_intervals(run_50):
@@ -317,8 +319,8 @@ def test_anees_axis_top_is_a_labelled_tick_above_every_curve(run_50):
     for ax in (a for a in fig.axes if a.get_visible()):
         top = ax.get_ylim()[1]
         assert top in ax.get_yticks()
-        assert all(np.nanmax(line.get_ydata()) <= top for line in ax.get_lines()
-                   if len(line.get_ydata()))
+        assert all(1.03 * np.nanmax(line.get_ydata()) <= top for line in ax.get_lines()
+                   if len(line.get_ydata()))  # a marker at the top would be cut in half
 
 
 def test_a_panel_title_too_long_breaks_after_a_comma():

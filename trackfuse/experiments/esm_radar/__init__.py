@@ -26,11 +26,13 @@ FIGURES = {
         "methods", ""),
     "trajectory": FigureSpec(
         "true tracks and the ESM TDOA-DF location of one saved trial, its manoeuvre index "
-        "and range weight per scan, and the ESM range error per scan over all trials",
+        "and (where a dynamic-weight algorithm ran) range weight per scan, and the ESM range "
+        "error per scan over all trials",
         "Figs. 1-2"),
     "manoeuvre": FigureSpec(
-        "mean manoeuvre index and mean range weight of the paper's method per scan, 95 % t "
-        "bands, one curve per setting of the ESM track", ""),
+        "mean manoeuvre index per scan and, where a dynamic-weight algorithm ran, the mean "
+        "range weight of the paper's method, 95 % t bands, one curve per setting of the ESM "
+        "track", ""),
 }
 
 EXPERIMENT = Experiment(

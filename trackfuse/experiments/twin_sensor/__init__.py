@@ -12,10 +12,12 @@ from trackfuse.experiments.twin_sensor.model import PARAMS, ROW_METRICS, run_bat
 
 FIGURES = {
     "loss_vs_clutter": FigureSpec(
-        "Paper Fig. 1 redrawn: tracks lost (angle rule: the estimate's azimuth or elevation "
-        "off the truth by more than 3 sigma for 3 scans, the same yardstick for every filter) "
+        "Fig. 1 (redrawn at the paper's scenario, else an analogue): tracks lost (angle "
+        "rule: the estimate's azimuth or elevation off the truth by more than 3 sigma for 3 "
+        "scans, the same yardstick for every filter) "
         "against the mean number of false returns, the paper's fused-gate PDA "
-        "(reconstruction) and our corrected parallel PDA with the MGEKF, 95 % Wilson error "
+        "(reconstruction) and our corrected parallel PDA with the MGEKF where run, 95 % "
+        "Wilson error "
         "bars, the paper's claim (< 5 % up to 9) shaded at the paper's scenario", "Fig. 1"),
     "loss_vs_clutter_ablation": FigureSpec(
         "Fig. 1 ablation: tracks lost (angle rule) against false returns for every algorithm "
@@ -28,8 +30,9 @@ FIGURES = {
         "Extension (W000-5): tracks lost (angle and gate rules) against the manoeuvring "
         "index sqrt(q) T^2 / (r sigma) of the truth, with clutter; crosses: without clutter"),
     "range_error_vs_time": FigureSpec(
-        "Paper Fig. 2 redrawn: range RMSE against time at a few clutter levels, MGEKF (band) "
-        "beside EKF (dashed band edges), the other of the paper's method and our parallel "
+        "Fig. 2 (redrawn at the paper's scenario with the paper's method, else an "
+        "analogue): range RMSE against time at a few clutter levels, MGEKF (band) beside "
+        "EKF where run (dashed band edges), the other of the paper's method and our parallel "
         "PDA where run (MGEKF, curve), the square-root PCRLB of the truth and filter "
         "models, and five single runs: the per-scan bands are marginal, errors are strongly "
         "correlated across scans (correlation quoted per panel)", "Fig. 2"),
@@ -39,7 +42,8 @@ FIGURES = {
     "final_range_rmse_vs_sweep": FigureSpec(
         "Range RMSE at the last scan against the swept axis (clutter, baseline, range cue) "
         "with 95 % bootstrap intervals beside the square-root PCRLB of the truth and filter "
-        "models, MGEKF beside EKF and the paper's method beside our parallel PDA (W000-2)"),
+        "models, MGEKF beside EKF and the paper's method beside our parallel PDA, those "
+        "run (W000-2)"),
 }
 
 EXPERIMENT = Experiment(

@@ -407,8 +407,10 @@ def _context(run: RunData, *extra: str) -> str:
 
 
 def _fig_words(run: RunData, number: int) -> str:
-    """"Paper Fig. n redrawn" at the paper's scenario, else "Fig. n analogue"."""
-    return (f"Paper Fig. {number} redrawn" if _at_paper(run).all()
+    """"Paper Fig. n redrawn" at the paper's scenario with the paper's method run, else
+    "Fig. n analogue"."""
+    paper_method = any(a.startswith("paper_approx/") for a in run.params["algorithms"])
+    return (f"Paper Fig. {number} redrawn" if _at_paper(run).all() and paper_method
             else f"Fig. {number} analogue")
 
 
@@ -790,8 +792,8 @@ def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
         rmse = np.sqrt(frame[frame["algorithm"] == name].groupby("scan")["range_sq_err_m2"]
                        .mean()) / 1e3
         top = max(top, float(rmse.max()))
-        kw = _time_curve_kwargs(name)  # thin and on top: it often lies on the pair's curves
-        kw.update(linewidth=1.0, zorder=kw["zorder"] + 2)
+        kw = _time_curve_kwargs(name)  # thin, bare and on top: it often lies on the pair's
+        kw.update(linewidth=1.0, marker="", zorder=kw["zorder"] + 2)  # curves
         ax.plot(rmse.index.to_numpy(float) * period, rmse, **kw)
     for i, name in enumerate(names):
         rows = frame[frame["algorithm"] == name]
@@ -854,7 +856,7 @@ def _nees_figure(run: RunData) -> Figure:
             anees = frame[frame["algorithm"] == name].groupby("scan")["nees"].mean()
             ax.plot(anees.index * period, anees, **_time_curve_kwargs(name))
             highest = max(highest, float(anees.max()))
-        top = _tick_ceiling(highest)  # the top is a labelled tick
+        top = _tick_ceiling(1.03 * highest)  # a labelled tick, clear of the markers
         ax.set_ylim(0.0, top)
         ax.yaxis.set_major_locator(FixedLocator(_round_ticks(top)))
 
@@ -892,7 +894,8 @@ def _final_figure(run: RunData) -> Figure | str:
     algorithms = run.params["algorithms"]
     names = list(dict.fromkeys(_headline_pair(algorithms) + _main_algorithms(algorithms)
                                + _other_filters(algorithms)))
-    title = [("Paper Fig. 2 quantified: final" if x_key == "clutter.mean" else "Final")
+    quantified = x_key == "clutter.mean" and _fig_words(run, 2).endswith("redrawn")
+    title = [("Paper Fig. 2 quantified: final" if quantified else "Final")
              + f" range RMSE ({_runs(last)} runs per point)",
              _context(run, "95 % bootstrap-t intervals")]
     panel = SINGLE_PANEL if len(facets) == 1 else PANEL
