@@ -606,6 +606,8 @@ def _curve_panel(ax: Axes, rows: pd.DataFrame, x: str, names: Sequence[str],
         xs = scale * g[x].to_numpy(float)
         mean, lo, hi = (100 * g[c].to_numpy(float) for c in ("mean", "ci_low", "ci_high"))
         kw = {**line_kwargs(name), "clip_on": False}  # a marker at 100 % is drawn whole
+        if look(name).role == "paper":  # on top of ours where both reach 100 %
+            kw["zorder"] += 0.1
         if name not in barred:
             band(ax, xs, mean, lo, hi, **kw)
             continue
