@@ -426,7 +426,8 @@ def _noise_figure(summary: pd.DataFrame, config: dict) -> Figure | str:
         ax.set_ylim(*FRACTION_LIMITS)
     legend_below(fig, *legend_entries(axes.ravel()), column_width=LEGEND_COLUMN)
     fig.suptitle("Paper 002 setting, no paper figure: accuracy vs angle noise (the exact "
-                 f"optimum is the ceiling)\n{config.get('trials', '')} runs per point; dotted: "
+                 f"optimum is the ceiling)\n{config.get('trials', '')} runs per point, 95 % "
+                 "bands; dotted: "
                  "sigma = 0.005 and sqrt(0.005) rad, the two readings of the paper")
     return fig
 
@@ -485,7 +486,7 @@ def _scale_figure(summary: pd.DataFrame, metrics: pd.DataFrame, config: dict) ->
     fig.suptitle(f"Paper 002 model, no paper figure: cost and accuracy vs number of targets\n"
                  f"{p.get('scene.mode', 'random')} scenes, sigma = "
                  f"{p.get('noise.sigma', 0.005)} rad, {config.get('trials', '')} runs per "
-                 f"point{budget}")
+                 f"point, 95 % bands{budget}")
     return fig
 
 
