@@ -903,13 +903,14 @@ def _final_figure(run: RunData) -> Figure | str:
     curves = [_final_bounds(run, frame, x_key) for _, frame in facets]
     labels = {label for facet in curves for *_, label in facet}
     points = [_final_points(frame, x_key, names) for _, frame in facets]
-    past = any(len(x) for p, c in zip(points, curves, strict=True)
-               for _, x in _past_final_top(p, _final_top(p, c)))
+    tops = [_final_top(p, c) for p, c in zip(points, curves, strict=True)]
+    past = any(len(x) for p, top in zip(points, tops, strict=True)
+               for _, x in _past_final_top(p, top))
     fig, axes, cols = _figure(len(facets), min(len(facets), 3), panel, title,
                               len(names) + len(labels) + past, _lines(titles))
-    for ax, facet_points, bound_curves, facet_title in zip(axes, points, curves, titles,
-                                                           strict=True):
-        _draw_final(ax, facet_points, x_key, bound_curves)
+    for ax, facet_points, bound_curves, top, facet_title in zip(axes, points, curves, tops,
+                                                                titles, strict=True):
+        _draw_final(ax, facet_points, x_key, bound_curves, top)
         ax.set_xlabel(_axis_label(x_key, run.params))
         ax.set_ylabel("final range RMSE (km)")
         ax.set_title(facet_title)
@@ -943,10 +944,11 @@ def _final_bounds(run: RunData, frame: pd.DataFrame, x_key: str
 
 
 def _draw_final(ax: Axes, points: FinalPoints, x_key: str,
-                bound_curves: Sequence[tuple[np.ndarray, np.ndarray, str, str]]) -> None:
+                bound_curves: Sequence[tuple[np.ndarray, np.ndarray, str, str]],
+                top: float) -> None:
     """Final range RMSE (km) with intervals per algorithm (``points``), dodged along x, the
-    bounds ``bound_curves`` (:func:`_final_bounds`), y up to :func:`_final_top` and a
-    triangle there for each interval that passes it."""
+    bounds ``bound_curves`` (:func:`_final_bounds`), y up to ``top`` (:func:`_final_top`)
+    and a triangle there for each interval that passes it."""
     scale = _x_scale(x_key)
     values = np.unique(np.concatenate([x for x, *_ in points.values()]))
     dodge = {name: 0.006 * (values[-1] - values[0]) * (i - (len(points) - 1) / 2)
@@ -956,7 +958,6 @@ def _draw_final(ax: Axes, points: FinalPoints, x_key: str,
                     elinewidth=0.8, **line_kwargs(name))
     for x_bound, bound, style, label in bound_curves:
         ax.plot(x_bound / scale, bound, color="k", ls=style, lw=1.0, label=label)
-    top = _final_top(points, bound_curves)
     ax.set_ylim(0.0, top)
     ax.yaxis.set_major_locator(FixedLocator(_round_ticks(top)))
     _mark_past_top(ax, [(name, (x + dodge[name]) / scale)
