@@ -36,8 +36,8 @@ import numpy as np
 import pandas as pd
 
 from trackfuse.config import did_you_mean
-from trackfuse.results import FAILED_ROW, RUNNER_COLUMNS
-from trackfuse.rundata import RunData
+from trackfuse.results import RUNNER_COLUMNS
+from trackfuse.rundata import RunData, succeeded_rows
 from trackfuse.stats import (
     mcnemar_p,
     paired_t_p,
@@ -121,10 +121,9 @@ def metric_columns(frame: pd.DataFrame, keys: Sequence[str]) -> list[str]:
 
 def _long(frame: pd.DataFrame, keys: Sequence[str], metrics: Sequence[str]) -> pd.DataFrame:
     """Rows of finished trials melted to ``[*keys, trial, metric, value]``."""
-    if "status" in frame:
-        frame = frame[frame["status"].astype(str) != FAILED_ROW]
-    return frame.melt(id_vars=[*keys, "trial"], value_vars=list(metrics), var_name="metric",
-                      value_name="value").dropna(subset=["value"])
+    return succeeded_rows(frame).melt(id_vars=[*keys, "trial"], value_vars=list(metrics),
+                                      var_name="metric", value_name="value"
+                                      ).dropna(subset=["value"])
 
 
 def _paired_cells(base: pd.DataFrame, new: pd.DataFrame, keys: list[str],

@@ -33,6 +33,7 @@ from trackfuse import experiments
 from trackfuse.experiments.base import Experiment
 from trackfuse.results import (
     CONFIG,
+    FAILED_ROW,
     MANIFEST,
     SUMMARY,
     TIMING_SUMMARY,
@@ -97,6 +98,13 @@ class RunData:
     def point_params(self, point: int) -> dict[str, Any]:
         """Every parameter of sweep point ``point``, with its schema types."""
         return self.points[point]
+
+
+def succeeded_rows(trials: pd.DataFrame) -> pd.DataFrame:
+    """The rows of ``trials`` (of ``trials.csv``) not left by a failed trial."""
+    if "status" in trials:
+        return trials[trials["status"].astype(str) != FAILED_ROW]
+    return trials
 
 
 def swept_keys(config: dict[str, Any]) -> list[str]:

@@ -143,6 +143,13 @@ def band(ax, x, y, low, high, label: str, marker: str = "o", **kw) -> None:
                     color=line.get_color(), alpha=0.18, linewidth=0)
 
 
+def wants_log_axis(values) -> bool:
+    """Whether a grid of swept ``values`` is drawn on a log axis: at least 4 distinct
+    positive values spanning at least 10x (a narrower grid stays linear)."""
+    v = np.unique(np.asarray(values, dtype=float))
+    return len(v) >= 4 and v.min() > 0 and v.max() / v.min() >= 10
+
+
 def reference_line(ax, y: float, label: str, **kw) -> None:
     """A horizontal reference (bound, exact optimum) drawn dashed in black."""
     kw.setdefault("color", "k")

@@ -74,7 +74,14 @@ from trackfuse.experiments.esm_radar.model import (
     static_weights,
 )
 from trackfuse.plots.algorithms import line_kwargs, look
-from trackfuse.plots.style import band, legend_below, legend_entries, new_figure, reference_line
+from trackfuse.plots.style import (
+    band,
+    legend_below,
+    legend_entries,
+    new_figure,
+    reference_line,
+    wants_log_axis,
+)
 from trackfuse.reported import ESM_RADAR, ESM_RADAR_WEIGHTS
 from trackfuse.reports import HEADLINE_COLUMNS
 from trackfuse.rundata import RunData, swept_keys
@@ -520,13 +527,13 @@ MAX_LABELLED = 9
 
 
 def _set_x_axis(ax: Axes, key: str, values: np.ndarray) -> None:
-    """Label the x axis; a log axis (its label says so) only for a wide grid (>= 4 values
-    spanning >= 10x), ticked with plain numbers, else linear. Up to :data:`MAX_LABELLED`
+    """Label the x axis; a log axis (its label says so) only for a wide grid
+    (:func:`~trackfuse.plots.style.wants_log_axis`), ticked with plain numbers, else linear. Up to :data:`MAX_LABELLED`
     values every grid value is ticked and labelled; a longer log grid is ticked at 1, 2,
     5 x 10^k."""
     label, _ = AXES.get(key, (key, 1.0))
     values = np.unique(values)
-    log = len(values) >= 4 and values.min() > 0 and values.max() / values.min() >= 10
+    log = wants_log_axis(values)
     if log:
         label = f"{label[:-1]}, log scale)" if label.endswith(")") else f"{label} (log scale)"
     ax.set_xlabel(label)

@@ -65,11 +65,10 @@ from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 from numpy.typing import ArrayLike
 
 from trackfuse.plots.algorithms import line_kwargs, look
-from trackfuse.plots.style import band, legend_below, legend_entries, new_figure
+from trackfuse.plots.style import band, legend_below, legend_entries, new_figure, wants_log_axis
 from trackfuse.reported import PASSIVE_ASSOC
 from trackfuse.reports import HEADLINE_COLUMNS
-from trackfuse.results import FAILED_ROW
-from trackfuse.rundata import RunData, swept_keys
+from trackfuse.rundata import RunData, succeeded_rows, swept_keys
 from trackfuse.stats import (
     bootstrap_t_mean_intervals,
     proportion_difference_interval,
@@ -194,7 +193,7 @@ def _count_axis(ax: Axes, values: ArrayLike, quantity: str, unit: str) -> None:
     linear; a tick with a plain number at every value; the label is ``quantity (unit)``,
     ``quantity (unit, log scale)`` on a log axis."""
     v = np.unique(np.asarray(values, dtype=float))
-    if len(v) >= 4 and v.min() > 0 and v.max() / v.min() >= 10:
+    if wants_log_axis(v):
         ax.set_xscale("log")
         ax.xaxis.set_minor_formatter(NullFormatter())
         unit += ", log scale"
@@ -525,13 +524,6 @@ def gap_interval(gap: ArrayLike, level: float = 0.95) -> tuple[float, float]:
     return max(float(low), 0.0), float(high)
 
 
-def _ok_rows(trials: pd.DataFrame) -> pd.DataFrame:
-    """Trial rows that did not fail."""
-    if "status" in trials:
-        return trials[trials["status"].astype(str) != FAILED_ROW]
-    return trials
-
-
 def _interval_columns(g: pd.DataFrame) -> dict[str, float]:
     """Mean and 95 % interval of every metric of one (point, algorithm, ops) group."""
     n = len(g)
@@ -567,7 +559,7 @@ def checkpoint_metrics(trials: pd.DataFrame, config: dict) -> pd.DataFrame:
     """
     keys = ["point", *[k for k in _grouping_keys(config) if k in trials], "algorithm", "ops"]
     rows = [{**dict(zip(keys, key, strict=True)), **_interval_columns(g)}
-            for key, g in _ok_rows(trials).groupby(keys, sort=True)]
+            for key, g in succeeded_rows(trials).groupby(keys, sort=True)]
     return pd.DataFrame(rows)
 
 
@@ -645,7 +637,7 @@ def versus_exact(trials: pd.DataFrame, config: dict) -> pd.DataFrame:
     exact optimum on the same trials, per metric of :data:`FIG2_METRICS` (value with its
     95 % interval, exact mean, paired difference exact - PGA with its 95 % interval)."""
     rows = []
-    for point, values, name, runs, exact in _fig2_points(_ok_rows(trials), config):
+    for point, values, name, runs, exact in _fig2_points(succeeded_rows(trials), config):
         head = {"point": point, **values, "algorithm": name, "ops": int(runs["ops"].max()),
                 "runs": len(runs)}
         for metric, quantity in FIG2_METRICS.items():
@@ -704,7 +696,7 @@ def paper_vs_reproduced(trials: pd.DataFrame, config: dict) -> pd.DataFrame:
     that the Hungarian method cannot solve the dummy formulation.
     """
     out = []
-    for _, values, name, runs, exact in _fig2_points(_ok_rows(trials), config):
+    for _, values, name, runs, exact in _fig2_points(succeeded_rows(trials), config):
         out += _fig2_headline(values, config, name, runs, exact)
     rep = PASSIVE_ASSOC.result("Hungarian method on the dummy formulation")
     out.append(_headline(rep.where, "exact solution of the dummy-augmented assignment",

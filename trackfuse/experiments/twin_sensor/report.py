@@ -78,8 +78,7 @@ from trackfuse.plots.algorithms import FILTER_LABELS, GREYS, VERMILLION, line_kw
 from trackfuse.plots.style import Margins, context, fixed_figure, legend_in_strip
 from trackfuse.reported import TWIN_SENSOR
 from trackfuse.reports import HEADLINE_COLUMNS
-from trackfuse.results import FAILED_ROW
-from trackfuse.rundata import RunData, swept_keys
+from trackfuse.rundata import RunData, succeeded_rows, swept_keys
 from trackfuse.stats import nees_band, rmse_intervals, t_interval, wilson_interval
 from trackfuse.tracking.pda import METHODS
 
@@ -414,14 +413,9 @@ def _fig_words(run: RunData, number: int) -> str:
             else f"Fig. {number} analogue")
 
 
-def _succeeded(frame: pd.DataFrame) -> pd.DataFrame:
-    """The rows of ``frame`` (of ``trials.csv``) not left by a failed trial."""
-    return frame[frame["status"].astype(str) != FAILED_ROW] if "status" in frame else frame
-
-
 def _runs(frame: pd.DataFrame) -> int:
     """Successful trials per point: the fewest of any point that has one."""
-    return int(_succeeded(frame).groupby("point")["trial"].nunique().min())
+    return int(succeeded_rows(frame).groupby("point")["trial"].nunique().min())
 
 
 # --------------------------------------------------------------------------------------------
@@ -709,7 +703,7 @@ def _time_figure(run: RunData, draw: Callable[[Axes, pd.DataFrame, dict[str, Any
     drawn = []
     for ax, pt, panel_title in zip(axes, points, titles, strict=True):
         frame = trials[trials["point"] == pt]
-        if _succeeded(frame).empty:
+        if succeeded_rows(frame).empty:
             ax.text(0.5, 0.5, f"all {frame['trial'].nunique()} trials failed\n(status=failed "
                     "in trials.csv)", transform=ax.transAxes, ha="center", va="center",
                     fontsize=8)
