@@ -528,9 +528,9 @@ MAX_LABELLED = 9
 
 def _set_x_axis(ax: Axes, key: str, values: np.ndarray) -> None:
     """Label the x axis; a log axis (its label says so) only for a wide grid
-    (:func:`~trackfuse.plots.style.wants_log_axis`), ticked with plain numbers, else linear. Up to :data:`MAX_LABELLED`
-    values every grid value is ticked and labelled; a longer log grid is ticked at 1, 2,
-    5 x 10^k."""
+    (:func:`~trackfuse.plots.style.wants_log_axis`), ticked with plain numbers, else
+    linear. Up to :data:`MAX_LABELLED` values every grid value is ticked and labelled; a
+    longer log grid is ticked at 1, 2, 5 x 10^k."""
     label, _ = AXES.get(key, (key, 1.0))
     values = np.unique(values)
     log = wants_log_axis(values)
