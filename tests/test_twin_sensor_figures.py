@@ -359,3 +359,47 @@ def test_a_point_whose_every_trial_failed_gets_a_panel_that_says_so(run_50, name
     assert not first.lines and all(ax.lines for ax in fig.axes[1:3])
     assert any(look(a).label in t.get_text() for t in fig.legends[0].get_texts()
                for a in ALGORITHMS)
+
+
+def test_time_panels_share_one_y_range_when_their_tops_are_alike(run_50):
+    """Panels of a time figure whose needed tops differ by at most 2.5x share one range,
+    so that they compare at a glance (twin_sensor_baseline's nine panels ended at 30, 40 or
+    50 km); the shared top is a labelled tick."""
+    for name in ("range_error_vs_time", "anees_vs_time"):
+        axes = [ax for ax in report.figures(run_50, [name])[name].axes if ax.get_visible()]
+        tops = {ax.get_ylim()[1] for ax in axes}
+        assert len(axes) == 3 and len(tops) == 1, (name, tops)
+        assert tops.pop() in axes[0].get_yticks()
+
+
+def test_shared_tops_go_by_figure_then_by_row():
+    """One top for all when the figure allows, else per row, else each its own (a 5 km
+    panel is not squeezed under a 140 km one)."""
+    assert report._shared_tops({0: 30.0, 1: 50.0, 2: 40.0, 3: 30.0}, 3) == dict.fromkeys(
+        range(4), 50.0)
+    rows = report._shared_tops({0: 5.0, 1: 5.0, 2: 6.0, 3: 120.0, 4: 140.0, 5: 120.0}, 3)
+    assert rows == {0: 6.0, 1: 6.0, 2: 6.0, 3: 140.0, 4: 140.0, 5: 140.0}
+    alone = {0: 5.0, 1: 50.0, 2: 140.0}
+    assert report._shared_tops(alone, 3) == alone
+    gap = report._shared_tops({0: 5.0, 2: 6.0, 3: 120.0, 5: 140.0}, 3)  # panels 1, 4 failed
+    assert gap == {0: 6.0, 2: 6.0, 3: 140.0, 5: 140.0}
+
+
+def test_a_range_band_past_the_top_is_marked_there(run_50):
+    """A band that leaves the axis top (twin_sensor_baseline's 40 and 50 km panels, with no
+    sign) gets a triangle at the top at each such time, with its legend entry."""
+    name = "range_error_vs_time"
+    trials = run_50.trials.copy()
+    wild = ((trials["scan"] == 10) & (trials["trial"] == 0) & (trials["clutter.mean"] == 8.0)
+            & (trials["algorithm"] == "paper_approx/mgekf"))
+    trials.loc[wild, "range_sq_err_m2"] = 2e5**2
+    bad = replace(run_50)
+    bad.trials = trials
+    fig = report.figures(bad, [name])[name]
+    marks = [_past_top_marks(ax) for ax in fig.axes if ax.get_visible()]
+    assert not marks[0] and not marks[2]
+    (x, y, colour), = marks[1]
+    assert x == pytest.approx(10 * bad.params["scan.period"]) and y == fig.axes[1].get_ylim()[1]
+    assert colour == to_hex(line_kwargs("paper_approx/mgekf")["color"])
+    assert report.PAST_TOP_LABEL in _legend(fig)
+    assert report.PAST_TOP_LABEL not in _legend(report.figures(run_50, [name])[name])

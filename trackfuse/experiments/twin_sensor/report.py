@@ -687,11 +687,40 @@ def _time_points(run: RunData) -> list[int]:
     return sorted(set(int(i) for i in idx))
 
 
-def _time_figure(run: RunData, draw: Callable[[Axes, pd.DataFrame, dict[str, Any]], None],
-                 title: Sequence[str], y_label: str, legend_entries: int,
-                 everywhere: Collection[str] = ()) -> Figure:
-    """One panel per :func:`_time_points` point against time (s); the legend holds the
-    first panel's entries and those labelled one of ``everywhere`` in any panel."""
+AxisFit = Callable[[float], None]
+"""Sets a drawn panel's y axis from 0 to a given top and marks what passes it."""
+
+PanelDraw = Callable[[Axes, pd.DataFrame, dict[str, Any]], tuple[float, AxisFit]]
+"""Draws one time panel and returns ``(the y top it needs, its AxisFit)``."""
+
+SHARED_TOP_RATIO = 2.5
+"""The panels of a time figure share one y range when the highest top they need is at most
+this multiple of the lowest, so that panels compare at a glance; else the panels of each row
+do, on the same condition, else each has its own."""
+
+
+def _shared_tops(needed: dict[int, float], per_row: int) -> dict[int, float]:
+    """The y top of each drawn panel (km or 1) from the tops they need (``needed``: panel
+    index -> top; rows of ``per_row`` panels): shared as :data:`SHARED_TOP_RATIO` allows."""
+    def shared(panels: dict[int, float]) -> dict[int, float]:
+        tops = panels.values()
+        fits = bool(panels) and max(tops) <= SHARED_TOP_RATIO * min(tops)
+        return dict.fromkeys(panels, max(tops)) if fits else dict(panels)
+
+    whole = shared(needed)
+    if whole != needed:
+        return whole
+    rows: dict[int, dict[int, float]] = {}
+    for i, top in needed.items():
+        rows.setdefault(i // per_row, {})[i] = top
+    return {i: top for row in rows.values() for i, top in shared(row).items()}
+
+
+def _time_figure(run: RunData, draw: PanelDraw, title: Sequence[str], y_label: str,
+                 legend_entries: int, everywhere: Collection[str] = ()) -> Figure:
+    """One panel per :func:`_time_points` point against time (s), y ranges shared where
+    :data:`SHARED_TOP_RATIO` allows; the legend holds the first panel's entries and those
+    labelled one of ``everywhere`` in any panel."""
     points = _time_points(run)
     swept = swept_keys(run.config)
     per_row = 3 if len(points) % 3 == 0 or len(points) > 4 else len(points)
@@ -700,20 +729,23 @@ def _time_figure(run: RunData, draw: Callable[[Axes, pd.DataFrame, dict[str, Any
     fig, axes, cols = _figure(len(points), per_row, TIME_PANEL, title, legend_entries,
                               _lines(titles))
     trials = run.trials
-    drawn = []
-    for ax, pt, panel_title in zip(axes, points, titles, strict=True):
+    drawn, fits = [], {}
+    for i, (ax, pt, panel_title) in enumerate(zip(axes, points, titles, strict=True)):
         frame = trials[trials["point"] == pt]
         if succeeded_rows(frame).empty:
             ax.text(0.5, 0.5, f"all {frame['trial'].nunique()} trials failed\n(status=failed "
                     "in trials.csv)", transform=ax.transAxes, ha="center", va="center",
                     fontsize=8)
+            ax.set_ylim(bottom=0)
         else:
-            draw(ax, frame, run.point_params(pt))
+            fits[i] = draw(ax, frame, run.point_params(pt))
             drawn.append(ax)
         ax.set_xlabel("time t (s)")
         ax.set_ylabel(y_label)
-        ax.set_ylim(bottom=0)
         ax.set_title(panel_title)
+    tops = _shared_tops({i: top for i, (top, _) in fits.items()}, per_row)
+    for i, (_, fit) in fits.items():
+        fit(tops[i])
     return _finish(fig, drawn[:1], cols, everywhere)
 
 
@@ -739,19 +771,28 @@ bound drawn; a run that goes higher is cut at the top (said in the panel) so tha
 curves and the bounds keep most of the panel's height."""
 
 
-def _range_ylim(ax: Axes, highest: float, single_runs: np.ndarray) -> None:
-    """y from 0 to a round tick above :data:`RMSE_HEADROOM` times ``highest`` (km: the
-    highest RMSE or bound drawn) and above every single run (``single_runs``, km) unless one passes
-    :data:`SINGLE_RUNS_REACH` times ``highest``: then the panel says they are cut."""
+def _range_top(highest: float, single_runs: np.ndarray) -> float:
+    """y top (km) a range panel needs: a round tick above :data:`RMSE_HEADROOM` times
+    ``highest`` (km: the highest RMSE or bound drawn) and above every single run
+    (``single_runs``, km) unless one passes :data:`SINGLE_RUNS_REACH` times ``highest``."""
     reach = float(np.nanmax(single_runs, initial=0.0))
     room = RMSE_HEADROOM * highest
-    wanted = room if reach > SINGLE_RUNS_REACH * highest else max(room, reach)
-    top = _tick_ceiling(wanted)
+    return _tick_ceiling(room if reach > SINGLE_RUNS_REACH * highest else max(room, reach))
+
+
+def _fit_range_axis(ax: Axes, top: float, single_runs: np.ndarray,
+                    bands: Sequence[tuple[str, np.ndarray, np.ndarray]]) -> None:
+    """y from 0 to ``top`` (km), labelled there; a note when single runs (``single_runs``,
+    km) are cut at the top, and an upward triangle at the top at each time where a 95 %
+    band (``bands``: ``(algorithm, t (s), upper end (km))``) passes it or has no upper
+    end."""
     ax.set_ylim(0.0, top)
     ax.yaxis.set_major_locator(FixedLocator(_round_ticks(top)))
+    reach = float(np.nanmax(single_runs, initial=0.0))
     if reach > top:
         ax.text(0.97, 0.96, f"single runs cut at {top:g} km (highest {reach:.0f} km)",
                 transform=ax.transAxes, fontsize=7, ha="right", va="top")
+    _mark_past_top(ax, [(name, t[~(hi <= top)]) for name, t, hi in bands], top)
 
 
 PCRLB_TRUTH = "sqrt PCRLB (truth model, clutter-aware)"
@@ -774,14 +815,15 @@ def _pcrlb_curves(params: dict[str, Any]) -> list[tuple[np.ndarray, str, str]]:
 
 
 def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
-                names: Sequence[str], beside: Sequence[str] = ()) -> None:
+                names: Sequence[str], beside: Sequence[str] = ()) -> tuple[float, AxisFit]:
     """Range RMSE (km) with 95 % bootstrap-t bands per scan (the first algorithm's filled,
     the second's as dashed edges, each band in the legend), the RMSE of the ``beside``
     algorithms as thin curves on top without bands, five single runs of the first algorithm, the
     square-root PCRLBs, and the correlation of the first algorithm's errors between the
-    first and the last scan."""
+    first and the last scan; returns the panel's :data:`PanelDraw` pair."""
     period = float(params["scan.period"])
     top = 0.0
+    bands = []
     for name in beside:
         rmse = np.sqrt(frame[frame["algorithm"] == name].groupby("scan")["range_sq_err_m2"]
                        .mean()) / 1e3
@@ -794,6 +836,7 @@ def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
         band = _rmse_band(rows.groupby("scan")["range_sq_err_m2"]) / 1e3
         top = max(top, float(band["rmse"].max()))
         t = band.index.to_numpy(float) * period
+        bands.append((name, t, band["hi"].to_numpy()))
         kw = _time_curve_kwargs(name)
         ax.plot(t, band["rmse"], **kw)
         label = f"95 % band, {_filter_words(name)}"
@@ -814,10 +857,12 @@ def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
     times = np.arange(1, int(params["scan.count"]) + 1) * period
     for bound, style, label in _pcrlb_curves(params):
         ax.plot(times, bound, color="k", ls=style, lw=1.0, label=label)
-    _range_ylim(ax, max(top, float(np.max(bounds(params)[0])) / 1e3), np.abs(single))
     corr = float(np.corrcoef(errors.iloc[:, 0], errors.iloc[:, -1])[0, 1])
     ax.text(0.03, 0.04, f"corr. of errors, scan 1 vs {errors.columns[-1]}: {corr:.2f}",
-            transform=ax.transAxes, fontsize=7, va="bottom")
+            transform=ax.transAxes, fontsize=7, va="bottom", zorder=7,
+            bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.8, "pad": 1.0})
+    needed = _range_top(max(top, float(np.max(bounds(params)[0])) / 1e3), np.abs(single))
+    return needed, lambda top: _fit_range_axis(ax, top, np.abs(single), bands)
 
 
 def _range_figure(run: RunData) -> Figure:
@@ -830,8 +875,14 @@ def _range_figure(run: RunData) -> Figure:
     labels = {label for pt in _time_points(run)
               for _, _, label in _pcrlb_curves(run.point_params(pt))}
     return _time_figure(run, lambda ax, f, p: _draw_range(ax, f, p, names, beside), title,
-                        "range RMSE (km)", 2 * len(names) + len(beside) + 1 + len(labels),
-                        labels)
+                        "range RMSE (km)", 2 * len(names) + len(beside) + 2 + len(labels),
+                        {*labels, PAST_TOP_LABEL})
+
+
+def _fit_nees_axis(ax: Axes, top: float) -> None:
+    """y from 0 to ``top`` (a tick at least 3 % above the highest marker), labelled there."""
+    ax.set_ylim(0.0, top)
+    ax.yaxis.set_major_locator(FixedLocator(_round_ticks(top)))
 
 
 def _nees_figure(run: RunData) -> Figure:
@@ -839,7 +890,7 @@ def _nees_figure(run: RunData) -> Figure:
     algorithms = run.config["params"]["algorithms"]
     names = list(dict.fromkeys(_headline_pair(algorithms) + _main_algorithms(algorithms)))
 
-    def draw(ax: Axes, frame: pd.DataFrame, params: dict[str, Any]) -> None:
+    def draw(ax: Axes, frame: pd.DataFrame, params: dict[str, Any]) -> tuple[float, AxisFit]:
         period = float(params["scan.period"])
         n_runs = int(frame["trial"].nunique())
         lo, hi = nees_band(6, n_runs)
@@ -850,9 +901,7 @@ def _nees_figure(run: RunData) -> Figure:
             anees = frame[frame["algorithm"] == name].groupby("scan")["nees"].mean()
             ax.plot(anees.index * period, anees, **_time_curve_kwargs(name))
             highest = max(highest, float(anees.max()))
-        top = _tick_ceiling(1.03 * highest)  # a labelled tick, clear of the markers
-        ax.set_ylim(0.0, top)
-        ax.yaxis.set_major_locator(FixedLocator(_round_ticks(top)))
+        return _tick_ceiling(1.03 * highest), lambda top: _fit_nees_axis(ax, top)
 
     title = [f"Diagnostic: average NEES (6 states) against time ({_runs(run.trials)} runs per "
              "point)", _context(run, "a consistent filter stays inside the band")]
