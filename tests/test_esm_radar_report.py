@@ -14,7 +14,7 @@ from trackfuse import harness
 from trackfuse.config import load
 from trackfuse.experiments.esm_radar import EXPERIMENT, model, report
 from trackfuse.plots.algorithms import look
-from trackfuse.plots.style import inside_canvas, text_overlaps
+from trackfuse.plots.style import alike_legend_entries, inside_canvas, text_overlaps
 from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS, save_figure
 from trackfuse.rundata import RunData
 
@@ -57,6 +57,7 @@ def test_every_figure_of_every_shipped_config_is_drawn_cleanly(shipped_run):
         drawn(fig)
         assert text_overlaps(fig) == [], name
         assert inside_canvas(fig), name
+        assert alike_legend_entries(fig) == [], name
         assert fig.get_suptitle().count("\n") <= 1, name
         for ax in (a for a in fig.axes if a.has_data()):
             if not categorical(ax.yaxis):

@@ -14,7 +14,7 @@ from trackfuse import harness
 from trackfuse.config import load
 from trackfuse.experiments.passive_assoc import EXPERIMENT, report
 from trackfuse.plots.algorithms import look
-from trackfuse.plots.style import inside_canvas, text_overlaps
+from trackfuse.plots.style import alike_legend_entries, inside_canvas, text_overlaps
 from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS
 from trackfuse.rundata import RunData
 from trackfuse.stats import bootstrap_t_mean_intervals
@@ -64,6 +64,7 @@ def test_every_figure_of_every_shipped_config_is_drawn_or_explained(shipped_run)
         drawn(fig)
         assert text_overlaps(fig) == [], name
         assert inside_canvas(fig), name
+        assert alike_legend_entries(fig) == [], name
         assert fig.get_suptitle().count("\n") <= 1, name
         supy = fig._supylabel.get_text() if fig._supylabel else ""
         for ax in (a for a in fig.axes if a.has_data()):

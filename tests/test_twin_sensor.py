@@ -24,7 +24,7 @@ from trackfuse.experiments.twin_sensor.model import (
     truth_trajectory,
 )
 from trackfuse.plots.algorithms import look
-from trackfuse.plots.style import text_overlaps
+from trackfuse.plots.style import alike_legend_entries, text_overlaps
 from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS
 from trackfuse.rundata import RunData
 from trackfuse.seeding import trial_streams
@@ -243,6 +243,7 @@ def test_every_figure_of_a_shipped_config_is_clean(shipped, name):
             assert fig.strip() and "\n" not in fig, fig_name
             continue
         assert text_overlaps(fig) == [], fig_name
+        assert alike_legend_entries(fig) == [], fig_name
         assert 1 <= fig.get_suptitle().count("\n") + 1 <= 2, fig_name
         assert "runs per point" in fig.get_suptitle(), fig_name
         for ax in fig.axes:

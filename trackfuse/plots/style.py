@@ -22,7 +22,10 @@ import matplotlib
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.colors import to_hex
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 from matplotlib.text import Text
 
 RC = {
@@ -51,6 +54,16 @@ def new_figure(ncols: int = 1, nrows: int = 1, width: float = 5.0, height: float
         axes = fig.subplots(nrows, ncols, squeeze=False)
     flat = axes.ravel()
     return fig, (flat[0] if flat.size == 1 else flat)
+
+
+def mosaic_figure(layout: list[list[str]], width: float, height: float, **kw):
+    """Return ``(fig, axes by name)`` with the house style and constrained layout, panels
+    placed as in :meth:`~matplotlib.figure.Figure.subplot_mosaic` (a panel may span rows or
+    columns); ``width`` and ``height`` in inches, ``kw`` to ``subplot_mosaic``."""
+    with matplotlib.rc_context(RC):
+        fig = Figure(figsize=(width, height), layout="constrained")
+        axes = fig.subplot_mosaic(layout, **kw)
+    return fig, axes
 
 
 @cache
@@ -200,6 +213,33 @@ def text_overlaps(fig, tolerance_px: float = 1.0) -> list[tuple[str, str]]:
             dy = min(a.y1, b.y1) - max(a.y0, b.y0)
             if dx > tolerance_px and dy > tolerance_px:
                 found.append((text_a, text_b))
+    return found
+
+
+def _look(handle) -> tuple:
+    """What a reader sees of a legend handle: a line's colour, dashes, width class, marker
+    and marker fill, or a patch's face colour and hatch."""
+    if isinstance(handle, Line2D):
+        return ("line", to_hex(handle.get_color(), keep_alpha=False), str(handle.get_linestyle()),
+                handle.get_linewidth() >= 1.8, handle.get_marker(),
+                str(handle.get_markerfacecolor()))
+    if isinstance(handle, Patch):
+        return ("patch", to_hex(handle.get_facecolor(), keep_alpha=False), handle.get_hatch())
+    return ("other", id(handle))
+
+
+def alike_legend_entries(fig) -> list[tuple[str, str]]:
+    """Pairs of labels in one legend of ``fig`` (figure or axes legends) whose entries look
+    the same (:func:`_look`): a reader cannot tell which curve is which."""
+    legends = [*fig.legends, *(ax.get_legend() for ax in fig.axes if ax.get_legend())]
+    found = []
+    for legend in legends:
+        seen: dict[tuple, str] = {}
+        for handle, text in zip(legend.legend_handles, legend.get_texts(), strict=True):
+            look = _look(handle)
+            if look in seen:
+                found.append((seen[look], text.get_text()))
+            seen.setdefault(look, text.get_text())
     return found
 
 

@@ -46,6 +46,7 @@ index and range weight of ``improved`` per point, 95 % t intervals) and ``paper_
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Callable, Collection, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -78,6 +79,7 @@ from trackfuse.plots.style import (
     band,
     legend_below,
     legend_entries,
+    mosaic_figure,
     new_figure,
     reference_line,
     wants_log_axis,
@@ -878,8 +880,8 @@ def _tracks_panel(ax: Axes, params: Mapping[str, Any], row: pd.Series) -> None:
             markersize=4, label=f"ESM TDOA-DF location (trial {int(row['trial'])})")
     ax.set_xlabel("x (km)")
     ax.set_ylabel("y (km)")
-    ax.set_title(f"separation {params['target.separation']:g} m; sensors at (0, 0) and "
-                 f"({params['geometry.baseline'] / 1e3:g} km, 0)", fontsize=8)
+    ax.set_title(f"one trial; separation {params['target.separation']:g} m; sensors at "
+                 f"(0, 0) and ({params['geometry.baseline'] / 1e3:g} km, 0)", fontsize=8)
 
 
 def _index_panel(ax: Axes, run: RunData, row: pd.Series, params: Mapping[str, Any]) -> None:
@@ -923,8 +925,17 @@ def _range_error_panel(ax: Axes, esm: pd.DataFrame, params: Mapping[str, Any]) -
     ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
     ax.yaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("time (s)")
-    ax.set_ylabel("ESM TDOA-DF range error\n(m, log scale)")
+    ax.set_ylabel("ESM range error\n(m, log scale)")
     ax.set_title(f"all {len(esm)} trials of this point", fontsize=8)
+
+
+TRAJECTORY_SIZE = (8.6, 6.4)
+"""Width and height (in) of the trajectory figure: readable at a page's 7 in (it was 12.9 in
+wide, its tick labels under 5 pt there)."""
+
+TRAJECTORY_TITLE_CHARS = 88
+"""Characters per title line of the trajectory figure (about 10 per inch at the title's
+size)."""
 
 
 def _trajectory_figure(run: RunData) -> Figure | str:
@@ -939,20 +950,20 @@ def _trajectory_figure(run: RunData) -> Figure | str:
     row = esm[esm["point"] == weave[0]].iloc[0] if weave else esm.iloc[0]
     point = int(row["point"])
     params = run.point_params(point)
-    fig, axes = new_figure(ncols=3, width=4.3, height=4.2)
-    _tracks_panel(axes[0], params, row)
-    _index_panel(axes[1], run, row, params)
-    _range_error_panel(axes[2], esm[esm["point"] == point], params)
+    fig, axes = mosaic_figure([["tracks", "index"], ["tracks", "error"]], *TRAJECTORY_SIZE,
+                              width_ratios=(1.0, 1.15))  # the map over two rows
+    _tracks_panel(axes["tracks"], params, row)
+    _index_panel(axes["index"], run, row, params)
+    _range_error_panel(axes["error"], esm[esm["point"] == point], params)
+    axes["tracks"].set_aspect("equal", adjustable="datalim")
     legend_below(fig, *legend_entries(fig.axes))
     where = _setting_words(params, swept_keys(run.config))
     amplitude = params["snake.amplitude"]
     head = ("Paper 001 Figs. 1-2 redrawn" if np.isclose(amplitude, PAPER_SCENARIO[
         "snake.amplitude"]) else f"Paper 001 Figs. 1-2 layout, snake amplitude {amplitude:g} m"
             f" (not the paper's {PAPER_SCENARIO['snake.amplitude']:g} m weave)")
-    fig.suptitle(f"{head}: true tracks and the ESM TDOA-DF location of target 2\n"
-                 + (f"{where}; " if where else "")
-                 + f"one saved trial (left, middle); error over all "
-                 f"{len(esm[esm['point'] == point])} trials of this point (right)")
+    fig.suptitle(textwrap.fill(f"{head}: true tracks and the ESM TDOA-DF location of target 2",
+                               TRAJECTORY_TITLE_CHARS) + (f"\n{where}" if where else ""))
     return fig
 
 
@@ -993,10 +1004,8 @@ def _manoeuvre_figure(run: RunData) -> Figure | str:
         return f"{len(groups)} settings of the ESM track (more than 9 curves per panel)"
     weights = [_weight_series(run.trials, p, rows["trial"].tolist()) for _, p, rows in groups]
     weight_name = next((w[0] for w in weights if w is not None), "")
-    # long or many curve labels: one legend below both panels (per-panel ones would not fit)
-    long_words = len(groups) > 4 or any(len(words) > 30 for words, _, _ in groups)
     fig, axes = new_figure(ncols=2 if weight_name else 1, width=5.0 if weight_name else 6.4,
-                           height=3.8 + 0.15 * len(groups))
+                           height=CURVE_ROW_IN + 0.3)
     axes = np.atleast_1d(axes)
     ax = axes[0]
     colours = ["0.2"] if len(groups) == 1 else [
@@ -1008,12 +1017,12 @@ def _manoeuvre_figure(run: RunData) -> Figure | str:
             _series_band(axes[1], t, w[1], words, colour, shade)
     indices = _index_references(ax, [run.point_params(p) for _, p, _ in groups])
     ax.set_yscale("log")
-    panels = [(ax, "manoeuvre index α (1, log scale)", "manoeuvre index" + (
+    panels = [(ax, "manoeuvre index α\n(1, log scale)", "manoeuvre index" + (
         "" if weight_name else " (no range weight: no dynamic-weight algorithm was run)"))]
     if weight_name:
         static = static_weights(FACTORS, run.point_params(groups[0][1])["weights"])[0]
-        axes[1].axhline(static, color="k", linestyle=":", linewidth=1.0,
-                        label="static AHP range weight")
+        axes[1].axhline(static, color=look(weight_name).colour, linestyle=":",
+                        linewidth=1.0, label="static AHP range weight")  # not α_max's black
         axes[1].set_ylim(0, 0.7)
         panels.append((axes[1], "range weight a₁ (1)",
                        f"range weight of {look(weight_name).label}"))
@@ -1021,10 +1030,8 @@ def _manoeuvre_figure(run: RunData) -> Figure | str:
         a.set_xlabel("time (s)")
         a.set_ylabel(ylabel)
         a.set_title(title, fontsize=8)
-        if not long_words:
-            a.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncols=2, fontsize=7)
-    if long_words:  # one legend for both panels, below them
-        legend_below(fig, *legend_entries(axes))
+    legend_below(fig, *legend_entries(axes))  # one legend for both panels, below them
+    _grow_for_legend(fig)
     fig.suptitle(f"Manoeuvre index ({' and '.join(indices)})"
                  + (" and range weight" if weight_name else "") + " per scan (no paper figure)"
                  f"\nmean over {len(groups[0][2])} trials with 95 % t bands")

@@ -694,9 +694,9 @@ PanelDraw = Callable[[Axes, pd.DataFrame, dict[str, Any]], tuple[float, AxisFit]
 """Draws one time panel and returns ``(the y top it needs, its AxisFit)``."""
 
 SHARED_TOP_RATIO = 2.5
-"""The panels of a time figure share one y range when the highest top they need is at most
-this multiple of the lowest, so that panels compare at a glance; else the panels of each row
-do, on the same condition, else each has its own."""
+"""The panels of a time or final-RMSE figure share one y range when the highest top they
+need is at most this multiple of the lowest, so that panels compare at a glance; else the
+panels of each row do, on the same condition, else each has its own."""
 
 
 def _shared_tops(needed: dict[int, float], per_row: int) -> dict[int, float]:
@@ -926,7 +926,8 @@ def _final_x_key(run: RunData) -> str:
 def _final_figure(run: RunData) -> Figure | str:
     """Range RMSE (km) at the last scan against the swept axis with 95 % bootstrap-t intervals
     beside the square-root PCRLB of the truth model (41-point grid plus the swept values)
-    and of the filter's q at the swept values; one panel per facet of the other keys."""
+    and of the filter's q at the swept values; one panel per facet of the other keys, y
+    ranges shared as in the time figures (:func:`_shared_tops`)."""
     x_key = _final_x_key(run)
     if x_key.startswith("no "):
         return x_key
@@ -941,15 +942,17 @@ def _final_figure(run: RunData) -> Figure | str:
     title = [("Paper Fig. 2 quantified: final" if quantified else "Final")
              + f" range RMSE ({_runs(last)} runs per point)",
              _context(run, "95 % bootstrap-t intervals")]
-    panel = SINGLE_PANEL if len(facets) == 1 else PANEL
+    panel = SINGLE_PANEL if len(facets) == 1 else PANEL if len(facets) == 2 else TIME_PANEL
     titles = _wrapped([t if len(facets) > 1 else "" for t, _ in facets], panel[0])
     curves = [_final_bounds(run, frame, x_key) for _, frame in facets]
     labels = {label for facet in curves for *_, label in facet}
     points = [_final_points(frame, x_key, names) for _, frame in facets]
-    tops = [_final_top(p, c) for p, c in zip(points, curves, strict=True)]
+    per_row = min(len(facets), 3)
+    needed = {i: _final_top(p, c) for i, (p, c) in enumerate(zip(points, curves, strict=True))}
+    tops = list(_shared_tops(needed, per_row).values())
     past = any(len(x) for p, top in zip(points, tops, strict=True)
                for _, x in _past_final_top(p, top))
-    fig, axes, cols = _figure(len(facets), min(len(facets), 3), panel, title,
+    fig, axes, cols = _figure(len(facets), per_row, panel, title,
                               len(names) + len(labels) + past, _lines(titles))
     for ax, facet_points, bound_curves, top, facet_title in zip(axes, points, curves, tops,
                                                                 titles, strict=True):
