@@ -238,3 +238,67 @@ def test_an_aborted_pool_ends_its_busy_workers_at_once():
                          check=True, timeout=50).stdout
     seconds, only_mine = out.split()
     assert float(seconds) < 10 and only_mine == "True"
+
+
+def _patch_workers(address: str, **replacements) -> None:
+    """Replace ``trackfuse.environment`` functions in every worker of ``address``."""
+    distributed = pytest.importorskip("distributed")
+
+    def patch() -> None:
+        import trackfuse.environment as environment
+
+        for name, value in replacements.items():
+            setattr(environment, name, lambda value=value: value)
+
+    with distributed.Client(address) as client:
+        client.run(patch)
+
+
+@pytest.fixture
+def own_cluster():
+    """A cluster of its own, since a test here changes what its workers report."""
+    distributed = pytest.importorskip("distributed")
+    cluster = distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                       dashboard_address=None)
+    try:
+        yield cluster.scheduler_address
+    finally:
+        cluster.close()
+
+
+def test_a_dask_worker_with_other_library_versions_is_refused(write_config, tmp_path,
+                                                              own_cluster):
+    """A worker imports its own installation: with another numpy it would compute numbers the
+    run id does not name, so the run refuses it in one line and writes no batch."""
+    from trackfuse.environment import library_versions
+
+    _patch_workers(own_cluster, library_versions={**library_versions(), "numpy": "1.0.0"})
+    config = load(write_config(CFG))
+    with pytest.raises(ExecutorError, match=r"dask worker tcp://\S+ has other library "
+                                            r"versions: numpy 1\.0\.0 \(here "):
+        run(config, tmp_path / "d", executor="dask", scheduler=own_cluster)
+    assert not list((tmp_path / "d").rglob("part-*"))
+
+
+def test_the_manifest_records_the_dask_workers_cpus(write_config, tmp_path, own_cluster):
+    """The CPU that computed the batches is the workers', not the command's machine's."""
+    import json
+
+    worker_cpu = {"model": "a worker's CPU", "numpy_simd": None, "settings": {}}
+    _patch_workers(own_cluster, cpu=worker_cpu)
+    done = run(load(write_config(CFG)), tmp_path / "d", executor="dask",
+               scheduler=own_cluster)
+    manifest = json.loads((done.folder / "manifest.json").read_text())
+    assert manifest["cpu"] == [worker_cpu]
+
+
+def test_environment_difference_names_other_code_before_versions():
+    from trackfuse.environment import environment_difference
+
+    ours = {"python": "3.11.2", "numpy": "2.3.0"}
+    same = {"code": "abc", "libraries": dict(ours), "cpu": {}}
+    assert environment_difference("abc", ours, same) is None
+    assert "other trackfuse code" in environment_difference("abd", ours, same)
+    older = {**same, "libraries": {**ours, "numpy": "2.2.0"}}
+    assert environment_difference("abc", ours, older) == (
+        "has other library versions: numpy 2.2.0 (here 2.3.0)")

@@ -12,7 +12,10 @@ import importlib.metadata
 import os
 import platform
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from trackfuse.experiments.base import Experiment
 
 NUMERIC_LIBRARIES = ("numpy", "scipy", "pandas", "numba", "stonesoup")
 """Libraries whose arithmetic or CSV formatting writes numbers (Stone Soup's in its own
@@ -72,3 +75,26 @@ def cpu_words(machine: dict[str, Any]) -> str:
     words = f"{machine.get('model')}, numpy {'/'.join(simd) if simd else 'baseline'}"
     settings = machine.get("settings") or {}
     return words + "".join(f", {k}={v}" for k, v in settings.items())
+
+
+def worker_environment(experiment: Experiment) -> dict[str, Any]:
+    """What this process computes ``experiment``'s numbers with: ``code`` (the sha256 of
+    :func:`trackfuse.fingerprint.code_fingerprint`), ``libraries``
+    (:func:`library_versions`) and ``cpu`` (:func:`cpu`). Run on each dask worker, which
+    imports its own installation."""
+    from trackfuse.fingerprint import code_fingerprint
+
+    return {"code": code_fingerprint(experiment).digest, "libraries": library_versions(),
+            "cpu": cpu()}
+
+
+def environment_difference(code: str, libraries: dict[str, str | None],
+                           found: dict[str, Any]) -> str | None:
+    """How a worker's :func:`worker_environment` ``found`` differs from this run's ``code``
+    digest and ``libraries`` versions, in words; ``None`` when it computes the same."""
+    if found.get("code") != code:
+        return "runs other trackfuse code (another version or edited source)"
+    theirs = found.get("libraries") or {}
+    changed = [f"{lib} {theirs.get(lib)} (here {ours})" for lib, ours in libraries.items()
+               if theirs.get(lib) != ours]
+    return "has other library versions: " + ", ".join(changed) if changed else None

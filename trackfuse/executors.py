@@ -244,6 +244,11 @@ class DaskExecutor:
             yield future.result()
             future.release()
 
+    def worker_environments(self, probe: Callable[[], dict[str, Any]]) -> dict[str, Any]:
+        """``{worker address: probe()}`` for every worker connected now (each computes its
+        own in its own installation)."""
+        return self._client.run(probe)
+
     def close(self, abort: bool = False) -> None:
         self._client.close()
         if self._cluster is not None:

@@ -31,14 +31,23 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 import trackfuse
 from trackfuse.batch import BatchTask, execute_batch, watch_sigint
 from trackfuse.config import Config
-from trackfuse.environment import cpu, cpu_words, library_versions, recorded_cpus, version
-from trackfuse.executors import make_executor
+from trackfuse.environment import (
+    cpu,
+    cpu_words,
+    environment_difference,
+    library_versions,
+    recorded_cpus,
+    version,
+    worker_environment,
+)
+from trackfuse.executors import ExecutorError, make_executor
 from trackfuse.experiments.base import NON_NEGATIVE
 from trackfuse.failures import first_failure
 from trackfuse.fingerprint import code_fingerprint
@@ -120,10 +129,10 @@ def _said(value: Any) -> str:
     return "not installed or not recorded" if value is None else str(value)
 
 
-def _with_cpu(recorded: Any, current: dict[str, Any]) -> list[dict[str, Any]]:
+def _with_cpus(recorded: Any, current: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Every CPU that computed a run's batches, in order: ``recorded`` plus ``current``."""
     cpus = recorded_cpus(recorded)
-    return cpus if current in cpus else [*cpus, current]
+    return cpus + [c for c in current if c not in cpus]
 
 
 def _now() -> str:
@@ -167,7 +176,7 @@ class Runner:
         self.libraries = library_versions()
         self.run_id = run_id(self.resolved, trackfuse.__version__, self.code.digest,
                              self.libraries)
-        self.cpu = cpu()
+        self.cpus = [cpu()]  # of the machines that compute: this one, or the dask workers
         self.out = Path(out)
         self.folder = RunFolder(self.out / folder_name(config.source) / self.run_id)
         self.points = expand(config.sweep, config.sweep_mode)
@@ -181,6 +190,11 @@ class Runner:
         self.force, self.name = force, name
         self.on_phase = on_phase or (lambda phase: None)  # told each step after the trials
         self.git = _git_state(Path.cwd())
+
+    @property
+    def _on_dask(self) -> bool:
+        """Whether the batches run on dask workers (see :func:`make_executor`)."""
+        return self.executor_kind == "dask" or bool(self.scheduler or self.scheduler_file)
 
     @property
     def total_trials(self) -> int:
@@ -223,7 +237,7 @@ class Runner:
             "trackfuse_path": str(Path(trackfuse.__file__).resolve().parent),
             "versions": versions,
             "platform": platform.platform(),
-            "cpu": _with_cpu(previous.get("cpu"), self.cpu),
+            "cpu": _with_cpus(previous.get("cpu"), self.cpus),
             "host": platform.node(),
             "root_seed": self.config.seed,
             "executor": self.executor_used or previous.get("executor") or self.executor_kind,
@@ -265,8 +279,8 @@ class Runner:
         previous = self._previous_manifest()
         if previous is None:
             self._note_other_code()
-        elif previous.get("status") != RunStatus.COMPLETE:
-            self._note_other_cpu(previous)
+        elif previous.get("status") != RunStatus.COMPLETE and not self._on_dask:
+            self._note_other_cpu(previous)  # on dask: once the workers' CPUs are known
         if previous is not None and previous.get("status") == RunStatus.COMPLETE:
             problem = self.folder.check_final_files(previous)
             if problem is None:
@@ -354,8 +368,9 @@ class Runner:
         """Say in one line when a run resumes on a CPU its saved batches were not computed
         on (another model, vector extensions or rounding settings: :func:`cpu`)."""
         before = recorded_cpus(previous.get("cpu"))
-        if before and self.cpu not in before:
-            self.warn(f"{self.folder.path}: resuming on another CPU ({cpu_words(self.cpu)}; "
+        if before and (new := [c for c in self.cpus if c not in before]):
+            self.warn(f"{self.folder.path}: resuming on another CPU "
+                      f"({'; '.join(map(cpu_words, new))}; "
                       f"the saved batches: {'; '.join(map(cpu_words, before))}); the last "
                       "bits of some results may differ from a run on one machine, and "
                       "amplified ones more (docs/runner.md, run id)")
@@ -389,6 +404,8 @@ class Runner:
         executor = make_executor(self.executor_kind, self.workers, self.scheduler,
                                  self.scheduler_file, self.config.experiment.preload)
         self.workers, self.executor_used = executor.workers, executor.kind
+        if executor.kind == "dask":
+            self._check_dask_workers(executor, session)
         self.folder.write_manifest(self._manifest(RunStatus.RUNNING, session))
         last = time.monotonic()
         label = f"{self.config.experiment.name} [{self.run_id}]"
@@ -412,6 +429,21 @@ class Runner:
             executor.close(abort=stopped)
             if loading is not None:
                 loading.join()
+
+    def _check_dask_workers(self, executor: Any, session: _Session) -> None:
+        """Refuse dask workers that would compute with other code or library versions than
+        the run id names (each worker imports its own installation), and record the
+        workers' CPUs as the run's; workers that join later are not checked."""
+        found = executor.worker_environments(partial(worker_environment,
+                                                     self.config.experiment))
+        for address, environment in sorted(found.items()):
+            if why := environment_difference(self.code.digest, self.libraries, environment):
+                executor.close(abort=True)
+                raise ExecutorError(f"dask worker {address} {why}: install the same trackfuse "
+                                    "and libraries on every worker")
+        self.cpus = list({repr(e["cpu"]): e["cpu"] for e in found.values()}.values())
+        if session.previous:
+            self._note_other_cpu(session.previous)
 
     def _load_finishing_code(self, executor_kind: str) -> threading.Thread | None:
         """While the workers compute, load in this process what the steps after them need
