@@ -12,10 +12,10 @@ import importlib.metadata
 import os
 import platform
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-if TYPE_CHECKING:
-    from trackfuse.experiments.base import Experiment
+from trackfuse.experiments.base import Experiment
+from trackfuse.fingerprint import code_fingerprint
 
 NUMERIC_LIBRARIES = ("numpy", "scipy", "pandas", "numba", "stonesoup")
 """Libraries whose arithmetic or CSV formatting writes numbers (Stone Soup's in its own
@@ -82,8 +82,6 @@ def worker_environment(experiment: Experiment) -> dict[str, Any]:
     :func:`trackfuse.fingerprint.code_fingerprint`), ``libraries``
     (:func:`library_versions`) and ``cpu`` (:func:`cpu`). Run on each dask worker, which
     imports its own installation."""
-    from trackfuse.fingerprint import code_fingerprint
-
     return {"code": code_fingerprint(experiment).digest, "libraries": library_versions(),
             "cpu": cpu()}
 
