@@ -23,6 +23,18 @@ def _stop(signum: int, frame: object) -> None:
     raise KeyboardInterrupt
 
 
+def _forget_caught_ctrl_c() -> None:
+    """Let the exit status a command chose stand after a Ctrl-C it caught.
+
+    CPython 3.11 to 3.13 (changed by python/cpython#128130) marks the process as ended by
+    Ctrl-C when a ``KeyboardInterrupt`` leaves code run by ``exec`` or ``eval`` of a string,
+    as each dataclass of a module being imported is built, even if the command then catches
+    it: ``python -m trackfuse`` killed itself with SIGINT after its ``interrupted:`` line
+    instead of exiting 130. Running such code clears the mark.
+    """
+    exec("")
+
+
 #: The commands that save work a second call resumes.
 RESUMABLE = ("run", "reproduce")
 
@@ -59,6 +71,7 @@ class OneLineErrors(TyperGroup):
             print_error("aborted")
             sys.exit(1)
         finally:
+            _forget_caught_ctrl_c()
             # The interpreter's collections at exit walk every object still alive (the
             # libraries a run imported): about 0.5 s after a run. The process is ending and
             # its memory goes with it, so they are spared.

@@ -94,11 +94,21 @@ def test_terminal_ctrl_c_while_the_fork_server_loads_prints_no_traceback(tmp_pat
         # ("Exception ignored in"), and the run goes on: rare, and not the children's doing
         assert "Exception ignored in" in err, err
         return
-    # 130, or (2 of 30 runs at b0f2f3e, cause not found) death by SIGINT after the message,
-    # which a shell reports as the same 130 (128 + 2)
-    assert proc.returncode in (130, -signal.SIGINT)
+    assert proc.returncode == 130, (proc.returncode, err)
     assert "Traceback" not in err, err
     assert err.strip().startswith("interrupted:"), err
+
+
+def test_ctrl_c_caught_after_it_left_an_exec_exits_130(write_config, tmp_path):
+    """A Ctrl-C whose ``KeyboardInterrupt`` left code run by ``exec`` of a string (a dataclass
+    being built while a module loads) ended ``python -m trackfuse`` by SIGINT after its
+    ``interrupted:`` line (CPython 3.11 to 3.13): the test above's few runs in a hundred."""
+    path = write_config("experiment: toy_experiments:CTRL_C_IN_EXEC\ntrials: 4\nseed: 1\n")
+    result = trackfuse("run", path, "--out", tmp_path / "out", "--executor", "serial",
+                       "--no-plots", "--no-progress",
+                       preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    assert result.returncode == 130, (result.returncode, result.stderr)
+    assert result.stderr.startswith("interrupted:") and "Traceback" not in result.stderr
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux /proc")

@@ -166,6 +166,24 @@ UNRULY = register(Experiment(
     batch_size=5,
 ))
 
+
+def ctrl_c_in_exec_trial(params, streams: TrialStreams) -> list[dict]:
+    """Ctrl-C pressed while the trial runs code made from a string, as building a dataclass
+    or a namedtuple does: the ``KeyboardInterrupt`` leaves an ``exec``."""
+    import os
+    import signal
+
+    exec("os.kill(os.getpid(), signal.SIGINT)", {"os": os, "signal": signal})
+    return [{"algorithm": "a", "value": float(streams.point.random())}]
+
+
+CTRL_C_IN_EXEC = register(Experiment(
+    name="toy_ctrl_c_in_exec",
+    title="Ctrl-C inside exec",
+    params=(Param("x", 1.0, "a number", ""),),
+    run_trial=ctrl_c_in_exec_trial,
+))
+
 MIX = np.linspace(-1.0, 1.0, 24).reshape(8, 3)
 
 
