@@ -91,8 +91,9 @@ def test_terminal_ctrl_c_while_the_fork_server_loads_prints_no_traceback(tmp_pat
     assert "forkserver.py" not in err and "process.py" not in err, err  # no child's traceback
     if proc.returncode == 0:
         # CPython drops a KeyboardInterrupt raised inside a callback of its import machinery
-        # ("Exception ignored in"), and the run goes on: rare, and not the children's doing
-        assert "Exception ignored in" in err, err
+        # ("Exception ignored in"), or (2 of 270 runs) loses the Ctrl-C while modules load
+        # without a word, and the run goes on to completion: rare, not the children's doing
+        assert "Exception ignored in" in err or "Traceback" not in err, err
         return
     assert proc.returncode == 130, (proc.returncode, err)
     assert "Traceback" not in err, err
