@@ -84,18 +84,20 @@ def test_the_plugin_example_runs_through_the_cli(tmp_path):
     assert listed.returncode == 0 and "error" in listed.stdout and "tosses" in listed.stdout
 
 
-def _example_on_a_small_run(tmp_path, config: str, example: str) -> list[str]:
-    """The output lines of ``examples/<example>`` on a 20-trial run of ``configs/<config>``
-    (both must exit 0)."""
+def _example_on_a_small_run(tmp_path, config: str, example: str, trials: int = 20,
+                            run_args: tuple[str, ...] = (),
+                            example_args: tuple[str, ...] = ()) -> list[str]:
+    """The output lines of ``examples/<example>`` on a ``trials``-trial run of
+    ``configs/<config>`` (both must exit 0)."""
     env = cli_env()
     proc = subprocess.run([sys.executable, "-m", "trackfuse", "run", f"configs/{config}",
-                           "--trials", "20", "--out", str(tmp_path), "--workers", "1",
-                           "--no-plots", "--no-progress"], cwd=ROOT, env=env,
-                          capture_output=True, text=True, timeout=120)
+                           "--trials", str(trials), *run_args, "--out", str(tmp_path),
+                           "--workers", "1", "--no-plots", "--no-progress"], cwd=ROOT,
+                          env=env, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     folder = re.search(r"^wrote (.+?): \d+ rows", proc.stdout, flags=re.M).group(1)
-    proc = subprocess.run([sys.executable, f"examples/{example}", folder], cwd=ROOT,
-                          env=env, capture_output=True, text=True, timeout=120)
+    proc = subprocess.run([sys.executable, f"examples/{example}", folder, *example_args],
+                          cwd=ROOT, env=env, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     return proc.stdout.splitlines()
 
@@ -116,3 +118,44 @@ def test_the_esm_radar_cv_nis_example_runs_on_a_run_folder(tmp_path):
     means = [float(re.search(r"c dt ([\d.]+) \[", line).group(1)) for line in lines
              if "mean NIS" in line]
     assert len(means) == 8 and all(w > s for s, w in zip(means[:4], means[4:], strict=True))
+
+
+def test_the_interval_coverage_example_runs_on_a_run_folder(tmp_path):
+    """examples/interval_coverage.py (docs/runner.md, Statistics) on 100 trials of the orbit
+    config's nearest neighbour: all three measurements, one null comparison."""
+    lines = _example_on_a_small_run(
+        tmp_path, "twin_sensor_orbit.yaml", "interval_coverage.py", trials=100,
+        run_args=("--set", "algorithms=[nn/mgekf,nn/ekf]"),
+        example_args=("--replications", "20"))
+    assert lines[0].startswith("population: 100 runs per level, twin_sensor seed 20051001")
+    assert sum("report (bootstrap-t)" in line for line in lines) == 8
+    assert sum("Wilson over 500 pairs covers" in line for line in lines) == 4
+    assert re.fullmatch(r"3\. Null comparisons .*: \d of 1 flag .* in any of 3200 gated "
+                        r"cells .*", lines[-1])
+
+
+def test_the_first_update_example_prints_shift_and_formula():
+    """examples/first_update_shift.py (docs/papers/twin_sensor.md, W000-3) on 200 trials."""
+    proc = subprocess.run([sys.executable, "examples/first_update_shift.py", "--trials", "200",
+                           "--only", "paper", "cue_2km"], cwd=ROOT, env=cli_env(),
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.splitlines()
+    assert lines[1].startswith("paper: ") and lines[1].endswith("formula 2000 m")
+    assert lines[2].startswith("cue_2km: ") and lines[2].endswith("formula 20 m")
+
+
+def test_the_stonesoup_rounding_example_compares_two_numpy_settings():
+    """examples/stonesoup_jacobian_rounding.py (docs/stonesoup.md): both child processes run
+    and every line is printed (on a CPU without AVX-512 the two settings agree)."""
+    pytest.importorskip("stonesoup")
+    proc = subprocess.run([sys.executable, "examples/stonesoup_jacobian_rounding.py"],
+                          cwd=ROOT, env=cli_env(), capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.splitlines()
+    assert lines[0].startswith("3000 states;") and len(lines) == 11
+    assert lines[1].startswith("atan2: largest error") and lines[2].startswith("asin: ")
+    assert lines[4].startswith("  x < 0: the settings differ in ")
+    assert lines[7].startswith("  x >= 0: the settings differ in ")
+    assert lines[-1].startswith("  the state of tests/test_stonesoup.py (x = -23.8 km)")

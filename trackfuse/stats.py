@@ -198,7 +198,7 @@ def bootstrap_t_mean_intervals(groups, level: float = 0.95, resamples: int = 200
     Hesterberg's expansion for small samples (Hesterberg 2015, Am. Stat. 69, 371-386),
     which widens it at n = 8 and hardly at all at n = 50. Hesterberg proposes it for the
     percentile interval; on a bootstrap-t it is our choice, made on the coverage measured
-    below (without it: 0.91-0.93 at n = 8, 0.93-0.96 at n = 50), and it errs on the wide
+    below (without it: 0.913-0.938 at n = 8, 0.943-0.948 at n = 50), and it errs on the wide
     side (at n = 8 the tail quantiles rest on about 11 of 2000 resamples). A resample with
     no spread has an infinite t (``+-inf``, 0 when its mean is the sample's), so with few
     distinct values a bound can be infinite: the data do not bound the mean. A sample with
@@ -209,12 +209,13 @@ def bootstrap_t_mean_intervals(groups, level: float = 0.95, resamples: int = 200
         call would make, so a group's interval does not depend on the others.
     Returns ``(len(groups), 2)`` (low, high); NaN where a group has fewer than 2 values.
 
-    Measured coverage (nominal 95 %; the squared final-scan range errors of
-    ``configs/twin_sensor_orbit.yaml``, 4000 runs per level as the population, nearest
-    neighbour with MGEKF and EKF at clutter 0 and 9, 1000 replications each, Monte Carlo
-    s.e. 0.007) of the RMSE interval :func:`rmse_intervals` built on it: 0.961-0.970 at
-    n = 8 and 0.947-0.962 at n = 50, where the percentile bootstrap covers 0.787-0.805
-    and 0.905-0.933 (``docs/papers/twin_sensor.md``, Metrics, gives the limits).
+    Measured coverage (nominal 95 %; ``examples/interval_coverage.py`` on
+    ``configs/twin_sensor_orbit.yaml`` run with ``--set trials=4000``: the squared
+    final-scan range errors of nearest neighbour with MGEKF and EKF at clutter 0 and 9 as
+    the population, 1000 samples each, Monte Carlo s.e. 0.005-0.013) of the RMSE interval
+    :func:`rmse_intervals` built on it: 0.961-0.975 at n = 8 and 0.951-0.954 at n = 50,
+    where the percentile bootstrap covers 0.782-0.809 and 0.906-0.924 (``docs/runner.md``,
+    Statistics, gives the command).
     """
     from scipy.special import ndtr, stdtrit  # on first use: see the module docstring
 
