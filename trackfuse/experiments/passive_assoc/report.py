@@ -512,12 +512,16 @@ def gap_interval(gap: ArrayLike, level: float = 0.95) -> tuple[float, float]:
     (all at the optimum, typically) the interval collapses to that value, and when fewer than a few
     runs are off the optimum the upper bound is infinite (the data do not bound the mean):
     in both cases the Wilson interval of the at-optimum rate says how sure the run is.
-    Measured coverage of the mean gap at 50 runs (``configs/passive_association.yaml``,
-    2000 runs per N as the population, 1000 replications): 0.949-0.963 for the paper's PGA
-    (most runs off the optimum), where the percentile bootstrap covered 0.930-0.942; for
-    variants at ``J*`` in 97-99.6 % of runs no resampling interval can cover (most samples
-    of 50 hold at most one run off the optimum). NaN for fewer than 2 runs: one run does
-    not bound the mean.
+    Measured coverage of the mean gap at 50 runs, nominal 0.95 (``examples/gap_coverage.py``
+    on ``configs/passive_association.yaml`` run with ``--set trials=2000``: the gaps at the
+    last checkpoint of each N as the population, 1000 samples each, Monte Carlo s.e.
+    0.005-0.016; ``docs/papers/passive_assoc.md``, "Metrics and intervals", gives the
+    commands): 0.951-0.973 for the paper's PGA (most runs off the optimum), where the
+    percentile bootstrap covered 0.937-0.948; 0.179-0.682 (percentile 0.158-0.440) for
+    ``pga_evict`` and ``pga_anneal``, at ``J*`` in 97.8-99.7 % of the population's runs,
+    where 70.1-98.6 % of the samples hold at most one run off the optimum (``pga_anneal`` at
+    N = 5 reaches ``J*`` in every run: true mean 0, covered by every [0, 0]). NaN for fewer
+    than 2 runs: one run does not bound the mean.
     """
     g = np.asarray(gap, dtype=float)
     low, high = bootstrap_t_mean_intervals([g], level, BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED)[0]
