@@ -27,15 +27,21 @@ sweep: {mu: [0, 1, 2]}
 """
 
 
-@pytest.fixture(scope="module")
-def dask_address():
+def _local_cluster(workers: int):
+    """The scheduler address of a dask LocalCluster of ``workers`` one-thread processes,
+    closed after the test."""
     distributed = pytest.importorskip("distributed")
-    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                       dashboard_address=None)
+    cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1,
+                                       processes=True, dashboard_address=None)
     try:
         yield cluster.scheduler_address
     finally:
         cluster.close()
+
+
+@pytest.fixture(scope="module")
+def dask_address():
+    yield from _local_cluster(2)
 
 
 def run(config, out, **kw):
@@ -257,13 +263,7 @@ def _patch_workers(address: str, **replacements) -> None:
 @pytest.fixture
 def own_cluster():
     """A cluster of its own, since a test here changes what its workers report."""
-    distributed = pytest.importorskip("distributed")
-    cluster = distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
-                                       dashboard_address=None)
-    try:
-        yield cluster.scheduler_address
-    finally:
-        cluster.close()
+    yield from _local_cluster(1)
 
 
 def test_a_dask_worker_with_other_library_versions_is_refused(write_config, tmp_path,
