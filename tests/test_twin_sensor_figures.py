@@ -6,6 +6,7 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 import pytest
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import to_hex
 from matplotlib.container import ErrorbarContainer
 
@@ -403,3 +404,19 @@ def test_a_range_band_past_the_top_is_marked_there(run_50):
     assert colour == to_hex(line_kwargs("paper_approx/mgekf")["color"])
     assert report.PAST_TOP_LABEL in _legend(fig)
     assert report.PAST_TOP_LABEL not in _legend(report.figures(run_50, [name])[name])
+
+
+def test_no_empty_legend_row_when_nothing_passes_the_top(run_50):
+    """The range figure reserves a legend row for the past-the-top triangle; when no band
+    passes the top that row is cut, so the legend sits right under the x labels (an empty
+    0.2 in row used to separate them)."""
+    fig = report.figures(run_50, ["range_error_vs_time"])["range_error_vs_time"]
+    assert report.PAST_TOP_LABEL not in _legend(fig)
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    labels_bottom = min(ax.xaxis.label.get_window_extent(renderer).y0
+                        for ax in fig.axes if ax.get_visible())
+    legend_top = fig.legends[0].get_window_extent(renderer).y1
+    assert 0 < (labels_bottom - legend_top) / fig.dpi < 0.3
+    assert text_overlaps(fig) == []

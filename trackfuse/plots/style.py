@@ -122,6 +122,19 @@ def fixed_figure(ncols: int = 1, nrows: int = 1, panel: tuple[float, float] = (4
     return fig, axes.ravel()
 
 
+def trim_bottom(fig, inches: float) -> None:
+    """Cut ``inches`` off the bottom of a :func:`fixed_figure` (a legend row it reserved and
+    does not use), every panel and title keeping its place measured from the top."""
+    height = fig.get_figheight()
+    new = height - inches
+    for ax in fig.axes:
+        x0, y0, width, tall = ax.get_position().bounds
+        ax.set_position([x0, (y0 * height - inches) / new, width, tall * height / new])
+    if fig._suptitle is not None:
+        fig._suptitle.set_y(1 - (1 - fig._suptitle.get_position()[1]) * height / new)
+    fig.set_figheight(new)
+
+
 def legend_in_strip(fig, handles: list, labels: list[str], ncols: int) -> None:
     """One figure legend centred at the bottom of ``fig``, in the strip that
     :class:`Margins` ``strip`` reserved (about 0.2 inch per legend row)."""

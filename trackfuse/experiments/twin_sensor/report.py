@@ -75,7 +75,7 @@ from pandas.api.typing import SeriesGroupBy
 
 from trackfuse.experiments.twin_sensor.model import PARAMS, bounds, build_scenario
 from trackfuse.plots.algorithms import FILTER_LABELS, GREYS, VERMILLION, line_kwargs, look
-from trackfuse.plots.style import Margins, context, fixed_figure, legend_in_strip
+from trackfuse.plots.style import Margins, context, fixed_figure, legend_in_strip, trim_bottom
 from trackfuse.reported import TWIN_SENSOR
 from trackfuse.reports import HEADLINE_COLUMNS
 from trackfuse.rundata import RunData, succeeded_rows, swept_keys
@@ -313,6 +313,10 @@ def _rmse_band(sq: pd.Series) -> pd.DataFrame:
 # Figure frames: fixed layout, words in titles, one legend strip
 
 
+LEGEND_ROW_IN = 0.2
+"""Height (in) of one row of a figure's legend strip."""
+
+
 def _frame(n_panels: int, ncols: int, panel: tuple[float, float], title_lines: list[str],
            legend_entries: int, panel_titles: int) -> tuple[Figure, np.ndarray, int]:
     """``(fig, axes, legend_columns)`` with ``n_panels`` panels in rows of ``ncols`` and room
@@ -321,7 +325,7 @@ def _frame(n_panels: int, ncols: int, panel: tuple[float, float], title_lines: l
     nrows = -(-n_panels // ncols)
     width = 0.85 + ncols * panel[0] + (ncols - 1) * 0.55
     legend_cols = max(1, min(legend_entries, int(width / LEGEND_COLUMN_IN)))
-    strip = 0.2 * -(-legend_entries // legend_cols) + 0.1
+    strip = LEGEND_ROW_IN * -(-legend_entries // legend_cols) + 0.1
     margins = Margins(top=0.15 + 0.19 * len(title_lines) + 0.18 * panel_titles + 0.07,
                       hspace=0.55 + 0.18 * panel_titles, strip=strip)
     fig, axes = fixed_figure(ncols, nrows, panel, margins)
@@ -383,14 +387,18 @@ def _point_title(params: dict[str, Any], swept: Sequence[str]) -> str:
 
 
 def _finish(fig: Figure, axes: Sequence[Axes], legend_cols: int,
-            everywhere: Collection[str] = ()) -> Figure:
+            everywhere: Collection[str] = (), reserved: int = 0) -> Figure:
     """``fig`` with one legend of the entries of ``axes`` and of the entries labelled one of
-    ``everywhere`` in any panel of ``fig`` (each label once)."""
+    ``everywhere`` in any panel of ``fig`` (each label once); the legend rows of the
+    ``reserved`` entries :func:`_frame` made room for that stay empty are cut off."""
     entries: dict[str, Any] = {}
     for ax in fig.axes:
         for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
             if ax in axes or label in everywhere:
                 entries.setdefault(label, handle)
+    unused = -(-reserved // legend_cols) - -(-len(entries) // legend_cols)
+    if unused > 0:
+        trim_bottom(fig, LEGEND_ROW_IN * unused)
     legend_in_strip(fig, list(entries.values()), list(entries), legend_cols)
     return fig
 
@@ -746,7 +754,7 @@ def _time_figure(run: RunData, draw: PanelDraw, title: Sequence[str], y_label: s
     tops = _shared_tops({i: top for i, (top, _) in fits.items()}, per_row)
     for i, (_, fit) in fits.items():
         fit(tops[i])
-    return _finish(fig, drawn[:1], cols, everywhere)
+    return _finish(fig, drawn[:1], cols, everywhere, reserved=legend_entries)
 
 
 def _time_curve_kwargs(name: str) -> dict[str, Any]:
