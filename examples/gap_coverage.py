@@ -38,7 +38,7 @@ from trackfuse.experiments.passive_assoc.report import (
     BOOTSTRAP_SEED,
     gap_interval,
 )
-from trackfuse.stats import _resample_counts
+from trackfuse.stats import percentile_mean_intervals
 
 RUNS = 50  # trials of configs/passive_association.yaml
 
@@ -47,9 +47,7 @@ def percentile_gap_intervals(samples: np.ndarray) -> np.ndarray:
     """The percentile bootstrap the report used before (commit 316f7b0 replaced it),
     ``(R, n) -> (R, 2)``: the same resamples (generator :data:`BOOTSTRAP_SEED`) for every
     sample, as one call per sample drew them."""
-    n = samples.shape[1]
-    means = samples @ _resample_counts(n, BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED).T / n
-    return np.quantile(means, [0.025, 0.975], axis=1).T
+    return percentile_mean_intervals(samples, BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED)
 
 
 def report_gap_intervals(samples: np.ndarray) -> np.ndarray:

@@ -48,7 +48,13 @@ import numpy as np
 
 import trackfuse
 from trackfuse.compare import compare_trials
-from trackfuse.stats import _bootstrap_t, _resample_counts, rmse_intervals, wilson_interval
+from trackfuse.stats import (
+    _bootstrap_t,
+    _resample_counts,
+    percentile_mean_intervals,
+    rmse_intervals,
+    wilson_interval,
+)
 
 ALGORITHMS = ("nn/mgekf", "nn/ekf")
 RESAMPLES = 2000  # as the report (trackfuse/experiments/twin_sensor/report.py)
@@ -56,11 +62,8 @@ BLOCK = 50
 
 
 def percentile_rmse_intervals(squared: np.ndarray) -> np.ndarray:
-    """The percentile bootstrap the report used before, ``(R, n) -> (R, 2)``
-    (as ``tests/test_stats.py``)."""
-    n = squared.shape[1]
-    means = squared @ _resample_counts(n, RESAMPLES, 0).T / n
-    return np.sqrt(np.quantile(means, [0.025, 0.975], axis=1).T)
+    """The percentile bootstrap the report used before, ``(R, n) -> (R, 2)``."""
+    return np.sqrt(percentile_mean_intervals(squared, RESAMPLES, 0))
 
 
 def unexpanded_rmse_intervals(squared: np.ndarray) -> np.ndarray:

@@ -14,6 +14,7 @@ from trackfuse.stats import (
     mcnemar_p,
     nees_band,
     paired_t_p,
+    percentile_mean_intervals,
     proportion_difference_interval,
     rmse_intervals,
     t_interval,
@@ -125,9 +126,7 @@ def test_p_values_are_nan_when_the_spread_is_undefined():
 
 def _percentile_rmse_intervals(squared: np.ndarray, resamples: int, seed: int) -> np.ndarray:
     """The percentile bootstrap that :func:`rmse_intervals` replaced, ``(R, n) -> (R, 2)``."""
-    n = squared.shape[1]
-    means = squared @ _resample_counts(n, resamples, seed).T / n  # (R, resamples)
-    return np.sqrt(np.quantile(means, [0.025, 0.975], axis=1).T)
+    return np.sqrt(percentile_mean_intervals(squared, resamples, seed))
 
 
 def test_rmse_interval_covers_95_percent_of_gaussian_errors_where_the_percentile_did_not():

@@ -122,6 +122,10 @@ def fixed_figure(ncols: int = 1, nrows: int = 1, panel: tuple[float, float] = (4
     return fig, axes.ravel()
 
 
+LEGEND_ROW_IN = 0.2
+"""Height (in) of one row of a :func:`legend_in_strip` legend, for sizing the strip."""
+
+
 def trim_bottom(fig, inches: float) -> None:
     """Cut ``inches`` off the bottom of a :func:`fixed_figure` (a legend row it reserved and
     does not use), every panel and title keeping its place measured from the top."""
@@ -137,7 +141,7 @@ def trim_bottom(fig, inches: float) -> None:
 
 def legend_in_strip(fig, handles: list, labels: list[str], ncols: int) -> None:
     """One figure legend centred at the bottom of ``fig``, in the strip that
-    :class:`Margins` ``strip`` reserved (about 0.2 inch per legend row)."""
+    :class:`Margins` ``strip`` reserved (:data:`LEGEND_ROW_IN` per legend row)."""
     with context():
         fig.legend(handles, labels, loc="lower center", bbox_to_anchor=(0.5, 0.0),
                    ncols=max(1, ncols), frameon=False, borderaxespad=0.3)

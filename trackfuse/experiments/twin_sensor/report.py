@@ -75,7 +75,14 @@ from pandas.api.typing import SeriesGroupBy
 
 from trackfuse.experiments.twin_sensor.model import PARAMS, bounds, build_scenario
 from trackfuse.plots.algorithms import FILTER_LABELS, GREYS, VERMILLION, line_kwargs, look
-from trackfuse.plots.style import Margins, context, fixed_figure, legend_in_strip, trim_bottom
+from trackfuse.plots.style import (
+    LEGEND_ROW_IN,
+    Margins,
+    context,
+    fixed_figure,
+    legend_in_strip,
+    trim_bottom,
+)
 from trackfuse.reported import TWIN_SENSOR
 from trackfuse.reports import HEADLINE_COLUMNS
 from trackfuse.rundata import RunData, succeeded_rows, swept_keys
@@ -311,10 +318,6 @@ def _rmse_band(sq: pd.Series) -> pd.DataFrame:
 
 # --------------------------------------------------------------------------------------------
 # Figure frames: fixed layout, words in titles, one legend strip
-
-
-LEGEND_ROW_IN = 0.2
-"""Height (in) of one row of a figure's legend strip."""
 
 
 def _frame(n_panels: int, ncols: int, panel: tuple[float, float], title_lines: list[str],
