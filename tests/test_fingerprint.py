@@ -4,15 +4,17 @@ from __future__ import annotations
 
 import json
 import os
+import platform
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
-from conftest import ROOT, TESTS, ctrl_c_at_part
+from conftest import ROOT, TESTS, cli_env, ctrl_c_at_part
 from toy_experiments import GAUSSIAN
 
 from trackfuse.config import load
+from trackfuse.environment import unseen_cpus
 from trackfuse.experiments import get
 from trackfuse.fingerprint import NUMBERS_PATH, code_fingerprint
 from trackfuse.runner import RunInterrupted, Runner
@@ -149,7 +151,8 @@ def test_other_library_versions_give_a_new_folder_and_say_which(write_config, tm
     assert notes[0].split("(numpy ")[1].startswith(f"{first_numpy(first.folder)}, now 99.0.0")
     manifest = json.loads((second.folder / "manifest.json").read_text())
     assert manifest["versions"]["numpy"] == "99.0.0"
-    assert [set(c) for c in manifest["cpu"]] == [{"model", "numpy_simd", "settings"}]
+    assert [set(c) for c in manifest["cpu"]] == [{"model", "numpy_simd", "blas",
+                                                          "settings"}]
     assert (second.folder / "trials.csv").read_bytes() == (first.folder /
                                                            "trials.csv").read_bytes()
 
@@ -194,3 +197,25 @@ def test_a_sibling_manifest_with_damaged_versions_is_just_other_code(write_confi
     notes: list[str] = []
     Runner(config, tmp_path, progress=False, plots=False, warn=notes.append).run()
     assert len(notes) == 1 and "from other code (1 such run(s))" in notes[0]
+
+
+def test_the_recorded_blas_kernel_is_the_one_openblas_runs():
+    """docs/runner.md (run id): OPENBLAS_CORETYPE picks OpenBLAS's kernel, so it must change
+    what the manifest's ``cpu`` says (Nehalem's kernel runs on every x86-64 CPU since 2008)."""
+    probe = "from trackfuse.environment import cpu; print(cpu()['blas'])"
+    env = {k: v for k, v in cli_env().items() if k != "OPENBLAS_CORETYPE"}
+    default = subprocess.run([sys.executable, "-c", probe], env=env, text=True,
+                             capture_output=True, check=True).stdout
+    if "openblas" not in default or platform.machine() not in ("x86_64", "AMD64"):
+        pytest.skip(f"numpy does not use OpenBLAS on x86-64 here: {default.strip()}")
+    forced = subprocess.run([sys.executable, "-c", probe], text=True, capture_output=True,
+                            env={**env, "OPENBLAS_CORETYPE": "Nehalem"}, check=True).stdout
+    assert forced.strip() == "['openblas Nehalem']"
+
+
+def test_a_cpu_recorded_before_blas_was_is_compared_on_the_rest():
+    here = {"model": "m", "numpy_simd": ["AVX2"], "blas": ["openblas Haswell"], "settings": {}}
+    older = {"model": "m", "numpy_simd": ["AVX2"], "settings": {}}
+    assert unseen_cpus([here], [older]) == []
+    assert unseen_cpus([here], [{**older, "numpy_simd": ["SSE42"]}]) == [here]
+    assert unseen_cpus([here], [{**here, "blas": ["openblas SkylakeX"]}]) == [here]

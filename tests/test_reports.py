@@ -188,8 +188,9 @@ def test_the_index_names_every_cpu_that_computed_the_run(toy_run):
     write_report(mixed)
     facts = (toy_run.path / "index.md").read_text().split("\n## ")[0]
     here = m["cpu"][0]
-    assert f"**CPU**: {here['model']}, numpy {'/'.join(here['numpy_simd'])}; an older " \
-           "machine, numpy baseline, OPENBLAS_CORETYPE=Haswell" in facts
+    assert f"**CPU**: {here['model']}, numpy {'/'.join(here['numpy_simd'])}, " \
+           f"{'/'.join(here['blas'])}; an older machine, numpy baseline, " \
+           "OPENBLAS_CORETYPE=Haswell" in facts
     write_report(toy_run)  # the other tests read the default report
 
 

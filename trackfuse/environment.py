@@ -14,6 +14,9 @@ import platform
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+import threadpoolctl
+
 from trackfuse.experiments.base import Experiment
 from trackfuse.fingerprint import code_fingerprint
 
@@ -49,10 +52,27 @@ def _numpy_simd() -> list[str] | None:
     return None
 
 
+def _numpy_blas() -> list[str] | None:
+    """The BLAS numpy calls and the kernel it chose for this CPU, e.g. ``["openblas
+    SkylakeX"]`` (threadpoolctl's view of the loaded libraries; OpenBLAS picks its kernels
+    when it loads, and another kernel can round linear algebra differently). numpy's own
+    copy when it bundles one (a wheel), so that what else is loaded does not change it;
+    ``None`` when no BLAS is found."""
+    found = threadpoolctl.threadpool_info()
+    blas = [lib for lib in found if lib.get("user_api") == "blas"]
+    home = Path(np.__file__).resolve().parent
+    own = [lib for lib in blas if Path(lib["filepath"]).resolve().parent
+           in (home, home.with_name("numpy.libs"))]
+    words = {f"{lib['internal_api']} {lib.get('architecture') or 'default'}"
+             for lib in own or blas}
+    return sorted(words) or None
+
+
 def cpu() -> dict[str, Any]:
-    """This machine's CPU: ``model``, ``numpy_simd`` (:func:`_numpy_simd`) and ``settings``
-    (the :data:`ROUNDING_VARIABLES` that are set). Another CPU can round the last bit of
-    some results differently (numpy's ``exp``, ``arctan2`` with AVX-512 or without)."""
+    """This machine's CPU: ``model``, ``numpy_simd`` (:func:`_numpy_simd`), ``blas``
+    (:func:`_numpy_blas`) and ``settings`` (the :data:`ROUNDING_VARIABLES` that are set).
+    Another CPU can round the last bit of some results differently (numpy's ``exp``,
+    ``arctan2`` with AVX-512 or without; OpenBLAS's kernels)."""
     model = platform.processor() or platform.machine()
     with contextlib.suppress(OSError):
         for line in Path("/proc/cpuinfo").read_text().splitlines():
@@ -60,7 +80,8 @@ def cpu() -> dict[str, Any]:
                 model = line.split(":", 1)[1].strip()
                 break
     settings = {v: os.environ[v] for v in ROUNDING_VARIABLES if v in os.environ}
-    return {"model": model, "numpy_simd": _numpy_simd(), "settings": settings}
+    return {"model": model, "numpy_simd": _numpy_simd(), "blas": _numpy_blas(),
+            "settings": settings}
 
 
 def recorded_cpus(recorded: Any) -> list[dict[str, Any]]:
@@ -69,10 +90,23 @@ def recorded_cpus(recorded: Any) -> list[dict[str, Any]]:
     return [c for c in found if isinstance(c, dict)]
 
 
+def unseen_cpus(current: list[dict[str, Any]],
+                seen: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The CPUs of ``current`` (:func:`cpu`) that round unlike every one of ``seen``: that
+    differ in some key both record (a run recorded before ``blas`` was, is compared on the
+    rest)."""
+    def alike(one: dict[str, Any], other: dict[str, Any]) -> bool:
+        return all(one[key] == other[key] for key in one.keys() & other.keys())
+    return [c for c in current if not any(alike(c, s) for s in seen)]
+
+
 def cpu_words(machine: dict[str, Any]) -> str:
-    """One CPU of :func:`cpu` in words: model, numpy's extensions, rounding settings."""
+    """One CPU of :func:`cpu` in words: model, numpy's extensions, BLAS kernel, rounding
+    settings."""
     simd = machine.get("numpy_simd")
     words = f"{machine.get('model')}, numpy {'/'.join(simd) if simd else 'baseline'}"
+    if blas := machine.get("blas"):
+        words += ", " + "/".join(blas)
     settings = machine.get("settings") or {}
     return words + "".join(f", {k}={v}" for k, v in settings.items())
 

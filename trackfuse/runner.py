@@ -44,6 +44,7 @@ from trackfuse.environment import (
     environment_difference,
     library_versions,
     recorded_cpus,
+    unseen_cpus,
     version,
     worker_environment,
 )
@@ -132,7 +133,7 @@ def _said(value: Any) -> str:
 def _with_cpus(recorded: Any, current: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Every CPU that computed a run's batches, in order: ``recorded`` plus ``current``."""
     cpus = recorded_cpus(recorded)
-    return cpus + [c for c in current if c not in cpus]
+    return cpus + unseen_cpus(current, cpus)
 
 
 def _now() -> str:
@@ -368,7 +369,7 @@ class Runner:
         """Say in one line when a run resumes on a CPU its saved batches were not computed
         on (another model, vector extensions or rounding settings: :func:`cpu`)."""
         before = recorded_cpus(previous.get("cpu"))
-        if before and (new := [c for c in self.cpus if c not in before]):
+        if before and (new := unseen_cpus(self.cpus, before)):
             self.warn(f"{self.folder.path}: resuming on another CPU "
                       f"({'; '.join(map(cpu_words, new))}; "
                       f"the saved batches: {'; '.join(map(cpu_words, before))}); the last "
