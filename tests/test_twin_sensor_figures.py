@@ -420,3 +420,13 @@ def test_no_empty_legend_row_when_nothing_passes_the_top(run_50):
     legend_top = fig.legends[0].get_window_extent(renderer).y1
     assert 0 < (labels_bottom - legend_top) / fig.dpi < 0.3
     assert text_overlaps(fig) == []
+
+
+def test_the_single_runs_legend_counts_the_runs_drawn(tmp_path):
+    """A 3-trial run drew 3 grey runs under a legend that said "5 single runs"."""
+    base = {**EXPERIMENT.defaults(), "algorithms": ALGORITHMS[:1], "scan.count": 5}
+    run = harness.run_data(tmp_path, EXPERIMENT, base, {"clutter.mean": [0.0]}, trials=3,
+                           seed=3)
+    fig = report.figures(run, ["range_error_vs_time"])["range_error_vs_time"]
+    assert len(_single_runs(fig.axes[0])) == 3
+    assert "3 single runs, |range error|" in _legend(fig)

@@ -864,7 +864,8 @@ def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
     t = errors.columns.to_numpy(float) * period
     for j, run_err in enumerate(np.abs(single)):
         ax.plot(t, run_err, color=GREYS[1], lw=0.6, alpha=0.8, zorder=1,
-                label=f"{SINGLE_RUNS} single runs, |range error|" if j == 0 else None)
+                label=f"{len(single)} single run{'s' * (len(single) > 1)}, |range error|"
+                if j == 0 else None)
     times = np.arange(1, int(params["scan.count"]) + 1) * period
     for bound, style, label in _pcrlb_curves(params):
         ax.plot(times, bound, color="k", ls=style, lw=1.0, label=label)
