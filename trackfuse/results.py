@@ -74,10 +74,10 @@ class RunStatus(StrEnum):
 
 
 FAILED_ROW = "failed"
-#: Row columns the runner writes itself (a failed trial's row carries ``status`` and
-#: ``error``); never metrics, so an experiment may not name a metric after them.
-RUNNER_COLUMNS = ("point", "trial", "status", "error")
 """``status`` of the one row a contained trial failure leaves in ``trials.csv``."""
+RUNNER_COLUMNS = ("point", "trial", "status", "error")
+"""Row columns the runner writes itself (a failed trial's row carries ``status`` and
+``error``); never metrics, so an experiment may not name a metric after them."""
 
 
 class RunFolderError(ValueError):

@@ -49,7 +49,8 @@ from trackfuse.sweep import expand
 
 @dataclass
 class RunData:
-    """A complete run folder, read (frames load on first use)."""
+    """A run folder, read (frames load on first use): complete unless :func:`load` was
+    told not to require it."""
 
     path: Path
     config: dict[str, Any]

@@ -21,7 +21,7 @@ then evaluation:
   drawn by roulette over the remaining columns or uniformly (``second``).
 * mutation (paper sec. 3.2, one gene, k = 1): unpair a random paired row ``r`` from its
   column ``c`` (``x_rc = 0``, ``x_r0 = x_0c = 1``).
-* re-pair (our improvement, ``repair=True``): with probability 1/2 the mutation instead
+* re-pair (our improvement, ``repair_moves=True``): with probability 1/2 the mutation instead
   pairs a random unpaired row with a random empty column. Without it no operator maps a
   solution with unpaired rows back towards more pairs, so under monotone acceptance the
   search cannot undo an unpairing and the chain is not irreducible (W002-2 in

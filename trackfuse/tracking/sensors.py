@@ -97,7 +97,7 @@ def gate_threshold(P_G: float, nz: int = 2) -> float:
 
 
 def _gamma(x: float) -> float:
-    """Gamma function: exact ``math.gamma`` at integers, scipy's elsewhere (as before)."""
+    """Gamma function: exact ``math.gamma`` at integers, scipy's elsewhere."""
     if float(x).is_integer():
         return math.gamma(x)
     from scipy.special import gamma  # on first use: see trackfuse/chi2.py

@@ -433,7 +433,8 @@ ROW_METRICS = (
 )
 """Every metric column of the rows (see the module docstring)."""
 METRICS = tuple(m.name for m in ROW_METRICS if not m.name.endswith("_time_s"))
-"""Per-scan metric columns of :func:`run_filter`."""
+"""Per-scan metric columns of a trial's rows (the compiled kernel's and the reference
+:func:`run_filter`'s alike)."""
 BINARY_METRICS = tuple(m.name for m in ROW_METRICS if m.binary)
 """The 0/1 columns among :data:`METRICS` (Wilson intervals in the summary)."""
 
