@@ -231,13 +231,15 @@ OVERRIDABLE_TOP_LEVEL = ("trials", "seed", "batch_size", "title", "sweep_mode")
 
 
 def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
-          sweeps: Mapping[str, Any] | None = None) -> Config:
+          sweeps: Mapping[str, Any] | None = None, *,
+          experiment: Experiment | None = None) -> Config:
     """Validate a parsed YAML document plus overrides into a :class:`Config`.
 
     ``sets`` are ``--set`` overrides (dotted key -> value; keys outside the top level are
     experiment parameters, and a set on a swept key removes that axis); ``sweeps`` are
     ``--sweep`` axes (dotted key -> list or ``"range(...)"``), replacing config axes. A bad
-    override is blamed on ``--set``/``--sweep``, not on the file.
+    override is blamed on ``--set``/``--sweep``, not on the file. ``experiment``: the
+    object to run, used as it is instead of looking ``raw["experiment"]`` up by name.
     """
     if raw is None:
         raise ConfigError(source, "", "the file is empty; expected a mapping with at least "
@@ -255,8 +257,10 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
     for key in [k for k in sets if k in OVERRIDABLE_TOP_LEVEL]:
         raw[key], origin[key] = sets.pop(key), SET
 
+    if experiment is not None:
+        raw["experiment"] = experiment.name
     name = raw.get("experiment")
-    exp = _experiment(source, name)
+    exp = experiment or _experiment(source, name)
 
     title = raw.get("title", exp.title)
     if not isinstance(title, str):

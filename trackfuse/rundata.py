@@ -22,7 +22,7 @@ running it did.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 from typing import Any
@@ -54,10 +54,15 @@ class RunData:
     path: Path
     config: dict[str, Any]
     manifest: dict[str, Any]
+    #: The experiment object that produced the run when the caller holds it (the harness);
+    #: otherwise :attr:`experiment` looks the config's name up.
+    given: Experiment | None = field(default=None, repr=False)
 
     @cached_property
     def experiment(self) -> Experiment:
         """The experiment that produced the run (imported on first use)."""
+        if self.given is not None:
+            return self.given
         name = str(self.config["experiment"])
         try:
             return experiments.get(name)
@@ -122,11 +127,13 @@ def _read_csv(path: Path) -> pd.DataFrame:
         raise RunFolderError(f"{path}: unreadable ({type(err).__name__})") from None
 
 
-def load(path: str | Path, require_complete: bool = True) -> RunData:
+def load(path: str | Path, require_complete: bool = True,
+         experiment: Experiment | None = None) -> RunData:
     """Open the run folder ``path`` (raise :class:`RunFolderError` with one line if not).
 
     With ``require_complete`` the run must be complete and its final files must match the
-    sizes and checksums in its manifest.
+    sizes and checksums in its manifest. ``experiment``: the object that produced the run
+    (:attr:`RunData.given`), if the caller holds it.
     """
     path = Path(path)
     if not path.is_dir():
@@ -150,7 +157,7 @@ def load(path: str | Path, require_complete: bool = True) -> RunData:
         raise RunFolderError(f"{path / CONFIG}: not a trackfuse run's config (no experiment "
                              "or params, or outputs not a mapping of figure names and "
                              "formats)")
-    return RunData(path, config, manifest)
+    return RunData(path, config, manifest, experiment)
 
 
 _FINISH = "run the same `trackfuse run` command again to finish it"
