@@ -43,7 +43,7 @@ from trackfuse.results import (
     RunStatus,
 )
 from trackfuse.runstate import DAMAGED, STOPPED, run_state
-from trackfuse.safe_yaml import MAX_BYTES, YamlInputError, load_yaml
+from trackfuse.safe_yaml import YamlInputError, read_yaml_file
 from trackfuse.sweep import expand
 
 
@@ -183,13 +183,11 @@ def _outputs_readable(config: dict[str, Any]) -> bool:
 
 def _read_config(path: Path) -> Any:
     try:
-        with open(path, "rb") as fh:
-            data = fh.read(MAX_BYTES + 1)
-        return load_yaml(data.decode("utf-8"))
+        return read_yaml_file(path)
     except FileNotFoundError:
         raise RunFolderError(f"{path}: missing") from None
     except OSError as err:
         raise RunFolderError(f"{path}: unreadable ({err.strerror or type(err).__name__})") \
             from None
-    except (UnicodeDecodeError, YamlInputError) as err:
+    except YamlInputError as err:
         raise RunFolderError(f"{path}: unreadable ({err})"[:300]) from None
