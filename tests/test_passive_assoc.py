@@ -3,6 +3,7 @@
 import math
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -11,8 +12,9 @@ import pytest
 from conftest import trackfuse
 
 from trackfuse import harness
+from trackfuse.association.assignment import Assignment
 from trackfuse.experiments import get
-from trackfuse.experiments.passive_assoc import EXPERIMENT, report
+from trackfuse.experiments.passive_assoc import EXPERIMENT, model, report
 from trackfuse.experiments.passive_assoc.model import ALGORITHMS, VARIANTS, score, sigma_of
 from trackfuse.experiments.passive_assoc.report import (
     BOOTSTRAP_RESAMPLES,
@@ -69,6 +71,33 @@ def test_rows_are_tidy_and_deterministic():
         assert r["objective"] <= exact["objective"] + 1e-9
         assert r["gap"] == pytest.approx(exact["objective"] - r["objective"], abs=1e-9)
         assert r["at_opt"] == int(r["gap"] <= 1e-9 * max(1.0, abs(exact["objective"])))
+
+
+def test_a_pga_above_the_exact_optimum_fails_the_trial(monkeypatch):
+    """`gap <= tol -> 0` also zeroed a negative gap: a PGA beating an exact solver that
+    returned a poorer assignment was reported at the optimum (gap 0, at_opt 1)."""
+    p, streams = params(algorithms=["exact", "pga_evict"]), lambda: trial_streams(1, 0, 3)
+    honest = EXPERIMENT.run_trial(p, streams())
+    j_star = honest[0]["objective"]
+    assert j_star > 1.0 and max(r["objective"] for r in honest[1:]) == pytest.approx(j_star)
+    solve = model.solve_exact
+    tol = model.AT_OPT_RTOL * j_star
+
+    def poorer(gain, method):  # the empty matching: objective 0 < J*
+        m1, m2 = gain.shape
+        return Assignment(np.full(m1, -1), np.full(m2, -1), 0.0)
+
+    monkeypatch.setattr(model, "solve_exact", poorer)
+    with pytest.raises(model.ExactSolverError, match=r"pga_evict after \d+ operations "
+                                                     r"reached .* above the optimum J\* = 0\.0"):
+        EXPERIMENT.run_trial(p, streams())
+    # a J* below the PGA's by rounding residue (within the tolerance) is still J*
+    monkeypatch.setattr(model, "solve_exact", lambda gain, method: replace(
+        solve(gain, method), objective=solve(gain, method).objective - tol / 2))
+    for r in EXPERIMENT.run_trial(p, streams()):
+        assert r["gap"] >= 0 and (r["gap"] == 0) == (r["at_opt"] == 1)
+    assert [r["at_opt"] for r in EXPERIMENT.run_trial(p, streams())] == \
+        [r["at_opt"] for r in honest]
 
 
 def test_adding_an_algorithm_changes_no_other_number():

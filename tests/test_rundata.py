@@ -15,8 +15,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
-from trackfuse.config import load
+from trackfuse import rundata
+from trackfuse.config import ConfigError, load, read_yaml
+from trackfuse.results import RunFolderError
 from trackfuse.runner import Runner
+from trackfuse.safe_yaml import MAX_BYTES
 from trackfuse_cli.main import app
 
 CFG = """
@@ -145,6 +148,25 @@ def test_plot_on_a_bad_config_with_a_forged_checksum_is_one_line(case, finished,
     result = plot(folder)
     check(result, allowed=(2,))
     assert FORGED[case] in result.stderr, result.stderr
+
+
+def test_an_oversize_config_is_refused_by_plot_as_by_validate(finished, tmp_path):
+    """The run folder's reader read MAX_BYTES + 1 bytes and parsed them without checking
+    the size: padded with two-byte characters cut on a character boundary, a config larger
+    than MAX_BYTES was read truncated (here: the saved config, plotted without a word)."""
+    folder = tmp_path / "run"
+    shutil.copytree(finished, folder)
+    head = (folder / "config.yaml").read_bytes() + b"#"
+    head += b" " * ((MAX_BYTES + 1 - len(head)) % 2)  # the cut falls between characters
+    (folder / "config.yaml").write_bytes(head + "é".encode() * (MAX_BYTES // 2) + b"\n")
+    _forge(folder, "config.yaml")
+    result = plot(folder)
+    check(result, allowed=(2,))
+    assert f"config.yaml: unreadable (larger than {MAX_BYTES} bytes" in result.stderr
+    with pytest.raises(RunFolderError, match="unreadable \\(larger than"):
+        rundata.load(folder)
+    with pytest.raises(ConfigError, match=f"config.yaml: larger than {MAX_BYTES} bytes"):
+        read_yaml(folder / "config.yaml")
 
 
 @pytest.mark.parametrize("data", [b"", b"point,trial\n1\n", bytes(range(256)) * 3,

@@ -171,6 +171,23 @@ def test_bound_grows_with_clutter_and_shrinks_with_baseline():
     assert bounds(params(), q_model=900.0)[0][-1] > r0
 
 
+def test_a_caller_cannot_corrupt_the_cached_bound():
+    """`bounds` returns the cache's own arrays: writing into one changed every later
+    caller's bound (a report scaling it in place would have halved the next figure's)."""
+    p = params(scan__count=4)
+    range_b, position_b = bounds(p)
+    want = range_b.copy(), position_b.copy()
+    for bound in (range_b, position_b):
+        with pytest.raises(ValueError, match="read-only"):
+            bound /= 1e3
+        with pytest.raises(ValueError, match="read-only"):
+            bound[-1] = 0.0
+    again = bounds(p)
+    assert again[0] is range_b  # the same cached arrays, unchanged
+    np.testing.assert_array_equal(again[0], want[0])
+    np.testing.assert_array_equal(again[1], want[1])
+
+
 @pytest.fixture(scope="module")
 def small_run(tmp_path_factory):
     base = params(algorithms=["mspda_parallel/mgekf", "mspda_parallel/ekf", "nn/mgekf"])

@@ -30,7 +30,7 @@ from typing import Any
 
 from trackfuse import experiments
 from trackfuse.experiments.base import Experiment, Param
-from trackfuse.safe_yaml import MAX_BYTES, YamlInputError, load_yaml
+from trackfuse.safe_yaml import YamlInputError, read_yaml_file
 from trackfuse.sweep import MAX_POINTS, SweepError, count_points, parse_axis_values
 
 TOP_LEVEL = ("experiment", "title", "trials", "seed", "batch_size", "params", "sweep",
@@ -231,13 +231,15 @@ OVERRIDABLE_TOP_LEVEL = ("trials", "seed", "batch_size", "title", "sweep_mode")
 
 
 def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
-          sweeps: Mapping[str, Any] | None = None) -> Config:
+          sweeps: Mapping[str, Any] | None = None, *,
+          experiment: Experiment | None = None) -> Config:
     """Validate a parsed YAML document plus overrides into a :class:`Config`.
 
     ``sets`` are ``--set`` overrides (dotted key -> value; keys outside the top level are
     experiment parameters, and a set on a swept key removes that axis); ``sweeps`` are
     ``--sweep`` axes (dotted key -> list or ``"range(...)"``), replacing config axes. A bad
-    override is blamed on ``--set``/``--sweep``, not on the file.
+    override is blamed on ``--set``/``--sweep``, not on the file. ``experiment``: the
+    object to run, used as it is instead of looking ``raw["experiment"]`` up by name.
     """
     if raw is None:
         raise ConfigError(source, "", "the file is empty; expected a mapping with at least "
@@ -255,8 +257,10 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
     for key in [k for k in sets if k in OVERRIDABLE_TOP_LEVEL]:
         raw[key], origin[key] = sets.pop(key), SET
 
+    if experiment is not None:
+        raw["experiment"] = experiment.name
     name = raw.get("experiment")
-    exp = _experiment(source, name)
+    exp = experiment or _experiment(source, name)
 
     title = raw.get("title", exp.title)
     if not isinstance(title, str):
@@ -425,24 +429,15 @@ def _outputs(source: str, exp: Experiment, outputs: Any) -> tuple[list[str] | st
 
 
 def read_yaml(path: str | Path) -> Any:
-    """Parse a YAML config file (at most :data:`~trackfuse.safe_yaml.MAX_BYTES`, no duplicate
-    keys, bounded aliases), turning every problem into :class:`ConfigError`."""
-    path = Path(path)
+    """Parse a YAML config file (:func:`~trackfuse.safe_yaml.read_yaml_file`), turning every
+    problem into :class:`ConfigError`."""
     try:
-        with open(path, "rb") as fh:
-            data = fh.read(MAX_BYTES + 1)
+        return read_yaml_file(path)
     except FileNotFoundError:
         raise ConfigError(str(path), "", "no such file") from None
     except OSError as err:
         raise ConfigError(str(path), "", f"cannot read: {err.strerror or type(err).__name__}"
                           ) from None
-    if len(data) > MAX_BYTES:
-        raise ConfigError(str(path), "", f"larger than {MAX_BYTES} bytes; a config is a short "
-                                         "text file")
-    try:
-        return load_yaml(data.decode("utf-8"))
-    except UnicodeDecodeError:
-        raise ConfigError(str(path), "", "cannot read: not UTF-8 text") from None
     except YamlInputError as err:
         raise ConfigError(str(path), "", str(err)) from None
 

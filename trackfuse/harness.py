@@ -21,7 +21,6 @@ from typing import Any
 
 import pandas as pd
 
-from trackfuse import experiments
 from trackfuse.config import build
 from trackfuse.experiments.base import Experiment
 from trackfuse.rundata import RunData, load
@@ -31,18 +30,15 @@ from trackfuse.runner import Runner
 def _config(experiment: str | Experiment, params: Mapping[str, Any] | None,
             sweep: Mapping[str, list[Any]] | None, trials: int, seed: int,
             sweep_mode: str, batch_size: int | None):
-    if isinstance(experiment, Experiment):
-        if experiment.name not in experiments.names():
-            experiments.register(experiment)
-        experiment = experiment.name
+    given = experiment if isinstance(experiment, Experiment) else None
     sweep = dict(sweep or {})
     fixed = {k: v for k, v in (params or {}).items() if k not in sweep}
-    raw: dict[str, Any] = {"experiment": experiment, "trials": trials, "seed": seed,
-                           "params": fixed, "sweep": sweep,
+    raw: dict[str, Any] = {"experiment": experiment if given is None else given.name,
+                           "trials": trials, "seed": seed, "params": fixed, "sweep": sweep,
                            "sweep_mode": sweep_mode}
     if batch_size is not None:
         raw["batch_size"] = batch_size
-    return build(raw, "harness")
+    return build(raw, "harness", experiment=given)
 
 
 def run_data(out: str | Path, experiment: str | Experiment,
@@ -52,11 +48,18 @@ def run_data(out: str | Path, experiment: str | Experiment,
     """Run ``experiment`` (a name or an :class:`Experiment`) into ``out`` and return the
     complete run. ``params`` override defaults (dotted keys; a swept key's value is
     ignored); ``sweep`` maps a key to its values; ``trials`` per sweep point; ``seed`` the
-    root seed; ``batch_size`` default: the experiment's."""
+    root seed; ``batch_size`` default: the experiment's.
+
+    An :class:`Experiment` object is run as it is, never looked up by its name (two objects
+    of one name, or a ``dataclasses.replace`` of a built-in, each run their own code), and
+    the returned run's :attr:`~trackfuse.rundata.RunData.experiment` is that object. The
+    folder records the name only, and the run id covers the config and the source files,
+    not the object: give two objects of one name, defined in one module, their own
+    ``out`` (as :func:`run` does), or the second resumes the first's finished run."""
     config = _config(experiment, params, sweep, trials, seed, sweep_mode, batch_size)
     runner = Runner(config, Path(out), workers=1, executor="serial", plots=False,
                     progress=False, command=["trackfuse.harness"])
-    return load(runner.run().folder)
+    return load(runner.run().folder, experiment=config.experiment)
 
 
 def run(experiment: str | Experiment, params: Mapping[str, Any] | None = None,

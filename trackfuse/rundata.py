@@ -22,7 +22,7 @@ running it did.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 from typing import Any
@@ -43,7 +43,7 @@ from trackfuse.results import (
     RunStatus,
 )
 from trackfuse.runstate import DAMAGED, STOPPED, run_state
-from trackfuse.safe_yaml import MAX_BYTES, YamlInputError, load_yaml
+from trackfuse.safe_yaml import YamlInputError, read_yaml_file
 from trackfuse.sweep import expand
 
 
@@ -55,10 +55,15 @@ class RunData:
     path: Path
     config: dict[str, Any]
     manifest: dict[str, Any]
+    #: The experiment object that produced the run when the caller holds it (the harness);
+    #: otherwise :attr:`experiment` looks the config's name up.
+    given: Experiment | None = field(default=None, repr=False)
 
     @cached_property
     def experiment(self) -> Experiment:
         """The experiment that produced the run (imported on first use)."""
+        if self.given is not None:
+            return self.given
         name = str(self.config["experiment"])
         try:
             return experiments.get(name)
@@ -123,11 +128,13 @@ def _read_csv(path: Path) -> pd.DataFrame:
         raise RunFolderError(f"{path}: unreadable ({type(err).__name__})") from None
 
 
-def load(path: str | Path, require_complete: bool = True) -> RunData:
+def load(path: str | Path, require_complete: bool = True,
+         experiment: Experiment | None = None) -> RunData:
     """Open the run folder ``path`` (raise :class:`RunFolderError` with one line if not).
 
     With ``require_complete`` the run must be complete and its final files must match the
-    sizes and checksums in its manifest.
+    sizes and checksums in its manifest. ``experiment``: the object that produced the run
+    (:attr:`RunData.given`), if the caller holds it.
     """
     path = Path(path)
     if not path.is_dir():
@@ -151,7 +158,7 @@ def load(path: str | Path, require_complete: bool = True) -> RunData:
         raise RunFolderError(f"{path / CONFIG}: not a trackfuse run's config (no experiment "
                              "or params, or outputs not a mapping of figure names and "
                              "formats)")
-    return RunData(path, config, manifest)
+    return RunData(path, config, manifest, experiment)
 
 
 _FINISH = "run the same `trackfuse run` command again to finish it"
@@ -177,13 +184,11 @@ def _outputs_readable(config: dict[str, Any]) -> bool:
 
 def _read_config(path: Path) -> Any:
     try:
-        with open(path, "rb") as fh:
-            data = fh.read(MAX_BYTES + 1)
-        return load_yaml(data.decode("utf-8"))
+        return read_yaml_file(path)
     except FileNotFoundError:
         raise RunFolderError(f"{path}: missing") from None
     except OSError as err:
         raise RunFolderError(f"{path}: unreadable ({err.strerror or type(err).__name__})") \
             from None
-    except (UnicodeDecodeError, YamlInputError) as err:
+    except YamlInputError as err:
         raise RunFolderError(f"{path}: unreadable ({err})"[:300]) from None

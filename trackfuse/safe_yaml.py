@@ -11,6 +11,7 @@ is one line.
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import yaml
@@ -108,3 +109,21 @@ def load_yaml(text: str) -> Any:
         raise YamlInputError(f"invalid YAML: {type(err).__name__}") from None
     finally:
         loader.dispose()
+
+
+def read_yaml_file(path: str | Path) -> Any:
+    """Parse the YAML file at ``path``: at most :data:`MAX_BYTES` bytes of UTF-8 text, with
+    the bounds of :func:`load_yaml`.
+
+    Raises :class:`YamlInputError` (one line, without the file name) for a file too large,
+    not UTF-8 or refused by :func:`load_yaml`, and ``OSError`` when it cannot be read.
+    """
+    with open(path, "rb") as fh:
+        data = fh.read(MAX_BYTES + 1)
+    if len(data) > MAX_BYTES:
+        raise YamlInputError(f"larger than {MAX_BYTES} bytes; a config is a short text file")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise YamlInputError("not UTF-8 text") from None
+    return load_yaml(text)

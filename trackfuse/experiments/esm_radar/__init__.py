@@ -8,6 +8,7 @@ The science (scenario, TDOA-DF, manoeuvre index, fuzzy evaluation, references) i
 from __future__ import annotations
 
 from trackfuse.experiments.base import Experiment, FigureSpec
+from trackfuse.experiments.esm_radar.checks import config_problem
 from trackfuse.experiments.esm_radar.model import PARAMS, ROW_METRICS, run_batch, run_trial
 
 FIGURES = {
@@ -46,6 +47,7 @@ EXPERIMENT = Experiment(
     figures=FIGURES,
     row_keys=("algorithm",),
     batch_size=100,
+    check=config_problem,
 )
 
 __all__ = ["EXPERIMENT", "FIGURES"]

@@ -220,14 +220,15 @@ PARAMS = (
     Param("alpha.index", "nis_tdoa",
           "manoeuvre index: 'nis_tdoa' = windowed NIS of a constant-acceleration filter on the "
           "ESM range difference c*dt (default), 'literal' = paper eq. 8-13, residual of a CV "
-          "filter on the TDOA-DF range over its measurement variance", kind=str,
-          choices=("nis_tdoa", "literal")),
+          "filter on the TDOA-DF range over its measurement variance (needs alpha.max_mode "
+          "'fixed' or 'running_max')", kind=str, choices=("nis_tdoa", "literal")),
     Param("alpha.window", 5, "scans N averaged in the manoeuvre index", "samples", kind=int, low=1,
           high=10_000),
     Param("alpha.max_mode", "chi2",
           "alpha_max of eq. 14: 'chi2' = quantile 1 - alpha.false_alarm of chi2(N)/N, the "
-          "no-manoeuvre distribution of the 'nis_tdoa' index; 'fixed' = alpha.max; "
-          "'running_max' = running maximum of alpha", kind=str,
+          "no-manoeuvre distribution of the 'nis_tdoa' index (so only with alpha.index "
+          "'nis_tdoa'); 'fixed' = alpha.max; 'running_max' = running maximum of alpha",
+          kind=str,
           choices=("chi2", "fixed", "running_max")),
     Param("alpha.false_alarm", 0.01, "'chi2' mode: probability that the index of a "
           "non-manoeuvring target exceeds alpha_max in a window", "1", low=1e-9, high=0.5),
@@ -307,16 +308,30 @@ def manoeuvre_alpha(params: Mapping[str, Any], x_esm: np.ndarray, P_esm: np.ndar
     raise ValueError(f"unknown manoeuvre index {index!r}")
 
 
-def alpha_max(params: Mapping[str, Any]) -> tuple[float, str]:
-    """``alpha_max`` and the :func:`dynamic_weights` mode for ``params``.
+def alpha_max_problem(params: Mapping[str, Any]) -> str | None:
+    """Why ``alpha.max_mode`` cannot be used with ``alpha.index`` (one line, naming what is
+    allowed), else ``None``: ``chi2`` mode needs the ``nis_tdoa`` index, whose no-manoeuvre
+    distribution it uses."""
+    if params["alpha.max_mode"] == "chi2" and params["alpha.index"] != "nis_tdoa":
+        return (f"'chi2' needs alpha.index 'nis_tdoa', not {params['alpha.index']!r}; allowed "
+                "with the 'literal' index: 'fixed' (alpha.max) or 'running_max'")
+    return None
 
-    ``chi2`` mode needs the ``nis_tdoa`` index, whose no-manoeuvre distribution it uses.
-    """
+
+def uses_alpha_max(variant: Variant, names: tuple[str, ...]) -> bool:
+    """Whether ``variant`` on the factors ``names`` (:func:`factor_names`) cuts its range
+    weight by the manoeuvre index, so needs :func:`alpha_max`."""
+    return variant.dynamic and names[0] == "range"
+
+
+def alpha_max(params: Mapping[str, Any]) -> tuple[float, str]:
+    """``alpha_max`` (1) and the :func:`dynamic_weights` mode for ``params``; ``ValueError``
+    for the pairs :func:`alpha_max_problem` refuses."""
+    problem = alpha_max_problem(params)
+    if problem is not None:
+        raise ValueError(f"alpha.max_mode: {problem}")
     mode = params["alpha.max_mode"]
     if mode == "chi2":
-        if params["alpha.index"] != "nis_tdoa":
-            raise ValueError("alpha.max_mode 'chi2' needs alpha.index 'nis_tdoa'; with the "
-                             "'literal' index use 'fixed' (alpha.max) or 'running_max'")
         return nis_threshold(params["alpha.window"], params["alpha.false_alarm"]), "fixed"
     return params["alpha.max"], mode
 
@@ -553,7 +568,7 @@ def evaluate(variant: Variant, diff: Differences, alpha: np.ndarray,
     kind = params["membership_norm"] if variant.membership == "param" else variant.membership
     R = membership(kind, np.abs(d), diff, idx, params)
     a0 = variant_weights(variant, names, params["weights"])
-    if variant.dynamic and names[0] == "range":
+    if uses_alpha_max(variant, names):
         a_max, mode = alpha_max(params)
         a = dynamic_weights(a0, np.nan_to_num(alpha, nan=0.0), a_max, mode)
     else:

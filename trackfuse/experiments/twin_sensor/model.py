@@ -638,7 +638,7 @@ def bounds(params: dict[str, Any], q_model: float | None = None,
     ``in_gate`` clutter the density is ``clutter.mean / V_s`` with the gate of an ideal filter
     whose predicted covariance is the bound's own; for ``window`` clutter it is the true
     density. A random (``target.q > 0``) truth is averaged over ``truth_samples`` trajectories
-    from a fixed seed.
+    from a fixed seed. Both arrays are cached and read-only (copy one to change it).
     """
     key = tuple(sorted((k, tuple(v) if isinstance(v, list) else v) for k, v in params.items()))
     return _bounds_cached(key, q_model, truth_samples)
@@ -672,5 +672,8 @@ def _bounds_cached(key: tuple, q_model: float | None, truth_samples: int):
         return out
 
     Jinv = information_recursion(np.linalg.inv(sc.P0), sc.F, Q, Jz, q2)
-    return range_bound(Jinv[1:], x_mean[1:], sc.platform[1:]), position_bound(Jinv[1:])
+    out = range_bound(Jinv[1:], x_mean[1:], sc.platform[1:]), position_bound(Jinv[1:])
+    for bound in out:
+        bound.flags.writeable = False  # the cache hands these arrays to every caller
+    return out
 
