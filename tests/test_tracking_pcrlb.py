@@ -119,3 +119,13 @@ def test_the_stored_q2_tables_are_the_monte_carlo(P_D, points):
         q, se = irf_q2(q2_grid()[i], P_D)
         np.testing.assert_allclose(q, Q2_TABLES[P_D][i], rtol=1e-12, atol=0)
         assert se <= 0.002 * q
+
+
+def test_a_table_computed_on_demand_lies_between_the_stored_ones():
+    """A detection probability not stored is tabulated with fewer samples: its ``q2`` must
+    still be at most ``P_D``, fall with clutter and lie between the ``P_D`` 0.8 and 1 tables
+    (information grows with ``P_D``)."""
+    lam = np.geomspace(1e-4, 3.0, 12)
+    low, mid, high = (irf_q2_interp(lam, P_D) for P_D in (0.8, 0.9, 1.0))
+    assert np.all(mid <= 0.9) and np.all(np.diff(mid) < 0)
+    assert np.all((low < mid) & (mid < high))
