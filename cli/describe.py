@@ -40,8 +40,10 @@ def print_experiment(exp: Experiment, width: int | None = None) -> None:
                 "command line)")
     for p in exp.params:
         unit = f" {p.unit}" if p.unit and p.unit != "1" else ""
+        quiet = "" if p.draws else (" Changes no simulated data: sweep points that differ "
+                                    "only in it share their clutter.")
         out.entry(f"{p.key} = {_flow(p.default)}{unit}",
-                  f"{p.doc.rstrip('.')}. Allowed: {allowed_text(p)}.")
+                  f"{p.doc.rstrip('.')}. Allowed: {allowed_text(p)}.{quiet}")
     out.heading("metrics (columns of trials.csv; rows of summary.csv)")
     for m in exp.metrics:
         kind = "0/1, Wilson interval" if m.binary else "mean, t interval"
@@ -135,7 +137,8 @@ def as_data(exp: Experiment, reference: str) -> dict[str, Any]:
         "params": [{"key": p.key, "default": p.default, "unit": p.unit,
                     "kind": p.kind.__name__, "low": p.low, "high": p.high,
                     "choices": list(p.choices) if p.choices is not None else None,
-                    "allowed": allowed_text(p), "doc": p.doc} for p in exp.params],
+                    "allowed": allowed_text(p), "draws": p.draws, "doc": p.doc}
+                   for p in exp.params],
         "metrics": [{"name": m.name, "unit": m.unit, "binary": m.binary, "better": m.better,
                      "doc": m.doc} for m in exp.metrics],
         "algorithms": list(exp.algorithms),

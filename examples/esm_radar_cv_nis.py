@@ -44,7 +44,8 @@ def main(folder: str) -> None:
         params = run.point_params(point)
         if params["alpha.index"] != "nis_tdoa":
             raise SystemExit(f"point {point} of {folder} is not an NIS-index point")
-        sim = simulate(params, batch_streams(run.config["seed"], point, range(n)))
+        sim = simulate(params, batch_streams(run.config["seed"], run.draw_points[point],
+                                             range(n)))
         alpha = manoeuvre_alpha(params, sim.x_esm, sim.P_esm, "nis_tdoa")
         rows = run.trials[(run.trials["point"] == point) & run.trials["alpha_per_scan"].notna()]
         stored = rows.sort_values("trial").drop_duplicates("trial")["alpha_per_scan"]

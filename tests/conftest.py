@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import subprocess
 import sys
@@ -18,6 +19,7 @@ import toy_experiments  # noqa: E402,F401 - registers the toy experiments
 
 ROOT = TESTS.parent
 
+from trackfuse.experiments.base import Param  # noqa: E402
 from trackfuse.results import RunFolder  # noqa: E402
 
 
@@ -35,6 +37,24 @@ def trackfuse(*args: str, cwd: Path | None = None, timeout: float = 120,
     """Run the real CLI (``python -m trackfuse``) and capture its output."""
     return subprocess.run([sys.executable, "-m", "trackfuse", *map(str, args)], cwd=cwd,
                           env=cli_env(), capture_output=True, text=True, timeout=timeout, **kw)
+
+
+def another_value(param: Param, current):
+    """A valid value of ``param`` other than ``current`` (near it, for numbers)."""
+    if param.kind is list:
+        options = list(param.choices or current)
+        return [options[-1]] if [options[-1]] != current else [options[0]]
+    if param.choices:
+        return next(c for c in param.choices if c != current)
+    if param.kind is bool:
+        return not current
+    low = -math.inf if param.low is None else param.low
+    high = math.inf if param.high is None else param.high
+    for value in (2 * current, (current + high) / 2, (current + low) / 2, current + 1):
+        value = param.kind(value)
+        if value != current and low <= value <= high:
+            return value
+    raise ValueError(f"{param.key}: no other value near {current}")
 
 
 @pytest.fixture

@@ -35,7 +35,9 @@ def test_list_experiment_prints_every_key_whole_when_piped_at_80_columns(twin):
         assert any(line.startswith(f"{m.name} [{m.unit}]") for line in lines), m.name
     for name in twin.figures:
         assert any(line.split(" (paper")[0] == name for line in lines), name
-    assert all(a in result.stdout.replace("\n    ", " ") for a in twin.algorithms)
+    joined = result.stdout.replace("\n    ", " ")
+    assert all(a in joined for a in twin.algorithms)
+    assert joined.count("share their clutter") == sum(not p.draws for p in twin.params) > 0
     assert "…" not in result.stdout
 
 
@@ -57,6 +59,7 @@ def test_json_lists_params_metrics_algorithms_and_figures(twin):
     result = trackfuse("list", "twin_sensor", "--format", "json")
     data = json.loads(result.stdout)
     assert [p["key"] for p in data["params"]] == [p.key for p in twin.params]
+    assert [p["draws"] for p in data["params"]] == [p.draws for p in twin.params]
     assert {m["name"]: (m["unit"], m["binary"], m["better"]) for m in data["metrics"]} == \
         {m.name: (m.unit, m.binary, m.better) for m in twin.metrics}
     assert data["algorithms"] == list(twin.algorithms) and data["algorithms"]

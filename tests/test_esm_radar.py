@@ -3,6 +3,7 @@
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import another_value
 
 from trackfuse import harness
 from trackfuse.association.track_likelihood import abstaining_decision, ml_track_decision
@@ -38,6 +39,24 @@ def params(**over):
 
 def rngs(n, point=0, seed=11):
     return [trial_streams(seed, point, t) for t in range(n)]
+
+
+def test_a_parameter_marked_draws_false_changes_no_simulated_data():
+    """Sweep points that differ only in such a parameter share their point stream (the
+    runner's draw points; this experiment draws nothing from it yet), so it must leave the
+    simulated ESM and radar data alone (the manoeuvre index is computed from them)."""
+    base = params()
+    kept = ("t", "truth_p", "x_esm", "P_esm", "esm_valid", "x_radar", "P_radar", "sd_nominal")
+    ref = simulate(base, rngs(3))
+    quiet = [p for p in EXPERIMENT.params if not p.draws]
+    assert {"baseline.spread", "alpha.index", "algorithms"} <= {p.key for p in quiet}
+    for param in quiet:
+        got = simulate({**base, param.key: another_value(param, base[param.key])}, rngs(3))
+        for name in kept:
+            np.testing.assert_array_equal(getattr(got, name), getattr(ref, name),
+                                          err_msg=f"{param.key} changes {name}")
+    got = simulate({**base, "radar.sigma_range_coef": 0.02}, rngs(3))  # the check sees it
+    assert not np.array_equal(got.x_radar, ref.x_radar)
 
 
 def frame(rows, point=0, extra=None):

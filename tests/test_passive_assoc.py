@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from conftest import trackfuse
+from conftest import another_value, trackfuse
 
 from trackfuse import harness
 from trackfuse.association.assignment import Assignment
@@ -39,6 +39,35 @@ def params(**kw):
 
 def strip_times(rows):
     return [{k: v for k, v in r.items() if not k.endswith("_time_s")} for r in rows]
+
+
+def test_a_parameter_marked_draws_false_changes_neither_the_scan_nor_the_point_stream(
+        monkeypatch):
+    """Sweep points that differ only in such a parameter share their false alarms (the
+    runner's draw points), so it must leave the simulated scan alone and take nothing else
+    from the point stream."""
+    scans = []
+    simulate_scan = model.simulate_scan
+    monkeypatch.setattr(model, "simulate_scan",
+                        lambda *a, **kw: scans.append(simulate_scan(*a, **kw)) or scans[-1])
+    base = params(**{"targets.n": 6, "clutter.p_f": 0.3, "pga.ops": 20,
+                     "pga.checkpoints": [0, 20]})
+
+    def scan(p):
+        streams = trial_streams(5, 0, 1)
+        EXPERIMENT.run_trial(p, streams)
+        return [*scans[-1].z, *scans[-1].labels], streams.point.random()
+
+    ref, ref_next = scan(base)
+    quiet = [p for p in EXPERIMENT.params if not p.draws]
+    assert {"pga.p_m", "assoc.cost", "algorithms"} <= {p.key for p in quiet}
+    for param in quiet:
+        got, got_next = scan({**base, param.key: another_value(param, base[param.key])})
+        for a, b in zip(got, ref, strict=True):
+            np.testing.assert_array_equal(a, b, err_msg=param.key)
+        assert got_next == ref_next, param.key
+    changed = scan({**base, "clutter.p_f": 0.9})[0]  # the check sees a change
+    assert any(not np.array_equal(a, b) for a, b in zip(changed, ref, strict=True))
 
 
 def test_registered_and_defaults_follow_the_spec():

@@ -6,10 +6,12 @@ import subprocess
 import sys
 
 import pytest
+from toy_experiments import cluttered_trial
 
 import trackfuse
 from trackfuse.harness import run_data
 from trackfuse.results import RunFolderError
+from trackfuse.seeding import trial_streams
 
 
 def test_load_returns_the_frames_and_config_of_a_run(tmp_path):
@@ -24,6 +26,16 @@ def test_load_returns_the_frames_and_config_of_a_run(tmp_path):
     (folder / "summary.csv").write_text("point,metric\n")
     with pytest.raises(RunFolderError, match="summary.csv"):
         trackfuse.load(folder)
+
+
+def test_a_runs_draw_points_re_simulate_its_trials(tmp_path):
+    run = trackfuse.load(run_data(tmp_path, "toy_cluttered", trials=4, seed=6,
+                                  sweep={"gain": [1.0, 2.0], "density": [1.0, 3.0]}).path)
+    assert run.draw_points == [0, 1, 0, 1]  # gain draws nothing, density does
+    for (point, trial), row in run.trials.set_index(["point", "trial"]).iterrows():
+        streams = trial_streams(6, run.draw_points[point], trial)
+        again = cluttered_trial(run.point_params(point), streams)[0]
+        assert (again["uniform"], again["estimate"]) == (row["uniform"], row["estimate"])
 
 
 def test_importing_the_config_layer_loads_no_pandas_scipy_or_matplotlib():

@@ -65,7 +65,46 @@ def test_common_stream_depends_on_trial_and_seed_the_point_stream_also_on_the_po
     assert len(set(draws.values())) == len(draws)
 
 
-def test_points_differing_only_in_a_parameter_that_draws_nothing_give_identical_rows(
+CLUTTERED = """
+experiment: toy_experiments:CLUTTERED
+trials: 10
+seed: 3
+sweep: {density: [1.0, 2.0], gain: [1.0, 2.0, 3.0]}
+"""
+
+
+def test_points_differing_only_in_a_non_drawing_parameter_share_their_point_stream(
+        write_config, tmp_path):
+    """Points 0-2 (density 1) draw the point stream of point 0, points 3-5 (density 2) that
+    of point 3, exactly as the runner drew them before draw points existed; rows keep their
+    own point index."""
+    path = write_config(CLUTTERED)
+    trials = pd.read_csv(run(path, tmp_path, executor="process", workers=2).folder /
+                         "trials.csv")
+    assert trials["point"].tolist() == [p for p in range(6) for _ in range(10)]
+    uniform = trials.pivot(index="trial", columns="point", values="uniform")
+    for point in range(6):
+        own = [trial_streams(3, 3 * (point // 3), t).point.random() for t in range(10)]
+        assert uniform[point].tolist() == own
+    assert not np.isin(uniform[0], uniform[3]).any()
+    noise = trials.pivot(index="trial", columns="point", values="noise")
+    assert (noise.nunique(axis=1) == 1).all()  # the common stream, as always
+    estimate = trials.pivot(index="trial", columns="point", values="estimate")
+    np.testing.assert_allclose(estimate[2], 3 * estimate[0], rtol=1e-12)  # gain only
+
+
+def test_a_run_sharing_point_streams_resumes_to_the_same_bytes(write_config, tmp_path):
+    path = write_config(CLUTTERED)
+    reference = run(path, tmp_path / "ref", executor="serial")
+    with ctrl_c_at_part(7), pytest.raises(RunInterrupted):
+        run(path, tmp_path / "res", executor="serial")
+    resumed = run(path, tmp_path / "res", executor="process", workers=2)
+    assert 0 < resumed.computed_trials < 60
+    assert (resumed.folder / "trials.csv").read_bytes() == (reference.folder /
+                                                            "trials.csv").read_bytes()
+
+
+def test_points_differing_only_in_a_parameter_the_trial_ignores_give_identical_rows(
         write_config, tmp_path):
     path = write_config("""
 experiment: toy_experiments:GAUSSIAN

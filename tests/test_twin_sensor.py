@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import another_value
 from scipy import stats
 
 from trackfuse import harness
@@ -48,6 +49,33 @@ def params(**kw):
 def frames(out, base: dict, sweep: dict[str, list], trials: int, seed: int = 1):
     """A complete run folder of ``base`` and ``sweep`` made by the harness (the real runner)."""
     return harness.run_data(out, EXPERIMENT, base, sweep, trials=trials, seed=seed)
+
+
+@pytest.mark.parametrize("model", ["in_gate", "window"])
+def test_a_parameter_marked_draws_false_changes_no_simulated_data(model):
+    """Sweep points that differ only in such a parameter share their clutter (the runner's
+    draw points), so it must leave the truth, the returns and the clutter alone, and take
+    nothing else from the point stream; only the initial estimate may move (drawn from the
+    common stream with the filter's prior, the radar cue)."""
+    base = params(scan__count=4, clutter__mean=3.0, clutter__model=model, target__q=100.0)
+
+    def data(p):
+        streams = trial_streams(9, 0, 2)
+        return simulate(build_scenario(p), streams), streams.point.random()
+
+    ref, ref_next = data(base)
+    simulated = ("x_true", "detected", "los", "z_target", "n_clutter", "clutter")
+    quiet = [p for p in EXPERIMENT.params if not p.draws]
+    assert {"filter.q", "init.sigma_range", "algorithms"} <= {p.key for p in quiet}
+    for param in quiet:
+        got, got_next = data({**base, param.key: another_value(param, base[param.key])})
+        for name in simulated:
+            np.testing.assert_array_equal(getattr(got, name), getattr(ref, name),
+                                          err_msg=f"{param.key} changes {name}")
+        assert got_next == ref_next, param.key
+    for key in ("clutter.mean", "sensors.sigma_az", "target.q"):  # the check sees a change
+        got = data({**base, key: 2 * base[key]})[0]
+        assert any(not np.array_equal(getattr(got, n), getattr(ref, n)) for n in simulated)
 
 
 def test_registered_schema_is_complete():

@@ -38,6 +38,25 @@ def gaussian_batch(params, streams) -> list[list[dict]]:
     return [gaussian_trial(params, s) for s in streams]
 
 
+def cluttered_trial(params, streams: TrialStreams) -> list[dict]:
+    """Clutter ``density * U`` (U from the point stream) plus noise from the common stream,
+    times ``gain``: ``density`` changes what is simulated, ``gain`` only what is computed."""
+    uniform, noise = float(streams.point.random()), float(streams.common.normal())
+    return [{"algorithm": "a", "uniform": uniform, "noise": noise,
+             "estimate": params["gain"] * (params["density"] * uniform + noise)}]
+
+
+CLUTTERED = register(Experiment(
+    name="toy_cluttered",
+    title="Clutter from the point stream, a setting that draws nothing",
+    params=(Param("density", 1.0, "clutter scale", "1", low=0.0),
+            Param("gain", 1.0, "applied to the data, not to what is drawn", "1",
+                  draws=False)),
+    run_trial=cluttered_trial,
+    batch_size=4,
+))
+
+
 def trivial_trial(params, streams: TrialStreams) -> list[dict]:
     """One uniform draw: measures the runner's per-trial overhead."""
     return [{"algorithm": "a", "value": float(streams.point.random())}]

@@ -32,13 +32,17 @@ _sigint_watched = threading.Event()
 
 @dataclass(frozen=True)
 class BatchTask:
-    """Everything a worker needs to run one batch (picklable, self-contained)."""
+    """Everything a worker needs to run one batch (picklable, self-contained).
+
+    ``draw_point`` keys the trials' point streams (:func:`trackfuse.seeding.draw_points`);
+    ``span.point`` names the rows and the stored part."""
 
     experiment: Experiment
     params: dict[str, Any]
     swept: dict[str, Any]
     seed: int
     span: BatchSpan
+    draw_point: int
 
 
 @dataclass(frozen=True)
@@ -103,7 +107,7 @@ def _rows(result: Any, producer: str) -> list[dict[str, Any]]:
 
 def _one_trial(task: BatchTask, trial: int) -> list[dict[str, Any]] | BaseException:
     try:
-        streams = trial_streams(task.seed, task.span.point, trial)
+        streams = trial_streams(task.seed, task.draw_point, trial)
         return _rows(task.experiment.run_trial(task.params, streams), "run_trial")
     except BaseException as err:  # noqa: BLE001 - recorded in the CSV, the run goes on
         if _is_user_interrupt(err):
@@ -118,7 +122,7 @@ def execute_batch(task: BatchTask) -> BatchResult:
     trials = range(span.first, span.stop)
     try:
         batch = task.experiment.run_trials(task.params,
-                                           batch_streams(task.seed, span.point, trials))
+                                           batch_streams(task.seed, task.draw_point, trials))
         if isinstance(batch, RowTable):
             batch.check(len(trials))
             return _table_result(task, batch, t0)

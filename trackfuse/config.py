@@ -362,8 +362,8 @@ def _sweep_mode(source: str, mode: Any, sweep: dict[str, list[Any]]) -> str:
 def _check_distinct(source: str, sweep: dict[str, list[Any]], mode: str,
                     from_options: set[str]) -> None:
     """Refuse a sweep with two equal points: a value repeated on a grid axis, or a repeated
-    combination of zipped axes. Two such points would differ only in their random numbers
-    (the point stream), and be read as two settings."""
+    combination of zipped axes. Two such points would repeat one setting (with the same
+    numbers: they share their draw point) and be read as two settings."""
     if mode == "zip":
         seen: set[str] = set()
         for values in zip(*sweep.values(), strict=True):

@@ -44,6 +44,7 @@ from trackfuse.results import (
 )
 from trackfuse.runstate import DAMAGED, STOPPED, run_state
 from trackfuse.safe_yaml import YamlInputError, read_yaml_file
+from trackfuse.seeding import draw_points
 from trackfuse.sweep import expand
 
 
@@ -104,6 +105,14 @@ class RunData:
     def point_params(self, point: int) -> dict[str, Any]:
         """Every parameter of sweep point ``point``, with its schema types."""
         return self.points[point]
+
+    @cached_property
+    def draw_points(self) -> list[int]:
+        """The draw point of every sweep point, whose point stream its trials drew
+        (:func:`~trackfuse.seeding.draw_points`): ``trial_streams(seed, draw_points[p], t)``
+        re-simulates trial ``t`` of point ``p``."""
+        points = expand(self.sweep, self.config.get("sweep_mode", "grid"))
+        return draw_points(points, self.experiment.drawing)
 
 
 def succeeded_rows(trials: pd.DataFrame) -> pd.DataFrame:

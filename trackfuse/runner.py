@@ -1,13 +1,14 @@
 """Run a validated config: plan batches, seed trials, execute, resume, write outputs.
 
 Seeding: trial ``t`` of sweep point ``p`` under root seed ``s`` draws from the two streams of
-:func:`trackfuse.seeding.trial_streams` (one common to every sweep point, one specific to
-the point) and nothing else, so the numbers do not depend on worker count, executor, batch
-placement or completion order. Trials are cut into batches of ``batch_size`` by trial index
-alone; finished batches are stored as parts and the final CSVs are merged in (point, batch)
-order, so for a given ``batch_size`` any schedule writes byte-identical files. The batch
-size itself is part of the run id: an experiment's vectorized ``run_batch`` may round the
-last bits differently for different batch compositions.
+:func:`trackfuse.seeding.trial_streams` (one common to every sweep point, one keyed by the
+point's draw point, :func:`trackfuse.seeding.draw_points`) and nothing else, so the numbers
+do not depend on worker count, executor, batch placement or completion order (rows, parts
+and resume are keyed by the point itself). Trials are cut into batches of ``batch_size`` by
+trial index alone; finished batches are stored as parts and the final CSVs are merged in
+(point, batch) order, so for a given ``batch_size`` any schedule writes byte-identical
+files. The batch size itself is part of the run id: an experiment's vectorized
+``run_batch`` may round the last bits differently for different batch compositions.
 
 Each batch runs in a worker through :func:`trackfuse.batch.execute_batch`, which contains
 whatever a trial raises.
@@ -78,6 +79,7 @@ from trackfuse.rowtable import frame_csv
 from trackfuse.rundata import RunData, load
 from trackfuse.runlock import RunLock
 from trackfuse.runstate import has_report
+from trackfuse.seeding import draw_points
 from trackfuse.summary import CHUNK_ROWS, summarize
 from trackfuse.sweep import expand
 
@@ -181,6 +183,7 @@ class Runner:
         self.out = Path(out)
         self.folder = RunFolder(self.out / folder_name(config.source) / self.run_id)
         self.points = expand(config.sweep, config.sweep_mode)
+        self.draw_points = draw_points(self.points, config.experiment.drawing)
         self.batches_per_point = math.ceil(config.trials / config.batch_size)
         self.workers, self.executor_kind = workers, executor
         self.executor_used: str | None = None
@@ -219,7 +222,8 @@ class Runner:
         cfg = self.config
         for span in todo:
             swept = self.points[span.point].values
-            yield BatchTask(cfg.experiment, {**cfg.params, **swept}, swept, cfg.seed, span)
+            yield BatchTask(cfg.experiment, {**cfg.params, **swept}, swept, cfg.seed, span,
+                            self.draw_points[span.point])
 
     def _manifest(self, status: RunStatus, session: _Session, failed: int = 0) -> dict[str, Any]:
         versions = {"trackfuse": trackfuse.__version__, **self.libraries,

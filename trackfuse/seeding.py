@@ -7,8 +7,12 @@ Every trial gets two independent generators (``numpy.random.Generator``, PCG64):
   random numbers). Experiments draw from it everything the swept parameters do not change
   the distribution of: truth, initial estimate, measurement noise as standard normals to be
   scaled, algorithm randomness.
-* ``point``: a function of (root seed, trial, sweep point). Experiments draw from it what a
-  swept parameter changes, such as the number and positions of clutter returns.
+* ``point``: a function of (root seed, trial, draw point). Experiments draw from it what a
+  swept parameter changes, such as the number and positions of clutter returns. A sweep
+  point's *draw point* (:func:`draw_points`) is the first point with the same values of
+  every swept parameter that changes what is simulated (``Param.draws``): points that
+  differ only in what is computed from the data (an algorithm setting, a filter's model)
+  share their clutter too.
 
 Neither depends on the worker, the executor, the batch or the order of completion, so any
 schedule writes the same numbers. The two are separated by the ``spawn_key`` of a
@@ -18,9 +22,14 @@ can collide with another trial's common stream. See ``docs/runner.md`` (seeding)
 
 from __future__ import annotations
 
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:  # only for annotations: workers load no sweep parsing
+    from trackfuse.sweep import SweepPoint
 
 _COMMON, _POINT = 0, 1
 
@@ -33,8 +42,23 @@ class TrialStreams:
     point: np.random.Generator
 
 
+def draw_points(points: Sequence[SweepPoint], drawing: Collection[str]) -> list[int]:
+    """The draw point of every sweep point, in point order: the index of the first point
+    whose values of the swept keys in ``drawing`` (the parameters that change what is
+    simulated) equal its own. With every swept key drawing, each point is its own."""
+    first: dict[tuple[Any, ...], int] = {}
+    return [first.setdefault(_hashable([v for k, v in p.values.items() if k in drawing]),
+                             p.index) for p in points]
+
+
+def _hashable(value: Any) -> Any:
+    """``value`` with every list made a tuple (a swept value may be a list)."""
+    return tuple(map(_hashable, value)) if isinstance(value, (list, tuple)) else value
+
+
 def trial_streams(seed: int, point: int, trial: int) -> TrialStreams:
-    """Streams of trial ``trial`` at sweep point ``point`` under root seed ``seed``."""
+    """Streams of trial ``trial`` whose point stream is keyed by sweep point ``point`` (the
+    runner passes the point's draw point, :func:`draw_points`) under root seed ``seed``."""
     common = np.random.SeedSequence(seed, spawn_key=(_COMMON, trial))
     specific = np.random.SeedSequence(seed, spawn_key=(_POINT, trial, point))
     return TrialStreams(np.random.default_rng(common), np.random.default_rng(specific))

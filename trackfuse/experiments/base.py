@@ -9,8 +9,9 @@ An experiment module is the only place that knows its science. It exposes one mo
 * ``run_trial(params, streams) -> list[dict]``: one Monte Carlo trial. ``streams`` is a
   :class:`~trackfuse.seeding.TrialStreams`: ``streams.common`` is the same generator at every
   sweep point (draw truth, initial estimates, measurement noise and algorithm randomness
-  from it: common random numbers), ``streams.point`` is specific to the sweep point (draw
-  what a swept parameter changes, such as clutter). The trial returns tidy rows, one per
+  from it: common random numbers), ``streams.point`` is specific to the sweep point's values
+  of the parameters that change what is simulated (:attr:`Param.draws`; draw what a swept
+  parameter changes, such as clutter). The trial returns tidy rows, one per
   algorithm (and per value of any extra key in ``row_keys``, e.g. a scan index). Every
   algorithm in a trial sees the same simulated data (paired comparisons). A trial is a pure
   function of ``params`` and ``streams``.
@@ -70,6 +71,12 @@ class Param:
     inclusive bounds for numbers (and for every element of a list); ``choices`` restricts
     strings (or numbers, or every element of a list) to a fixed set; ``length`` fixes the
     number of items of a list (a position's 3 coordinates).
+
+    ``draws``: whether the parameter changes what is simulated (the scene, the sensor
+    returns, the clutter) rather than only what is computed from it (an algorithm or its
+    settings, a filter's model or prior, the scoring). Sweep points that differ only in
+    parameters with ``draws=False`` share their point stream (``docs/runner.md``, seeding);
+    ``True``, the default, keeps a point's own stream (the safe choice for a plugin).
     """
 
     key: str
@@ -81,6 +88,7 @@ class Param:
     high: float | None = None
     choices: tuple[Any, ...] | None = None
     length: int | None = None
+    draws: bool = True
 
 
 Better = Literal["lower", "higher"]
@@ -171,6 +179,11 @@ class Experiment:
     def directions(self) -> dict[str, Better]:
         """Metric name -> ``"lower"`` or ``"higher"`` for every metric with a direction."""
         return {m.name: m.better for m in self.metrics if m.better is not None}
+
+    @property
+    def drawing(self) -> tuple[str, ...]:
+        """Keys of the parameters that change what is simulated (:attr:`Param.draws`)."""
+        return tuple(p.key for p in self.params if p.draws)
 
     @property
     def algorithms(self) -> tuple[str, ...]:

@@ -172,7 +172,7 @@ ALGORITHMS: dict[str, Variant] = {
 PARAMS = (
     Param("algorithms", ["traditional", "improved", "chi2"],
           "association algorithms run on every trial (same data)", kind=list,
-          choices=tuple(ALGORITHMS)),
+          choices=tuple(ALGORITHMS), draws=False),
     Param("scan.count", 50, "ESM samples per trial K", "samples", kind=int, low=3, high=10_000),
     Param("esm.period", 1.0, "ESM sampling period", "s", low=1e-3, high=600.0),
     Param("radar.period", 1.0, "radar sampling period", "s", low=1e-3, high=600.0),
@@ -180,7 +180,7 @@ PARAMS = (
           low=0.0, high=600.0),
     Param("time_align", False,
           "interpolate radar factors to ESM times (eq. 1, corrected eq. 2); else hold the "
-          "latest radar sample", kind=bool),
+          "latest radar sample", kind=bool, draws=False),
     Param("geometry.baseline", 10_000.0, "A2 - A1 along x (A1 at the origin)", "m", low=1.0,
           high=1e6),
     Param("target.separation", 200.0, "T2 - T1 along x", "m", low=0.0, high=1e5),
@@ -214,48 +214,62 @@ PARAMS = (
           "the nominal sigmas", "1", low=0.0, high=100.0),
     Param("weights", "root_exact", "AHP weights: root method, eigenvector, or the paper's "
           "rounded set (5 factors only; subsets use the root method)", kind=str,
-          choices=("root_exact", "eigen", "paper_rounded")),
+          choices=("root_exact", "eigen", "paper_rounded"), draws=False),
     Param("membership_norm", "l1", "normalization of the 1/d membership of 'improved'", kind=str,
-          choices=("l1", "l2")),
+          choices=("l1", "l2"), draws=False),
     Param("alpha.index", "nis_tdoa",
           "manoeuvre index: 'nis_tdoa' = windowed NIS of a constant-acceleration filter on the "
           "ESM range difference c*dt (default), 'literal' = paper eq. 8-13, residual of a CV "
+<<<<<<< HEAD
           "filter on the TDOA-DF range over its measurement variance (needs alpha.max_mode "
           "'fixed' or 'running_max')", kind=str, choices=("nis_tdoa", "literal")),
+=======
+          "filter on the TDOA-DF range over its measurement variance", kind=str,
+          choices=("nis_tdoa", "literal"), draws=False),
+>>>>>>> crn
     Param("alpha.window", 5, "scans N averaged in the manoeuvre index", "samples", kind=int, low=1,
-          high=10_000),
+          high=10_000, draws=False),
     Param("alpha.max_mode", "chi2",
           "alpha_max of eq. 14: 'chi2' = quantile 1 - alpha.false_alarm of chi2(N)/N, the "
+<<<<<<< HEAD
           "no-manoeuvre distribution of the 'nis_tdoa' index (so only with alpha.index "
           "'nis_tdoa'); 'fixed' = alpha.max; 'running_max' = running maximum of alpha",
           kind=str,
           choices=("chi2", "fixed", "running_max")),
+=======
+          "no-manoeuvre distribution of the 'nis_tdoa' index; 'fixed' = alpha.max; "
+          "'running_max' = running maximum of alpha", kind=str,
+          choices=("chi2", "fixed", "running_max"), draws=False),
+>>>>>>> crn
     Param("alpha.false_alarm", 0.01, "'chi2' mode: probability that the index of a "
-          "non-manoeuvring target exceeds alpha_max in a window", "1", low=1e-9, high=0.5),
-    Param("alpha.max", 10.0, "alpha_max of eq. 14 in 'fixed' mode", "1", low=1e-6, high=1e9),
+          "non-manoeuvring target exceeds alpha_max in a window", "1", low=1e-9, high=0.5,
+          draws=False),
+    Param("alpha.max", 10.0, "alpha_max of eq. 14 in 'fixed' mode", "1", low=1e-6, high=1e9,
+          draws=False),
     Param("alpha.accel_change_sd", 0.05,
           "'nis_tdoa': sd of the range-difference acceleration change over one period "
-          "(DWPA process noise)", "m/s^2", low=0.0, high=1e4),
+          "(DWPA process noise)", "m/s^2", low=0.0, high=1e4, draws=False),
     Param("alpha.q", 1.0, "'literal': white acceleration variance of the range CV filter",
-          "m^2/s^4", low=0.0, high=1e6),
+          "m^2/s^4", low=0.0, high=1e6, draws=False),
     Param("lrt.threshold", float(np.log(19.0)),
           "chi2_lrt: least best-vs-second log-likelihood ratio to declare a track "
-          "(log 19: 95 % between the two)", "nat", low=0.0, high=1e6),
+          "(log 19: 95 % between the two)", "nat", low=0.0, high=1e6, draws=False),
     Param("gate.alpha", 0.001, "chi2_lrt: false-rejection probability of the chi-square "
-          "goodness-of-fit gate on the best track (0 = no gate)", "1", low=0.0, high=0.5),
+          "goodness-of-fit gate on the best track (0 = no gate)", "1", low=0.0, high=0.5,
+          draws=False),
     Param("baseline.factors", ["range", "speed", "angle"], "factors of 'traditional'", kind=list,
-          choices=FACTORS),
+          choices=FACTORS, draws=False),
     Param("baseline.tau", 0.5, "Gaussian grade exp(-tau d^2/(s_E^2+s_R^2))", "1", low=1e-6,
-          high=1e6),
+          high=1e6, draws=False),
     Param("baseline.spread", "nominal",
           "spread of the traditional Gaussian grade: 'nominal' = sensor sd at the scenario's "
           "noise-free geometry, averaged over the scans (static, default); 'trial_mean' = "
           "per-trial time mean of the sd from the measured values (static); 'per_sample' = "
           "sd recomputed at every scan from the measured bearing/TDOA/range (handicapped: "
           "sharp when the ESM range falls short)", kind=str,
-          choices=("nominal", "trial_mean", "per_sample")),
+          choices=("nominal", "trial_mean", "per_sample"), draws=False),
     Param("baseline.decision", "mean", "'traditional' decision: mean membership or majority "
-          "vote of per-scan decisions", kind=str, choices=("mean", "vote")),
+          "vote of per-scan decisions", kind=str, choices=("mean", "vote"), draws=False),
 )
 
 

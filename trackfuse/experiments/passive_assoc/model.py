@@ -39,7 +39,8 @@ trial, computed even when ``exact`` is not listed):
   timings.csv.
 
 Random streams: ``truth, noise, shuffle, algo`` are spawned from the trial's common stream
-(the same at every sweep point) and the false alarms come from its point-specific stream;
+(the same at every sweep point) and the false alarms come from its point stream (shared by
+sweep points that differ only in the solver settings, ``draws=False``);
 the PGA variants take fixed children of ``algo`` by their position in :data:`VARIANTS`
 (append new variants at the end), so adding or removing an algorithm in a config changes no
 other number.
@@ -99,28 +100,33 @@ PARAMS = (
     Param("clutter.margin", 0.1, "FOV box margin around the true target angles", "rad", low=0.0,
           high=1.0),
     Param("assoc.p_f", 0.05, "the paper's false-measurement likelihood p_f in a_i0 = ln p_f "
-          "(cost 'paper' only)", "1", low=1e-12, high=1.0),
+          "(cost 'paper' only)", "1", low=1e-12, high=1.0, draws=False),
     Param("assoc.tri", "unit_normal", "triangulation of a candidate pair", kind=str,
-          choices=("paper", "unit_normal", "wls", "ml")),
+          choices=("paper", "unit_normal", "wls", "ml"), draws=False),
     Param("assoc.cost", "paper", "assignment weights: the paper's (sign-corrected) or "
-          "Pattipati's FOV-normalised likelihood ratio", kind=str, choices=COSTS),
+          "Pattipati's FOV-normalised likelihood ratio", kind=str, choices=COSTS, draws=False),
     Param("assoc.exact", "lsa_clip", "exact solver for the reference optimum", kind=str,
-          choices=EXACT),
+          choices=EXACT, draws=False),
     Param("algorithms", ["exact", "pga_paper", "pga_evict"], "solvers reported per trial",
-          kind=list, choices=ALGORITHMS),
-    Param("pga.ops", 1000, "genetic operations per PGA run", "count", kind=int, low=0, high=10**7),
+          kind=list, choices=ALGORITHMS, draws=False),
+    Param("pga.ops", 1000, "genetic operations per PGA run", "count", kind=int, low=0, high=10**7,
+          draws=False),
     Param("pga.checkpoints", list(CHECKPOINTS), "operation counts at which the best "
           "solution is scored (values above pga.ops are ignored; pga.ops itself is always "
-          "scored)", "count", kind=list, low=0, high=10**7),
-    Param("pga.p_m", 0.2, "mutation probability per genetic operation", "1", low=0.0, high=1.0),
+          "scored)", "count", kind=list, low=0, high=10**7, draws=False),
+    Param("pga.p_m", 0.2, "mutation probability per genetic operation", "1", low=0.0, high=1.0,
+          draws=False),
     Param("pga.init", "random_B", "initial individual: random injection or identity "
-          "(paper eq. 31)", kind=str, choices=("random_B", "standard")),
+          "(paper eq. 31)", kind=str, choices=("random_B", "standard"), draws=False),
     Param("pga.roulette", "worse", "roulette direction: badly placed columns swapped more "
-          "often ('worse') or well placed ones ('better')", kind=str, choices=("worse", "better")),
+          "often ('worse') or well placed ones ('better')", kind=str, choices=("worse", "better"),
+          draws=False),
     Param("pga.second", "roulette", "second crossover column: roulette over the rest or "
-          "uniform", kind=str, choices=("roulette", "uniform")),
-    Param("pga.t0", 2.0, "initial annealing temperature (pga_anneal)", "nat", low=1e-9, high=1e6),
-    Param("pga.t1", 0.01, "final annealing temperature (pga_anneal)", "nat", low=1e-9, high=1e6),
+          "uniform", kind=str, choices=("roulette", "uniform"), draws=False),
+    Param("pga.t0", 2.0, "initial annealing temperature (pga_anneal)", "nat", low=1e-9, high=1e6,
+          draws=False),
+    Param("pga.t1", 0.01, "final annealing temperature (pga_anneal)", "nat", low=1e-9, high=1e6,
+          draws=False),
 )
 
 

@@ -22,9 +22,10 @@ the target with probability ``P_D`` and reports Poisson clutter:
   ``+-clutter.window`` rad box around the true line of sight, identical for every filter.
 
 Each trial spawns independent generators for truth, initialization and sensor noise from its
-common stream (the same at every sweep point) and draws clutter from its point-specific
-stream, so adding an algorithm never changes the simulated data and sweep points compare on
-the same targets and noise. Every algorithm (association variant
+common stream (the same at every sweep point) and draws clutter from its point stream (shared
+by sweep points that differ only in parameters marked ``draws=False``: the filter, its
+initialization, gating and scoring), so adding an algorithm never changes the simulated data
+and sweep points compare on the same targets and noise. Every algorithm (association variant
 x covariance form, see :mod:`trackfuse.tracking.pda`) starts from the same
 ``x0 ~ N(x_true(0), P0)``. The range standard deviation of ``P0`` (the radar cue) is
 ``init.sigma_range`` metres (``init.range_cue = "absolute"``, the paper's 20 km at 200 km)
@@ -164,36 +165,38 @@ PARAMS = (
           "rad", low=1e-4, high=1.0),
     Param("init.range_cue", "absolute", "How the radar range cue's standard deviation is "
           "given: in metres (init.sigma_range) or as a fraction of the true initial range "
-          "(init.sigma_range_fraction)", kind=str, choices=("absolute", "relative")),
+          "(init.sigma_range_fraction)", kind=str, choices=("absolute", "relative"), draws=False),
     Param("init.sigma_range", 20000.0, "Initial range standard deviation of an absolute cue "
-          "(paper default: 20 km = 10 % of 200 km)", "m", low=1.0, high=1e7),
+          "(paper default: 20 km = 10 % of 200 km)", "m", low=1.0, high=1e7, draws=False),
     Param("init.sigma_range_fraction", 0.1, "Initial range standard deviation of a relative "
-          "cue, as a fraction of the true range from sensor 1 at t = 0", "1", low=1e-4, high=10.0),
+          "cue, as a fraction of the true range from sensor 1 at t = 0", "1", low=1e-4, high=10.0,
+          draws=False),
     Param("init.sigma_angle", float(0.01 / np.sqrt(2.0)), "Initial cross-range standard "
-          "deviation per axis, as an angle", "rad", low=1e-7, high=1.0),
+          "deviation per axis, as an angle", "rad", low=1e-7, high=1.0, draws=False),
     Param("init.sigma_velocity", 30.0, "Initial velocity standard deviation per axis", "m/s",
-          low=1e-3, high=1e4),
+          low=1e-3, high=1e4, draws=False),
     Param("filter.q", 900.0, "Filter process-noise acceleration variance", "m^2/s^4", low=0.0,
-          high=1e8),
-    Param("gate.pg", 0.99, "Gate probability P_G", "1", low=0.5, high=0.999999),
+          high=1e8, draws=False),
+    Param("gate.pg", 0.99, "Gate probability P_G", "1", low=0.5, high=0.999999, draws=False),
     Param("filter.mg_at", "hypothesis", "Where the MGEKF modified rows are evaluated: each "
           "hypothesis's own returns, or the beta-weighted combined return (W000-4)", kind=str,
-          choices=("hypothesis", "combined")),
+          choices=("hypothesis", "combined"), draws=False),
     Param("pda.joint_cov", "full", "Joint innovation covariance of the pair hypotheses", kind=str,
-          choices=("full", "blockdiag")),
+          choices=("full", "blockdiag"), draws=False),
     Param("pda.density", "parametric", "Clutter density: true value or m_s / V_s", kind=str,
-          choices=("parametric", "nonparametric")),
+          choices=("parametric", "nonparametric"), draws=False),
     Param("algorithms", list(ALGORITHMS), "Algorithm variants run on the same data, as "
-          "association/filter", kind=list, choices=ALGORITHMS + STONESOUP_ALGORITHMS),
+          "association/filter", kind=list, choices=ALGORITHMS + STONESOUP_ALGORITHMS, draws=False),
     Param("loss.window", 3, "Consecutive scans with the target outside every gate that mean "
-          "a lost track (gate rule)", "scans", kind=int, low=1, high=1000),
+          "a lost track (gate rule)", "scans", kind=int, low=1, high=1000, draws=False),
     Param("loss.angle_sigmas", 3.0, "Angle rule: a scan counts as off-target when the "
           "estimate's azimuth or elevation seen from sensor 1 is further than this many "
-          "sensor-1 noise standard deviations from the true one", "1", low=0.1, high=1e3),
+          "sensor-1 noise standard deviations from the true one", "1", low=0.1, high=1e3,
+          draws=False),
     Param("loss.angle_window", 3, "Consecutive off-target scans that mean a lost track "
-          "(angle rule)", "scans", kind=int, low=1, high=1000),
+          "(angle rule)", "scans", kind=int, low=1, high=1000, draws=False),
     Param("loss.nees_quantile", 0.999, "Chi-square (3 dof) quantile above which the final "
-          "position NEES marks the filter inconsistent", "1", low=0.5, high=0.999999),
+          "position NEES marks the filter inconsistent", "1", low=0.5, high=0.999999, draws=False),
     *STONESOUP_PARAMS,
 )
 
@@ -331,7 +334,7 @@ def simulate(sc: Scenario, streams: TrialStreams) -> TrialData:
     Truth, initialization, detections and noise come from the trial's common stream (the
     same at every sweep point; detections and noise are drawn for :data:`MAX_SENSORS`
     sensors, so a one-sensor point sees sensor 1's returns of a two-sensor point); clutter
-    comes from the point-specific stream.
+    comes from the point stream.
     """
     g_truth, g_init, g_noise = streams.common.spawn(3)
     g_clutter = streams.point

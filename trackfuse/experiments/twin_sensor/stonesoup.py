@@ -57,13 +57,14 @@ weight on a validated return). Not smaller: Stone Soup's hypothesis normalisatio
 a ``Probability`` by a float, which leaves log space and overflows to NaN near 1e-300."""
 STONESOUP_PARAMS = (
     Param("stonesoup.particles", 500, "Particles of the Stone Soup particle filter "
-          "(stonesoup_pda/pf)", "particles", kind=int, low=10, high=1_000_000),
+          "(stonesoup_pda/pf)", "particles", kind=int, low=10, high=1_000_000, draws=False),
     Param("stonesoup.process_noise", "ours", "Process noise of the Stone Soup filters: our "
           "discrete white-noise acceleration Q (paired with ours) or Stone Soup's "
-          "ConstantVelocity (continuous white noise)", kind=str, choices=("ours", "cv")),
+          "ConstantVelocity (continuous white noise)", kind=str, choices=("ours", "cv"),
+          draws=False),
     Param("stonesoup.jacobian", "numerical", "Measurement Jacobian of the Stone Soup EKF: its "
           "own finite difference or the analytic one (docs/stonesoup.md)", kind=str,
-          choices=("numerical", "analytic")),
+          choices=("numerical", "analytic"), draws=False),
 )
 
 

@@ -1,0 +1,72 @@
+"""Seeding: which sweep points share their point stream (draw points)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from trackfuse.config import load
+from trackfuse.seeding import draw_points
+from trackfuse.sweep import expand
+
+CONFIGS = Path(__file__).resolve().parents[1] / "configs"
+SHIPPED = sorted(CONFIGS.rglob("*.yaml"))
+
+
+def test_points_with_equal_drawing_values_share_the_first_ones_index():
+    points = expand({"clutter": [0, 5], "p_m": [0.0, 0.1, 0.2]})  # p_m varies fastest
+    assert draw_points(points, {"clutter"}) == [0, 0, 0, 3, 3, 3]
+    assert draw_points(points, {"p_m"}) == [0, 1, 2, 0, 1, 2]
+    assert draw_points(points, {"clutter", "p_m"}) == list(range(6))
+    assert draw_points(points, set()) == [0] * 6
+
+
+def test_zipped_points_compare_every_drawing_value_and_lists_by_their_items():
+    points = expand({"q": [0, 9, 0, 9], "filter": [1, 2, 3, 4], "clutter": [0, 0, 4, 0]},
+                    "zip")
+    assert draw_points(points, {"q", "clutter"}) == [0, 1, 2, 1]
+    lists = expand({"algorithms": [["a", "b"], ["a"], ["a", "b"]], "x": [1, 1, 2]}, "zip")
+    assert draw_points(lists, {"algorithms"}) == [0, 1, 0]
+    assert draw_points(lists, {"algorithms", "x"}) == [0, 1, 2]
+
+
+def test_a_sweep_without_axes_is_its_own_draw_point():
+    assert draw_points(expand({}), {"clutter"}) == [0]
+
+
+def _mapped(path: Path) -> tuple[list, list[int]]:
+    """The sweep points of a shipped config and their draw points."""
+    config = load(path)
+    points = expand(config.sweep, config.sweep_mode)
+    return points, draw_points(points, config.experiment.drawing)
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.stem)
+def test_a_draw_point_is_the_first_point_with_the_same_simulated_values(path):
+    config = load(path)
+    drawing = [k for k in config.sweep if config.experiment.schema[k].draws]
+    points, mapped = _mapped(path)
+    for point, draw in zip(points, mapped, strict=True):
+        same = [q.index for q in points
+                if all(q.values[k] == point.values[k] for k in drawing)]
+        assert draw == same[0]
+
+
+def test_only_the_shipped_configs_with_a_non_drawing_axis_share_clutter_across_points():
+    """Every other shipped config draws exactly the clutter it drew before draw points
+    existed (each point its own stream), so its numbers are unchanged; these are the ones
+    whose sweep adds a parameter that changes only what is computed."""
+    sharing = set()
+    for path in SHIPPED:
+        points, mapped = _mapped(path)
+        if mapped != [p.index for p in points]:
+            sharing.add(path.stem)
+    assert sharing == {"passive_mutation", "passive_mutation_ci", "twin_sensor_range",
+                       "twin_sensor_stonesoup_jacobian", "esm_radar_baseline_spread",
+                       "esm_radar_weave"}
+
+
+def test_the_mutation_study_shares_clutter_across_p_m_and_not_across_targets():
+    assert _mapped(CONFIGS / "passive_mutation.yaml")[1] == [0, 1, 2] * 4  # p_m x targets.n
+    assert _mapped(CONFIGS / "twin_sensor_range.yaml")[1] == [0] * 9  # cue x filter q
