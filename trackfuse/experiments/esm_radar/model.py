@@ -220,27 +220,15 @@ PARAMS = (
     Param("alpha.index", "nis_tdoa",
           "manoeuvre index: 'nis_tdoa' = windowed NIS of a constant-acceleration filter on the "
           "ESM range difference c*dt (default), 'literal' = paper eq. 8-13, residual of a CV "
-<<<<<<< HEAD
           "filter on the TDOA-DF range over its measurement variance (needs alpha.max_mode "
-          "'fixed' or 'running_max')", kind=str, choices=("nis_tdoa", "literal")),
-=======
-          "filter on the TDOA-DF range over its measurement variance", kind=str,
-          choices=("nis_tdoa", "literal"), draws=False),
->>>>>>> crn
+          "'fixed' or 'running_max')", kind=str, choices=("nis_tdoa", "literal"), draws=False),
     Param("alpha.window", 5, "scans N averaged in the manoeuvre index", "samples", kind=int, low=1,
           high=10_000, draws=False),
     Param("alpha.max_mode", "chi2",
           "alpha_max of eq. 14: 'chi2' = quantile 1 - alpha.false_alarm of chi2(N)/N, the "
-<<<<<<< HEAD
           "no-manoeuvre distribution of the 'nis_tdoa' index (so only with alpha.index "
           "'nis_tdoa'); 'fixed' = alpha.max; 'running_max' = running maximum of alpha",
-          kind=str,
-          choices=("chi2", "fixed", "running_max")),
-=======
-          "no-manoeuvre distribution of the 'nis_tdoa' index; 'fixed' = alpha.max; "
-          "'running_max' = running maximum of alpha", kind=str,
-          choices=("chi2", "fixed", "running_max"), draws=False),
->>>>>>> crn
+          kind=str, choices=("chi2", "fixed", "running_max"), draws=False),
     Param("alpha.false_alarm", 0.01, "'chi2' mode: probability that the index of a "
           "non-manoeuvring target exceeds alpha_max in a window", "1", low=1e-9, high=0.5,
           draws=False),
