@@ -14,6 +14,8 @@ import pandas as pd
 import pytest
 from conftest import cli_env
 
+from trackfuse import harness
+
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 CODE = [*ROOT.glob("trackfuse/**/*.py"), *ROOT.glob("cli/*.py"), *ROOT.glob("tests/*.py"),
@@ -183,6 +185,40 @@ def test_the_first_update_example_prints_shift_and_formula():
     lines = proc.stdout.splitlines()
     assert lines[1].startswith("paper: ") and lines[1].endswith("formula 2000 m")
     assert lines[2].startswith("cue_2km: ") and lines[2].endswith("formula 20 m")
+
+
+def test_the_first_update_example_pairs_a_runs_own_trials(tmp_path, monkeypatch):
+    """``--run`` (the number README quotes): the shift is the run's scan-1 mean minus the
+    prior mean on the same trials, its paired interval far narrower than the scan-1 mean's
+    (which carries the prior's spread); a run whose scan-1 errors are not the code's own
+    is refused rather than paired with the wrong priors."""
+    run = harness.run_data(tmp_path / "run", "twin_sensor",
+                           {"algorithms": ["mspda_parallel/mgekf"]},
+                           {"clutter.mean": [0.0, 3.0]}, trials=30, seed=5)
+
+    def example(folder: Path) -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "examples/first_update_shift.py", "--run",
+                               str(folder)], cwd=ROOT, env=cli_env(), capture_output=True,
+                              text=True, timeout=120)
+
+    proc = example(run.path)
+    assert proc.returncode == 0, proc.stderr
+    assert "point 0 (clutter 0), 30 trials" in proc.stdout
+    numbers = [[float(v) for v in m] for m in re.findall(
+        r"(-?\d+) \[(-?\d+), (-?\d+)\] m", proc.stdout)]
+    (shift, s_lo, s_hi), (scan1, c_lo, c_hi), (prior, _, _) = numbers
+    assert abs(shift - (scan1 - prior)) <= 1.5  # each printed to the metre
+    assert 3 * (s_hi - s_lo) < c_hi - c_lo
+    spec = importlib.util.spec_from_file_location("first_update_shift",
+                                                  ROOT / "examples" / "first_update_shift.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    shifted = run.trials.copy()  # trial 0's scan-1 error moved by 1 m: not the code's own
+    shifted.loc[(shifted["scan"] == 1) & (shifted["trial"] == 0), "range_err_m"] += 1.0
+    run.trials = shifted
+    monkeypatch.setattr(module, "load", lambda folder: run)
+    with pytest.raises(SystemExit, match="scan-1 errors"):
+        module.run_shift(run.path)
 
 
 def test_the_stonesoup_rounding_example_compares_two_numpy_settings():

@@ -244,6 +244,11 @@ def test_tables_from_saved_frames(tmp_path):
         np.testing.assert_array_equal(rows["mcnemar_p_holm"],
                                       holm_adjusted(rows["mcnemar_p"]))
         assert (rows["mcnemar_p_holm"] >= rows["mcnemar_p"]).all()
+    for _, rows in variants.groupby("algorithm"):  # the same comparison along the sweep
+        assert len(rows) == 2
+        np.testing.assert_array_equal(rows["mcnemar_p_holm_sweep"],
+                                      holm_adjusted(rows["mcnemar_p"]))
+    assert imp["mcnemar_p_holm_sweep"].isna().all()
     assert set(abl["weights"]) == {"static", "dynamic", "-"}
 
 

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import matplotlib.figure
 import numpy as np
+import pandas as pd
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import to_rgba
@@ -185,8 +186,59 @@ def test_curve_claims_follow_the_paired_intervals(tmp_path):
     close = table.loc[table.index.str.startswith("improved - traditional at the closest")]
     assert close["verdict"].iloc[0] == "agrees" and close["ci_low"].iloc[0] > 0
     always = table[table["paper_item"] == "Abstract"].iloc[0]
-    assert always["verdict"] == "differs"  # equal (both ~1) at 3 km
+    # equal (both ~1) at 3 km: not shown higher there, but not shown lower either
+    assert always["verdict"] == "inconclusive"
     assert always["ci_low"] <= 0 <= always["ci_high"]
+
+
+def _outcomes(rates: dict[float, float | tuple[float, float]], n: int) -> pd.DataFrame:
+    """0/1 outcomes (trial x point): at the i-th value the first ``round(n * rate)`` trials
+    are 1 (nested across points and methods: strongly paired, as common random numbers), or
+    for ``(rate, start)`` as many trials from ``round(n * start)`` on."""
+    out = {}
+    for i, r in enumerate(rates.values()):
+        rate, start = r if isinstance(r, tuple) else (r, 0.0)
+        k, first = round(n * rate), round(n * start)
+        out[i] = ((np.arange(n) >= first) & (np.arange(n) < first + k)).astype(float)
+    return pd.DataFrame(out)
+
+
+def _gap_verdicts(trad: dict[float, float], imp: dict[float, float], n: int) -> dict:
+    xs = [(x, i) for i, x in enumerate(trad)]
+    rows = report._gap_rows("Fig. 3", "fig-3-separation", "target.separation", "",
+                            _outcomes(imp, n), _outcomes(trad, n), xs)
+    return {key: row for key, row in zip(("closest", "narrows", "always"), rows, strict=True)}
+
+
+def test_the_narrowing_verdict_does_not_pick_its_yardstick_from_the_data():
+    """The `derived` shape: the gap is +0.01 at 50 m, +0.30 at 300 m and 0 at 2 km. The rule
+    it replaced compared the widest separation with the largest of the gaps (selected from
+    the data) and said "agrees"; on the same trials the gap widens from 50 to 300 m, which a
+    narrowing gap cannot do."""
+    rows = _gap_verdicts({50: 0.49, 300: 0.58, 2000: 1.0},
+                         {50: (0.50, 0.2), 300: 0.88, 2000: 1.0}, 500)
+    assert rows["narrows"]["verdict"] == "differs"
+    assert "widens from +0.010 at 50 m to +0.300 at 300 m" in rows["narrows"]["reason"]
+    assert rows["narrows"]["reproduced"] == pytest.approx(0.01)  # pre-specified: 50 vs 2000
+    assert rows["closest"]["verdict"] == "inconclusive"  # +0.01: neither shown nor refuted
+    monotone = _gap_verdicts({50: 0.5, 300: 0.7, 2000: 1.0}, {50: 0.9, 300: 0.95, 2000: 1.0},
+                             500)
+    assert [monotone[k]["verdict"] for k in ("closest", "narrows")] == ["agrees", "agrees"]
+
+
+def test_curve_verdicts_with_too_few_trials_never_say_differs():
+    """30 trials and a small widening (+0.03 to +0.10): no verdict can be reached."""
+    rows = _gap_verdicts({50: 0.5, 300: 0.5, 2000: 1.0}, {50: 0.53, 300: 0.6, 2000: 1.0}, 30)
+    assert {k: r["verdict"] for k, r in rows.items()} == {
+        "closest": "inconclusive", "narrows": "inconclusive", "always": "inconclusive"}
+
+
+def test_always_higher_differs_only_where_the_improved_method_is_shown_lower():
+    tied = _gap_verdicts({50: 0.5, 2000: 1.0}, {50: 0.8, 2000: 1.0}, 200)["always"]
+    assert tied["verdict"] == "inconclusive"
+    assert "2000 m (the same outcome in every trial)" in tied["reason"]
+    lower = _gap_verdicts({50: 0.5, 2000: 0.9}, {50: 0.8, 2000: 0.6}, 200)["always"]
+    assert lower["verdict"] == "differs" and "shown lower at 2000 m" in lower["reason"]
 
 
 # --------------------------------------------------------------------------- per-scan columns

@@ -463,17 +463,21 @@ def _levels(lost_per_level: dict[float, int], runs: int, spread: bool = False) -
 
 
 @pytest.mark.parametrize(("lost", "runs", "spread", "below", "rises"), [
-    ({c: 0 for c in range(16)}, 50, False, "not comparable", "differs"),  # ours: [0, 7.1] %
-    ({c: 0 for c in range(16)}, 100, False, "agrees", "differs"),         # [0, 3.7] %
-    ({c: 10 for c in range(16)}, 50, False, "differs", "differs"),        # 20 % everywhere
+    ({c: 0 for c in range(16)}, 50, False, "inconclusive", "inconclusive"),  # ours: [0, 7.1] %
+    ({c: 0 for c in range(16)}, 100, False, "agrees", "inconclusive"),       # [0, 3.7] %
+    # 20 % everywhere, the same 10 runs at every level: nothing rises, nothing falls
+    ({c: 10 for c in range(16)}, 50, False, "differs", "inconclusive"),
     ({c: (c >= 10) * 3 * c for c in range(16)}, 100, False, "agrees", "agrees"),  # paper's shape
-    ({0: 0, 9: 3}, 50, False, "not comparable", "differs"),               # 3 of 50: > 5 % in
+    ({0: 0, 9: 3}, 50, False, "inconclusive", "inconclusive"),  # 3 of 50: > 5 % in, p = 0.25
     # one loss per level in different runs: pooled 10 of 1000 would agree, but 10 of the 100
     # runs lost a track somewhere up to 9, which cannot show the claim; no level's own rate
     # (1 %) is shown above 5 % either, so the run cannot tell
-    ({c: 1 for c in range(10)}, 100, True, "not comparable", "differs"),
+    ({c: 1 for c in range(10)}, 100, True, "inconclusive", "inconclusive"),
+    # 8 of 50 (16 %, Wilson [8.3, 28.5] %) at one level of ten is not shown above 5 % once
+    # the ten levels are accounted for (exact p = 0.003, Holm 0.03 > 0.025)
+    ({**{c: 0 for c in range(9)}, 9: 8}, 50, False, "inconclusive", "agrees"),
 ])
-def test_fig1_verdicts_follow_the_intervals(lost, runs, spread, below, rises):
+def test_fig1_verdicts_follow_the_tests(lost, runs, spread, below, rises):
     rows = report._fig1_rows("paper_approx/mgekf", _levels(lost, runs, spread))
     assert [r["verdict"] for r in rows] == [below, rises]
     assert all(tuple(r) == HEADLINE_COLUMNS for r in rows)
@@ -481,6 +485,70 @@ def test_fig1_verdicts_follow_the_intervals(lost, runs, spread, below, rises):
     assert rows[0]["trials"] == runs
     assert rows[0]["reproduced"] == pytest.approx(
         100 * (sum(upto.values()) if spread else max(upto.values())) / runs)
+    first, last = min(lost), max(lost)
+    assert rows[1]["reproduced"] == pytest.approx(100 * (lost[last] - lost[first]) / runs)
+    assert rows[1]["ci_low"] <= rows[1]["reproduced"] <= rows[1]["ci_high"]
+
+
+def test_a_paired_rise_is_found_where_the_marginal_intervals_overlap():
+    """20 of 200 runs lost at the lowest level and the same 20 plus 12 more at the highest:
+    the two Wilson intervals overlap (the rule they replaced said "differs"), but on the same
+    runs 12 against 0 discordant is a rise (exact McNemar p = 0.0005)."""
+    rows = report._fig1_rows("paper_approx/mgekf", _levels({0: 20, 15: 32}, 200))
+    (lo0, hi0), (lo1, hi1) = (wilson_interval(k, 200) for k in (20, 32))
+    assert lo1 < hi0  # overlapping marginal intervals
+    assert rows[1]["verdict"] == "agrees" and "12 lost only at 15, 0 only at 0" in rows[1]["reason"]
+    assert rows[1]["ci_low"] > 0
+    # the same margins with the losses in different runs: 20 + 32 discordant, p = 0.13
+    apart = _levels({0: 20, 15: 32}, 200, spread=True)
+    assert report._fig1_rows("paper_approx/mgekf", apart)[1]["verdict"] == "inconclusive"
+
+
+@pytest.mark.parametrize(("lost", "runs", "verdict"), [
+    ({0: 0, 15: 2}, 50, "inconclusive"),  # a small rise 50 runs cannot show: never "differs"
+    ({0: 0, 15: 0}, 1000, "inconclusive"),  # flat and tight: still no evidence against a rise
+    ({0: 20, 15: 5}, 50, "differs"),      # the same runs lose fewer tracks: the curve falls
+])
+def test_the_rise_verdict_says_differs_only_when_the_data_show_a_fall(lost, runs, verdict):
+    row = report._fig1_rows("paper_approx/mgekf", _levels(lost, runs))[1]
+    assert row["verdict"] == verdict
+    if verdict == "inconclusive":
+        assert f"rise above {row['ci_high']:.1f} points is excluded" in row["reason"]
+
+
+def test_paired_loss_table_pairs_the_same_trials(small_run):
+    """Every pair once per point and rule; the counts are those of the trials themselves;
+    Holm's adjustment over the pairs of a point and rule never lowers a p-value."""
+    table = report.tables(small_run)["paired_loss"]
+    last = report._last(small_run.trials)
+    algorithms = small_run.params["algorithms"]
+    per = table.groupby(["point", "rule"]).size()
+    assert (per == len(algorithms) * (len(algorithms) - 1) // 2).all()
+    assert set(table["rule"]) == set(report.RULES)
+    for _, row in table.sample(n=10, random_state=0).iterrows():
+        at = last[last["point"] == row["point"]].pivot(index="trial", columns="algorithm",
+                                                       values=row["rule"])
+        a, b = at[row["algorithm_a"]], at[row["algorithm_b"]]
+        assert row["n_a_only"] == ((a == 1) & (b == 0)).sum()
+        assert row["n_b_only"] == ((a == 0) & (b == 1)).sum()
+        assert row["b_minus_a_pct"] == pytest.approx(100 * (b.mean() - a.mean()))
+    assert (table["mcnemar_p_holm"] >= table["mcnemar_p"] - 1e-15).all()
+    assert ((table["b_minus_a_pct_ci_low"] <= table["b_minus_a_pct"])
+            & (table["b_minus_a_pct"] <= table["b_minus_a_pct_ci_high"])).all()
+
+
+def test_paired_counts_decide_where_the_marginal_intervals_overlap():
+    """12 against 1 discordant runs of 200 (23.5 % against 18 %, as the close config's gate
+    rule at clutter 150): overlapping Wilson intervals, exact McNemar p = 0.0034."""
+    a = np.r_[np.ones(36), np.zeros(164)]
+    b = a.copy()
+    b[0] = 0          # lost by a only
+    b[36:48] = 1      # lost by b only
+    row = report._paired_counts("a", "b", pd.DataFrame({"a": a, "b": b}))
+    assert (row["n_a_only"], row["n_b_only"]) == (1, 12)
+    assert wilson_interval(b.sum(), 200)[0] < wilson_interval(a.sum(), 200)[1]
+    assert row["mcnemar_p"] == pytest.approx(0.0034, abs=5e-5)
+    assert row["b_minus_a_pct_ci_low"] > 0
 
 
 def test_fig1_claim_is_not_judged_when_another_swept_key_varies():
@@ -491,6 +559,7 @@ def test_fig1_claim_is_not_judged_when_another_swept_key_varies():
     mixed = rows.assign(**{"pda.density": np.where(rows["trial"] % 2, "a", "b")})
     two = report._fig1_rows("paper_approx/mgekf", mixed, ["pda.density"])
     assert two[0]["verdict"] == "not comparable" and "pda.density" in two[0]["reason"]
+    assert two[1]["verdict"] == "not comparable" and "pda.density" in two[1]["reason"]
 
 
 def test_fig1_text_names_the_levels_of_the_run():

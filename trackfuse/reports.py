@@ -84,9 +84,14 @@ FOLDED_TABLE_ROWS = 30
 #: ``reason`` one line; ``docs`` a link into ``docs/papers/`` with the longer explanation.
 HEADLINE_COLUMNS = ("paper_item", "quantity", "algorithm", "paper_value", "reproduced",
                     "ci_low", "ci_high", "unit", "trials", "verdict", "reason", "docs")
-#: ``agrees``: the paper's number lies inside our interval, or its claim holds;
-#: ``differs``: it does not; ``not comparable``: the run's config cannot answer it.
-VERDICTS = ("agrees", "differs", "not comparable")
+#: ``agrees``: the paper's number lies inside our interval, or the data show its claim (a
+#: test of the opposite rejects it at 5 %); ``differs``: the paper's number lies outside our
+#: interval, or the data contradict its claim (they show the opposite); ``inconclusive``:
+#: the run answers the claim's question but its data can neither show nor contradict it
+#: (too few runs, or both methods at a ceiling): absence of evidence is never ``differs``;
+#: ``not comparable``: the run's config cannot answer it (the paper gives no number, or the
+#: run is not at the paper's setting).
+VERDICTS = ("agrees", "differs", "inconclusive", "not comparable")
 #: Why a table is not written when its report module returns it without rows.
 NO_ROWS = "no rows for this config"
 #: What each file of a run folder holds (figures and tables add their own captions).

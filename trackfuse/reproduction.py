@@ -247,8 +247,10 @@ def report_markdown(sections: Sequence[PaperSection], out: Path) -> str:
     """The whole report as Markdown; image and doc links relative to ``out``."""
     lines = ["# trackfuse reproduce: paper reported vs reproduced", "",
              "Each paper item is set against our estimate with its 95 % interval; "
-             "`agrees` means the paper's number lies inside our interval (or its claim "
-             "holds), `differs` that it does not, with the reason in one line. Links into "
+             "`agrees` means the paper's number lies inside our interval (or the data show "
+             "its claim), `differs` that it lies outside (or the data contradict the claim), "
+             "`inconclusive` that the data can do neither, `not comparable` that the config "
+             "cannot answer it; the reason is in one line. Links into "
              "`docs/` point at the checkout that ran the code: relative when this folder lies "
              "inside it, absolute otherwise.", ""]
     for s in sections:
@@ -281,6 +283,7 @@ _CSS = ("body{font-family:sans-serif;max-width:80em;margin:2em auto;padding:0 1e
         "line-height:1.4}table{border-collapse:collapse;font-size:90%;margin:1em 0}"
         "td,th{border:1px solid #ccc;padding:2px 6px;vertical-align:top}"
         "th{background:#f3f3f3}.agrees{background:#e6f4ea}.differs{background:#fce8e6}"
+        ".inconclusive{background:#fef7e0}"
         ".pair{display:grid;grid-template-columns:1fr 2fr;gap:1em;margin:1.5em 0;"
         "border-top:1px solid #ddd;padding-top:1em}img{max-width:100%}"
         "section{margin-bottom:3em}")

@@ -425,8 +425,8 @@ def _noise_figure(summary: pd.DataFrame, config: dict) -> Figure | str:
         ax.set_ylim(*FRACTION_LIMITS)
     legend_below(fig, *legend_entries(axes.ravel()), column_width=LEGEND_COLUMN)
     fig.suptitle("Paper 002 setting, no paper figure: accuracy vs angle noise (the exact "
-                 f"optimum is the ceiling)\n{config.get('trials', '')} runs per point, 95 % "
-                 "bands; dotted: "
+                 "optimum: the objective's ceiling)\n"
+                 f"{config.get('trials', '')} runs per point, 95 % bands; dotted: "
                  "sigma = 0.005 and sqrt(0.005) rad, the two readings of the paper")
     return fig
 
@@ -664,7 +664,7 @@ def _headline(item: str, quantity: str, algorithm: str, paper: str, ours: float,
 def _fig2_headline(values: dict, config: dict, name: str, runs: pd.DataFrame,
                    exact: pd.DataFrame) -> list[dict[str, Any]]:
     """The two Fig. 2 claims for one variant at one point: a high correct rate (read as
-    the exact optimum's accuracy, the ceiling of the model) and the optimum reached."""
+    the exact optimum's accuracy, the ceiling of this objective) and the optimum reached."""
     rep = PASSIVE_ASSOC.result("accuracy against genetic operations")
     high_rate, optimum = rep.claim.split("; ")
     ops, n = int(runs["ops"].max()), len(runs)

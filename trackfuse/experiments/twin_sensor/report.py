@@ -47,6 +47,9 @@ beside the clutter-aware square-root PCRLB (truth model and filter model), RMSE 
 lost, signed range bias at scan 1 and at the last scan with 95 % t intervals, position RMSE,
 ANEES and validated returns (mean over all scans). Intervals are numeric ``<q>_ci_low`` /
 ``<q>_ci_high`` columns.
+``paired_loss``: every pair of algorithms on the same trials, per point and 0/1 rule: the
+difference of rates with Newcombe's paired interval, the discordant trials, the exact McNemar
+p-value and its Holm adjustment over the pairs of the point and rule.
 ``paper_vs_reproduced``: paper 000's Fig. 1 claims and Fig. 2 against this run, in the
 :data:`trackfuse.reports.HEADLINE_COLUMNS` schema, when the run sweeps ``clutter.mean`` at
 the paper's scenario.
@@ -72,6 +75,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.ticker import FixedLocator, MaxNLocator
 from pandas.api.typing import SeriesGroupBy
+from scipy.stats import binomtest
 
 from trackfuse.experiments.twin_sensor.model import PARAMS, bounds, build_scenario
 from trackfuse.plots.algorithms import FILTER_LABELS, GREYS, VERMILLION, line_kwargs, look
@@ -86,7 +90,15 @@ from trackfuse.plots.style import (
 from trackfuse.reported import TWIN_SENSOR
 from trackfuse.reports import HEADLINE_COLUMNS
 from trackfuse.rundata import RunData, succeeded_rows, swept_keys
-from trackfuse.stats import nees_band, rmse_intervals, t_interval, wilson_interval
+from trackfuse.stats import (
+    holm_adjusted,
+    mcnemar_p,
+    nees_band,
+    proportion_difference_interval,
+    rmse_intervals,
+    t_interval,
+    wilson_interval,
+)
 from trackfuse.tracking.pda import METHODS
 
 SCHEMA = {p.key: p for p in PARAMS}
@@ -1148,6 +1160,52 @@ def final_scan_table(run: RunData) -> pd.DataFrame:
     return table
 
 
+def paired_loss_table(run: RunData) -> pd.DataFrame:
+    """Every pair of algorithms on the same trials, per point and 0/1 rule, at the last scan.
+
+    One row per point, rule of :data:`RULES` and pair ``(algorithm_a, algorithm_b)`` in the
+    run's order: the rates of each (``lost_a_pct``, ``lost_b_pct``), ``b_minus_a_pct`` with
+    Newcombe's paired 95 % interval, the discordant trials ``n_a_only`` (flagged for a
+    only) and ``n_b_only``, the two-sided exact McNemar ``mcnemar_p`` and
+    ``mcnemar_p_holm``, Holm's adjustment over the pairs of that point and rule. Every
+    algorithm of a trial sees the same returns (common random numbers), so overlapping
+    marginal Wilson intervals (``final_scan``) do not mean two algorithms do not differ:
+    this table says whether they do. Empty with fewer than two algorithms.
+    """
+    last = _last(succeeded_rows(run.trials))
+    algorithms = [a for a in run.params["algorithms"] if a in set(last["algorithm"])]
+    keys = swept_keys(run.config)
+    out = []
+    for point, at in last.groupby("point", sort=True):
+        values = {k: at[k].iloc[0] for k in keys}
+        for rule in RULES:
+            wide = at.pivot(index="trial", columns="algorithm", values=rule)
+            first = len(out)
+            for i, a in enumerate(algorithms):
+                for b in algorithms[i + 1:]:
+                    out.append({"point": point, **values, "rule": rule,
+                                **_paired_counts(a, b, wide[[a, b]].dropna())})
+            if len(out) > first:
+                holm = holm_adjusted([r["mcnemar_p"] for r in out[first:]])
+                for row, q in zip(out[first:], holm, strict=True):
+                    row["mcnemar_p_holm"] = float(q)
+    return pd.DataFrame(out)
+
+
+def _paired_counts(a: str, b: str, pair: pd.DataFrame) -> dict[str, Any]:
+    """The paired comparison of 0/1 columns ``a`` and ``b`` of ``pair`` (one row a trial)."""
+    x, y = pair[a].to_numpy(), pair[b].to_numpy()
+    n = len(pair)
+    a_only, b_only = int(np.sum((x == 1) & (y == 0))), int(np.sum((x == 0) & (y == 1)))
+    lo, hi = proportion_difference_interval(x.sum(), n, y.sum(), n, both=np.sum(x * y))
+    return {"algorithm_a": a, "algorithm_b": b, "trials": n,
+            "lost_a_pct": 100 * x.mean(), "lost_b_pct": 100 * y.mean(),
+            "b_minus_a_pct": 100 * (y.mean() - x.mean()),
+            "b_minus_a_pct_ci_low": 100 * float(lo), "b_minus_a_pct_ci_high": 100 * float(hi),
+            "n_a_only": a_only, "n_b_only": b_only,
+            "mcnemar_p": float(mcnemar_p(a_only, b_only))}
+
+
 def _rmse_km(squared_errors: SeriesGroupBy) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """RMSE (km) of each group of squared errors (m^2; NaN dropped) and its 95 % bootstrap-t
     interval (NaN for a group of fewer than two values)."""
@@ -1185,11 +1243,12 @@ def _fig1_rows(name: str, rows: pd.DataFrame, other_swept: Sequence[str] = ()
     truth and noise (common random numbers), so pooling trials x levels as independent
     overstates the sample. The fraction of trials that lost a track at any level up to 9,
     with its Wilson interval, bounds every such level's loss rate from above, so the claim
-    "agrees" when that bound is below 5 %; it "differs" when some level's own interval lies
-    at or above 5 % (a high fraction at *any* level does not show that one level is high);
-    else "not comparable" (the run is too small to tell). Also "not comparable" when another
-    swept key (``other_swept``) varies across these points: their trials are not distinct
-    runs of one setting."""
+    "agrees" when that bound is below 5 %; it "differs" when some level's own rate is shown
+    above 5 % (:func:`_levels_above`: exact binomial tests, Holm over the levels; a high
+    fraction at *any* level does not show that one level is high); else "inconclusive" (the
+    run is too small to tell). "not comparable" when another swept key (``other_swept``)
+    varies across these points: their trials are not distinct runs of one setting.
+    Claim 2: :func:`_rise_row`."""
     rate = _rates(rows, "clutter.mean", MAIN_RULE)
     upto = rate[rate.index <= CLAIM_UP_TO]
     per_trial = rows[rows["clutter.mean"] <= CLAIM_UP_TO].groupby("trial")[MAIN_RULE].max()
@@ -1197,30 +1256,82 @@ def _fig1_rows(name: str, rows: pd.DataFrame, other_swept: Sequence[str] = ()
     lo, hi = (100 * float(v) for v in wilson_interval(k, n))
     limit = 100 * CLAIM.value
     varying = [key for key in other_swept if rows[key].nunique() > 1]
+    above = _levels_above(upto, CLAIM.value)
     verdict = "not comparable" if varying else "agrees" if hi < limit \
-        else "differs" if bool((upto["lo"] >= limit).any()) else "not comparable"
+        else "differs" if above else "inconclusive"
     levels = _levels_text(upto.index)
     worst_text = (f"; worst level {upto['pct'].max():.1f} % at {upto['pct'].idxmax():g}"
                   if k else "")
     reason = (f"{k} of {n} runs lost a track at any level of {levels}{worst_text}"
               + (f"; {', '.join(varying)} also swept: not one setting" if varying
+                 else f"; above {limit:g} % at {', '.join(f'{v:g}' for v in above)} (exact "
+                 f"binomial, Holm over the levels)" if above
                  else f"; upper bound {hi:.1f} % is not below {limit:g} % and no level is "
-                 f"above it: {n} runs cannot show it (>= {runs_to_show(limit / 100)} with "
-                 "no loss)" if verdict == "not comparable" else ""))
-    first, end = rate.iloc[0], rate.iloc[-1]
-    rises = bool(end["lo"] > first["hi"])
-    rise_reason = (f"{first['pct']:.1f} % at {rate.index[0]:g} -> {end['pct']:.1f} % at "
-                   f"{rate.index[-1]:g}" + ("" if rises else
-                                            ": no rise beyond the intervals (W000-5)"))
+                 f"shown above it: {n} runs cannot tell (>= {runs_to_show(limit / 100)} with "
+                 "no loss)" if verdict == "inconclusive" else ""))
     return [
         _headline_row("Fig. 1", f"runs that lost a track at any level of {levels} false "
                       "returns (angle rule)", name, f"< {limit:g} % up to {CLAIM_UP_TO:g}",
                       100 * k / n, lo, hi, "%", n, verdict, reason, FIG1_ANCHOR),
-        _headline_row("Fig. 1", "tracks lost at the highest clutter level (angle rule)", name,
-                      "rises with clutter", float(end["pct"]), float(end["lo"]),
-                      float(end["hi"]), "%", int(end["n"]), "agrees" if rises else "differs",
-                      rise_reason, FIG1_ANCHOR),
+        _rise_row(name, rows, rate, varying),
     ]
+
+
+#: Significance level of the paired tests behind the Fig. 1 verdicts (two-sided).
+ALPHA = 0.05
+
+
+def _levels_above(upto: pd.DataFrame, limit: float) -> list[float]:
+    """The levels of ``upto`` (:func:`_rates` rows) whose loss rate is shown above ``limit``
+    (a fraction): the one-sided exact binomial test of ``k`` of ``n`` at ``limit``, Holm's
+    adjustment over the levels, rejected below ``ALPHA / 2`` (the one-sided half of a
+    two-sided 95 % test, as a Wilson lower bound above the limit would be)."""
+    if upto.empty:
+        return []
+    p = [binomtest(int(k), int(m), limit, alternative="greater").pvalue if m else 1.0
+         for k, m in zip(upto["k"], upto["n"], strict=True)]
+    adjusted = holm_adjusted(p)
+    return [float(v) for v, q in zip(upto.index, adjusted, strict=True) if q < ALPHA / 2]
+
+
+def _rise_row(name: str, rows: pd.DataFrame, rate: pd.DataFrame,
+              varying: Sequence[str]) -> dict[str, Any]:
+    """Claim 2, "the curve rises with clutter", as a paired comparison of the highest level
+    with the lowest on the same trials (they share truth and noise: common random numbers).
+
+    ``reproduced``: the rise, loss at the highest level minus at the lowest (points), with
+    Newcombe's paired 95 % interval. Verdict from the exact McNemar test of the runs lost
+    at one level only: "agrees" when it shows a rise (p < :data:`ALPHA`), "differs" when it
+    shows a fall, else "inconclusive": the run cannot tell a rise smaller than the
+    interval's upper end from none. "not comparable" (the highest level's rate and Wilson
+    interval) when another swept key varies (``varying``)."""
+    first, end = rate.index.min(), rate.index.max()
+    if varying:
+        top = rate.loc[end]
+        return _headline_row(
+            "Fig. 1", "tracks lost at the highest clutter level (angle rule)", name,
+            "rises with clutter", float(top["pct"]), float(top["lo"]), float(top["hi"]), "%",
+            int(top["n"]), "not comparable",
+            f"{', '.join(varying)} also swept: not one setting", FIG1_ANCHOR)
+    wide = rows.pivot(index="trial", columns="clutter.mean", values=MAIN_RULE)
+    pair = wide[[first, end]].dropna()
+    low, high = pair[first].to_numpy(), pair[end].to_numpy()
+    m = len(pair)
+    up, down = int(np.sum((high == 1) & (low == 0))), int(np.sum((low == 1) & (high == 0)))
+    p = float(mcnemar_p(up, down))
+    d_lo, d_hi = (100 * float(v) for v in proportion_difference_interval(
+        low.sum(), m, high.sum(), m, both=np.sum(low * high)))
+    verdict = ("agrees" if up > down else "differs") if p < ALPHA else "inconclusive"
+    tail = ("" if verdict == "agrees" else "; the curve falls" if verdict == "differs" else
+            f"; a rise above {d_hi:.1f} points is excluded, a smaller one cannot be told "
+            "from none (W000-5)")
+    reason = (f"{100 * low.mean():.1f} % at {first:g} -> {100 * high.mean():.1f} % at "
+              f"{end:g} on the same {m} runs: {up} lost only at {end:g}, {down} only at "
+              f"{first:g}, exact McNemar p = {p:.2g}{tail}")
+    return _headline_row(
+        "Fig. 1", f"rise in tracks lost from {first:g} to {end:g} false returns, same runs "
+        "(angle rule)", name, "rises with clutter", 100 * (high.mean() - low.mean()),
+        d_lo, d_hi, "points", m, verdict, reason, FIG1_ANCHOR)
 
 
 def runs_to_show(limit: float) -> int:
@@ -1267,7 +1378,8 @@ def paper_vs_reproduced(run: RunData) -> pd.DataFrame:
     algorithm (:func:`_main_algorithms`), by the angle rule: claim 1, loss below 5 % up to 9
     false returns (the fraction of runs lost at any level up to 9, Wilson interval; "agrees"
     when the interval lies below 5 %, see :func:`_fig1_rows`); claim 2, the curve rises
-    (the highest level's interval above the lowest's).
+    (the highest level against the lowest on the same runs, exact McNemar test, see
+    :func:`_rise_row`).
     Fig. 2 for the paper's MGEKF: "not comparable", our RMSE set against the bound.
     """
     if "clutter.mean" not in swept_keys(run.config):
@@ -1286,9 +1398,13 @@ def paper_vs_reproduced(run: RunData) -> pd.DataFrame:
 
 
 def tables(run: RunData) -> dict[str, pd.DataFrame]:
-    """``final_scan`` (:func:`final_scan_table`) and, for a clutter sweep at the paper's
-    scenario, ``paper_vs_reproduced`` (:func:`paper_vs_reproduced`)."""
+    """``final_scan`` (:func:`final_scan_table`), ``paired_loss`` (:func:`paired_loss_table`,
+    with two or more algorithms) and, for a clutter sweep at the paper's scenario,
+    ``paper_vs_reproduced`` (:func:`paper_vs_reproduced`)."""
     out = {"final_scan": final_scan_table(run)}
+    paired = paired_loss_table(run)
+    if not paired.empty:
+        out["paired_loss"] = paired
     paper = paper_vs_reproduced(run)
     if not paper.empty:
         out["paper_vs_reproduced"] = paper
