@@ -10,12 +10,14 @@ from browser import chromium, decoded_images
 from trackfuse.config import load
 from trackfuse.harness import run_data
 from trackfuse.reported import ESM_RADAR, Paper, Reported
+from trackfuse.reports import VERDICTS
 from trackfuse.reproduction import (
     REPORT_HTML,
     REPORT_MD,
     PaperSection,
     _claims,
     _doc_link,
+    _summary_line,
     collect,
     main_figure_names,
     paper_claims,
@@ -142,3 +144,15 @@ def test_doc_links_stay_valid_wherever_the_report_folder_is(tmp_path):
     link, _ = _doc_link("guide/x.md#table-3", outside, [checkout])
     assert link == f"{page.resolve()}#table-3"  # survives moving the report folder
     assert _doc_link("guide/missing.md", outside, [checkout]) == ("", "guide/missing.md")
+
+
+def test_the_summary_counts_the_papers_methods_apart_from_ours():
+    """The reproduce report said "10 agrees, 9 differs" for paper 002 when every "agrees"
+    was one of our variants and every row of the paper's PGA differed."""
+    rows = pd.DataFrame({"algorithm": ["pga_paper", "pga_evict", "pga_anneal", None],
+                         "verdict": ["differs", "agrees", "agrees", "differs"]})
+    section = PaperSection("toy", "a paper", {}, rows)
+    assert section.verdict_counts(ours=False) == {**dict.fromkeys(VERDICTS, 0), "differs": 2}
+    assert _summary_line(section).startswith(
+        "4 paper items compared in the paper's own configs: the paper's methods 2 differs; "
+        "ours and other variants 2 agrees.")

@@ -30,6 +30,7 @@ from pathlib import Path
 import pandas as pd
 
 import trackfuse
+from trackfuse.plots.algorithms import PAPER_ROLES, look
 from trackfuse.reported import PAPERS, Paper
 from trackfuse.reports import HEADLINE_COLUMNS, HEADLINE_TABLE, VERDICTS, wanted_figures
 from trackfuse.results import atomic_write
@@ -65,10 +66,23 @@ class PaperSection:
     problems: list[str] = field(default_factory=list)
     others: dict[str, dict[str, int]] = field(default_factory=dict)
 
-    def verdict_counts(self) -> dict[str, int]:
-        """How many compared items got each verdict (in :data:`VERDICTS` order)."""
-        counts = self.rows["verdict"].value_counts() if len(self.rows) else pd.Series()
+    def verdict_counts(self, ours: bool | None = None) -> dict[str, int]:
+        """How many compared items got each verdict (in :data:`VERDICTS` order): of every
+        row, or (``ours``) only of the rows about our methods and other variants, or (not
+        ``ours``) only of the rest (:func:`about_ours`)."""
+        rows = self.rows
+        if ours is not None and len(rows):
+            rows = rows[rows["algorithm"].map(about_ours) == ours]
+        counts = rows["verdict"].value_counts() if len(rows) else pd.Series()
         return {v: int(counts.get(v, 0)) for v in VERDICTS}
+
+
+def about_ours(algorithm: object) -> bool:
+    """Whether a headline row's ``algorithm`` is one of ours or another variant, not the
+    paper's method or its baseline (:data:`trackfuse.plots.algorithms.ROLES`); a row with no
+    algorithm is about the paper's claim itself."""
+    return isinstance(algorithm, str) and bool(algorithm) and \
+        look(algorithm).role not in PAPER_ROLES
 
 
 def _headline(run: RunData) -> pd.DataFrame:
@@ -185,14 +199,20 @@ def _ours(row: pd.Series) -> str:
     return f"{text} {unit}".strip() if unit not in ("1", "fraction") else text
 
 
+def _counted(counts: Mapping[str, int]) -> str:
+    return ", ".join(f"{n} {v}" for v, n in counts.items() if n) or "none"
+
+
 def _summary_line(section: PaperSection) -> str:
-    counts = section.verdict_counts()
-    total = sum(counts.values())
-    parts = ", ".join(f"{n} {v}" for v, n in counts.items() if n)
-    line = (f"{total} paper items compared in the paper's own configs: {parts}."
+    """The section's verdicts counted: the paper's methods (and claims with no algorithm)
+    apart from ours and other variants, so that our methods' agreement does not pass for
+    the paper's."""
+    total = sum(section.verdict_counts().values())
+    line = (f"{total} paper items compared in the paper's own configs: the paper's methods "
+            f"{_counted(section.verdict_counts(ours=False))}; ours and other variants "
+            f"{_counted(section.verdict_counts(ours=True))}."
             if total else "No paper item could be compared from the paper's own configs.")
-    others = "; ".join(f"{name}: " + ", ".join(f"{n} {v}" for v, n in counts.items() if n)
-                       for name, counts in section.others.items())
+    others = "; ".join(f"{name}: {_counted(counts)}" for name, counts in section.others.items())
     return line + (f" Other configs (their own index.html): {others}." if others else "")
 
 

@@ -22,7 +22,9 @@ VERMILLION, BLUE, GREEN, PURPLE = "#D55E00", "#0072B2", "#009E73", "#CC79A7"
 ORANGE, SKY, BLACK = "#E69F00", "#56B4E9", "#000000"
 GREYS = ("#555555", "#888888", "#AAAAAA")
 ROLES = ("paper", "paper_baseline", "ours", "reference", "variant")
-EMPHASISED = ("paper", "paper_baseline", "ours")
+PAPER_ROLES = ("paper", "paper_baseline")
+"""The roles of what the paper ran (its method and its baseline)."""
+EMPHASISED = (*PAPER_ROLES, "ours")
 
 
 @dataclass(frozen=True)
