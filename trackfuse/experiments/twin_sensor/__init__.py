@@ -43,7 +43,9 @@ FIGURES = {
         "Range RMSE at the last scan against the swept axis (clutter, baseline, range cue) "
         "with 95 % bootstrap intervals beside the square-root PCRLB of the truth and filter "
         "models, MGEKF beside EKF and the paper's method beside our parallel PDA, those "
-        "run (W000-2)"),
+        "run (W000-2); every point runs the same targets and noise (common random numbers), "
+        "so the points' errors move together: a curve below the bound at every point is "
+        "one set of runs, not independent results"),
 }
 
 EXPERIMENT = Experiment(
