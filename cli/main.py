@@ -237,6 +237,8 @@ def run(
 ) -> None:
     """Run CONFIG: every sweep point x trial, then trials.csv, summary.csv and the report."""
     config = _load(cfg, _overrides(sets, overrides), sweeps, trials=trials, seed=seed)
+    if config.source != str(cfg) and not dry_run:  # a name: say which file it found
+        print(f"config: {config.source}")
     options = RunOptions(out_folder(out_dir), workers, executor.value, scheduler,
                          scheduler_file, not no_plots, not no_progress, force, name)
     options.check()
@@ -282,12 +284,15 @@ def failed_trials_line(failed: int, total: int, first: str | None) -> str:
 
 
 def _config_paths(folder: Path | None) -> list[Path]:
-    """The ``*.yaml`` configs ``reproduce`` runs (one-line error if there are none)."""
-    from trackfuse.shipped import configs_folder
+    """The ``*.yaml`` configs ``reproduce`` runs (one-line error if there are none): by
+    default the first folder a config name is looked up in (``./configs``, else the shipped
+    configs: :func:`trackfuse.shipped.config_folders`)."""
+    from trackfuse.shipped import config_folders
     if folder is None:
-        folder = Path("configs") if Path("configs").is_dir() else configs_folder()
-        if folder is None:
+        folders = config_folders()
+        if not folders:
             fail("no configs/ folder here and no shipped configs installed; name a folder")
+        folder = folders[0]
     if not folder.is_dir():
         fail(f"{folder}: not a folder of configs")
     paths = sorted(folder.glob("*.yaml"))
@@ -591,7 +596,7 @@ def validate(
     from trackfuse.sweep import count_points
     config = _load(cfg, _overrides(sets, overrides), sweeps)
     points = count_points(config.sweep, config.sweep_mode)
-    print(f"ok: {cfg}: {config.experiment.name}, {_count(points, 'point')} x "
+    print(f"ok: {config.source}: {config.experiment.name}, {_count(points, 'point')} x "
           f"{_count(config.trials, 'trial')}")
 
 

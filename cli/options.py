@@ -114,8 +114,9 @@ def warn(message: str) -> None:
     print(f"warning: {_printable(message)}", file=sys.stderr, flush=True)
 
 
-Cfg = Annotated[Path, typer.Argument(metavar="CONFIG", help="Scenario config (YAML), or the "
-                                     "name of a shipped one (twin_sensor_orbit).")]
+Cfg = Annotated[Path, typer.Argument(metavar="CONFIG", help="Scenario config (YAML), or a "
+                                     "config name (twin_sensor_orbit, ci/twin_sensor_ci): "
+                                     "./configs/NAME.yaml if present, else the shipped one.")]
 Overrides = Annotated[list[str] | None, typer.Argument(
     metavar="KEY=VALUE", show_default=False,
     help="Overrides as in Hydra: clutter.mean=5 (same as --set).")]

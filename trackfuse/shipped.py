@@ -1,8 +1,11 @@
-"""The paper configs shipped with the package, so they work outside a checkout.
+"""The paper configs shipped with the package, and how a config NAME is found.
 
 The top-level ``configs/`` folder of the repository installs as the data package
 ``trackfuse.configs`` (see ``pyproject.toml``). :func:`config_path` lets the command line
-accept a shipped config by name (``trackfuse run twin_sensor_orbit``) wherever it is run.
+accept a config by name (``trackfuse run twin_sensor_orbit``, ``ci/twin_sensor_ci``) wherever
+it is run: the working directory's ``./configs/<name>.yaml`` when it exists (a checkout,
+whose configs may have been edited: the folder ``trackfuse reproduce`` runs by default),
+else the shipped one.
 """
 
 from __future__ import annotations
@@ -10,6 +13,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import trackfuse
+
+#: The working directory's configs, preferred to the shipped ones (as by ``reproduce``).
+LOCAL_CONFIGS = Path("configs")
 
 
 def configs_folder() -> Path | None:
@@ -22,16 +28,27 @@ def configs_folder() -> Path | None:
     return None
 
 
+def config_folders() -> list[Path]:
+    """Where a config name is looked up, in order: ``./configs`` (if it is a folder), then
+    the shipped configs (once, when they are that same folder)."""
+    found = [LOCAL_CONFIGS] if LOCAL_CONFIGS.is_dir() else []
+    shipped = configs_folder()
+    if shipped is not None and not (found and LOCAL_CONFIGS.resolve() == shipped):
+        found.append(shipped)
+    return found
+
+
 def config_path(given: Path) -> Path:
-    """``given`` if it exists, else the shipped config of that name (with or without
-    ``.yaml``, ``ci/`` allowed), else ``given`` unchanged (the loader reports it)."""
-    if given.exists():
-        return given
-    folder = configs_folder()
-    if folder is None or given.is_absolute():
+    """``given`` if it exists; else the config of that name (with or without ``.yaml``,
+    subfolders such as ``ci/`` allowed) in ``./configs``, else among the shipped configs;
+    else ``given`` unchanged (the loader reports it)."""
+    if given.exists() or given.is_absolute():
         return given
     name = given if given.suffix == ".yaml" else given.with_name(f"{given.name}.yaml")
-    for candidate in (folder / name, folder / name.name):
+    folders = config_folders()
+    shipped = [f / name.name for f in folders if f != LOCAL_CONFIGS]  # configs/x.yaml, outside
+    for candidate in [*(f / name for f in folders), *shipped]:
         if candidate.is_file():
             return candidate
     return given
+

@@ -1,0 +1,63 @@
+"""How a config NAME is found: ./configs first (like `reproduce`), then the shipped configs."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from conftest import trackfuse
+
+from trackfuse.shipped import config_folders, config_path, configs_folder
+
+CI = "ci/twin_sensor_ci"
+
+
+def _edited_checkout(tmp_path: Path) -> Path:
+    """A folder with ./configs/ci/twin_sensor_ci.yaml edited to 3 trials (shipped: 8)."""
+    shipped = (configs_folder() / f"{CI}.yaml").read_text()
+    assert "trials: 8\n" in shipped
+    local = tmp_path / "configs" / f"{CI}.yaml"
+    local.parent.mkdir(parents=True)
+    local.write_text(shipped.replace("trials: 8\n", "trials: 3\n"))
+    return local
+
+
+def test_a_name_means_the_working_directorys_configs_file_when_present(tmp_path, monkeypatch):
+    """`run ci/twin_sensor_ci` took the installed copy although ./configs held an edited
+    one, which `reproduce` would run: the two commands disagreed."""
+    _edited_checkout(tmp_path)
+    monkeypatch.chdir(tmp_path)
+    assert config_path(Path(CI)) == Path("configs") / f"{CI}.yaml"
+    assert config_path(Path(f"{CI}.yaml")) == Path("configs") / f"{CI}.yaml"
+    assert config_folders()[0] == Path("configs")  # reproduce's default folder
+    # a name ./configs lacks still finds the shipped config
+    assert config_path(Path("twin_sensor_orbit")) == configs_folder() / "twin_sensor_orbit.yaml"
+    (tmp_path / "mine.yaml").write_text("x")
+    assert config_path(Path("mine.yaml")) == Path("mine.yaml")  # an existing path as given
+
+
+def test_run_dry_run_validate_and_run_name_the_file_they_used(tmp_path):
+    _edited_checkout(tmp_path)
+    dry = trackfuse("run", CI, "--dry-run", cwd=tmp_path)
+    assert dry.returncode == 0, dry.stderr
+    plan = dry.stdout.splitlines()[-1]
+    assert plan.startswith(f"# configs/{CI}.yaml: 3 points x 3 trials"), plan
+    ok = trackfuse("validate", CI, cwd=tmp_path)
+    assert ok.stdout.strip() == f"ok: configs/{CI}.yaml: twin_sensor, 3 points x 3 trials"
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    shipped = trackfuse("validate", CI, cwd=elsewhere)
+    assert shipped.stdout.strip() == (f"ok: {configs_folder() / CI}.yaml: twin_sensor, "
+                                      "3 points x 8 trials")
+
+
+def test_run_by_name_says_which_file_it_ran(tmp_path):
+    (tmp_path / "configs").mkdir()
+    (tmp_path / "configs" / "toy.yaml").write_text("experiment: toy_experiments:TRIVIAL\n"
+                                                   "trials: 2\nseed: 1\n")
+    result = trackfuse("run", "toy", "--out", "out", "--no-plots", "--no-progress",
+                       cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.splitlines()[0] == "config: configs/toy.yaml"
+    by_path = trackfuse("run", "configs/toy.yaml", "--out", "out", "--no-plots",
+                        "--no-progress", cwd=tmp_path)
+    assert not by_path.stdout.startswith("config:")
