@@ -8,6 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 from conftest import ROOT, cli_env, trackfuse
 
 from trackfuse.experiments import ENTRY_POINT_GROUP
@@ -82,3 +83,18 @@ def test_an_installed_plugin_is_listed_validated_and_run_by_name(tmp_path):
               "--no-progress")
     assert ran.returncode == 0, ran.stderr
     assert "report: " in ran.stdout
+
+
+def test_the_readme_plugin_runs_output_is_ignored_by_git():
+    """`cd examples/plugin_example && trackfuse run coin.yaml` left results/ untracked: only
+    the top-level results/ was ignored."""
+    inside = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--is-inside-work-tree"],
+                            capture_output=True, text=True)
+    if inside.returncode != 0:
+        pytest.skip("not a git checkout")
+    ignored = ["examples/plugin_example/results/coin/seed1-0123456789/trials.csv",
+               "results/twin_sensor_orbit/seed1-0123456789/trials.csv"]
+    kept = ["results/README.md", "examples/plugin_example/coin.yaml"]
+    check = subprocess.run(["git", "-C", str(ROOT), "check-ignore", "--no-index", *ignored,
+                            *kept], capture_output=True, text=True)
+    assert check.stdout.split() == ignored
