@@ -2,11 +2,15 @@
 
 Every error, usage errors from the option parser included (a bad value, a missing
 argument), is printed as one line ``error: ...`` on stderr; usage errors exit with status 2.
+A closed standard output (``| head``) is silent and changes no exit status
+(:class:`QuietClosedStdout`).
 """
 
 from __future__ import annotations
 
 import gc
+import io
+import os
 import signal
 import sys
 from enum import StrEnum
@@ -35,6 +39,42 @@ def _forget_caught_ctrl_c() -> None:
     exec("")
 
 
+class QuietClosedStdout:
+    """``sys.stdout`` for the length of a command: once its reader has gone (``trackfuse list
+    twin_sensor | head -1``), what is printed is dropped instead of raising
+    ``BrokenPipeError``, so the command ends as it would have (``compare``'s exit status is
+    its verdict) and says nothing about the pipe, as ``cat`` and ``grep`` do."""
+
+    def __init__(self, stream):
+        self.stream = stream
+
+    def write(self, text: str) -> int:
+        try:
+            return self.stream.write(text)
+        except BrokenPipeError:
+            self._discard()
+            return len(text)
+
+    def flush(self) -> None:
+        try:
+            self.stream.flush()
+        except BrokenPipeError:
+            self._discard()
+
+    def _discard(self) -> None:
+        """Point the stream's file descriptor at ``/dev/null``: what is still buffered and
+        what comes later (the interpreter's last flush included) goes nowhere."""
+        try:
+            null = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(null, self.stream.fileno())
+            os.close(null)
+        except (OSError, ValueError, AttributeError, io.UnsupportedOperation):
+            pass  # a stream without a descriptor (a test's buffer) cannot break this way
+
+    def __getattr__(self, name: str):
+        return getattr(self.stream, name)
+
+
 #: The commands that save work a second call resumes.
 RESUMABLE = ("run", "reproduce")
 
@@ -58,6 +98,8 @@ class OneLineErrors(TyperGroup):
         if not standalone_mode:
             return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
         signal.signal(signal.SIGTERM, _stop)
+        stdout = sys.stdout
+        sys.stdout = QuietClosedStdout(stdout)
         try:
             code = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
         except typer.TyperException as err:  # click's ClickException and UsageError
@@ -71,6 +113,8 @@ class OneLineErrors(TyperGroup):
             print_error("aborted")
             sys.exit(1)
         finally:
+            sys.stdout.flush()  # a closed pipe is found here at the latest, and silenced
+            sys.stdout = stdout
             _forget_caught_ctrl_c()
             # The interpreter's collections at exit walk every object still alive (the
             # libraries a run imported): about 0.5 s after a run. The process is ending and

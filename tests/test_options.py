@@ -2,14 +2,19 @@
 
 from __future__ import annotations
 
+import os
 import re
+import subprocess
+import sys
 
 import pytest
-from conftest import trackfuse
+from conftest import cli_env, trackfuse
 from typer.testing import CliRunner
 
 import trackfuse as package
+from trackfuse.config import load
 from trackfuse.executors import KINDS
+from trackfuse.runner import Runner
 from trackfuse_cli.main import app
 from trackfuse_cli.options import Executor
 
@@ -84,3 +89,34 @@ def test_shell_completion_is_offered_and_completes_experiment_names():
 def test_no_command_prints_help_and_exits_2():
     result = trackfuse()
     assert result.returncode == 2 and "Usage: " in result.stdout
+
+
+def _closed_stdout(*args: str) -> subprocess.CompletedProcess:
+    """``trackfuse ARGS`` writing into a pipe whose reader has gone (``| head -1`` after its
+    line)."""
+    read, write = os.pipe()
+    os.close(read)
+    try:
+        return subprocess.run([sys.executable, "-m", "trackfuse", *args], stdout=write,
+                              stderr=subprocess.PIPE, env=cli_env(), text=True, timeout=120)
+    finally:
+        os.close(write)
+
+
+def test_a_closed_stdout_is_silent_and_keeps_the_commands_exit_status(write_config, tmp_path):
+    """`trackfuse list twin_sensor | head -1` and `compare A B | head -1` exited 1 with
+    nothing on stderr, and compare's 1 means "regression"."""
+    listed = _closed_stdout("list", "twin_sensor")
+    assert (listed.returncode, listed.stderr) == (0, "")
+    folders = []
+    for name, shift in (("base", 0.0), ("worse", 0.3)):
+        cfg = write_config(f"experiment: toy_experiments:SHIFTED\ntrials: 200\nseed: 1\n"
+                           f"params: {{shift: {shift}}}\n", name=name)
+        folders.append(str(Runner(load(cfg), tmp_path / "out", progress=False,
+                                  plots=False).run().folder))
+    passed = _closed_stdout("compare", folders[0], folders[0], "--fail-on-regression")
+    assert (passed.returncode, passed.stderr) == (0, "")
+    plain = _closed_stdout("compare", *folders)
+    assert (plain.returncode, plain.stderr) == (0, "")
+    gated = _closed_stdout("compare", *folders, "--fail-on-regression")
+    assert gated.returncode == 1 and gated.stderr.startswith("error: 1 regressions")
