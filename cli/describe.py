@@ -1,5 +1,6 @@
-"""What ``trackfuse list`` prints: the experiments, or one experiment's parameters, metrics,
-algorithms and figures as a table, a commented config template (YAML) or JSON.
+"""What ``trackfuse list`` prints: the experiments (a table or JSON), or one experiment's
+parameters, metrics, algorithms and figures as a table, a commented config template (YAML)
+or JSON.
 
 Keys and names are never cut: each heads its own line in full, and its description wraps
 below it (also when the output is piped, where the width is 80 columns).
@@ -28,6 +29,14 @@ def print_listing(listed: list[Listed], width: int | None = None) -> None:
     out.line("")
     out.line("`trackfuse list EXPERIMENT` shows its parameters, metrics, algorithms and "
              "figures; `--format yaml` prints a config template.")
+
+
+def listing_data(listed: list[Listed]) -> list[dict[str, str]]:
+    """:func:`print_listing` as plain JSON-ready data: each experiment's ``name``,
+    ``origin``, ``reference`` (module, or ``module:ATTRIBUTE`` of a plugin) and
+    ``description``."""
+    return [{"name": item.name, "origin": item.origin, "reference": item.reference,
+             "description": item.description} for item in listed]
 
 
 def print_experiment(exp: Experiment, width: int | None = None) -> None:

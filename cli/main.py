@@ -606,8 +606,10 @@ def list_experiments(
         metavar="[EXPERIMENT]", autocompletion=_complete_experiment, show_default=False,
         help="Show this experiment's parameters, metrics, algorithms and figures.")] = None,
     output: Annotated[Format, typer.Option(
-        "--format", help="table; yaml: a commented config template that `trackfuse "
-                         "validate` accepts as is; json: everything, machine-readable.")]
+        "--format", help="table; yaml (with EXPERIMENT): a commented config template that "
+                         "`trackfuse validate` accepts as is; json: the same as the table, "
+                         "machine-readable (with EXPERIMENT: every parameter, metric, "
+                         "algorithm and figure).")]
     = Format.table,
 ) -> None:
     """List experiments, or one experiment's parameters, metrics, algorithms, figures.
@@ -618,10 +620,13 @@ def list_experiments(
     from trackfuse import experiments
     from trackfuse_cli import describe
     if name is None:
-        if output is not Format.table:
-            fail("--format yaml/json describes one experiment; name it: trackfuse list "
-                 "EXPERIMENT --format yaml")
-        describe.print_listing(experiments.listing())
+        if output is Format.yaml:
+            fail("--format yaml: a config template is of one experiment; allowed without "
+                 "EXPERIMENT: table, json (or name it: trackfuse list EXPERIMENT --format yaml)")
+        if output is Format.json:
+            print(json.dumps(describe.listing_data(experiments.listing()), indent=1))
+        else:
+            describe.print_listing(experiments.listing())
         return
     try:
         exp = experiments.get(name)

@@ -132,7 +132,7 @@ class Executor(StrEnum):
 
 
 class Format(StrEnum):
-    """Output of ``trackfuse list EXPERIMENT``."""
+    """Output of ``trackfuse list [EXPERIMENT]``."""
 
     table = "table"
     yaml = "yaml"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 import json
 import subprocess
 import sys
@@ -66,12 +67,23 @@ def test_json_lists_params_metrics_algorithms_and_figures(twin):
     assert [f["name"] for f in data["figures"]] == list(twin.figures)
 
 
-def test_list_names_every_experiment_and_refuses_format_without_one():
+def test_list_names_every_experiment_in_a_table_or_json_and_refuses_a_yaml_template():
+    """`list --format json` was refused although the help promised json; `list` showed
+    "(twin_sensor)" after two descriptions and cut passive_assoc's before its name."""
     result = trackfuse("list")
     assert result.returncode == 0
     assert all(name in result.stdout for name in experiments.BUILTIN)
-    refused = trackfuse("list", "--format", "json")
-    assert refused.returncode == 2 and refused.stderr.startswith("error: --format")
+    data = json.loads(trackfuse("list", "--format", "json").stdout)
+    assert [d["name"] for d in data][:len(experiments.BUILTIN)] == list(experiments.BUILTIN)
+    for item in data[:len(experiments.BUILTIN)]:
+        assert item["reference"] == experiments.BUILTIN[item["name"]]
+        doc = importlib.import_module(item["reference"]).__doc__
+        summary = " ".join(doc.split("\n\n")[0].split()).replace("``", "")
+        assert summary.startswith(item["description"]) and item["description"]
+        assert f"({item['name']})" not in item["description"]  # the listing names it
+        assert " ".join(item["description"].split()) in " ".join(result.stdout.split())
+    refused = trackfuse("list", "--format", "yaml")
+    assert refused.returncode == 2 and refused.stderr.startswith("error: --format yaml")
 
 
 def test_yaml_template_writes_lists_and_strings_as_yaml(twin):

@@ -94,7 +94,8 @@ def listing() -> list[Listed]:
     found = []
     for name in names():
         if name in BUILTIN:
-            found.append(Listed(name, "built-in", BUILTIN[name], _docstring_line(BUILTIN[name])))
+            found.append(Listed(name, "built-in", BUILTIN[name],
+                                _docstring_summary(BUILTIN[name], name)))
         elif name in _registered:
             found.append(Listed(name, "registered", "", _registered[name].title))
         else:
@@ -104,16 +105,17 @@ def listing() -> list[Listed]:
     return found
 
 
-def _docstring_line(module: str) -> str:
-    """First line of ``module``'s docstring, read from its source without running it."""
+def _docstring_summary(module: str, name: str) -> str:
+    """The summary (first paragraph, on one line) of ``module``'s docstring, read from its
+    source without running it, without a closing ``(name)``: the listing names it."""
     try:
         spec = importlib.util.find_spec(module)
         with open(spec.origin, "rb") as fh:
             doc = ast.get_docstring(ast.parse(fh.read())) or ""
     except (OSError, SyntaxError, ValueError, TypeError, AttributeError, ImportError):
         return ""
-    first = doc.strip().splitlines()[0] if doc.strip() else ""
-    return first.replace("``", "").rstrip(".")
+    summary = " ".join(doc.strip().split("\n\n")[0].split()).replace("``", "").rstrip(".")
+    return summary.removesuffix(f"({name})").rstrip()
 
 
 def get(name: str) -> Experiment:
