@@ -161,13 +161,13 @@ class RunOptions:
     def runner(self, config: Config) -> Runner:
         from trackfuse.executors import default_workers
         from trackfuse.progress import PhaseLog
-        from trackfuse.runner import Runner
+        from trackfuse.runner import Runner, folder_name
         return Runner(config, self.out, workers=self.workers or default_workers(),
                       executor=self.executor, scheduler=self.scheduler,
                       scheduler_file=self.scheduler_file, plots=self.plots,
                       progress=self.progress, command=sys.argv, warn=warn, force=self.force,
                       name=self.name,
-                      on_phase=PhaseLog(config.experiment.name, self.progress))
+                      on_phase=PhaseLog(folder_name(config.source), self.progress))
 
 
 def _execute(runner: Runner) -> RunOutcome:
@@ -261,9 +261,9 @@ def _closing_lines(outcome: RunOutcome) -> None:
     if outcome.status == RunStatus.ALREADY_COMPLETE:
         print(f"already complete: {outcome.folder}")
     else:
-        print(f"wrote {outcome.folder}: {outcome.rows} rows, {outcome.total_trials} trials "
-              f"({outcome.computed_trials} computed now) in {outcome.seconds:.1f} s, "
-              f"{len(outcome.figures)} figure files")
+        print(f"wrote {outcome.folder}: {_count(outcome.rows, 'row')}, "
+              f"{_count(outcome.total_trials, 'trial')} ({outcome.computed_trials} computed "
+              f"now) in {outcome.seconds:.1f} s, {_count(len(outcome.figures), 'figure file')}")
     for message in outcome.figure_errors:
         warn(message)
     if outcome.report is not None:
@@ -422,7 +422,7 @@ def plot(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR",
     except KeyboardInterrupt:
         print("interrupted: run `trackfuse plot` again to redraw", file=sys.stderr)
         raise typer.Exit(130) from None
-    print(f"drew {len(report.figures)} figure files in {run_dir / 'figures'}")
+    print(f"drew {_count(len(report.figures), 'figure file')} in {run_dir / 'figures'}")
     failed, total = run.manifest.get("trials_failed"), run.manifest.get("trials_total")
     if isinstance(failed, int) and isinstance(total, int) and failed > 0:
         first = first_failure(run.trials, swept_keys(run.config))

@@ -13,6 +13,9 @@ from trackfuse.progress import PhaseLog, RunProgress, duration_text, fit_label, 
 def test_durations_read_as_seconds_minutes_or_hours():
     assert [duration_text(s) for s in (0.4, 42, 185, 3723, float("nan"), float("inf"))] == \
         ["0 s", "42 s", "3:05", "1:02:03", "unknown", "unknown"]
+    # a phase of a small run read "took 0 s"
+    assert [duration_text(s, tenths=True) for s in (0.04, 0.34, 9.94, 9.96, 42, 185)] == \
+        ["0.0 s", "0.3 s", "9.9 s", "10 s", "42 s", "3:05"]
 
 
 def test_plain_line_has_no_eta_before_a_rate_and_formats_it_after():

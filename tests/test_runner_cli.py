@@ -3,6 +3,7 @@ status, reproduce's options."""
 
 from __future__ import annotations
 
+import re
 from types import SimpleNamespace
 
 import pandas as pd
@@ -125,3 +126,24 @@ def test_a_run_whose_every_trial_failed_has_no_report_and_plot_refuses(write_con
     plotted = trackfuse("plot", folder)
     assert plotted.returncode == 2 and plotted.stderr.count("\n") == 1
     assert plotted.stderr.startswith("error: every trial failed (3 of 3; first: point 0")
+
+
+def test_phase_lines_name_the_config_and_a_short_phase_in_tenths(tmp_path):
+    """Under `reproduce`, six lines in a row read "toy_gaussian: merging..." whichever
+    config they were about, a phase took "0 s", and one figure was "1 figure files"."""
+    folder = tmp_path / "configs"
+    folder.mkdir()
+    for name, seed in (("first", 1), ("second", 2)):
+        (folder / f"{name}.yaml").write_text(f"experiment: toy_experiments:GAUSSIAN\n"
+                                             f"trials: 3\nseed: {seed}\n"
+                                             "outputs: {formats: [png]}\n")
+    result = trackfuse("reproduce", folder, "--out", tmp_path / "out", "--workers", "1")
+    assert result.returncode == 0, result.stderr
+    phases = [line for line in result.stderr.splitlines() if re.search(r"\.\.\.( \(|$)", line)]
+    assert [line.split(": ")[0] for line in phases] == ["first"] * 3 + ["second"] * 3
+    took = re.findall(r" took (.*)\)$", "\n".join(phases), re.MULTILINE)
+    assert len(took) == 4 and all(re.fullmatch(r"\d\.\d s", t) for t in took), took
+    single = trackfuse("run", folder / "first.yaml", "--out", tmp_path / "again",
+                       "--workers", "1", "--no-progress")
+    assert re.search(r", 3 trials \(3 computed now\) in \S+ s, 1 figure file$",
+                     single.stdout.splitlines()[0]), single.stdout

@@ -26,10 +26,14 @@ FIXED_WIDTH = 48
 MIN_BAR_WIDTH = 10
 
 
-def duration_text(seconds: float) -> str:
-    """``"42 s"``, ``"3:05"`` (min:s) or ``"1:02:03"`` (h:min:s); ``"unknown"`` if not finite."""
+def duration_text(seconds: float, tenths: bool = False) -> str:
+    """``"42 s"``, ``"3:05"`` (min:s) or ``"1:02:03"`` (h:min:s); ``"unknown"`` if not
+    finite. With ``tenths``, below 10 s in tenths (``"0.3 s"``: a phase of a small run, which
+    would read "0 s"); an ETA keeps whole seconds."""
     if not math.isfinite(seconds) or seconds < 0:
         return "unknown"
+    if tenths and round(seconds, 1) < 10:
+        return f"{seconds:.1f} s"
     whole = round(seconds)
     if whole < 60:
         return f"{whole} s"
@@ -139,6 +143,7 @@ class PhaseLog:
         now = time.monotonic()
         took = ""
         if self._previous is not None:
-            took = f" ({self._previous[0]} took {duration_text(now - self._previous[1])})"
+            seconds = now - self._previous[1]
+            took = f" ({self._previous[0]} took {duration_text(seconds, tenths=True)})"
         self._previous = (phase, now)
         self._write(f"{self.label}: {phase}...{took}")

@@ -413,7 +413,7 @@ class Runner:
             self._check_dask_workers(executor, session)
         self.folder.write_manifest(self._manifest(RunStatus.RUNNING, session))
         last = time.monotonic()
-        label = f"{self.config.experiment.name} [{self.run_id}]"
+        label = f"{folder_name(self.config.source)} [{self.run_id}]"  # the config, not kind
         loading = self._load_finishing_code(executor.kind)
         stopped = True  # by an interrupt or an error, until the loop ends
         try:
