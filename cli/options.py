@@ -75,6 +75,17 @@ class QuietClosedStdout:
         return getattr(self.stream, name)
 
 
+def _value_given(err: Exception) -> str | None:
+    """The value a bad option was given, from typer's check of it (a pydantic validation
+    error, whose message, "Input should be greater than or equal to 1", does not echo it)."""
+    errors = getattr(err.__cause__, "errors", None)
+    try:
+        first = errors()[0] if callable(errors) else {}
+    except (IndexError, TypeError, ValueError):
+        return None
+    return _printable(str(first["input"]))[:80] if "input" in first else None
+
+
 #: The commands that save work a second call resumes.
 RESUMABLE = ("run", "reproduce")
 
@@ -107,6 +118,11 @@ class OneLineErrors(TyperGroup):
             hint = f" (see `{ctx.command_path} --help`)" if ctx is not None else ""
             # typer words a bad choice "Invalid value for '--x': Value error, 'y' is not..."
             message = err.format_message().replace(": Value error, ", ": ")
+            given = _value_given(err)
+            if given is not None:  # "Invalid value for '--trials': got -3; input should..."
+                reason = str(getattr(err, "message", ""))
+                message = message.replace(reason, f"got {given}; {reason[:1].lower()}"
+                                                  f"{reason[1:]}", 1)
             print_error(f"{message}{hint}")
             sys.exit(err.exit_code)
         except typer.Abort:

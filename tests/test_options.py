@@ -24,7 +24,9 @@ from trackfuse_cli.options import Executor
     (["run"], "Missing argument 'CONFIG'"),
     (["run", "cfg.yaml", "--executor", "threads"], "'--executor'"),
     (["validate", "cfg.yaml", "--no-such-option"], "No such option: --no-such-option"),
-    (["run", "cfg.yaml", "--trials", "0"], "'--trials'"),
+    (["run", "cfg.yaml", "--trials", "0"], "'--trials': got 0; "),
+    (["run", "cfg.yaml", "--trials", "-3"], "'--trials': got -3; input should be greater"),
+    (["run", "cfg.yaml", "--seed", "x1"], "'--seed': got x1; "),
     (["frobnicate"], "No such command 'frobnicate'"),
 ])
 def test_usage_errors_are_one_line_with_exit_2(args, expected):
