@@ -113,10 +113,24 @@ def _load(cfg: Path, sets: dict[str, Any], sweeps: list[str], **top) -> Config:
     for key in given.keys() & sets.keys():
         fail(f"--{key} {given[key]} and --set {key}={sets[key]}: give {key} once")
     overrides = {**sets, **given}
+    path = config_path(cfg)
+    if not path.exists():
+        fail(_no_config(cfg))
     try:
-        return load(config_path(cfg), overrides, axes)
+        return load(path, overrides, axes)
     except ConfigError as err:
         fail(str(err))
+
+
+def _no_config(given: Path) -> str:
+    """One line for a CONFIG that is neither a file nor a config name, with the closest
+    names (``ci/twin_sensor_ci`` for ``twin_sensor_ci``)."""
+    from trackfuse.shipped import close_config_names
+    close = close_config_names(given)
+    names = ", ".join(f"'{n}'" for n in close)
+    return (f"{given}: no such file, nor a config of that name in ./configs or the shipped "
+            "configs; " + (f"did you mean {names}?" if close else "allowed: a YAML file or a "
+                           "config name such as twin_sensor_orbit or ci/twin_sensor_ci"))
 
 
 @dataclass(frozen=True)

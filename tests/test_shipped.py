@@ -61,3 +61,23 @@ def test_run_by_name_says_which_file_it_ran(tmp_path):
     by_path = trackfuse("run", "configs/toy.yaml", "--out", "out", "--no-plots",
                         "--no-progress", cwd=tmp_path)
     assert not by_path.stdout.startswith("config:")
+
+
+def test_a_config_that_is_neither_a_file_nor_a_name_suggests_the_closest_names(tmp_path):
+    """`trackfuse run twin_sensor_ci` said only "no such file", though ci/twin_sensor_ci
+    exists."""
+    missing = trackfuse("run", "twin_sensor_ci", "--dry-run", cwd=tmp_path)
+    assert missing.returncode == 2
+    assert missing.stderr.splitlines() == [
+        "error: twin_sensor_ci: no such file, nor a config of that name in ./configs or the "
+        "shipped configs; did you mean 'ci/twin_sensor_ci'?"]
+    typo = trackfuse("validate", "twin_sensor_orbt.yaml", cwd=tmp_path)
+    assert typo.returncode == 2 and "did you mean 'twin_sensor_orbit'" in typo.stderr
+    (tmp_path / "configs").mkdir()
+    (tmp_path / "configs" / "my_study.yaml").write_text("experiment: twin_sensor\n")
+    mine = trackfuse("validate", "my_stduy", cwd=tmp_path)  # the local configs count too
+    assert mine.stderr.strip().endswith("did you mean 'my_study'?")
+    nothing = trackfuse("validate", "zzz", cwd=tmp_path)
+    assert nothing.returncode == 2 and len(nothing.stderr.splitlines()) == 1
+    assert nothing.stderr.strip().endswith("allowed: a YAML file or a config name such as "
+                                           "twin_sensor_orbit or ci/twin_sensor_ci")

@@ -5,11 +5,13 @@ The top-level ``configs/`` folder of the repository installs as the data package
 accept a config by name (``trackfuse run twin_sensor_orbit``, ``ci/twin_sensor_ci``) wherever
 it is run: the working directory's ``./configs/<name>.yaml`` when it exists (a checkout,
 whose configs may have been edited: the folder ``trackfuse reproduce`` runs by default),
-else the shipped one.
+else the shipped one. :func:`close_config_names` suggests names for one that matches
+nothing.
 """
 
 from __future__ import annotations
 
+import difflib
 from pathlib import Path
 
 import trackfuse
@@ -41,7 +43,7 @@ def config_folders() -> list[Path]:
 def config_path(given: Path) -> Path:
     """``given`` if it exists; else the config of that name (with or without ``.yaml``,
     subfolders such as ``ci/`` allowed) in ``./configs``, else among the shipped configs;
-    else ``given`` unchanged (the loader reports it)."""
+    else ``given`` unchanged (the loader reports it, :func:`close_config_names` helps)."""
     if given.exists() or given.is_absolute():
         return given
     name = given if given.suffix == ".yaml" else given.with_name(f"{given.name}.yaml")
@@ -52,3 +54,20 @@ def config_path(given: Path) -> Path:
             return candidate
     return given
 
+
+def config_names() -> list[str]:
+    """Every config name :func:`config_path` finds (``twin_sensor_orbit``,
+    ``ci/twin_sensor_ci``), ``./configs`` first, each once."""
+    names = [p.relative_to(folder).with_suffix("").as_posix()
+             for folder in config_folders() for p in sorted(folder.rglob("*.yaml"))]
+    return list(dict.fromkeys(names))
+
+
+def close_config_names(given: Path, most: int = 3) -> list[str]:
+    """Config names close to ``given``, a path or name that matches no file: those of the
+    same file name in another folder (``ci/twin_sensor_ci`` for ``twin_sensor_ci``), else
+    the ``most`` most similar."""
+    text = given.as_posix().removesuffix(".yaml")
+    names = [n for n in config_names() if n != text]
+    same = [n for n in names if n.rpartition("/")[2] == text.rpartition("/")[2]]
+    return same[:most] or difflib.get_close_matches(text, names, n=most, cutoff=0.6)
