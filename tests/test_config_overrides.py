@@ -80,3 +80,17 @@ def test_a_key_given_twice_on_the_command_line_is_refused(items, parse):
     """`--set k=1 --set k=2` kept the last value without a word."""
     with pytest.raises(SweepError, match="a: given twice"):
         (parse_sets if parse == "sets" else parse_sweeps)(items)
+
+
+@pytest.mark.parametrize("key", ["trials", "seed", "batch_size"])
+def test_a_top_level_key_cannot_be_swept_and_is_not_called_an_unknown_parameter(key):
+    """`--sweep trials=1,2` said "unknown parameter of 'toy_gaussian'"."""
+    raw = yaml.safe_load(CONFIG)
+    with pytest.raises(ValueError) as from_option:
+        build(raw, "c.yaml", sweeps={key: [1, 2]})
+    assert str(from_option.value).startswith(f"--sweep: {key}: a top-level key cannot be "
+                                             "swept")
+    with pytest.raises(ValueError) as from_file:
+        build({**raw, "sweep": {key: [1, 2]}}, "c.yaml")
+    assert str(from_file.value).startswith(f"c.yaml: sweep.{key}: a top-level key cannot be")
+    assert "allowed: the parameters of 'toy_gaussian'" in str(from_file.value)

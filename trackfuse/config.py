@@ -320,6 +320,10 @@ def _sweep(source: str, exp: Experiment, sweep_raw: Any, sweeps: dict[str, Any],
     for key, (where, section, spec) in axes.items():
         if key in dropped:
             continue
+        if key in TOP_LEVEL and key not in exp.schema:  # not "unknown parameter"
+            raise ConfigError(where, _dotted(section, key), "a top-level key cannot be swept "
+                              f"(one value per run: set it, or run once per value); allowed: "
+                              f"the parameters of '{exp.name}' (see `trackfuse list {exp.name}`)")
         if key not in exp.schema:
             _validated(where, exp, section, key, None)
         try:
