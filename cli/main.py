@@ -51,6 +51,7 @@ from trackfuse_cli.options import (
 if TYPE_CHECKING:
     from trackfuse.compare import Comparison
     from trackfuse.config import Config
+    from trackfuse.rundata import RunData
     from trackfuse.runner import Runner, RunOutcome
 
 
@@ -411,20 +412,13 @@ def plot(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR",
     figures show the successful trials; a run with none (or whose trials.csv lacks a column
     the runner writes) is refused and its earlier report removed. Plotting a run of a plugin
     experiment imports the plugin's module (a config is code)."""
-    from trackfuse.catalog import find_runs, is_run_folder
     from trackfuse.failures import first_failure
     from trackfuse.reports import write_report
     from trackfuse.results import RunFolder, RunFolderError
-    from trackfuse.rundata import load as load_run
     from trackfuse.rundata import swept_keys
     from trackfuse.runlock import RunLock
-    runs = find_runs(run_dir) if run_dir.is_dir() and not is_run_folder(run_dir) else []
-    if runs:
-        _print_runs(runs)
-        fail(f"{run_dir}: a folder of {len(runs)} runs, not a run; plot one of them (listed "
-             "above)")
+    run = _load_run(run_dir)
     try:
-        run = load_run(run_dir)
         with RunLock(run.path, warn):
             report = write_report(run)
             RunFolder(run.path).write_manifest({**run.manifest,
@@ -449,6 +443,25 @@ def plot(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR",
         raise typer.Exit(1)
 
 
+def _load_run(path: Path) -> RunData:
+    """The complete run folder ``path`` (``plot``, ``compare``), or one line saying why not;
+    a folder of runs is listed first."""
+    from trackfuse.catalog import find_runs, is_run_folder
+    from trackfuse.results import RunFolderError
+    from trackfuse.rundata import load
+    runs = find_runs(path) if path.is_dir() and not is_run_folder(path) else []
+    if runs:
+        _print_runs(runs)
+        fail(f"{path}: a folder of {_count(len(runs), 'run')}, not a run; name one of them "
+             "(listed above)")
+    try:
+        return load(path)
+    except RunFolderError as err:
+        fail(str(err))
+    except OSError as err:
+        fail(f"{err.filename or path}: {err.strerror or type(err).__name__}")
+
+
 def _print_runs(runs) -> None:
     from rich.console import Console
     from rich.table import Table
@@ -469,7 +482,8 @@ def runs(
     """List run folders under ROOT, newest first: experiment, name, status, trials, dates."""
     from trackfuse.catalog import find_runs
     if not root.is_dir():
-        fail(f"{root}: not a folder")
+        fail(f"{root}: {'not a folder' if root.exists() else 'no such file or folder'}; "
+             "allowed: an output root, a config's folder of runs or a run folder")
     found = find_runs(root)
     if not found:
         print(f"no runs under {root}")
@@ -566,14 +580,13 @@ def compare(
     nothing compared or nothing gated (the reason in one line on stderr; cells only NEW has
     do not fail); 2 for bad input."""
     from trackfuse.compare import compare_runs
-    from trackfuse.results import RunFolderError
-    from trackfuse.rundata import load as load_run
     if not 0 < alpha < 1:
         fail(f"--alpha: got {alpha}; allowed: a number in (0, 1)")
     tolerances = _tolerances(tolerance)
+    runs = _load_run(base), _load_run(new)
     try:
-        result = compare_runs(load_run(base), load_run(new), tolerances, alpha=alpha)
-    except (RunFolderError, ValueError) as err:
+        result = compare_runs(*runs, tolerances, alpha=alpha)
+    except ValueError as err:
         fail(str(err))
     failure = result.gate_failure()
     if as_json:

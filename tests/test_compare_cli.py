@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+from conftest import trackfuse
 from typer.testing import CliRunner
 
 from trackfuse.config import load
@@ -97,3 +98,24 @@ def test_comparing_nothing_fails_the_gate(write_config, tmp_path):
     assert plain.stdout.startswith("nothing compared: the runs share no cell; 1 cells only "
                                    "in BASE (e.g. shift=0.0, algorithm=a, metric=miss), 2 cells "
                                    "only in NEW (e.g. shift=0.5")
+
+
+def test_plot_and_compare_say_the_same_accurate_line_for_what_is_no_run(write_config,
+                                                                         tmp_path):
+    """`plot` said "(no manifest.json)" and `compare` "(not a directory)" for paths of one
+    kind, and a path that does not exist was "not a directory"."""
+    run = _run(write_config, tmp_path, 0.0, 1, "base")
+    (tmp_path / "file.txt").write_text("x")
+    (tmp_path / "empty").mkdir()
+    reasons = {tmp_path / "missing": "no such file or folder",
+               tmp_path / "file.txt": "not a run folder: a file",
+               tmp_path / "empty": "not a run folder: no manifest.json",
+               tmp_path / "out": "a folder of 1 run, not a run; name one of them"}
+    for path, reason in reasons.items():
+        plotted = trackfuse("plot", path)
+        compared = trackfuse("compare", path, run)
+        assert plotted.returncode == compared.returncode == 2, (path, compared.stderr)
+        assert plotted.stderr == compared.stderr, path
+        assert plotted.stderr.splitlines() == [compared.stderr.strip()]
+        assert compared.stderr.startswith(f"error: {path}: {reason}"), compared.stderr
+        assert trackfuse("compare", run, path).stderr == compared.stderr

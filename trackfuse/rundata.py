@@ -146,12 +146,10 @@ def load(path: str | Path, require_complete: bool = True,
     (:attr:`RunData.given`), if the caller holds it.
     """
     path = Path(path)
-    if not path.is_dir():
-        raise RunFolderError(f"{path}: not a run folder (not a directory)")
-    folder = RunFolder(path)
-    manifest = folder.read_manifest()
+    manifest = RunFolder(path).read_manifest() if path.is_dir() else None
     if manifest is None:
-        raise RunFolderError(f"{path}: not a run folder (no {MANIFEST})")
+        raise RunFolderError(f"{path}: {_not_a_run(path)}; allowed: a run folder, "
+                             "<out>/<config>/<run-id> (`trackfuse runs` lists them)")
     if require_complete:
         state = run_state(path, manifest, checksums=True)
         if state.status == DAMAGED:
@@ -168,6 +166,14 @@ def load(path: str | Path, require_complete: bool = True,
                              "or params, or outputs not a mapping of figure names and "
                              "formats)")
     return RunData(path, config, manifest, experiment)
+
+
+def _not_a_run(path: Path) -> str:
+    """Why ``path``, which holds no readable manifest, is no run folder (``plot`` and
+    ``compare`` say the same)."""
+    if not path.exists():
+        return "no such file or folder"
+    return f"not a run folder: no {MANIFEST}" if path.is_dir() else "not a run folder: a file"
 
 
 _FINISH = "run the same `trackfuse run` command again to finish it"
