@@ -266,11 +266,21 @@ def run(
         _print_plan(runner)
         return
     outcome = _execute(runner)
-    _closing_lines(outcome)
+    _closing_lines(outcome, config)
     raise typer.Exit(exit_status([outcome]))
 
 
-def _closing_lines(outcome: RunOutcome) -> None:
+def warn_not_drawn(source: str, wanted: Any, not_drawn: dict[str, str]) -> None:
+    """One ``warning:`` line for each figure that ``outputs.figures`` lists by name (not
+    ``all``, whose figures this config cannot draw only the report lists) and the report
+    could not draw for this run, with the reason (``target.q is not swept``)."""
+    if isinstance(wanted, list):
+        for name, why in not_drawn.items():
+            if name in wanted:
+                warn(f"{source}: outputs.figures: {name} not drawn: {why}")
+
+
+def _closing_lines(outcome: RunOutcome, config: Config) -> None:
     """What ``trackfuse run`` prints at the end of a run."""
     from trackfuse.results import RunStatus
     if outcome.status == RunStatus.ALREADY_COMPLETE:
@@ -281,6 +291,7 @@ def _closing_lines(outcome: RunOutcome) -> None:
               f"now) in {outcome.seconds:.1f} s, {_count(len(outcome.figures), 'figure file')}")
     for message in outcome.figure_errors:
         warn(message)
+    warn_not_drawn(config.source, config.figures, outcome.not_drawn)
     if outcome.report is not None:
         print(f"report: {outcome.report}")
     if outcome.failed_trials:
@@ -358,6 +369,7 @@ def run_configs(configs: list[Config], options: RunOptions) -> list[RunOutcome]:
                 outcome.failed_trials, outcome.total_trials, outcome.first_failure))
         for message in outcome.figure_errors:
             warn(message)
+        warn_not_drawn(config.source, config.figures, outcome.not_drawn)
         if outcome.report is not None:
             print(f"  report: {outcome.report}")
     return outcomes
@@ -414,7 +426,7 @@ def plot(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR",
     experiment imports the plugin's module (a config is code)."""
     from trackfuse.failures import first_failure
     from trackfuse.reports import write_report
-    from trackfuse.results import RunFolder, RunFolderError
+    from trackfuse.results import CONFIG, RunFolder, RunFolderError
     from trackfuse.rundata import swept_keys
     from trackfuse.runlock import RunLock
     run = _load_run(run_dir)
@@ -438,6 +450,8 @@ def plot(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR",
              f"{total - failed}")
     for message in report.errors:
         warn(message)
+    warn_not_drawn(str(run.path / CONFIG), (run.config.get("outputs") or {}).get("figures"),
+                   report.not_drawn)
     print(f"report: {report.index}")
     if report.errors:
         raise typer.Exit(1)

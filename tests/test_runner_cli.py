@@ -147,3 +147,28 @@ def test_phase_lines_name_the_config_and_a_short_phase_in_tenths(tmp_path):
                        "--workers", "1", "--no-progress")
     assert re.search(r", 3 trials \(3 computed now\) in \S+ s, 1 figure file$",
                      single.stdout.splitlines()[0]), single.stdout
+
+
+PICKY = "experiment: toy_experiments:PICKY\ntrials: 3\nseed: 1\noutputs: {figures: %s}\n"
+
+
+def test_a_listed_figure_the_run_cannot_draw_is_one_warning_line(write_config, tmp_path):
+    """A figure named in outputs.figures that the run could not draw showed only under "Not
+    drawn" in index.md; `run` exited 0 without a word."""
+    path = write_config(PICKY % "[estimate, estimate_vs_sigma]")
+    want = (f"warning: {path}: outputs.figures: estimate_vs_sigma not drawn: sigma is not "
+            "swept")
+    ran = trackfuse("run", path, "--out", tmp_path / "out", "--no-progress")
+    assert ran.returncode == 0, ran.stderr
+    assert ran.stderr.splitlines() == [want]
+    assert "estimate_vs_sigma" in (next(tmp_path.glob("out/cfg/*")) / "index.md").read_text()
+    plotted = trackfuse("plot", next(tmp_path.glob("out/cfg/*")))
+    assert plotted.returncode == 0
+    assert plotted.stderr.splitlines() == [want.replace(
+        str(path), str(next(tmp_path.glob("out/cfg/*")) / "config.yaml"))]
+    reproduced = trackfuse("reproduce", tmp_path, "--out", tmp_path / "again",
+                           "--no-progress")
+    assert reproduced.stderr.splitlines() == [want]
+    every = write_config(PICKY % "all", name="every")  # `all`: index.md lists it, no warning
+    quiet = trackfuse("run", every, "--out", tmp_path / "out", "--no-progress")
+    assert quiet.returncode == 0 and quiet.stderr == ""

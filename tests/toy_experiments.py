@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from trackfuse.experiments import register
@@ -89,6 +91,10 @@ GAUSSIAN = register(Experiment(
     figures=GAUSSIAN_FIGURES,
     batch_size=7,
 ))
+
+#: The Gaussian toy with a figure only a sweep over sigma can draw (toy_report says why not).
+PICKY = register(dataclasses.replace(GAUSSIAN, name="toy_picky", figures={
+    **GAUSSIAN_FIGURES, "estimate_vs_sigma": FigureSpec("mean estimate against sigma")}))
 
 TRIVIAL = register(Experiment(
     name="toy_trivial",

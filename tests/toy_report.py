@@ -11,8 +11,11 @@ from trackfuse.plots.style import band, new_figure
 from trackfuse.rundata import RunData
 
 
-def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure]:
-    """``estimate``: mean estimate per algorithm with its t band, against the point."""
+def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure | str]:
+    """``estimate``: mean estimate per algorithm with its t band, against the point;
+    ``estimate_vs_sigma`` (toy_picky) only says why it is not drawn without a sigma sweep."""
+    if "estimate_vs_sigma" in wanted and "sigma" not in (run.config.get("sweep") or {}):
+        return {"estimate_vs_sigma": "sigma is not swept"}
     if "estimate" not in wanted:
         return {}
     fig, ax = new_figure()

@@ -108,6 +108,7 @@ class RunOutcome:
     rows: int = 0
     figures: list[Path] = field(default_factory=list)
     figure_errors: list[str] = field(default_factory=list)
+    not_drawn: dict[str, str] = field(default_factory=dict)  # wanted figure -> why not
     report: Path | None = None
     seconds: float = 0.0
 
@@ -343,6 +344,7 @@ class Runner:
             outcome.figure_errors = [str(err)]
             return {"figure_errors": outcome.figure_errors}
         outcome.figures, outcome.figure_errors = report.figures, report.errors
+        outcome.not_drawn = report.not_drawn
         outcome.report = report.index
         return report.manifest_entries(run.path)
 
