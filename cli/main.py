@@ -533,6 +533,21 @@ def _left_out_line(result: Comparison) -> str:
     return f"{', '.join(parts)}: sweep points, row keys or metrics the other run lacks"
 
 
+def _config_line(differences, shown: int = 6) -> str:
+    """``config differs: trials (BASE 50, NEW 100); ...`` or that the configs are equal."""
+    if not differences:
+        return "config: the same in both runs"
+
+    def short(value: Any) -> str:
+        text = value if isinstance(value, str) else json.dumps(value, default=str)
+        return text if len(text) <= 40 else text[:39] + "…"
+
+    listed = [f"{key} (BASE {short(b)}, NEW {short(n)})" for key, b, n in differences[:shown]]
+    more = f"; +{len(differences) - shown} more (--json lists them)" \
+        if len(differences) > shown else ""
+    return "config differs: " + "; ".join(listed) + more
+
+
 def _print_comparison(result: Comparison, shown: int = 30) -> None:
     """One summary line, then the cells that differ (most ``shown``)."""
     from rich.console import Console
@@ -541,15 +556,20 @@ def _print_comparison(result: Comparison, shown: int = 30) -> None:
     if cells.empty:
         print(f"nothing compared: the runs share no cell; {_left_out_line(result)}")
         return
-    counts = cells["verdict"].value_counts().to_dict()
-    print(f"{'paired' if result.paired else 'unpaired'} comparison, {len(cells)} cells, "
-          f"{result.gated} gated (family-wise alpha {result.alpha:g}): "
-          + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())))
-    ungated = len(cells) - result.gated
-    if counts.get("differs"):
-        print(f"'differs': a diagnostic metric's 95 % interval excludes no change, cell by cell "
-              f"and not adjusted: about 5 % of the {ungated} ungated cells would differ by chance "
-              "when nothing has changed")
+    print(f"{'paired' if result.paired else 'unpaired'} comparison of "
+          f"{_count(len(cells), 'cell')} {result.pairing}".rstrip())
+    print(_config_line(result.config_differences))
+    gated = cells["better"].isin(("lower", "higher"))
+    for label, part in ((f"gated (the regression gate, family-wise alpha {result.alpha:g})",
+                         cells[gated]),
+                        ("not gated (no better direction declared; each cell's 95 % interval, "
+                         "not adjusted)", cells[~gated])):
+        counts = part["verdict"].value_counts().to_dict()
+        print(f"{label}: {_count(len(part), 'cell')}"
+              + "".join(f", {v} {k}" for k, v in sorted(counts.items())))
+    if (cells["verdict"] == "differs").any():
+        print(f"'differs' (not gated): about 5 % of the {(~gated).sum()} cells not gated would "
+              "differ by chance when nothing has changed")
     if result.only_base or result.only_new:
         print(f"not compared: {_left_out_line(result)}")
     notable = cells[~cells["verdict"].str.startswith("no significant")]
@@ -586,9 +606,9 @@ def compare(
     """Compare two complete runs of one experiment, cell by cell.
 
     A cell is a sweep point x row key x metric: both means, the difference NEW - BASE with
-    its 95 % interval. Runs with the same seed and trial count are paired (paired t,
+    its 95 % interval. Runs with the same seed are paired on the trials both have (paired t,
     Newcombe and McNemar for 0/1 metrics); otherwise unpaired (Welch, Newcombe hybrid
-    score).
+    score). The config values that differ between the runs are listed.
 
     Exit 0; 1 with --fail-on-regression on a regression, a cell of BASE missing from NEW,
     nothing compared or nothing gated (the reason in one line on stderr; cells only NEW has
@@ -607,7 +627,11 @@ def compare(
         def records(frame) -> list[dict[str, Any]]:
             return json.loads(frame.to_json(orient="records"))
 
-        print(json.dumps({"paired": result.paired, "alpha": result.alpha,
+        print(json.dumps({"paired": result.paired, "pairing": result.pairing,
+                          "config_differences": [
+                              {"key": key, "base": b, "new": n}
+                              for key, b, n in result.config_differences],
+                          "alpha": result.alpha,
                           "compared": len(result.cells), "gated": result.gated,
                           "regressions": len(result.regressions),
                           "only_base": result.only_base, "only_new": result.only_new,

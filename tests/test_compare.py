@@ -154,3 +154,27 @@ def test_the_gate_fails_when_nothing_is_compared_or_gated():
     ungated = compare_trials(base, base.copy(), KEYS)
     assert ungated.gated == 0 and ungated.gate_failure().startswith("nothing gated")
     assert gate(base, base.copy()).gate_failure() is None
+
+
+def test_runs_of_one_seed_and_different_trial_counts_pair_on_the_shared_trials(tmp_path):
+    """Trials 0-29 of a 30- and a 60-trial run are the same draws (the seeding depends on the
+    root seed and the trial index only), yet were compared unpaired (Welch)."""
+    sweep = {"mu": [0.0, 1.0]}
+    short = harness.run_data(tmp_path / "a", "toy_gaussian", {"n": 5}, sweep, trials=30,
+                             seed=3)
+    long = harness.run_data(tmp_path / "b", "toy_gaussian", {"n": 5}, sweep, trials=60,
+                            seed=3)
+    result = compare_runs(short, long)
+    assert result.paired and "both runs have" in result.pairing
+    assert (result.cells["n_base"] == 30).all() and (result.cells["n_new"] == 30).all()
+    assert (result.cells["diff"] == 0).all()
+    estimate = result.cells[result.cells["metric"] == "estimate"]  # paired t: no spread at all
+    assert (estimate["ci_low"] == 0).all() and (estimate["ci_high"] == 0).all()
+    assert result.config_differences == (("trials", 30, 60),)
+    assert compare_runs(long, short).paired  # either way round
+    other = harness.run_data(tmp_path / "c", "toy_gaussian", {"n": 6}, sweep, trials=60,
+                             seed=4)
+    unpaired = compare_runs(short, other)
+    assert not unpaired.paired and "seeds differ, 3 and 4" in unpaired.pairing
+    assert unpaired.config_differences == (("trials", 30, 60), ("seed", 3, 4),
+                                           ("params.n", 5, 6))

@@ -8,6 +8,7 @@ from conftest import trackfuse
 from typer.testing import CliRunner
 
 from trackfuse.config import load
+from trackfuse.harness import run_data
 from trackfuse.runner import Runner
 from trackfuse_cli.main import app
 
@@ -119,3 +120,27 @@ def test_plot_and_compare_say_the_same_accurate_line_for_what_is_no_run(write_co
         assert plotted.stderr.splitlines() == [compared.stderr.strip()]
         assert compared.stderr.startswith(f"error: {path}: {reason}"), compared.stderr
         assert trackfuse("compare", run, path).stderr == compared.stderr
+
+
+def test_the_summary_says_how_trials_pair_what_config_differs_and_what_is_gated(tmp_path):
+    """Two runs differing only in the trial count were compared unpaired, the output did
+    not say how the runs differ, and "4 no significant change, 4 no significant difference"
+    did not say which cells the regression gate judged."""
+    sweep = {"mu": [0.0, 1.0]}
+    base = run_data(tmp_path / "a", "toy_gaussian", {}, sweep, trials=30, seed=3).path
+    more = run_data(tmp_path / "b", "toy_gaussian", {}, sweep, trials=45, seed=3).path
+    lines = _compare(base, more).stdout.splitlines()
+    assert lines[:4] == [
+        "paired comparison of 8 cells on the trial indices both runs have (same seed 3; 30 "
+        "trials per point in BASE, 45 in NEW: the others are left out)",
+        "config differs: trials (BASE 30, NEW 45)",
+        "gated (the regression gate, family-wise alpha 0.05): 4 cells, 4 no significant change",
+        "not gated (no better direction declared; each cell's 95 % interval, not adjusted): "
+        "4 cells, 4 no significant difference"]
+    report = json.loads(_compare(base, more, "--json").stdout)
+    assert report["paired"] and report["config_differences"] == [
+        {"key": "trials", "base": 30, "new": 45}]
+    assert {c["n_new"] for c in report["cells"]} == {30}
+    same = _compare(base, base).stdout.splitlines()
+    assert same[0].endswith("trial by trial (same seed 3, 30 trials per point)")
+    assert same[1] == "config: the same in both runs"

@@ -5,9 +5,12 @@ experiment's row keys (algorithm, scan, ...) and one metric. For every cell pres
 runs the comparison gives both means, the difference ``new - base`` with its 95 % interval,
 a two-sided p-value and the test used:
 
-* **paired** (both runs share the root seed, so trial ``t`` saw the same simulated data in
-  both): paired t interval and test on the per-trial differences; for 0/1 metrics Newcombe's
-  paired hybrid score interval and the exact McNemar test.
+* **paired** (both runs share the root seed, so trial ``t`` drew the same common random
+  numbers in both: :mod:`trackfuse.seeding` makes them a function of the root seed and the
+  trial index alone, whatever the trial count, batch size or worker): paired t interval and
+  test on the per-trial differences over the trials both runs have (trials 0-49 of a 50-
+  and a 100-trial run); for 0/1 metrics Newcombe's paired hybrid score interval and the
+  exact McNemar test.
 * **unpaired** (different seeds): Welch interval and test; for 0/1 metrics Newcombe's hybrid
   score interval and the 'N-1' chi-square test.
 
@@ -23,11 +26,14 @@ every trial failed), no cell compared at all, or no gated cell. Cells only the n
 are reported and never fail it.
 
 :func:`compare_runs` compares two run folders and takes the 0/1 metrics and the directions
-from the experiment's declared :class:`~trackfuse.experiments.base.Metric` list.
+from the experiment's declared :class:`~trackfuse.experiments.base.Metric` list; it also
+says how the trials were paired and which config values differ between the runs
+(:func:`config_differences`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -70,6 +76,10 @@ class Comparison:
     alpha: float
     only_base_cells: pd.DataFrame
     only_new_cells: pd.DataFrame
+    #: How the trials were (or were not) paired, in words (set by :func:`compare_runs`).
+    pairing: str = ""
+    #: ``(key, base value, new value)`` for each config value that differs (``compare_runs``).
+    config_differences: tuple[tuple[str, object, object], ...] = ()
 
     @property
     def regressions(self) -> pd.DataFrame:
@@ -244,8 +254,8 @@ def compare_runs(base: RunData, new: RunData, tolerance: Mapping[str, float] | N
 
     Cells are keyed by the swept keys of ``base`` and the experiment's row keys; 0/1 metrics
     and the direction of each metric come from ``Experiment.metrics``. Trials are paired when
-    both runs share the root seed and the trial count. Raises ``ValueError`` for runs of
-    different experiments or different swept keys.
+    both runs share the root seed, on the trial indices both have (:func:`_pairing`). Raises
+    ``ValueError`` for runs of different experiments or different swept keys.
     """
     if base.config["experiment"] != new.config["experiment"]:
         raise ValueError(f"different experiments: {base.config['experiment']!r} and "
@@ -266,9 +276,46 @@ def compare_runs(base: RunData, new: RunData, tolerance: Mapping[str, float] | N
         if not 0 <= value < math.inf:
             raise ValueError(f"--tolerance: got {metric}={value}; allowed: a finite number "
                              ">= 0 (in the metric's unit)")
-    paired = (base.config.get("seed") == new.config.get("seed")
-              and base.config.get("trials") == new.config.get("trials"))
-    return compare_trials(base.trials, new.trials, [*base.sweep, *experiment.row_keys],
-                          binary=experiment.binary_metrics, better=experiment.directions,
-                          paired=paired, tolerance=tolerance, alpha=alpha,
-                          family_wise=family_wise, skip=experiment.categorical_metrics)
+    paired, pairing = _pairing(base.config, new.config)
+    result = compare_trials(base.trials, new.trials, [*base.sweep, *experiment.row_keys],
+                            binary=experiment.binary_metrics, better=experiment.directions,
+                            paired=paired, tolerance=tolerance, alpha=alpha,
+                            family_wise=family_wise, skip=experiment.categorical_metrics)
+    return dataclasses.replace(result, pairing=pairing, config_differences=tuple(
+        config_differences(base.config, new.config)))
+
+
+def _pairing(base: Mapping, new: Mapping) -> tuple[bool, str]:
+    """Whether trials of the resolved configs ``base`` and ``new`` pair by index, and how.
+
+    Trial ``t``'s common stream (truth, noise) depends on the root seed and ``t`` alone
+    (:func:`trackfuse.seeding.trial_streams`), never on the trial count, the batch size or
+    the worker: with one seed, trial ``t`` of both runs is the same draw, so the trials both
+    runs have pair by index; with two seeds no trial does.
+    """
+    seeds, trials = (base.get("seed"), new.get("seed")), (base.get("trials"), new.get("trials"))
+    if seeds[0] != seeds[1]:
+        return False, f"(the seeds differ, {seeds[0]} and {seeds[1]}: no trial is shared)"
+    if trials[0] == trials[1]:
+        return True, f"trial by trial (same seed {seeds[0]}, {trials[0]} trials per point)"
+    return True, (f"on the trial indices both runs have (same seed {seeds[0]}; {trials[0]} "
+                  f"trials per point in BASE, {trials[1]} in NEW: the others are left out)")
+
+
+def _flat(config: Mapping, prefix: str = "") -> dict[str, object]:
+    """A resolved config as ``{dotted path: value}`` (``params.clutter.mean``, ``trials``)."""
+    flat: dict[str, object] = {}
+    for key, value in config.items():
+        if isinstance(value, Mapping) and value:
+            flat.update(_flat(value, f"{prefix}{key}."))
+        else:
+            flat[f"{prefix}{key}"] = value
+    return flat
+
+
+def config_differences(base: Mapping, new: Mapping) -> list[tuple[str, object, object]]:
+    """``(key, base value, new value)`` for every value of two resolved configs that differs
+    (``None`` where a config lacks the key), in the order of ``base`` then ``new``."""
+    b, n = _flat(base), _flat(new)
+    return [(key, b.get(key), n.get(key)) for key in dict.fromkeys([*b, *n])
+            if b.get(key) != n.get(key) or (key in b) != (key in n)]
