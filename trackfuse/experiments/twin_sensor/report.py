@@ -964,8 +964,7 @@ def _final_figure(run: RunData) -> Figure | str:
                                + _other_filters(algorithms)))
     quantified = x_key == "clutter.mean" and _fig_words(run, 2).endswith("redrawn")
     title = [("Paper Fig. 2 quantified: final" if quantified else "Final")
-             + f" range RMSE ({_runs(last)} runs per point, the same targets and noise at "
-             "every point)",
+             + f" range RMSE ({_runs(last)} runs per point)",
              _context(run, "95 % bootstrap-t intervals")]
     panel = SINGLE_PANEL if len(facets) == 1 else PANEL if len(facets) == 2 else TIME_PANEL
     titles = _wrapped([t if len(facets) > 1 else "" for t, _ in facets], panel[0])
