@@ -92,6 +92,35 @@ HEADLINE_COLUMNS = ("paper_item", "quantity", "algorithm", "paper_value", "repro
 #: ``not comparable``: the run's config cannot answer it (the paper gives no number, or the
 #: run is not at the paper's setting).
 VERDICTS = ("agrees", "differs", "inconclusive", "not comparable")
+#: The verdicts by name: report modules use these, never the words, so a typo is an error.
+AGREES, DIFFERS, INCONCLUSIVE, NOT_COMPARABLE = VERDICTS
+
+
+def headline_row(paper_item: str, quantity: str, algorithm: str, paper_value: Any,
+                 reproduced: float, ci_low: float, ci_high: float, unit: str,
+                 trials: int | None, verdict: str, reason: str, docs: str) -> dict[str, Any]:
+    """One row of a headline table, in :data:`HEADLINE_COLUMNS` order (see there);
+    ``reproduced``, ``ci_low`` and ``ci_high`` as floats (NaN for none). Raises
+    :class:`ValueError` for a ``verdict`` not in :data:`VERDICTS`."""
+    if verdict not in VERDICTS:
+        raise ValueError(f"verdict {verdict!r} is not one of {VERDICTS}")
+    return dict(zip(HEADLINE_COLUMNS, (paper_item, quantity, algorithm, paper_value,
+                                       float(reproduced), float(ci_low), float(ci_high), unit,
+                                       trials, verdict, reason, docs), strict=True))
+
+
+def interval_verdict(paper: float, low: float, high: float, tolerance: float = 0.0) -> str:
+    """:data:`AGREES` if the paper's value lies in ``[low - tolerance, high + tolerance]``,
+    else :data:`DIFFERS`."""
+    return AGREES if low - tolerance <= paper <= high + tolerance else DIFFERS
+
+
+def claim_verdict(shown: bool, opposite_shown: bool) -> str:
+    """:data:`AGREES` when the data show a claim, else :data:`DIFFERS` when they show its
+    opposite, else :data:`INCONCLUSIVE` (absence of evidence is never ``differs``)."""
+    return AGREES if shown else DIFFERS if opposite_shown else INCONCLUSIVE
+
+
 #: Why a table is not written when its report module returns it without rows.
 NO_ROWS = "no rows for this config"
 #: What each file of a run folder holds (figures and tables add their own captions).
