@@ -53,6 +53,7 @@ from typing import Any
 import pandas as pd
 
 from trackfuse.child_processes import setup_child
+from trackfuse.coerce import one_line
 from trackfuse.environment import cpu_words, recorded_cpus
 from trackfuse.failures import first_failure
 from trackfuse.results import (
@@ -211,11 +212,6 @@ def save_figure(fig, folder: Path, name: str, formats: Sequence[str]) -> list[Pa
     return written
 
 
-def _one_line(err: BaseException) -> str:
-    """``Type: message`` of an exception on one line, at most 300 characters."""
-    return " ".join(f"{type(err).__name__}: {err}".split())[:300]
-
-
 def _module(run: RunData, report: Report) -> ModuleType | None:
     """The experiment's report module, or ``None`` (no report declared, or it fails to
     import: one message in ``report.errors``)."""
@@ -224,7 +220,7 @@ def _module(run: RunData, report: Report) -> ModuleType | None:
     try:
         return importlib.import_module(run.experiment.report)
     except Exception as err:  # noqa: BLE001 - a report bug must not lose the run
-        report.errors.append(f"report module {run.experiment.report}: {_one_line(err)}")
+        report.errors.append(f"report module {run.experiment.report}: {one_line(err)}")
         return None
 
 
@@ -236,7 +232,7 @@ def _write_tables(run: RunData, module: ModuleType, report: Report) -> dict[str,
     try:
         made = module.tables(run)
     except Exception as err:  # noqa: BLE001 - a report bug must not lose the run
-        report.errors.append(f"tables: {_one_line(err)}")
+        report.errors.append(f"tables: {one_line(err)}")
         return {}
     written = {}
     for name, table in made.items():
@@ -260,7 +256,7 @@ def _draw(run: RunData, module: ModuleType, names: Sequence[str],
         try:
             fig = module.figures(run, [name]).get(name)
         except Exception as err:  # noqa: BLE001 - one figure's bug must not lose the others
-            part.errors.append(f"figure {name}: {_one_line(err)}")
+            part.errors.append(f"figure {name}: {one_line(err)}")
             continue
         if fig is None or isinstance(fig, str):
             part.not_drawn[name] = fig or "the experiment's report drew nothing for this config"
@@ -270,7 +266,7 @@ def _draw(run: RunData, module: ModuleType, names: Sequence[str],
         except OSError:  # the disk (full, unwritable), not the figure: the run stops, resumable
             raise
         except Exception as err:  # noqa: BLE001 - one figure's bug must not lose the others
-            part.errors.append(f"figure {name}: {_one_line(err)}")
+            part.errors.append(f"figure {name}: {one_line(err)}")
     return part
 
 
