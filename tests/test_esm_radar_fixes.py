@@ -11,7 +11,8 @@ from trackfuse.association import ahp
 from trackfuse.config import load
 from trackfuse.experiments.esm_radar import EXPERIMENT
 from trackfuse.experiments.esm_radar.model import alpha_max, differences, manoeuvre_alpha, simulate
-from trackfuse.experiments.esm_radar.report import paper_vs_reproduced, printed_half_unit, verdict
+from trackfuse.experiments.esm_radar.report import paper_vs_reproduced, printed_half_unit
+from trackfuse.reports import interval_verdict
 from trackfuse.rundata import RunData
 from trackfuse.seeding import trial_streams
 
@@ -144,10 +145,10 @@ def test_phase_config_runs_and_the_spacing_sharpens_the_phase_factor(tmp_path):
 
 
 def test_verdict_and_printed_precision():
-    assert verdict(0.74, 0.70, 0.78) == "agrees"
-    assert verdict(0.74, 0.75, 0.80) == "differs"
-    assert verdict(0.07, 0.0636, 0.0636, printed_half_unit(0.07)) == "differs"
-    assert verdict(0.26, 0.2638, 0.2638, printed_half_unit(0.26)) == "agrees"
+    assert interval_verdict(0.74, 0.70, 0.78) == "agrees"
+    assert interval_verdict(0.74, 0.75, 0.80) == "differs"
+    assert interval_verdict(0.07, 0.0636, 0.0636, printed_half_unit(0.07)) == "differs"
+    assert interval_verdict(0.26, 0.2638, 0.2638, printed_half_unit(0.26)) == "agrees"
     assert printed_half_unit(0.053) == pytest.approx(5e-4)
     assert printed_half_unit(5.2375) == pytest.approx(5e-5)
     assert printed_half_unit(130) == 0.5

@@ -8,6 +8,7 @@ import matplotlib.figure
 import numpy as np
 import pandas as pd
 import pytest
+from figure_checks import alike_legend_entries, inside_canvas, text_overlaps
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import to_rgba
 
@@ -15,7 +16,6 @@ from trackfuse import harness
 from trackfuse.config import load
 from trackfuse.experiments.esm_radar import EXPERIMENT, model, report
 from trackfuse.plots.algorithms import look
-from trackfuse.plots.style import alike_legend_entries, inside_canvas, text_overlaps
 from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS, save_figure
 from trackfuse.rundata import RunData
 

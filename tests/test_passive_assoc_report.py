@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from figure_checks import alike_legend_entries, inside_canvas, text_overlaps
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.text import Text
 
@@ -14,7 +15,6 @@ from trackfuse import harness
 from trackfuse.config import load
 from trackfuse.experiments.passive_assoc import EXPERIMENT, report
 from trackfuse.plots.algorithms import look
-from trackfuse.plots.style import alike_legend_entries, inside_canvas, text_overlaps
 from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS
 from trackfuse.rundata import RunData
 from trackfuse.stats import bootstrap_t_mean_intervals

@@ -3,9 +3,12 @@ page as a browser shows it."""
 
 from __future__ import annotations
 
+import ast
 import dataclasses
 import errno
+import importlib
 import os
+from pathlib import Path
 
 import pandas as pd
 import pytest
@@ -13,8 +16,17 @@ import toy_report
 from browser import chromium, decoded_images
 
 from trackfuse import reports
+from trackfuse.config import load
 from trackfuse.harness import run_data
-from trackfuse.reports import display_table, write_report
+from trackfuse.reports import (
+    HEADLINE_TABLE,
+    VERDICTS,
+    display_table,
+    headline_row,
+    write_report,
+)
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")
@@ -214,3 +226,29 @@ def test_a_redraw_removes_what_it_no_longer_draws_and_names_the_failing_figure(
     assert "figures/estimate" not in (toy_run.path / "index.md").read_text()
     monkeypatch.undo()
     write_report(toy_run)  # the other tests read the default report
+
+
+def test_a_headline_row_refuses_a_verdict_that_is_not_one_of_the_four():
+    row = headline_row("Fig. 1", "q", "a", "0.9", 1, 0, 2, "m", 3, "inconclusive", "r", "d")
+    assert list(row) == list(reports.HEADLINE_COLUMNS) and row["reproduced"] == 1.0
+    with pytest.raises(ValueError, match="verdict 'agree' is not one of"):
+        headline_row("Fig. 1", "q", "a", "0.9", 1, 0, 2, "m", 3, "agree", "r", "d")
+
+
+def test_no_report_module_spells_a_verdict_out():
+    """The verdicts are named through :data:`trackfuse.reports.VERDICTS` (``AGREES``, ...),
+    so a typo is a ``NameError``, not a fifth verdict."""
+    for path in sorted((ROOT / "trackfuse" / "experiments").glob("*/report.py")):
+        words = [node.value for node in ast.walk(ast.parse(path.read_text()))
+                 if isinstance(node, ast.Constant) and node.value in VERDICTS]
+        assert not words, f"{path.relative_to(ROOT)} spells out {words}"
+
+
+@pytest.mark.parametrize("path", sorted(ROOT.glob("configs/ci/*.yaml")), ids=lambda p: p.stem)
+def test_every_headline_table_of_a_ci_config_uses_only_the_four_verdicts(path, tmp_path):
+    cfg = load(path)
+    run = run_data(tmp_path, cfg.experiment.name, cfg.params, cfg.sweep, trials=cfg.trials,
+                   seed=cfg.seed, sweep_mode=cfg.sweep_mode)
+    table = importlib.import_module(run.experiment.report).tables(run).get(HEADLINE_TABLE)
+    if isinstance(table, pd.DataFrame):
+        assert set(table["verdict"]) <= set(VERDICTS)

@@ -8,6 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from conftest import another_value
+from figure_checks import OUTSIDE, alike_legend_entries, text_overlaps
 from scipy import stats
 
 from trackfuse import harness
@@ -25,7 +26,7 @@ from trackfuse.experiments.twin_sensor.model import (
     truth_trajectory,
 )
 from trackfuse.plots.algorithms import look
-from trackfuse.plots.style import alike_legend_entries, text_overlaps
+from trackfuse.plots.style import fixed_figure, legend_in_strip
 from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS
 from trackfuse.rundata import RunData
 from trackfuse.seeding import trial_streams
@@ -699,8 +700,6 @@ def test_first_update_adds_the_predicted_range_bias():
 
 
 def test_text_overlaps_reports_text_that_runs_off_the_figure():
-    from trackfuse.plots.style import OUTSIDE, fixed_figure, legend_in_strip, text_overlaps
-
     fig, (ax,) = fixed_figure(panel=(2.0, 1.5))
     ax.plot([0, 1], [0, 1], label="short")
     assert text_overlaps(fig) == []

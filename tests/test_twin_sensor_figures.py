@@ -6,6 +6,7 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 import pytest
+from figure_checks import text_overlaps
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import to_hex
 from matplotlib.container import ErrorbarContainer
@@ -13,7 +14,6 @@ from matplotlib.container import ErrorbarContainer
 from trackfuse import harness
 from trackfuse.experiments.twin_sensor import EXPERIMENT, report
 from trackfuse.plots.algorithms import GREYS, line_kwargs, look
-from trackfuse.plots.style import text_overlaps
 from trackfuse.rundata import RunData
 
 LOSS_FIGURES = ("loss_vs_clutter", "loss_vs_clutter_ablation", "loss_gate_and_nees_vs_clutter")

@@ -8,6 +8,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from trackfuse.plots.style import band, new_figure
+from trackfuse.reports import AGREES, DIFFERS
 from trackfuse.rundata import RunData
 
 
@@ -39,7 +40,7 @@ def tables(run: RunData) -> dict[str, pd.DataFrame]:
         "ci_high": rows["ci_high"].to_numpy(), "unit": "fraction",
         "trials": rows["n"].to_numpy()})
     inside = (out["ci_low"] <= 0.95) & (out["ci_high"] >= 0.95)
-    out["verdict"] = inside.map({True: "agrees", False: "differs"})
+    out["verdict"] = inside.map({True: AGREES, False: DIFFERS})
     out["reason"] = "the paper's 0.95 against our Wilson interval"
     out["docs"] = "docs/runner.md#output-files"
     return {"paper_vs_reproduced": out}

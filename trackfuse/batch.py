@@ -14,18 +14,21 @@ import multiprocessing
 import signal
 import threading
 import time
-import traceback
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
+from trackfuse.coerce import one_line
 from trackfuse.experiments.base import Experiment
 from trackfuse.results import FAILED_ROW, TIME_SUFFIX, BatchSpan, rows_to_csv, split_timings
 from trackfuse.rowtable import Constant, RowTable, columns_csv
 from trackfuse.seeding import batch_streams, trial_streams
 
 RESERVED_COLUMNS = ("point", "trial")
+#: Longest error text of a failed trial's row (characters): the record in ``trials.csv``
+#: to diagnose the failure from, so longer than an error inside a message.
+ERROR_CHARS = 500
 _user_interrupt = threading.Event()
 _sigint_watched = threading.Event()
 
@@ -93,8 +96,8 @@ def _is_user_interrupt(err: BaseException) -> bool:
 
 
 def _failure(prefix: dict[str, Any], err: BaseException) -> dict[str, Any]:
-    text = "".join(traceback.format_exception_only(type(err), err)).strip().replace("\n", " ")
-    return {**prefix, "algorithm": "", "status": FAILED_ROW, "error": text[:500]}
+    return {**prefix, "algorithm": "", "status": FAILED_ROW,
+            "error": one_line(err, ERROR_CHARS)}
 
 
 def _rows(result: Any, producer: str) -> list[dict[str, Any]]:

@@ -15,6 +15,7 @@ from datetime import datetime
 from pathlib import Path
 from typing import Any
 
+from trackfuse.coerce import int_or
 from trackfuse.results import (
     MANIFEST,
     PART_KINDS,
@@ -51,18 +52,14 @@ def _wall_seconds(manifest: dict[str, Any]) -> float | None:
     return (end - first).total_seconds()
 
 
-def _int(value: Any) -> int:
-    return value if isinstance(value, int) and not isinstance(value, bool) else 0
-
-
 def _saved_trials(path: Path, manifest: dict[str, Any]) -> int:
     """Trials of the batches of the run's plan whose two parts are in ``parts/`` (names only,
     none read): what a running or stopped run has saved, which its manifest (rewritten at
     most every few seconds) lags behind."""
-    per_point, batch = _int(manifest.get("trials_per_point")), _int(manifest.get("batch_size"))
-    points = _int(manifest.get("points"))
+    per_point, batch = int_or(manifest.get("trials_per_point")), int_or(manifest.get("batch_size"))
+    points = int_or(manifest.get("points"))
     if batch < 1:
-        return _int(manifest.get("trials_done"))
+        return int_or(manifest.get("trials_done"))
     kinds: dict[tuple[int, int], set[str]] = {}
     for point, number, kind in part_names(RunFolder(path).parts):
         if point < points and number * batch < per_point:
@@ -74,10 +71,10 @@ def _saved_trials(path: Path, manifest: dict[str, Any]) -> int:
 def _info(path: Path, manifest: dict[str, Any]) -> RunInfo:
     state = run_state(path, manifest)
     done = (_saved_trials(path, manifest) if state.status in (RunStatus.RUNNING, STOPPED)
-            else _int(manifest.get("trials_done")))
+            else int_or(manifest.get("trials_done")))
     return RunInfo(path, path.parent.name, str(manifest.get("experiment", "")),
                    str(manifest.get("name") or ""), str(state),
-                   done, _int(manifest.get("trials_total")),
+                   done, int_or(manifest.get("trials_total")),
                    str(manifest.get("first_started") or manifest.get("started") or ""),
                    _wall_seconds(manifest))
 

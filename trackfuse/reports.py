@@ -53,6 +53,7 @@ from typing import Any
 import pandas as pd
 
 from trackfuse.child_processes import setup_child
+from trackfuse.coerce import one_line
 from trackfuse.environment import cpu_words, recorded_cpus
 from trackfuse.failures import first_failure
 from trackfuse.results import (
@@ -92,6 +93,35 @@ HEADLINE_COLUMNS = ("paper_item", "quantity", "algorithm", "paper_value", "repro
 #: ``not comparable``: the run's config cannot answer it (the paper gives no number, or the
 #: run is not at the paper's setting).
 VERDICTS = ("agrees", "differs", "inconclusive", "not comparable")
+#: The verdicts by name: report modules use these, never the words, so a typo is an error.
+AGREES, DIFFERS, INCONCLUSIVE, NOT_COMPARABLE = VERDICTS
+
+
+def headline_row(paper_item: str, quantity: str, algorithm: str, paper_value: Any,
+                 reproduced: float, ci_low: float, ci_high: float, unit: str,
+                 trials: int | None, verdict: str, reason: str, docs: str) -> dict[str, Any]:
+    """One row of a headline table, in :data:`HEADLINE_COLUMNS` order (see there);
+    ``reproduced``, ``ci_low`` and ``ci_high`` as floats (NaN for none). Raises
+    :class:`ValueError` for a ``verdict`` not in :data:`VERDICTS`."""
+    if verdict not in VERDICTS:
+        raise ValueError(f"verdict {verdict!r} is not one of {VERDICTS}")
+    return dict(zip(HEADLINE_COLUMNS, (paper_item, quantity, algorithm, paper_value,
+                                       float(reproduced), float(ci_low), float(ci_high), unit,
+                                       trials, verdict, reason, docs), strict=True))
+
+
+def interval_verdict(paper: float, low: float, high: float, tolerance: float = 0.0) -> str:
+    """:data:`AGREES` if the paper's value lies in ``[low - tolerance, high + tolerance]``,
+    else :data:`DIFFERS`."""
+    return AGREES if low - tolerance <= paper <= high + tolerance else DIFFERS
+
+
+def claim_verdict(shown: bool, opposite_shown: bool) -> str:
+    """:data:`AGREES` when the data show a claim, else :data:`DIFFERS` when they show its
+    opposite, else :data:`INCONCLUSIVE` (absence of evidence is never ``differs``)."""
+    return AGREES if shown else DIFFERS if opposite_shown else INCONCLUSIVE
+
+
 #: Why a table is not written when its report module returns it without rows.
 NO_ROWS = "no rows for this config"
 #: What each file of a run folder holds (figures and tables add their own captions).
@@ -182,11 +212,6 @@ def save_figure(fig, folder: Path, name: str, formats: Sequence[str]) -> list[Pa
     return written
 
 
-def _one_line(err: BaseException) -> str:
-    """``Type: message`` of an exception on one line, at most 300 characters."""
-    return " ".join(f"{type(err).__name__}: {err}".split())[:300]
-
-
 def _module(run: RunData, report: Report) -> ModuleType | None:
     """The experiment's report module, or ``None`` (no report declared, or it fails to
     import: one message in ``report.errors``)."""
@@ -195,7 +220,7 @@ def _module(run: RunData, report: Report) -> ModuleType | None:
     try:
         return importlib.import_module(run.experiment.report)
     except Exception as err:  # noqa: BLE001 - a report bug must not lose the run
-        report.errors.append(f"report module {run.experiment.report}: {_one_line(err)}")
+        report.errors.append(f"report module {run.experiment.report}: {one_line(err)}")
         return None
 
 
@@ -207,7 +232,7 @@ def _write_tables(run: RunData, module: ModuleType, report: Report) -> dict[str,
     try:
         made = module.tables(run)
     except Exception as err:  # noqa: BLE001 - a report bug must not lose the run
-        report.errors.append(f"tables: {_one_line(err)}")
+        report.errors.append(f"tables: {one_line(err)}")
         return {}
     written = {}
     for name, table in made.items():
@@ -231,7 +256,7 @@ def _draw(run: RunData, module: ModuleType, names: Sequence[str],
         try:
             fig = module.figures(run, [name]).get(name)
         except Exception as err:  # noqa: BLE001 - one figure's bug must not lose the others
-            part.errors.append(f"figure {name}: {_one_line(err)}")
+            part.errors.append(f"figure {name}: {one_line(err)}")
             continue
         if fig is None or isinstance(fig, str):
             part.not_drawn[name] = fig or "the experiment's report drew nothing for this config"
@@ -241,7 +266,7 @@ def _draw(run: RunData, module: ModuleType, names: Sequence[str],
         except OSError:  # the disk (full, unwritable), not the figure: the run stops, resumable
             raise
         except Exception as err:  # noqa: BLE001 - one figure's bug must not lose the others
-            part.errors.append(f"figure {name}: {_one_line(err)}")
+            part.errors.append(f"figure {name}: {one_line(err)}")
     return part
 
 

@@ -444,17 +444,14 @@ class RunFolder:
                 part.unlink(missing_ok=True)
         shutil.rmtree(self.parts, ignore_errors=True)
 
-    def remove_temporaries(self) -> list[Path]:
+    def remove_temporaries(self) -> None:
         """Delete temporary files left by killed runs (call only with the lock held)."""
-        removed = []
         for folder in (self.path, self.parts, *(self.path / d for d in REPORT_DIRS)):
             if not folder.is_dir():
                 continue
             for entry in os.scandir(folder):
                 if _TEMPORARY.match(entry.name) and entry.is_file(follow_symlinks=False):
                     Path(entry.path).unlink(missing_ok=True)
-                    removed.append(Path(entry.path))
-        return removed
 
     def part_path(self, span: BatchSpan, kind: str) -> Path:
         return self.parts / f"{span.name}.{kind}.csv"

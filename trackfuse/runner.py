@@ -38,6 +38,7 @@ from typing import Any
 
 import trackfuse
 from trackfuse.batch import BatchTask, execute_batch, watch_sigint
+from trackfuse.coerce import int_or
 from trackfuse.config import Config
 from trackfuse.environment import (
     cpu,
@@ -258,7 +259,7 @@ class Runner:
             "first_started": previous.get("first_started", session.started),
             "started": session.started,
             "finished": _now() if status == RunStatus.COMPLETE else None,
-            "sessions": _int_or(previous.get("sessions"), 0) + 1,
+            "sessions": int_or(previous.get("sessions"), 0) + 1,
             "per_point_wall_s": {str(k): round(v, 6)
                                  for k, v in sorted(session.per_point.items())},
         }
@@ -321,9 +322,9 @@ class Runner:
     def _already_complete(self, previous: dict[str, Any]) -> RunOutcome:
         """The outcome of a run found complete; its report drawn if it has none (it finished
         with --no-plots, or its report files were removed)."""
-        failed = _int_or(previous.get("trials_failed"), 0)
+        failed = int_or(previous.get("trials_failed"), 0)
         outcome = RunOutcome(self.folder.path, RunStatus.ALREADY_COMPLETE, self.total_trials,
-                             0, failed, rows=_int_or(previous.get("rows"), 0))
+                             0, failed, rows=int_or(previous.get("rows"), 0))
         if failed:
             outcome.first_failure = first_failure(self.folder.path / TRIALS,
                                                   list(self.config.sweep))
@@ -527,10 +528,6 @@ def _write_record(path: Path, text: str) -> dict[str, Any]:
     """Write ``text`` atomically; return its size and checksum for the manifest."""
     atomic_write(path, text)
     return {"bytes": path.stat().st_size, "sha256": sha256_file(path)}
-
-
-def _int_or(value: Any, default: int) -> int:
-    return value if isinstance(value, int) and not isinstance(value, bool) else default
 
 
 def _per_point(previous: dict[str, Any] | None) -> dict[int, float]:

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from trackfuse.coerce import int_or
 from trackfuse.results import INDEX_HTML, RunFolder, RunStatus
 from trackfuse.runlock import held_by_a_live_process
 
@@ -52,10 +53,6 @@ class RunState:
                           *([] if self.report else ["no report"])])
 
 
-def _int(value: Any) -> int:
-    return value if isinstance(value, int) and not isinstance(value, bool) else 0
-
-
 def has_report(path: Path, manifest: dict[str, Any]) -> bool:
     """Whether run folder ``path`` holds its whole report: ``index.html`` and every file in
     the manifest's :data:`REPORT_FILES` (a manifest from before it was recorded: the index
@@ -76,4 +73,4 @@ def run_state(path: Path, manifest: dict[str, Any], checksums: bool = False) -> 
     problem = RunFolder(path).check_final_files(manifest, checksums=checksums)
     if problem is not None:
         return RunState(DAMAGED, problem=problem)
-    return RunState(status, _int(manifest.get("trials_failed")), has_report(path, manifest))
+    return RunState(status, int_or(manifest.get("trials_failed")), has_report(path, manifest))

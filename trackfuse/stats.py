@@ -13,20 +13,28 @@ scipy is imported on first use: ``scipy.stats`` takes about a second to import, 
 summary of every run only needs the t and normal quantiles of ``scipy.special``
 (``stdtrit`` and ``ndtri``, the functions ``scipy.stats`` itself calls: bit for bit the same
 numbers, tested).
+
+Array arguments (``ArrayLike``: numbers, lists, arrays) broadcast against each other to one
+shape ``S``, and each returned array has that shape, except where a function gives its own
+shapes (:func:`holm_adjusted`, the bootstrap intervals).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from trackfuse.chi2 import chi2_quantile
 
 
-def wilson_interval(successes, n, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
+def wilson_interval(successes: ArrayLike, n: ArrayLike,
+                    level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
     """Wilson score interval for a binomial proportion.
 
-    ``successes`` and ``n`` broadcast; returns ``(low, high)`` arrays in [0, 1]. Where
-    ``n == 0`` both bounds are NaN.
+    ``successes`` and ``n`` broadcast to ``S``; returns ``(low, high)``, each ``S``, in
+    [0, 1]. Where ``n == 0`` both bounds are NaN.
     """
     from scipy.special import ndtri  # on first use: see the module docstring
 
@@ -44,8 +52,10 @@ def wilson_interval(successes, n, level: float = 0.95) -> tuple[np.ndarray, np.n
     return low, high
 
 
-def t_interval(mean, std, n, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
-    """Student-t interval ``mean +- t_{n-1} std / sqrt(n)``; NaN where ``n < 2``."""
+def t_interval(mean: ArrayLike, std: ArrayLike, n: ArrayLike,
+               level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
+    """Student-t interval ``mean +- t_{n-1} std / sqrt(n)`` (all broadcast to ``S``):
+    ``(low, high)``, each ``S``, in the unit of ``mean``; NaN where ``n < 2``."""
     from scipy.special import stdtrit  # on first use: see the module docstring
 
     mean = np.asarray(mean, dtype=float)
@@ -69,10 +79,12 @@ def nees_band(dim: int, n_runs: int, level: float = 0.95) -> tuple[float, float]
 
 
 
-def welch_interval(m1, s1, n1, m2, s2, n2,
+def welch_interval(m1: ArrayLike, s1: ArrayLike, n1: ArrayLike, m2: ArrayLike,
+                   s2: ArrayLike, n2: ArrayLike,
                    level: float = 0.95) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Welch interval for ``m2 - m1`` from two independent samples' means, standard
-    deviations and sizes (all broadcast). Returns ``(low, high, p_value)``; the p-value is
+    deviations and sizes (all broadcast to ``S``). Returns ``(low, high, p_value)``, each
+    ``S``; the p-value is
     the two-sided Welch t test of equal means. NaN where a sample has fewer than two values.
     """
     from scipy import stats  # on first use: see the module docstring
@@ -93,7 +105,7 @@ def welch_interval(m1, s1, n1, m2, s2, n2,
             np.where(ok, p, nan))
 
 
-def _p_value(p_test, se, diff) -> np.ndarray:
+def _p_value(p_test: ArrayLike, se: ArrayLike, diff: ArrayLike) -> np.ndarray:
     """``p_test`` where the standard error ``se`` is positive; where it is exactly 0 (every
     value equal), 1 for a zero difference ``diff`` and 0 otherwise; NaN where ``se`` is not
     a number (one value, or an infinite one): the test has nothing to go on."""
@@ -101,9 +113,9 @@ def _p_value(p_test, se, diff) -> np.ndarray:
     return np.where(se > 0, p_test, np.where(se == 0, np.where(diff == 0, 1.0, 0.0), np.nan))
 
 
-def paired_t_p(diff, sd, n) -> np.ndarray:
-    """Two-sided p-value of the paired t test from the mean ``diff``, standard deviation
-    ``sd`` and number ``n`` of the per-trial differences (all broadcast); see
+def paired_t_p(diff: ArrayLike, sd: ArrayLike, n: ArrayLike) -> np.ndarray:
+    """Two-sided p-value (shape ``S``) of the paired t test from the mean ``diff``, standard
+    deviation ``sd`` and number ``n`` of the per-trial differences (all broadcast to ``S``); see
     :func:`_p_value` for ``sd`` zero or not a number."""
     from scipy import stats  # on first use: see the module docstring
 
@@ -114,9 +126,11 @@ def paired_t_p(diff, sd, n) -> np.ndarray:
     return _p_value(p, se, diff)
 
 
-def proportion_difference_interval(k1, n1, k2, n2, both=None,
+def proportion_difference_interval(k1: ArrayLike, n1: ArrayLike, k2: ArrayLike,
+                                   n2: ArrayLike, both: ArrayLike | None = None,
                                    level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
-    """Newcombe's hybrid score interval for ``k2/n2 - k1/n1`` (all broadcast).
+    """Newcombe's hybrid score interval for ``k2/n2 - k1/n1`` (all broadcast to ``S``):
+    ``(low, high)``, each ``S``, in [-1, 1].
 
     Independent samples when ``both`` is None (Newcombe 1998, Stat. Med. 17, 873-890,
     method 10). Paired samples (the same trials, ``n1 == n2``) when ``both`` gives the number
@@ -150,8 +164,9 @@ def _paired_phi(a: np.ndarray, k1: np.ndarray, k2: np.ndarray, n: np.ndarray) ->
         return np.where(denom > 0, num / denom, 0.0)
 
 
-def holm_adjusted(p_values) -> np.ndarray:
-    """Holm's step-down adjusted p-values of one family of ``m`` tests (Holm 1979, Scand. J.
+def holm_adjusted(p_values: ArrayLike) -> np.ndarray:
+    """Holm's step-down adjusted p-values ``(m,)`` of one family of ``m`` tests with
+    p-values ``p_values: (m,)`` (Holm 1979, Scand. J.
     Stat. 6, 65-70): ``max over j <= i of min(1, (m - j + 1) p_(j))`` in ascending order of
     ``p``, returned in the input order. Rejecting where it is below ``alpha`` keeps the
     family-wise error rate at ``alpha`` under any dependence between the tests."""
@@ -164,9 +179,10 @@ def holm_adjusted(p_values) -> np.ndarray:
     return out
 
 
-def mcnemar_p(b, c) -> np.ndarray:
-    """Two-sided exact McNemar p-value from the discordant counts ``b`` and ``c``
-    (McNemar 1947): the binomial test of ``b`` in ``b + c`` at one half; 1 when ``b + c = 0``."""
+def mcnemar_p(b: ArrayLike, c: ArrayLike) -> np.ndarray:
+    """Two-sided exact McNemar p-value (shape ``S``) from the discordant counts ``b`` and
+    ``c`` (broadcast to ``S``; McNemar 1947): the binomial test of ``b`` in ``b + c`` at one
+    half; 1 when ``b + c = 0``."""
     from scipy import stats  # on first use: see the module docstring
 
     b, c = np.asarray(b, dtype=float), np.asarray(c, dtype=float)
@@ -174,9 +190,10 @@ def mcnemar_p(b, c) -> np.ndarray:
     return np.where(b + c > 0, np.minimum(p, 1.0), 1.0)
 
 
-def two_proportion_p(k1, n1, k2, n2) -> np.ndarray:
-    """Two-sided p-value of the 'N-1' chi-square test of equal independent proportions
-    (Campbell 2007, Stat. Med. 26, 3661-3675), accurate down to small expected counts."""
+def two_proportion_p(k1: ArrayLike, n1: ArrayLike, k2: ArrayLike, n2: ArrayLike) -> np.ndarray:
+    """Two-sided p-value (shape ``S``) of the 'N-1' chi-square test of equal independent
+    proportions ``k1/n1`` and ``k2/n2`` (broadcast to ``S``; Campbell 2007, Stat. Med. 26,
+    3661-3675), accurate down to small expected counts."""
     from scipy import stats  # on first use: see the module docstring
 
     k1, n1, k2, n2 = (np.asarray(v, dtype=float) for v in (k1, n1, k2, n2))
@@ -187,8 +204,8 @@ def two_proportion_p(k1, n1, k2, n2) -> np.ndarray:
     return np.where(np.isfinite(chi2), stats.chi2.sf(chi2, 1), 1.0)
 
 
-def bootstrap_t_mean_intervals(groups, level: float = 0.95, resamples: int = 2000,
-                               seed: int = 0) -> np.ndarray:
+def bootstrap_t_mean_intervals(groups: Sequence[ArrayLike], level: float = 0.95,
+                               resamples: int = 2000, seed: int = 0) -> np.ndarray:
     """Expanded bootstrap-t (studentized) interval of the mean of each array of ``groups``.
 
     Each resample's mean is studentized by its own analytic standard error ``s* / sqrt(n)``;
@@ -273,12 +290,13 @@ def _bootstrap_t(x: np.ndarray, counts: np.ndarray) -> np.ndarray:
     return np.where(var > tiny**2, t, degenerate)
 
 
-def rmse_intervals(squared_errors, level: float = 0.95, resamples: int = 2000,
-                   seed: int = 0) -> np.ndarray:
+def rmse_intervals(squared_errors: Sequence[ArrayLike], level: float = 0.95,
+                   resamples: int = 2000, seed: int = 0) -> np.ndarray:
     """Interval of the root mean square ``sqrt(mean(e^2))`` from the squared errors of each
-    array of ``squared_errors``: :func:`bootstrap_t_mean_intervals` of the mean square,
-    lower bound clipped at 0, then square-rooted. Assumes neither zero-mean nor Gaussian
-    errors. Returns ``(groups, 2)``; coverage as measured there.
+    array ``(n_i,)`` of ``squared_errors`` (in the square of the error's unit):
+    :func:`bootstrap_t_mean_intervals` of the mean square, lower bound clipped at 0, then
+    square-rooted. Assumes neither zero-mean nor Gaussian errors. Returns
+    ``(len(squared_errors), 2)`` (low, high) in the error's unit; coverage as measured there.
     """
     mse = bootstrap_t_mean_intervals(squared_errors, level, resamples, seed)
     return np.sqrt(np.clip(mse, 0.0, None))

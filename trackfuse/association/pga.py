@@ -101,7 +101,10 @@ class PGAResult:
 
 
 def is_feasible(col_row: Sequence[int], m1: int) -> bool:
-    """True iff every entry is in 0..m1 and no real row appears twice."""
+    """True iff every entry is in 0..m1 and no real row appears twice.
+
+    The tests' reference (tests/test_pga.py): the operators keep a chromosome feasible by
+    construction, so the package itself never calls it."""
     real = [r for r in col_row if r != 0]
     return all(0 <= r <= m1 for r in col_row) and len(real) == len(set(real))
 

@@ -89,6 +89,9 @@ def tdoa_df_range_sigma(theta: np.ndarray, dr: np.ndarray, b: np.ndarray, sigma_
     Returns
     -------
     sigma_r : (...,) m; NaN where the inversion is invalid.
+
+    The tests' reference for the scenario's range accuracy (tests/test_esm_radar_geometry.py);
+    the package does not call it.
     """
     d_theta, d_dr = tdoa_df_jacobian(theta, dr, b)
     return np.sqrt((d_theta * sigma_theta) ** 2 + (d_dr * sigma_dr) ** 2)

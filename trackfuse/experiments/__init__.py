@@ -31,9 +31,9 @@ import importlib
 import importlib.metadata
 import importlib.util
 import re
-import traceback
 from dataclasses import dataclass
 
+from trackfuse.coerce import one_line
 from trackfuse.experiments.base import Experiment, Param
 
 BUILTIN: dict[str, str] = {
@@ -140,12 +140,6 @@ def get(name: str) -> Experiment:
     raise UnknownExperiment(name)
 
 
-def _one_line(err: BaseException) -> str:
-    text = "".join(traceback.format_exception_only(type(err), err)).strip()
-    text = " ".join(text.split())
-    return text if len(text) <= 200 else text[:197] + "..."
-
-
 def _plugin(ref: str) -> Experiment:
     module, _, attr = ref.partition(":")
     where = f"cannot use {ref[:80]!r}"
@@ -161,7 +155,7 @@ def _plugin(ref: str) -> Experiment:
     except KeyboardInterrupt:
         raise
     except BaseException as err:  # noqa: BLE001 - SystemExit included: a config is code
-        raise PluginError(f"{where}: importing {module} failed: {_one_line(err)}") from None
+        raise PluginError(f"{where}: importing {module} failed: {one_line(err)}") from None
     if not isinstance(found, Experiment):
         raise PluginError(f"{where}: {attr} is a {type(found).__name__}, not a "
                           "trackfuse Experiment")
@@ -175,7 +169,7 @@ def _check_source(module: str, attr: str, where: str) -> None:
     except KeyboardInterrupt:
         raise
     except BaseException as err:  # noqa: BLE001 - a parent package failed to import
-        raise PluginError(f"{where}: cannot locate {module}: {_one_line(err)}") from None
+        raise PluginError(f"{where}: cannot locate {module}: {one_line(err)}") from None
     if spec is None:
         raise PluginError(f"{where}: no module named {module!r} on the Python path (run "
                           "trackfuse from the folder that holds it, or add that folder to "
@@ -187,7 +181,7 @@ def _check_source(module: str, attr: str, where: str) -> None:
         with open(origin, "rb") as fh:
             tree = ast.parse(fh.read(MAX_SOURCE_BYTES + 1), filename=origin)
     except (OSError, SyntaxError, ValueError) as err:
-        raise PluginError(f"{where}: cannot read {module}: {_one_line(err)}") from None
+        raise PluginError(f"{where}: cannot read {module}: {one_line(err)}") from None
     defined = _top_level_names(tree.body)
     if attr not in defined:
         close = difflib.get_close_matches(attr, sorted(defined), n=1, cutoff=0.6)

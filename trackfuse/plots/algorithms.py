@@ -21,6 +21,7 @@ from dataclasses import dataclass
 VERMILLION, BLUE, GREEN, PURPLE = "#D55E00", "#0072B2", "#009E73", "#CC79A7"
 ORANGE, SKY, BLACK = "#E69F00", "#56B4E9", "#000000"
 GREYS = ("#555555", "#888888", "#AAAAAA")
+#: Every role a :class:`Look` may have (see the module docstring).
 ROLES = ("paper", "paper_baseline", "ours", "reference", "variant")
 PAPER_ROLES = ("paper", "paper_baseline")
 """The roles of what the paper ran (its method and its baseline)."""
@@ -35,6 +36,10 @@ class Look:
     colour: str
     marker: str
     role: str
+
+    def __post_init__(self) -> None:
+        if self.role not in ROLES:
+            raise ValueError(f"{self.label!r}: role {self.role!r} is not one of {ROLES}")
 
     @property
     def emphasised(self) -> bool:

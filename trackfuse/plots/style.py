@@ -21,12 +21,7 @@ from functools import cache
 import matplotlib
 import numpy as np
 from matplotlib.axes import Axes
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.colors import to_hex
 from matplotlib.figure import Figure
-from matplotlib.lines import Line2D
-from matplotlib.patches import Patch
-from matplotlib.text import Text
 
 RC = {
     "figure.dpi": 110,
@@ -186,85 +181,3 @@ def reference_line(ax, y: float, label: str, **kw) -> None:
     kw.setdefault("linestyle", "--")
     kw.setdefault("linewidth", 1.0)
     ax.axhline(y, label=label, **kw)
-
-
-OUTSIDE = "<outside the figure>"
-"""The partner :func:`text_overlaps` gives a text that runs off the figure."""
-
-
-def text_overlaps(fig, tolerance_px: float = 1.0) -> list[tuple[str, str]]:
-    """Pairs of text elements drawn in ``fig`` whose boxes overlap, and texts that run off
-    the figure (paired with :data:`OUTSIDE`: they would be cut when saved).
-
-    The figure is drawn once while every :class:`~matplotlib.text.Text` that actually
-    renders (visible, non-empty, inside its axes' view) is recorded; boxes are in display
-    pixels and overlap when they share more than ``tolerance_px`` in both directions; a text
-    is outside when it passes an edge of the figure by more than ``tolerance_px``.
-    Returns ``[(text_a, text_b), ...]``; empty for a clean figure. A figure made without a
-    canvas (:func:`new_figure`) is given an Agg canvas first.
-    """
-    if not hasattr(fig.canvas, "get_renderer"):
-        FigureCanvasAgg(fig)
-    drawn: list[Text] = []
-    original = Text.draw
-
-    def recording(self: Text, renderer) -> None:
-        original(self, renderer)
-        if self.get_visible() and self.get_text().strip():
-            drawn.append(self)
-
-    Text.draw = recording
-    try:
-        fig.canvas.draw()
-    finally:
-        Text.draw = original
-    renderer = fig.canvas.get_renderer()
-    boxes = [(t.get_text(), t.get_window_extent(renderer)) for t in drawn]
-    page = fig.bbox
-    found = [(text, OUTSIDE) for text, b in boxes
-             if min(b.x0 - page.x0, b.y0 - page.y0, page.x1 - b.x1, page.y1 - b.y1)
-             < -tolerance_px]
-    for i, (text_a, a) in enumerate(boxes):
-        for text_b, b in boxes[i + 1:]:
-            dx = min(a.x1, b.x1) - max(a.x0, b.x0)
-            dy = min(a.y1, b.y1) - max(a.y0, b.y0)
-            if dx > tolerance_px and dy > tolerance_px:
-                found.append((text_a, text_b))
-    return found
-
-
-def _look(handle) -> tuple:
-    """What a reader sees of a legend handle: a line's colour, dashes, width class, marker
-    and marker fill, or a patch's face colour and hatch."""
-    if isinstance(handle, Line2D):
-        return ("line", to_hex(handle.get_color(), keep_alpha=False), str(handle.get_linestyle()),
-                handle.get_linewidth() >= 1.8, handle.get_marker(),
-                str(handle.get_markerfacecolor()))
-    if isinstance(handle, Patch):
-        return ("patch", to_hex(handle.get_facecolor(), keep_alpha=False), handle.get_hatch())
-    return ("other", id(handle))
-
-
-def alike_legend_entries(fig) -> list[tuple[str, str]]:
-    """Pairs of labels in one legend of ``fig`` (figure or axes legends) whose entries look
-    the same (:func:`_look`): a reader cannot tell which curve is which."""
-    legends = [*fig.legends, *(ax.get_legend() for ax in fig.axes if ax.get_legend())]
-    found = []
-    for legend in legends:
-        seen: dict[tuple, str] = {}
-        for handle, text in zip(legend.legend_handles, legend.get_texts(), strict=True):
-            look = _look(handle)
-            if look in seen:
-                found.append((seen[look], text.get_text()))
-            seen.setdefault(look, text.get_text())
-    return found
-
-
-def inside_canvas(fig) -> bool:
-    """Whether every drawn artist (titles, legends, labels) lies inside the saved figure
-    (to 0.01 inch): a legend or label pushed off the canvas is cut when saved."""
-    if not hasattr(fig.canvas, "get_renderer"):
-        FigureCanvasAgg(fig)
-    box = fig.get_tightbbox(fig.canvas.get_renderer())
-    return (box.x0 >= -0.01 and box.y0 >= -0.01 and box.x1 <= fig.get_figwidth() + 0.01
-            and box.y1 <= fig.get_figheight() + 0.01)

@@ -37,6 +37,7 @@ from collections.abc import Callable
 from functools import lru_cache
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from trackfuse.tracking.sensors import azel_jacobian
 
@@ -230,11 +231,14 @@ def _q2_table(P_D: float) -> tuple[np.ndarray, np.ndarray]:
     return grid, table
 
 
-def irf_q2_interp(lam_w: np.ndarray, P_D: float = 1.0) -> np.ndarray:
+def irf_q2_interp(lam_w: ArrayLike, P_D: float = 1.0) -> np.ndarray:
     """``q2`` for an array of whitened densities, interpolated from a cached Monte Carlo table.
 
-    Interpolation is linear in ``log lam_w`` on ``[1e-4, 3]``; below the table ``q2`` goes to
-    its clutter-free value ``P_D``.
+    ``lam_w``: clutter densities in whitened coordinates (per unit area, as in
+    :func:`irf_q2`), any shape ``S``; ``P_D`` in ``(0, 1]``. Returns ``q2`` (dimensionless),
+    shape ``S``. Interpolation is linear in ``log lam_w`` on ``[1e-4, 3]``; below the table
+    ``q2`` goes linearly to its clutter-free value ``P_D`` at 0, and above it stays at the
+    table's last value.
     """
     grid, table = _q2_table(float(P_D))
     lam = np.clip(np.asarray(lam_w, dtype=float), 0.0, grid[-1])

@@ -252,11 +252,22 @@ def _wouter(b: np.ndarray, U: np.ndarray, V: np.ndarray) -> np.ndarray:
     return Uw @ V.transpose(0, 1, 3, 2).reshape(n, m * k, V.shape[2])
 
 
-def _class_terms(K, R, P, bsum, nu_bar, NN, Gbar, C):
+#: Weighted moments of one hypothesis class over a batch of ``N`` trials with ``n``
+#: measurement rows (2 for one sensor, 4 for a pair): ``(bsum: (N,), nu_bar: (N, n),
+#: NN: (N, n, n), Gbar: (N, n, 3), C: (N, n, n))``, see :func:`_class_terms`.
+Moments = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+
+
+def _class_terms(K: np.ndarray, R: np.ndarray, P: np.ndarray, bsum: np.ndarray,
+                 nu_bar: np.ndarray, NN: np.ndarray, Gbar: np.ndarray,
+                 C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Contribution of one hypothesis class sharing gain ``K: (N, 6, n)``.
 
-    ``Gbar: (N, n, 3)`` and ``C: (N, n, n)`` are the weighted sums of ``G_h`` (position
-    columns) and ``G_h Pp G_h'``. Returns ``(dx, dP)`` with ``dx = K sum beta nu: (N, 6)`` and
+    ``R: (n, n)`` measurement noise (rad^2), ``P: (N, 6, 6)`` the predicted covariance;
+    ``bsum: (N,)`` the class's total weight, ``nu_bar: (N, n)`` and ``NN: (N, n, n)`` the
+    weighted sums of ``nu_h`` and ``nu_h nu_h'`` (rad, rad^2), ``Gbar: (N, n, 3)`` and
+    ``C: (N, n, n)`` those of ``G_h`` (position columns, rad/m) and ``G_h Pp G_h'``.
+    Returns ``(dx, dP)`` with ``dx = K sum beta nu: (N, 6)`` and
     ``dP = sum beta [P_h + dx_h dx_h']: (N, 6, 6)`` where ``dx_h = K nu_h``.
     """
     KGP = K @ (Gbar @ P[:, :3, :])
@@ -266,22 +277,28 @@ def _class_terms(K, R, P, bsum, nu_bar, NN, Gbar, C):
     return (K @ nu_bar[:, :, None])[:, :, 0], dP
 
 
-def _single_moments(lin: _Linearized, b: np.ndarray, P: np.ndarray):
-    """Weighted moments of one sensor's hypotheses with weights ``b: (N, M)``."""
+def _single_moments(lin: _Linearized, b: np.ndarray, P: np.ndarray) -> Moments:
+    """Weighted moments (:data:`Moments`, ``n = 2``) of one sensor's hypotheses with weights
+    ``b: (N, M)`` at the predicted covariance ``P: (N, 6, 6)``."""
     GP = lin.G @ P[:, None, :3, :3]
     nu = lin.nu[..., None]
     return (b.sum(axis=1), _wsum(b, lin.nu), _wouter(b, nu, nu), _wsum(b, lin.G),
             _wouter(b, GP, lin.G))
 
 
-def _collapse_single(X, P, lin: _Linearized, R, b0, b):
+def _collapse_single(X: np.ndarray, P: np.ndarray, lin: _Linearized, R: np.ndarray,
+                     b0: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One sensor's collapsed update ``(X: (N, 6), P: (N, 6, 6))`` from the prediction
+    ``X: (N, 6)``, ``P: (N, 6, 6)``, noise ``R: (2, 2)`` (rad^2) and the weights of the
+    null ``b0: (N,)`` and of each return ``b: (N, M)``."""
     dx, dP = _class_terms(lin.K, R, P, *_single_moments(lin, b, P))
     P_new = b0[:, None, None] * P + dP - dx[:, :, None] * dx[:, None, :]
     return X + dx, P_new
 
 
-def _pair_moments(l1: _Linearized, l2: _Linearized, B: np.ndarray, P: np.ndarray):
-    """Weighted moments of the joint hypotheses ``(i, j)``, ``B: (N, M1, M2)``."""
+def _pair_moments(l1: _Linearized, l2: _Linearized, B: np.ndarray, P: np.ndarray) -> Moments:
+    """Weighted moments (:data:`Moments`, ``n = 4``) of the joint hypotheses ``(i, j)`` with
+    weights ``B: (N, M1, M2)`` at the predicted covariance ``P: (N, 6, 6)``."""
     n, m1, m2 = B.shape
     r, c = B.sum(axis=2), B.sum(axis=1)
     P33 = P[:, None, :3, :3]
@@ -306,7 +323,8 @@ def _blocks(A: np.ndarray, B: np.ndarray, D: np.ndarray) -> np.ndarray:
 
 
 def pair_weights(X: np.ndarray, P: np.ndarray, r1: SensorReturns, r2: SensorReturns,
-                 options: PDAOptions):
+                 options: PDAOptions
+                 ) -> tuple[list[np.ndarray], _Linearized, _Linearized, np.ndarray]:
     """Association probabilities of the two-sensor hypotheses at the prediction ``(X, P)``.
 
     Returns ``(beta_00: (N,), beta_i0: (N, M1), beta_0j: (N, M2), beta_ij: (N, M1, M2))``
@@ -340,7 +358,10 @@ def pair_weights(X: np.ndarray, P: np.ndarray, r1: SensorReturns, r2: SensorRetu
     return betas, l1, l2, K12
 
 
-def _pair_update(X, P, r1: SensorReturns, r2: SensorReturns, options: PDAOptions):
+def _pair_update(X: np.ndarray, P: np.ndarray, r1: SensorReturns, r2: SensorReturns,
+                 options: PDAOptions) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Both sensors' joint update of the prediction ``X: (N, 6)``, ``P: (N, 6, 6)``:
+    ``(X: (N, 6), P: (N, 6, 6), validated counts: (N, 2))``."""
     (b00, b1, b2, B), l1, l2, K12 = pair_weights(X, P, r1, r2, options)
     if options.covariance == "mgekf" and options.mg_at == "combined":
         l1, l2 = _at_combined(l1, b1 + B.sum(axis=2)), _at_combined(l2, b2 + B.sum(axis=1))
@@ -354,8 +375,10 @@ def _pair_update(X, P, r1: SensorReturns, r2: SensorReturns, options: PDAOptions
     return X + dx, P_new, np.stack([l1.m, l2.m], axis=1)
 
 
-def _block_inverse(A: np.ndarray, B: np.ndarray, D: np.ndarray):
-    """Inverse and determinant of ``[[A, B], [B', D]]`` with 2x2 blocks ``(N, 2, 2)``.
+def _block_inverse(A: np.ndarray, B: np.ndarray,
+                   D: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Inverse ``(N, 4, 4)`` and determinant ``(N,)`` of ``[[A, B], [B', D]]`` with 2x2
+    blocks ``(N, 2, 2)``.
 
     Schur complement ``Sc = D - B' A^-1 B`` with closed-form 2x2 inverses, so a diverged
     trial yields non-finite numbers instead of stopping the batch.
@@ -368,8 +391,11 @@ def _block_inverse(A: np.ndarray, B: np.ndarray, D: np.ndarray):
     return _blocks(TL, TR, Scinv), detA * detSc
 
 
-def _log_joint(l1, l2, S12inv, det12):
-    """``log N([nu_1i; nu_2j]; 0, S_12)``: ``(N, M1, M2)`` (in-place arithmetic: hot path)."""
+def _log_joint(l1: _Linearized, l2: _Linearized, S12inv: np.ndarray,
+               det12: np.ndarray) -> np.ndarray:
+    """``log N([nu_1i; nu_2j]; 0, S_12)``: ``(N, M1, M2)`` from ``S12inv: (N, 4, 4)``, the
+    inverse of ``S_12``, and its determinant ``det12: (N,)`` (in-place arithmetic: hot
+    path)."""
     A, Bc, D = S12inv[:, :2, :2], S12inv[:, :2, 2:], S12inv[:, 2:, 2:]
     with np.errstate(invalid="ignore", divide="ignore"):
         logdet = np.log(det12)
@@ -381,8 +407,13 @@ def _log_joint(l1, l2, S12inv, det12):
     return out
 
 
-def _paper_logs(l1, l2, S12inv, det12, ok, P_D1, P_D2, P_G):
-    """Log weights of the ``paper_approx`` reconstruction (see the module docstring)."""
+def _paper_logs(l1: _Linearized, l2: _Linearized, S12inv: np.ndarray, det12: np.ndarray,
+                ok: np.ndarray, P_D1: float, P_D2: float,
+                P_G: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Log weights of the ``paper_approx`` reconstruction (see the module docstring):
+    ``(log_pair: (N, M1, M2), log_1: (N, M1), log_2: (N, M2), log_00: (N,))``; ``ok:
+    (N, M1, M2)`` marks the pairs both of whose returns are validated, ``S12inv`` and
+    ``det12`` as in :func:`_log_joint`."""
     P_D = 1.0 - (1.0 - P_D1) * (1.0 - P_D2)
     P_Gf = 1.0 - (1.0 - P_G) ** 2
     m_k = (l1.m + 1) * (l2.m + 1)
@@ -400,7 +431,8 @@ def _paper_logs(l1, l2, S12inv, det12, ok, P_D1, P_D2, P_G):
     return log_pair, log_1, log_2, log_00
 
 
-def single_weights(lin: _Linearized, P_D: float, P_G: float, nearest: bool = False):
+def single_weights(lin: _Linearized, P_D: float, P_G: float,
+                   nearest: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Single-sensor PDA probabilities ``(beta_0: (N,), beta_i: (N, M))`` of a linearized
     sensor (Bar-Shalom & Fortmann 1988, eq. 6.2-34 with a Poisson clutter model)."""
     with np.errstate(divide="ignore"):
@@ -409,7 +441,10 @@ def single_weights(lin: _Linearized, P_D: float, P_G: float, nearest: bool = Fal
     return b0, b
 
 
-def _single_update(X, P, ret: SensorReturns, options: PDAOptions):
+def _single_update(X: np.ndarray, P: np.ndarray, ret: SensorReturns,
+                   options: PDAOptions) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One sensor's update of the prediction ``X: (N, 6)``, ``P: (N, 6, 6)``:
+    ``(X: (N, 6), P: (N, 6, 6), validated count: (N,))``."""
     lin = linearize(X, P, ret, options)
     b0, b = single_weights(lin, ret.P_D, options.P_G, nearest=options.method == "nn")
     if options.covariance == "mgekf" and options.mg_at == "combined":

@@ -69,6 +69,9 @@ def modified_rows(z: np.ndarray, d_bar: np.ndarray) -> np.ndarray:
     ----------
     z : (..., 2) measured azimuth and elevation (rad).
     d_bar : (..., 3) predicted target-minus-sensor position (m); broadcasts against ``z``.
+
+    The tests' reference (the textbook MGEKF update in tests/test_tracking_pda.py): the
+    package uses :func:`modified_position_rows`, the nonzero columns.
     """
     g3 = modified_position_rows(z, d_bar)
     return np.concatenate([g3, np.zeros(g3.shape)], axis=-1)

@@ -85,7 +85,15 @@ from trackfuse.plots.style import (
     wants_log_axis,
 )
 from trackfuse.reported import ESM_RADAR, ESM_RADAR_WEIGHTS
-from trackfuse.reports import HEADLINE_COLUMNS
+from trackfuse.reports import (
+    AGREES,
+    DIFFERS,
+    HEADLINE_COLUMNS,
+    INCONCLUSIVE,
+    claim_verdict,
+    headline_row,
+    interval_verdict,
+)
 from trackfuse.rundata import RunData, swept_keys
 from trackfuse.stats import (
     holm_adjusted,
@@ -262,22 +270,6 @@ def printed_half_unit(value: float) -> float:
     return 0.5 * 10.0 ** -decimals
 
 
-def verdict(paper: float, low: float, high: float, tolerance: float = 0.0) -> str:
-    """``agrees`` if the paper's value lies in ``[low - tolerance, high + tolerance]``, else
-    ``differs`` (one of :data:`trackfuse.reports.VERDICTS`)."""
-    return "agrees" if low - tolerance <= paper <= high + tolerance else "differs"
-
-
-def _headline(item: str, quantity: str, algorithm: str, paper: Any, ours: float,
-              low: float, high: float, unit: str, trials: int | None, agrees: bool | str,
-              reason: str, anchor: str) -> dict[str, Any]:
-    """One row of the headline table (:data:`HEADLINE_COLUMNS`)."""
-    word = agrees if isinstance(agrees, str) else ("agrees" if agrees else "differs")
-    return dict(zip(HEADLINE_COLUMNS, (item, quantity, algorithm, paper, float(ours),
-                                       float(low), float(high), unit, trials, word, reason,
-                                       f"{DOCS}#{anchor}"), strict=True))
-
-
 def _setting_words(point: Mapping[str, Any], keys: Sequence[str]) -> str:
     """The swept settings of a point in words (``radar TDOA/phase derived``, ...)."""
     return "; ".join(_value_words(k, point[k]) for k in keys)
@@ -307,11 +299,12 @@ def _table3_rows(run: RunData) -> list[dict[str, Any]]:
             side = "inside" if lo <= paper <= hi else ("above" if paper > hi else "below")
             why = ("; the radar's own TDOA decides (W001-2)" if side == "below"
                    and params["radar.factor_model"] == "table" else "")
-            out.append(_headline(
+            out.append(headline_row(
                 "Table 3", "correct association rate at 200 m separation, radar range sd 1 %"
                 + (f" ({_headline_words(params, keys)})" if keys else ""), name, paper,
-                x.mean(), lo, hi, "fraction", len(x), lo <= paper <= hi,
-                f"paper's {paper:.3f} {side} our 95 % Wilson interval{why}", "table-3"))
+                x.mean(), lo, hi, "fraction", len(x), interval_verdict(paper, lo, hi),
+                f"paper's {paper:.3f} {side} our 95 % Wilson interval{why}",
+                f"{DOCS}#table-3"))
     return out
 
 
@@ -329,13 +322,14 @@ def _ahp_rows() -> list[dict[str, Any]]:
     for quantity, value in ours.items():
         paper = printed[quantity] if quantity in printed else ESM_RADAR.result(quantity).value
         half = printed_half_unit(paper)
-        agrees = verdict(paper, value, value, half) == "agrees"
-        reason = (f"exact value equals the printed one to +-{half:g}" if agrees else
+        word = interval_verdict(paper, value, value, half)
+        reason = (f"exact value equals the printed one to +-{half:g}" if word == AGREES else
                   f"exact {value:.6g} is not {paper:g} to +-{half:g}"
                   + (": the paper's CI uses its rounded lambda_max" if quantity == "AHP CI"
                      else ": the printed set looks adjusted to sum to 1"))
-        out.append(_headline("Table 1", quantity.removeprefix("AHP "), "", paper, value, value,
-                             value, "1", None, agrees, reason, "table-1-ahp-weights"))
+        out.append(headline_row("Table 1", quantity.removeprefix("AHP "), "", paper, value,
+                                value, value, "1", None, word, reason,
+                                f"{DOCS}#table-1-ahp-weights"))
     return out
 
 
@@ -374,13 +368,6 @@ def _fmt_x(x: str, value: float) -> str:
 ALPHA = 0.05
 
 
-def _direction(low: float, high: float) -> str:
-    """Verdict on a claim that a paired difference is > 0, from its 95 % interval:
-    ``agrees`` above 0, ``differs`` below 0 (the data show the opposite), ``inconclusive``
-    across 0 (they show neither)."""
-    return "agrees" if low > 0 else "differs" if high < 0 else "inconclusive"
-
-
 def _discordant(a: np.ndarray, b: np.ndarray) -> tuple[int, int]:
     """Trials where only ``b`` is 1 and where only ``a`` is 1 (two 0/1 arrays, same trials)."""
     return int(np.sum((b == 1) & (a == 0))), int(np.sum((a == 1) & (b == 0)))
@@ -396,17 +383,17 @@ def _gap_rows(item: str, anchor: str, x: str, setting: str, imp: pd.DataFrame,
     out = []
     if x == "target.separation":
         x0, d0, lo0, hi0 = gaps[0]
-        word = _direction(lo0, hi0)
+        word = claim_verdict(lo0 > 0, hi0 < 0)
         paper_gap = (ESM_RADAR.result("improved: correct rate").value
                      - ESM_RADAR.result("traditional: correct rate").value)
-        out.append(_headline(
+        out.append(headline_row(
             item, f"improved - traditional at the closest separation, {_fmt_x(x, x0)}{where}",
             "improved", "clearly higher (> 0)", d0, lo0, hi0, "fraction", n, word,
-            {"agrees": "paired Newcombe interval above 0",
-             "differs": "paired Newcombe interval below 0: lower, not higher",
-             "inconclusive": f"paired Newcombe interval includes 0: the run cannot show it "
-                             f"higher, and excludes a gap above {hi0:+.3f} (the paper's Table "
-                             f"3 gap at 200 m is {paper_gap:+.3f})"}[word], anchor))
+            {AGREES: "paired Newcombe interval above 0",
+             DIFFERS: "paired Newcombe interval below 0: lower, not higher",
+             INCONCLUSIVE: f"paired Newcombe interval includes 0: the run cannot show it "
+                           f"higher, and excludes a gap above {hi0:+.3f} (the paper's Table "
+                           f"3 gap at 200 m is {paper_gap:+.3f})"}[word], f"{DOCS}#{anchor}"))
         out.append(_narrowing_row(item, anchor, x, where, imp, trad, xs))
     out.append(_always_higher_row(item, anchor, x, where, imp, trad, xs, gaps))
     return out
@@ -443,18 +430,19 @@ def _narrowing_row(item: str, anchor: str, x: str, where: str, imp: pd.DataFrame
     if widening:
         q, _, i = widening[0]
         xa, xb, d, lo, hi, _ = tests[i]
-        word = "differs"
+        word = DIFFERS
         reason = (f"the gap widens from {means[xa]:+.3f} at {_fmt_x(x, xa)} to "
                   f"{means[xb]:+.3f} at {_fmt_x(x, xb)} ({-d:+.3f} [{-hi:+.3f}, {-lo:+.3f}], "
                   f"Holm p = {q:.2g} over the {len(tests)} pairs of separations)")
     else:
-        word = "agrees" if d_end > 0 and holm[k_end] < ALPHA else "inconclusive"
+        word = AGREES if d_end > 0 and holm[k_end] < ALPHA else INCONCLUSIVE
         reason = (f"gap {means[x0]:+.3f} at {_fmt_x(x, x0)}, {means[x1]:+.3f} at "
                   f"{_fmt_x(x, x1)} (Holm p = {holm[k_end]:.2g}); no pair of the "
                   f"{len(tests)} shows it widening")
-    return _headline(item, f"gap at {_fmt_x(x, x0)} minus gap at {_fmt_x(x, x1)}, same "
-                     f"trials{where}", "improved", "gap narrows as separation grows", d_end,
-                     lo_end, hi_end, "fraction", len(imp), word, reason, anchor)
+    return headline_row(item, f"gap at {_fmt_x(x, x0)} minus gap at {_fmt_x(x, x1)}, same "
+                        f"trials{where}", "improved", "gap narrows as separation grows",
+                        d_end, lo_end, hi_end, "fraction", len(imp), word, reason,
+                        f"{DOCS}#{anchor}")
 
 
 def _always_higher_row(item: str, anchor: str, x: str, where: str, imp: pd.DataFrame,
@@ -470,23 +458,23 @@ def _always_higher_row(item: str, anchor: str, x: str, where: str, imp: pd.DataF
     holm = holm_adjusted([mcnemar_p(up, down) for up, down in counts])
     lower = [xv for (xv, _), (up, down), q in zip(xs, counts, holm, strict=True)
              if down > up and q < ALPHA]
-    word = "agrees" if not not_shown else "differs" if lower else "inconclusive"
+    word = claim_verdict(not not_shown, bool(lower))
     tied = {xv for (xv, _), c in zip(xs, counts, strict=True) if c == (0, 0)}
     listed = ", ".join(_fmt_x(x, g[0]) + (" (the same outcome in every trial)"
                                           if g[0] in tied else f" ({g[1]:+.3f} "
                                           f"[{g[2]:+.3f}, {g[3]:+.3f}])") for g in not_shown)
-    reason = ("paired interval above 0 at every value" if word == "agrees" else
+    reason = ("paired interval above 0 at every value" if word == AGREES else
               "shown lower at " + ", ".join(_fmt_x(x, v) for v in lower) + " (exact McNemar, "
-              f"Holm over the {len(xs)} values)" if word == "differs" else
+              f"Holm over the {len(xs)} values)" if word == DIFFERS else
               f"not shown higher at {listed}; shown lower nowhere (exact McNemar, Holm over "
               f"the {len(xs)} values)")
     xm, dm, lom, him = min(gaps, key=lambda g: g[1])
     claim = ("always higher as separation varies" if x == "target.separation"
              else "higher throughout")
-    return _headline("Abstract" if x == "target.separation" else item,
-                     f"smallest improved - traditional over the {len(gaps)} values, at "
-                     f"{_fmt_x(x, xm)}{where}", "improved", claim, dm, lom, him, "fraction",
-                     len(imp), word, reason, anchor)
+    return headline_row("Abstract" if x == "target.separation" else item,
+                        f"smallest improved - traditional over the {len(gaps)} values, at "
+                        f"{_fmt_x(x, xm)}{where}", "improved", claim, dm, lom, him, "fraction",
+                        len(imp), word, reason, f"{DOCS}#{anchor}")
 
 
 def _trend_rows(item: str, anchor: str, x: str, setting: str, rates: dict[str, pd.DataFrame],
@@ -498,14 +486,15 @@ def _trend_rows(item: str, anchor: str, x: str, setting: str, rates: dict[str, p
     out = []
     for name, r in rates.items():
         d, lo, hi = _paired(r[easy[1]].to_numpy(), r[hard[1]].to_numpy())
-        word = _direction(-hi, -lo)
-        out.append(_headline(item, f"rate at {_fmt_x(x, hard[0])} minus at "
-                             f"{_fmt_x(x, easy[0])}" + (f" ({setting})" if setting else ""),
-                             name, "declines (< 0)", d, lo, hi, "fraction", len(r), word,
-                             {"agrees": "paired interval below 0",
-                              "differs": "paired interval above 0: it rises",
-                              "inconclusive": "paired interval includes 0: the run cannot "
-                                              "show a decline, nor a rise"}[word], anchor))
+        word = claim_verdict(hi < 0, lo > 0)
+        out.append(headline_row(item, f"rate at {_fmt_x(x, hard[0])} minus at "
+                                f"{_fmt_x(x, easy[0])}" + (f" ({setting})" if setting else ""),
+                                name, "declines (< 0)", d, lo, hi, "fraction", len(r), word,
+                                {AGREES: "paired interval below 0",
+                                 DIFFERS: "paired interval above 0: it rises",
+                                 INCONCLUSIVE: "paired interval includes 0: the run cannot "
+                                               "show a decline, nor a rise"}[word],
+                                f"{DOCS}#{anchor}"))
     return out
 
 

@@ -67,7 +67,7 @@ from numpy.typing import ArrayLike
 from trackfuse.plots.algorithms import line_kwargs, look
 from trackfuse.plots.style import band, legend_below, legend_entries, new_figure, wants_log_axis
 from trackfuse.reported import PASSIVE_ASSOC
-from trackfuse.reports import HEADLINE_COLUMNS
+from trackfuse.reports import AGREES, DIFFERS, HEADLINE_COLUMNS, headline_row
 from trackfuse.rundata import RunData, succeeded_rows, swept_keys
 from trackfuse.stats import (
     bootstrap_t_mean_intervals,
@@ -652,15 +652,6 @@ def versus_exact(trials: pd.DataFrame, config: dict) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def _headline(item: str, quantity: str, algorithm: str, paper: str, ours: float, low: float,
-              high: float, unit: str, trials: int | None, verdict: str, reason: str,
-              anchor: str) -> dict[str, Any]:
-    """One row of the headline table (:data:`HEADLINE_COLUMNS`)."""
-    return dict(zip(HEADLINE_COLUMNS, (item, quantity, algorithm, paper, ours, low, high, unit,
-                                       trials, verdict, reason, f"{DOCS}#{anchor}"),
-                    strict=True))
-
-
 def _fig2_headline(values: dict, config: dict, name: str, runs: pd.DataFrame,
                    exact: pd.DataFrame) -> list[dict[str, Any]]:
     """The two Fig. 2 claims for one variant at one point: a high correct rate (read as
@@ -678,14 +669,14 @@ def _fig2_headline(values: dict, config: dict, name: str, runs: pd.DataFrame,
     k = int(runs["at_opt"].sum())
     lo, hi = wilson_interval(k, n)
     return [
-        _headline("Fig. 2", f"accuracy after {ops} operations, {where}", name, high_rate,
-                  acc["accuracy"], acc["accuracy_ci_low"], acc["accuracy_ci_high"], "fraction",
-                  n, "agrees" if level else "differs", reason, "fig-2"),
-        _headline("Fig. 2", f"runs at the exact optimum J* after {ops} operations, {where}",
-                  name, optimum, k / n, float(lo), float(hi), "fraction", n,
-                  "agrees" if k == n else "differs",
-                  "every run reached J*" if k == n else f"{n - k} of {n} runs short of J*",
-                  "fig-2")]
+        headline_row("Fig. 2", f"accuracy after {ops} operations, {where}", name, high_rate,
+                     acc["accuracy"], acc["accuracy_ci_low"], acc["accuracy_ci_high"],
+                     "fraction", n, AGREES if level else DIFFERS, reason, f"{DOCS}#fig-2"),
+        headline_row("Fig. 2", f"runs at the exact optimum J* after {ops} operations, {where}",
+                     name, optimum, k / n, lo, hi, "fraction", n,
+                     AGREES if k == n else DIFFERS,
+                     "every run reached J*" if k == n else f"{n - k} of {n} runs short of J*",
+                     f"{DOCS}#fig-2")]
 
 
 def paper_vs_reproduced(trials: pd.DataFrame, config: dict) -> pd.DataFrame:
@@ -703,11 +694,11 @@ def paper_vs_reproduced(trials: pd.DataFrame, config: dict) -> pd.DataFrame:
     for _, values, name, runs, exact in _fig2_points(succeeded_rows(trials), config):
         out += _fig2_headline(values, config, name, runs, exact)
     rep = PASSIVE_ASSOC.result("Hungarian method on the dummy formulation")
-    out.append(_headline(rep.where, "exact solution of the dummy-augmented assignment",
-                         "exact", rep.claim, np.nan, np.nan, np.nan, "", None, "differs",
-                         "linear_sum_assignment on the clipped pair gains solves it exactly "
-                         "(equal to enumeration in tests/test_assignment.py)",
-                         "w002-1-the-hungarian-method"))
+    out.append(headline_row(rep.where, "exact solution of the dummy-augmented assignment",
+                            "exact", rep.claim, np.nan, np.nan, np.nan, "", None, DIFFERS,
+                            "linear_sum_assignment on the clipped pair gains solves it exactly "
+                            "(equal to enumeration in tests/test_assignment.py)",
+                            f"{DOCS}#w002-1-the-hungarian-method"))
     return pd.DataFrame(out, columns=list(HEADLINE_COLUMNS)).astype({"trials": "Int64"})
 
 

@@ -27,8 +27,8 @@ from numba import njit
 from trackfuse.experiments.twin_sensor.stonesoup import Estimates
 from trackfuse.tracking.pda import METHODS, PDAOptions
 
-PARALLEL, SEQUENTIAL, NEAREST, PAPER_APPROX = (METHODS.index(m) for m in (
-    "mspda_parallel", "mspda_sequential", "nn", "paper_approx"))
+SEQUENTIAL, NEAREST, PAPER_APPROX = (METHODS.index(m) for m in (
+    "mspda_sequential", "nn", "paper_approx"))
 LOG_2PI = math.log(2.0 * math.pi)
 TWO_PI = 2.0 * math.pi
 JIT = {"cache": True, "nogil": True, "error_model": "numpy"}

@@ -206,8 +206,13 @@ class Scenario:
     """Everything deterministic about a trial, derived from the params.
 
     Shapes: ``K`` scans, ``S`` sensors; ``times: (K+1,)`` s, ``platform: (K+1, 3)`` m,
-    ``sensor_pos: (K+1, S, 3)`` m, ``R: (S, 2, 2)`` rad^2, ``P_D: (S,)``, ``x_start: (6,)``,
-    ``P0, F, Q_filter, Q_truth: (6, 6)``.
+    ``sensor_pos: (K+1, S, 3)`` m, ``R: (S, 2, 2)`` rad^2, ``P_D: (S,)``, ``x_start: (6,)``
+    the true state at t = 0 (position m, velocity m/s), ``P0, F, Q_filter: (6, 6)``.
+    Scalars: ``q_truth`` the truth's process-noise acceleration variance (m^2/s^4, 0 for
+    exact CV truth), ``gamma`` the gate threshold on ``nu' S^-1 nu`` (chi-square, 2 dof) and
+    ``P_G`` its gate probability, ``clutter_mean`` false returns per sensor and scan (in the
+    gate or the window, by ``clutter_model``), ``window`` the half-width (rad) of the window
+    clutter box in azimuth and elevation.
     """
 
     K: int

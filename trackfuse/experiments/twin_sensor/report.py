@@ -88,7 +88,15 @@ from trackfuse.plots.style import (
     trim_bottom,
 )
 from trackfuse.reported import TWIN_SENSOR
-from trackfuse.reports import HEADLINE_COLUMNS
+from trackfuse.reports import (
+    AGREES,
+    DIFFERS,
+    HEADLINE_COLUMNS,
+    INCONCLUSIVE,
+    NOT_COMPARABLE,
+    claim_verdict,
+    headline_row,
+)
 from trackfuse.rundata import RunData, succeeded_rows, swept_keys
 from trackfuse.stats import (
     holm_adjusted,
@@ -1213,16 +1221,8 @@ def _rmse_km(squared_errors: SeriesGroupBy) -> tuple[np.ndarray, np.ndarray, np.
     return np.sqrt(squared_errors.mean().to_numpy()) / 1e3, boot[:, 0], boot[:, 1]
 
 
-def _headline_row(item: str, quantity: str, algorithm: str, paper_value: str, value: float,
-                  lo: float, hi: float, unit: str, trials: int, verdict: str, reason: str,
-                  anchor: str) -> dict[str, Any]:
-    return dict(zip(HEADLINE_COLUMNS, (item, quantity, algorithm, paper_value, value, lo, hi,
-                                       unit, trials, verdict, reason, f"{DOCS}#{anchor}"),
-                    strict=True))
-
-
-FIG1_ANCHOR = "fig-1-tracks-lost-against-false-returns"
-FIG2_ANCHOR = "fig-2-range-error-against-time"
+FIG1_DOCS = f"{DOCS}#fig-1-tracks-lost-against-false-returns"
+FIG2_DOCS = f"{DOCS}#fig-2-range-error-against-time"
 
 
 def _levels_text(levels: Sequence[float]) -> str:
@@ -1257,8 +1257,7 @@ def _fig1_rows(name: str, rows: pd.DataFrame, other_swept: Sequence[str] = ()
     limit = 100 * CLAIM.value
     varying = [key for key in other_swept if rows[key].nunique() > 1]
     above = _levels_above(upto, CLAIM.value)
-    verdict = "not comparable" if varying else "agrees" if hi < limit \
-        else "differs" if above else "inconclusive"
+    verdict = NOT_COMPARABLE if varying else claim_verdict(hi < limit, bool(above))
     levels = _levels_text(upto.index)
     worst_text = (f"; worst level {upto['pct'].max():.1f} % at {upto['pct'].idxmax():g}"
                   if k else "")
@@ -1268,11 +1267,11 @@ def _fig1_rows(name: str, rows: pd.DataFrame, other_swept: Sequence[str] = ()
                  f"binomial, Holm over the levels)" if above
                  else f"; upper bound {hi:.1f} % is not below {limit:g} % and no level is "
                  f"shown above it: {n} runs cannot tell (>= {runs_to_show(limit / 100)} with "
-                 "no loss)" if verdict == "inconclusive" else ""))
+                 "no loss)" if verdict == INCONCLUSIVE else ""))
     return [
-        _headline_row("Fig. 1", f"runs that lost a track at any level of {levels} false "
-                      "returns (angle rule)", name, f"< {limit:g} % up to {CLAIM_UP_TO:g}",
-                      100 * k / n, lo, hi, "%", n, verdict, reason, FIG1_ANCHOR),
+        headline_row("Fig. 1", f"runs that lost a track at any level of {levels} false "
+                     "returns (angle rule)", name, f"< {limit:g} % up to {CLAIM_UP_TO:g}",
+                     100 * k / n, lo, hi, "%", n, verdict, reason, FIG1_DOCS),
         _rise_row(name, rows, rate, varying),
     ]
 
@@ -1308,11 +1307,10 @@ def _rise_row(name: str, rows: pd.DataFrame, rate: pd.DataFrame,
     first, end = rate.index.min(), rate.index.max()
     if varying:
         top = rate.loc[end]
-        return _headline_row(
+        return headline_row(
             "Fig. 1", "tracks lost at the highest clutter level (angle rule)", name,
-            "rises with clutter", float(top["pct"]), float(top["lo"]), float(top["hi"]), "%",
-            int(top["n"]), "not comparable",
-            f"{', '.join(varying)} also swept: not one setting", FIG1_ANCHOR)
+            "rises with clutter", top["pct"], top["lo"], top["hi"], "%", int(top["n"]),
+            NOT_COMPARABLE, f"{', '.join(varying)} also swept: not one setting", FIG1_DOCS)
     wide = rows.pivot(index="trial", columns="clutter.mean", values=MAIN_RULE)
     pair = wide[[first, end]].dropna()
     low, high = pair[first].to_numpy(), pair[end].to_numpy()
@@ -1321,17 +1319,17 @@ def _rise_row(name: str, rows: pd.DataFrame, rate: pd.DataFrame,
     p = float(mcnemar_p(up, down))
     d_lo, d_hi = (100 * float(v) for v in proportion_difference_interval(
         low.sum(), m, high.sum(), m, both=np.sum(low * high)))
-    verdict = ("agrees" if up > down else "differs") if p < ALPHA else "inconclusive"
-    tail = ("" if verdict == "agrees" else "; the curve falls" if verdict == "differs" else
+    verdict = claim_verdict(p < ALPHA and up > down, p < ALPHA and down > up)
+    tail = ("" if verdict == AGREES else "; the curve falls" if verdict == DIFFERS else
             f"; a rise above {d_hi:.1f} points is excluded, a smaller one cannot be told "
             "from none (W000-5)")
     reason = (f"{100 * low.mean():.1f} % at {first:g} -> {100 * high.mean():.1f} % at "
               f"{end:g} on the same {m} runs: {up} lost only at {end:g}, {down} only at "
               f"{first:g}, exact McNemar p = {p:.2g}{tail}")
-    return _headline_row(
+    return headline_row(
         "Fig. 1", f"rise in tracks lost from {first:g} to {end:g} false returns, same runs "
         "(angle rule)", name, "rises with clutter", 100 * (high.mean() - low.mean()),
-        d_lo, d_hi, "points", m, verdict, reason, FIG1_ANCHOR)
+        d_lo, d_hi, "points", m, verdict, reason, FIG1_DOCS)
 
 
 def runs_to_show(limit: float) -> int:
@@ -1362,11 +1360,11 @@ def _fig2_row(run: RunData, name: str, rows: pd.DataFrame) -> dict[str, Any]:
     lo, hi = (v / 1e3 for v in rmse_intervals([sq])[0])
     bound = bounds(run.point_params(int(at["point"].iloc[0])))[0][-1] / 1e3
     where = "inside" if lo <= bound <= hi else "below" if bound < lo else "above"
-    return _headline_row(
+    return headline_row(
         "Fig. 2", f"final range RMSE at {level:g} false returns", name,
-        "tracks well (no numbers)", float(np.sqrt(np.mean(sq)) / 1e3), lo, hi, "km", len(at),
-        "not comparable", f"paper gives no numbers; sqrt PCRLB (clutter-aware) {bound:.1f} km "
-        f"lies {where} our interval", FIG2_ANCHOR)
+        "tracks well (no numbers)", np.sqrt(np.mean(sq)) / 1e3, lo, hi, "km", len(at),
+        NOT_COMPARABLE, f"paper gives no numbers; sqrt PCRLB (clutter-aware) {bound:.1f} km "
+        f"lies {where} our interval", FIG2_DOCS)
 
 
 def paper_vs_reproduced(run: RunData) -> pd.DataFrame:
