@@ -338,7 +338,10 @@ def launch_then_ctrl_c(self, process_obj):
     # a slow worker: held before it reads its semaphores until this process has had time
     # to stop the run
     os.kill(self.pid, signal.SIGSTOP)
-    subprocess.Popen(["sh", "-c", f"sleep 2; kill -CONT {self.pid}"])
+    # released once this process has exited (the bug: the worker then finds its semaphores
+    # gone), or after 5 s (fixed: this process waits for the worker it ends)
+    subprocess.Popen(["sh", "-c", f"for i in $(seq 100); do kill -0 {os.getpid()} || break; "
+                      f"sleep 0.05; done; kill -CONT {self.pid}"])
     os.kill(os.getpid(), signal.SIGINT)
 popen_forkserver.Popen._launch = launch_then_ctrl_c
 runpy.run_module("trackfuse", run_name="__main__")
@@ -349,8 +352,8 @@ def test_ctrl_c_while_a_worker_starts_leaves_no_worker_behind(write_config, tmp_
     """A Ctrl-C inside ``Process.start`` (the pool starting a worker) left a worker the pool
     did not know of: it outlived the command and printed a traceback once its semaphores
     were gone. Here every worker start is followed by a Ctrl-C while the worker is held
-    for 2 s; the captured output ends only when every process holding the pipes has
-    ended."""
+    until the command has exited (at most 5 s); the captured output ends only when every
+    process holding the pipes has ended."""
     path = write_config("experiment: toy_experiments:GAUSSIAN\ntrials: 40\nseed: 1\n"
                         "batch_size: 2\n")
     result = subprocess.run(

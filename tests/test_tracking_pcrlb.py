@@ -129,3 +129,8 @@ def test_a_table_computed_on_demand_lies_between_the_stored_ones():
     low, mid, high = (irf_q2_interp(lam, P_D) for P_D in (0.8, 0.9, 1.0))
     assert np.all(mid <= 0.9) and np.all(np.diff(mid) < 0)
     assert np.all((low < mid) & (mid < high))
+
+
+def test_no_detection_gives_no_information_not_nan():
+    assert irf_q2(0.5, 0.0) == (0.0, 0.0)
+    assert np.all(irf_q2_interp(np.array([0.0, 0.01, 2.0]), 0.0) == 0.0)

@@ -71,6 +71,8 @@ def ctrl_c_held() -> Iterator[None]:
         signal.signal(signal.SIGINT, handler)
         if caught and callable(handler):
             handler(signal.SIGINT, caught[0])
+        elif caught and handler == signal.SIG_DFL:
+            signal.raise_signal(signal.SIGINT)
 
 
 class SerialExecutor:

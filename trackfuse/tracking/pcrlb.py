@@ -131,7 +131,7 @@ def irf_q2(lam_w: float, P_D: float = 1.0, n_samples: int = 1_000_000,
     ``beta`` fitted on the same samples. The target measurements have a stream of their
     own, the same at every ``lam_w`` (common random numbers).
     """
-    if lam_w <= 0.0:
+    if lam_w <= 0.0 or P_D <= 0.0:  # no clutter, or no detection: nothing to estimate
         return float(P_D), 0.0
     mu = lam_w * (2.0 * half_width) ** 2
     target_rng, clutter_rng = (np.random.default_rng([seed, stream]) for stream in (0, 1))
