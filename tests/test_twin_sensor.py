@@ -538,6 +538,19 @@ def test_paired_loss_table_pairs_the_same_trials(small_run):
             & (table["b_minus_a_pct"] <= table["b_minus_a_pct_ci_high"])).all()
 
 
+def test_paired_loss_pairs_each_points_own_algorithms_when_they_are_swept(tmp_path):
+    """With ``algorithms`` swept the table paired the config's list at every point: a
+    point without one of them raised KeyError, and the run lost all its tables."""
+    base = {**EXPERIMENT.defaults(), "scan.count": 5}
+    sweep = {"algorithms": [["mspda_parallel/mgekf", "nn/mgekf"], ["mspda_parallel/ekf"]]}
+    run = harness.run_data(tmp_path, EXPERIMENT, base, sweep, trials=3, seed=1)
+    tables = report.tables(run)
+    pairs = tables["paired_loss"]
+    assert set(pairs["point"]) == {0} and len(pairs) == len(report.RULES)
+    assert set(pairs["algorithm_a"]) == {"mspda_parallel/mgekf"}
+    assert "final_scan" in tables
+
+
 def test_paired_counts_decide_where_the_marginal_intervals_overlap():
     """12 against 1 discordant runs of 200 (23.5 % against 18 %, as the close config's gate
     rule at clutter 150): overlapping Wilson intervals, exact McNemar p = 0.0034."""

@@ -1181,11 +1181,11 @@ def paired_loss_table(run: RunData) -> pd.DataFrame:
     this table says whether they do. Empty with fewer than two algorithms.
     """
     last = _last(succeeded_rows(run.trials))
-    algorithms = [a for a in run.params["algorithms"] if a in set(last["algorithm"])]
     keys = swept_keys(run.config)
     out = []
     for point, at in last.groupby("point", sort=True):
         values = {k: at[k].iloc[0] for k in keys}
+        algorithms = list(dict.fromkeys(at["algorithm"]))  # the point's own (may be swept)
         for rule in RULES:
             wide = at.pivot(index="trial", columns="algorithm", values=rule)
             first = len(out)
