@@ -489,6 +489,8 @@ def test_fig1_verdicts_follow_the_tests(lost, runs, spread, below, rises):
     first, last = min(lost), max(lost)
     assert rows[1]["reproduced"] == pytest.approx(100 * (lost[last] - lost[first]) / runs)
     assert rows[1]["ci_low"] <= rows[1]["reproduced"] <= rows[1]["ci_high"]
+    # the verdict is read off the interval the row shows
+    assert (rows[1]["verdict"] == "agrees") == (rows[1]["ci_low"] > 0)
 
 
 def test_a_paired_rise_is_found_where_the_marginal_intervals_overlap():

@@ -1299,10 +1299,10 @@ def _rise_row(name: str, rows: pd.DataFrame, rate: pd.DataFrame,
     with the lowest on the same trials (they share truth and noise: common random numbers).
 
     ``reproduced``: the rise, loss at the highest level minus at the lowest (points), with
-    Newcombe's paired 95 % interval. Verdict from the exact McNemar test of the runs lost
-    at one level only: "agrees" when it shows a rise (p < :data:`ALPHA`), "differs" when it
-    shows a fall, else "inconclusive": the run cannot tell a rise smaller than the
-    interval's upper end from none. "not comparable" (the highest level's rate and Wilson
+    Newcombe's paired 95 % interval, which gives the verdict: "agrees" when it lies above
+    0 (a rise shown), "differs" when below (a fall), else "inconclusive": the run cannot
+    tell a rise smaller than the interval's upper end from none. The exact McNemar p of the
+    runs lost at one level only goes into the reason. "not comparable" (the highest level's rate and Wilson
     interval) when another swept key varies (``varying``)."""
     first, end = rate.index.min(), rate.index.max()
     if varying:
@@ -1319,7 +1319,7 @@ def _rise_row(name: str, rows: pd.DataFrame, rate: pd.DataFrame,
     p = float(mcnemar_p(up, down))
     d_lo, d_hi = (100 * float(v) for v in proportion_difference_interval(
         low.sum(), m, high.sum(), m, both=np.sum(low * high)))
-    verdict = claim_verdict(p < ALPHA and up > down, p < ALPHA and down > up)
+    verdict = claim_verdict(d_lo > 0, d_hi < 0)
     tail = ("" if verdict == AGREES else "; the curve falls" if verdict == DIFFERS else
             f"; a rise above {d_hi:.1f} points is excluded, a smaller one cannot be told "
             "from none (W000-5)")
