@@ -1302,8 +1302,8 @@ def _rise_row(name: str, rows: pd.DataFrame, rate: pd.DataFrame,
     Newcombe's paired 95 % interval, which gives the verdict: "agrees" when it lies above
     0 (a rise shown), "differs" when below (a fall), else "inconclusive": the run cannot
     tell a rise smaller than the interval's upper end from none. The exact McNemar p of the
-    runs lost at one level only goes into the reason. "not comparable" (the highest level's rate and Wilson
-    interval) when another swept key varies (``varying``)."""
+    runs lost at one level only goes into the reason. "not comparable" (the highest level's
+    rate and Wilson interval) when another swept key varies (``varying``)."""
     first, end = rate.index.min(), rate.index.max()
     if varying:
         top = rate.loc[end]
