@@ -116,6 +116,10 @@ def interval_verdict(paper: float, low: float, high: float, tolerance: float = 0
     return AGREES if low - tolerance <= paper <= high + tolerance else DIFFERS
 
 
+ALPHA = 0.05
+"""Significance level of the paired tests behind the claim verdicts (two-sided)."""
+
+
 def claim_verdict(shown: bool, opposite_shown: bool) -> str:
     """:data:`AGREES` when the data show a claim, else :data:`DIFFERS` when they show its
     opposite, else :data:`INCONCLUSIVE` (absence of evidence is never ``differs``)."""

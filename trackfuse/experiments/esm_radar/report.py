@@ -87,6 +87,7 @@ from trackfuse.plots.style import (
 from trackfuse.reported import ESM_RADAR, ESM_RADAR_WEIGHTS
 from trackfuse.reports import (
     AGREES,
+    ALPHA,
     DIFFERS,
     HEADLINE_COLUMNS,
     INCONCLUSIVE,
@@ -362,10 +363,6 @@ def _sweep_groups(run: RunData, x: str) -> list[tuple[str, list[tuple[float, int
 def _fmt_x(x: str, value: float) -> str:
     """A swept value in words with its unit (``200 m``, ``1 %``)."""
     return f"{100 * value:g} %" if x == "radar.sigma_range_coef" else f"{value:g} m"
-
-
-#: Significance level of the paired tests behind the curve verdicts (two-sided).
-ALPHA = 0.05
 
 
 def _discordant(a: np.ndarray, b: np.ndarray) -> tuple[int, int]:

@@ -90,6 +90,7 @@ from trackfuse.plots.style import (
 from trackfuse.reported import TWIN_SENSOR
 from trackfuse.reports import (
     AGREES,
+    ALPHA,
     DIFFERS,
     HEADLINE_COLUMNS,
     INCONCLUSIVE,
@@ -1274,10 +1275,6 @@ def _fig1_rows(name: str, rows: pd.DataFrame, other_swept: Sequence[str] = ()
                      100 * k / n, lo, hi, "%", n, verdict, reason, FIG1_DOCS),
         _rise_row(name, rows, rate, varying),
     ]
-
-
-#: Significance level of the paired tests behind the Fig. 1 verdicts (two-sided).
-ALPHA = 0.05
 
 
 def _levels_above(upto: pd.DataFrame, limit: float) -> list[float]:
