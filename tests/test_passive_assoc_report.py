@@ -276,3 +276,18 @@ def test_scale_time_labels_stay_apart_on_a_range_under_one_decade(tmp_path):
     assert text_overlaps(fig) == []
     low, high = fig.axes[0].get_ylim()
     assert sum(low <= t <= high for t in fig.axes[0].get_yticks()) >= 2
+
+
+def test_the_high_rate_verdict_follows_the_margin_below_the_optimum(shipped_run):
+    """"A high correct rate" agrees when the paired interval of exact - PGA lies below
+    report.AT_LEVEL_MARGIN, differs when above it, else is inconclusive (it agreed
+    whenever the interval held 0, so a small run always agreed)."""
+    table = report.tables(shipped_run)["paper_vs_reproduced"]
+    rows = table[table["quantity"].str.startswith("accuracy after")]
+    for _, row in rows.iterrows():
+        low, high = map(float, re.search(r"exact - PGA [-\d.]+ \[([-\d.]+), ([-\d.]+)\]",
+                                         row["reason"]).groups())
+        margin = report.AT_LEVEL_MARGIN
+        expected = ("agrees" if high <= margin else "differs" if low > margin
+                    else "inconclusive")
+        assert row["verdict"] == expected, row["reason"]

@@ -149,10 +149,10 @@ def test_doc_links_stay_valid_wherever_the_report_folder_is(tmp_path):
 def test_the_summary_counts_the_papers_methods_apart_from_ours():
     """The reproduce report said "10 agrees, 9 differs" for paper 002 when every "agrees"
     was one of our variants and every row of the paper's PGA differed."""
-    rows = pd.DataFrame({"algorithm": ["pga_paper", "pga_evict", "pga_anneal", None],
-                         "verdict": ["differs", "agrees", "agrees", "differs"]})
+    rows = pd.DataFrame({"algorithm": ["pga_paper", "pga_evict", "pga_anneal", None, "exact"],
+                         "verdict": ["differs", "agrees", "agrees", "differs", "differs"]})
     section = PaperSection("toy", "a paper", {}, rows)
-    assert section.verdict_counts(ours=False) == {**dict.fromkeys(VERDICTS, 0), "differs": 2}
+    assert section.verdict_counts(ours=False) == {**dict.fromkeys(VERDICTS, 0), "differs": 3}
     assert _summary_line(section).startswith(
-        "4 paper items compared in the paper's own configs: the paper's methods 2 differs; "
-        "ours and other variants 2 agrees.")
+        "5 paper items compared in the paper's own configs: the paper's methods and claims "
+        "3 differs; ours and other variants 2 agrees.")

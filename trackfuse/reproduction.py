@@ -30,7 +30,7 @@ from pathlib import Path
 import pandas as pd
 
 import trackfuse
-from trackfuse.plots.algorithms import PAPER_ROLES, look
+from trackfuse.plots.algorithms import OUR_ROLES, look
 from trackfuse.reported import PAPERS, Paper
 from trackfuse.reports import HEADLINE_COLUMNS, HEADLINE_TABLE, VERDICTS, wanted_figures
 from trackfuse.results import atomic_write
@@ -78,11 +78,12 @@ class PaperSection:
 
 
 def about_ours(algorithm: object) -> bool:
-    """Whether a headline row's ``algorithm`` is one of ours or another variant, not the
-    paper's method or its baseline (:data:`trackfuse.plots.algorithms.ROLES`); a row with no
-    algorithm is about the paper's claim itself."""
+    """Whether a headline row's ``algorithm`` is one of ours or another variant
+    (:data:`trackfuse.plots.algorithms.ROLES`), not the paper's method or its baseline; a
+    row with no algorithm, or with a reference solver (the exact optimum answering the
+    paper's claim about the Hungarian method), is about the paper's claim itself."""
     return isinstance(algorithm, str) and bool(algorithm) and \
-        look(algorithm).role not in PAPER_ROLES
+        look(algorithm).role in OUR_ROLES
 
 
 def _headline(run: RunData) -> pd.DataFrame:
@@ -204,11 +205,12 @@ def _counted(counts: Mapping[str, int]) -> str:
 
 
 def _summary_line(section: PaperSection) -> str:
-    """The section's verdicts counted: the paper's methods (and claims with no algorithm)
-    apart from ours and other variants, so that our methods' agreement does not pass for
+    """The section's verdicts counted: the paper's methods and claims apart from ours and
+    other variants, so that our methods' agreement does not pass for
     the paper's."""
     total = sum(section.verdict_counts().values())
-    line = (f"{total} paper items compared in the paper's own configs: the paper's methods "
+    line = (f"{total} paper items compared in the paper's own configs: the paper's methods and "
+            "claims "
             f"{_counted(section.verdict_counts(ours=False))}; ours and other variants "
             f"{_counted(section.verdict_counts(ours=True))}."
             if total else "No paper item could be compared from the paper's own configs.")
@@ -270,7 +272,8 @@ def report_markdown(sections: Sequence[PaperSection], out: Path) -> str:
              "`agrees` means the paper's number lies inside our interval (or the data show "
              "its claim), `differs` that it lies outside (or the data contradict the claim), "
              "`inconclusive` that the data can do neither, `not comparable` that the config "
-             "cannot answer it; the reason is in one line. Links into "
+             "cannot answer it or the paper gives no number to set beside ours; the reason "
+             "is in one line. Links into "
              "`docs/` point at the checkout that ran the code: relative when this folder lies "
              "inside it, absolute otherwise.", ""]
     for s in sections:

@@ -25,6 +25,8 @@ GREYS = ("#555555", "#888888", "#AAAAAA")
 ROLES = ("paper", "paper_baseline", "ours", "reference", "variant")
 PAPER_ROLES = ("paper", "paper_baseline")
 """The roles of what the paper ran (its method and its baseline)."""
+OUR_ROLES = ("ours", "variant")
+"""The roles of what this project adds (its methods and other variants)."""
 EMPHASISED = (*PAPER_ROLES, "ours")
 
 
