@@ -1188,12 +1188,10 @@ def paired_loss_table(run: RunData) -> pd.DataFrame:
         values = {k: at[k].iloc[0] for k in keys}
         algorithms = list(dict.fromkeys(at["algorithm"]))  # the point's own (may be swept)
         for rule in RULES:
-            wide = at.pivot(index="trial", columns="algorithm", values=rule)
+            wide = at.pivot(index="trial", columns="algorithm", values=rule)[algorithms]
             first = len(out)
-            for i, a in enumerate(algorithms):
-                for b in algorithms[i + 1:]:
-                    out.append({"point": point, **values, "rule": rule,
-                                **_paired_counts(a, b, wide[[a, b]].dropna())})
+            out += [{"point": point, **values, "rule": rule, **counts}
+                    for counts in _pairs_counts(algorithms, wide.to_numpy(float))]
             if len(out) > first:
                 holm = holm_adjusted([r["mcnemar_p"] for r in out[first:]])
                 for row, q in zip(out[first:], holm, strict=True):
@@ -1203,16 +1201,31 @@ def paired_loss_table(run: RunData) -> pd.DataFrame:
 
 def _paired_counts(a: str, b: str, pair: pd.DataFrame) -> dict[str, Any]:
     """The paired comparison of 0/1 columns ``a`` and ``b`` of ``pair`` (one row a trial)."""
-    x, y = pair[a].to_numpy(), pair[b].to_numpy()
-    n = len(pair)
-    a_only, b_only = int(np.sum((x == 1) & (y == 0))), int(np.sum((x == 0) & (y == 1)))
-    lo, hi = proportion_difference_interval(x.sum(), n, y.sum(), n, both=np.sum(x * y))
-    return {"algorithm_a": a, "algorithm_b": b, "trials": n,
-            "lost_a_pct": 100 * x.mean(), "lost_b_pct": 100 * y.mean(),
-            "b_minus_a_pct": 100 * (y.mean() - x.mean()),
-            "b_minus_a_pct_ci_low": 100 * float(lo), "b_minus_a_pct_ci_high": 100 * float(hi),
-            "n_a_only": a_only, "n_b_only": b_only,
-            "mcnemar_p": float(mcnemar_p(a_only, b_only))}
+    return _pairs_counts([a, b], pair[[a, b]].to_numpy(float))[0]
+
+
+def _pairs_counts(algorithms: Sequence[str], flags: np.ndarray) -> list[dict[str, Any]]:
+    """:func:`_paired_counts` of every pair of ``algorithms`` in order, at once: ``flags``
+    ``(trials, len(algorithms))`` 0/1, NaN where an algorithm has no row (a pair uses the
+    trials both have)."""
+    i, j = np.triu_indices(len(algorithms), 1)
+    x, y = flags[:, i], flags[:, j]
+    ok = ~(np.isnan(x) | np.isnan(y))
+    x, y = np.where(ok, x, 0.0), np.where(ok, y, 0.0)
+    n = ok.sum(axis=0)
+    a_only, b_only = ((x == 1) & (y == 0)).sum(axis=0), ((x == 0) & (y == 1)).sum(axis=0)
+    sx, sy = x.sum(axis=0), y.sum(axis=0)
+    lo, hi = proportion_difference_interval(sx, n, sy, n, both=(x * y).sum(axis=0))
+    p = mcnemar_p(a_only, b_only)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mx, my = sx / n, sy / n
+    return [{"algorithm_a": algorithms[i[k]], "algorithm_b": algorithms[j[k]],
+             "trials": int(n[k]), "lost_a_pct": 100 * mx[k], "lost_b_pct": 100 * my[k],
+             "b_minus_a_pct": 100 * (my[k] - mx[k]),
+             "b_minus_a_pct_ci_low": 100 * float(lo[k]),
+             "b_minus_a_pct_ci_high": 100 * float(hi[k]),
+             "n_a_only": int(a_only[k]), "n_b_only": int(b_only[k]),
+             "mcnemar_p": float(p[k])} for k in range(len(i))]
 
 
 def _rmse_km(squared_errors: SeriesGroupBy) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
