@@ -1187,8 +1187,9 @@ def paired_loss_table(run: RunData) -> pd.DataFrame:
     for point, at in last.groupby("point", sort=True):
         values = {k: at[k].iloc[0] for k in keys}
         algorithms = list(dict.fromkeys(at["algorithm"]))  # the point's own (may be swept)
+        flags = at.pivot(index="trial", columns="algorithm", values=list(RULES))
         for rule in RULES:
-            wide = at.pivot(index="trial", columns="algorithm", values=rule)[algorithms]
+            wide = flags[rule][algorithms]
             first = len(out)
             out += [{"point": point, **values, "rule": rule, **counts}
                     for counts in _pairs_counts(algorithms, wide.to_numpy(float))]
