@@ -9,6 +9,7 @@ from scipy import stats
 from trackfuse.stats import (
     _bootstrap_t,
     _resample_counts,
+    binomial_above_p,
     bootstrap_t_mean_intervals,
     holm_adjusted,
     mcnemar_p,
@@ -188,3 +189,19 @@ def test_holm_adjusts_step_down_and_keeps_the_input_order():
                                [0.03, 0.06, 0.06, 0.02])
     np.testing.assert_allclose(holm_adjusted([0.5, 0.9]), [1.0, 1.0])  # capped at 1
     assert holm_adjusted([0.2]).tolist() == [0.2] and holm_adjusted([]).size == 0
+
+
+def test_binomial_above_p_is_scipys_one_sided_binomial_test():
+    for k, n, p0 in [(0, 50, 0.05), (3, 50, 0.05), (8, 50, 0.05), (50, 50, 0.05), (1, 1, 0.5),
+                     (12, 200, 0.02)]:
+        ref = stats.binomtest(k, n, p0, alternative="greater").pvalue
+        assert binomial_above_p(k, n, p0) == pytest.approx(ref, rel=1e-12)
+    assert binomial_above_p(0, 0, 0.05) == 1.0
+    np.testing.assert_allclose(binomial_above_p([3, 8], [50, 50], 0.05),
+                               [stats.binomtest(k, 50, 0.05, alternative="greater").pvalue
+                                for k in (3, 8)], rtol=1e-12)
+
+
+def test_mcnemar_p_is_the_exact_two_sided_binomial_test():
+    for b, c in [(2, 9), (12, 1), (15, 3), (0, 7), (50, 50), (100, 120)]:
+        assert mcnemar_p(b, c) == pytest.approx(stats.binomtest(b, b + c).pvalue, rel=1e-12)

@@ -75,7 +75,6 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.ticker import FixedLocator, MaxNLocator
 from pandas.api.typing import SeriesGroupBy
-from scipy.stats import binomtest
 
 from trackfuse.experiments.twin_sensor.model import PARAMS, bounds, build_scenario
 from trackfuse.plots.algorithms import FILTER_LABELS, GREYS, VERMILLION, line_kwargs, look
@@ -100,6 +99,7 @@ from trackfuse.reports import (
 )
 from trackfuse.rundata import RunData, succeeded_rows, swept_keys
 from trackfuse.stats import (
+    binomial_above_p,
     holm_adjusted,
     mcnemar_p,
     nees_band,
@@ -1298,9 +1298,7 @@ def _levels_above(upto: pd.DataFrame, limit: float) -> list[float]:
     two-sided 95 % test, as a Wilson lower bound above the limit would be)."""
     if upto.empty:
         return []
-    p = [binomtest(int(k), int(m), limit, alternative="greater").pvalue if m else 1.0
-         for k, m in zip(upto["k"], upto["n"], strict=True)]
-    adjusted = holm_adjusted(p)
+    adjusted = holm_adjusted(binomial_above_p(upto["k"], upto["n"], limit))
     return [float(v) for v, q in zip(upto.index, adjusted, strict=True) if q < ALPHA / 2]
 
 
