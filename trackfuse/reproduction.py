@@ -206,8 +206,7 @@ def _counted(counts: Mapping[str, int]) -> str:
 
 def _summary_line(section: PaperSection) -> str:
     """The section's verdicts counted: the paper's methods and claims apart from ours and
-    other variants, so that our methods' agreement does not pass for
-    the paper's."""
+    other variants, so that our methods' agreement does not pass for the paper's."""
     total = sum(section.verdict_counts().values())
     line = (f"{total} paper items compared in the paper's own configs: the paper's methods and "
             "claims "

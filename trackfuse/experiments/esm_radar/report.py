@@ -58,7 +58,6 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 from matplotlib.transforms import offset_copy
-from scipy.stats import binomtest
 
 from trackfuse.association import ahp
 from trackfuse.association.esm_scenario import FACTORS
@@ -167,7 +166,7 @@ def ablation(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
             lo, hi = wilson_interval(x.sum(), len(x))
             only_v = int(((x == 1) & (ref == 0)).sum())
             only_i = int(((x == 0) & (ref == 1)).sum())
-            p = binomtest(only_v, only_v + only_i).pvalue if only_v + only_i else 1.0
+            p = float(mcnemar_p(only_v, only_i))
             both = int(((x == 1) & (ref == 1)).sum())
             gain_lo, gain_hi = proportion_difference_interval(ref.sum(), len(ref), x.sum(),
                                                               len(x), both)

@@ -1321,23 +1321,19 @@ def _rise_row(name: str, rows: pd.DataFrame, rate: pd.DataFrame,
             "rises with clutter", top["pct"], top["lo"], top["hi"], "%", int(top["n"]),
             NOT_COMPARABLE, f"{', '.join(varying)} also swept: not one setting", FIG1_DOCS)
     wide = rows.pivot(index="trial", columns="clutter.mean", values=MAIN_RULE)
-    pair = wide[[first, end]].dropna()
-    low, high = pair[first].to_numpy(), pair[end].to_numpy()
-    m = len(pair)
-    up, down = int(np.sum((high == 1) & (low == 0))), int(np.sum((low == 1) & (high == 0)))
-    p = float(mcnemar_p(up, down))
-    d_lo, d_hi = (100 * float(v) for v in proportion_difference_interval(
-        low.sum(), m, high.sum(), m, both=np.sum(low * high)))
+    rise = _pairs_counts([first, end], wide[[first, end]].to_numpy(float))[0]
+    m, up, down, p = rise["trials"], rise["n_b_only"], rise["n_a_only"], rise["mcnemar_p"]
+    d_lo, d_hi = rise["b_minus_a_pct_ci_low"], rise["b_minus_a_pct_ci_high"]
     verdict = claim_verdict(d_lo > 0, d_hi < 0)
     tail = ("" if verdict == AGREES else "; the curve falls" if verdict == DIFFERS else
             f"; a rise above {d_hi:.1f} points is excluded, a smaller one cannot be told "
             "from none (W000-5)")
-    reason = (f"{100 * low.mean():.1f} % at {first:g} -> {100 * high.mean():.1f} % at "
+    reason = (f"{rise['lost_a_pct']:.1f} % at {first:g} -> {rise['lost_b_pct']:.1f} % at "
               f"{end:g} on the same {m} runs: {up} lost only at {end:g}, {down} only at "
               f"{first:g}, exact McNemar p = {p:.2g}{tail}")
     return headline_row(
         "Fig. 1", f"rise in tracks lost from {first:g} to {end:g} false returns, same runs "
-        "(angle rule)", name, "rises with clutter", 100 * (high.mean() - low.mean()),
+        "(angle rule)", name, "rises with clutter", rise["b_minus_a_pct"],
         d_lo, d_hi, "points", m, verdict, reason, FIG1_DOCS)
 
 
