@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import subprocess
 import sys
 
@@ -36,6 +37,17 @@ def test_a_runs_draw_points_re_simulate_its_trials(tmp_path):
         streams = trial_streams(6, run.draw_points[point], trial)
         again = cluttered_trial(run.point_params(point), streams)[0]
         assert (again["uniform"], again["estimate"]) == (row["uniform"], row["estimate"])
+    assert run.manifest["draw_points"] == [0, 1, 0, 1]
+
+
+def test_draw_points_come_from_the_manifest_before_the_current_flags(tmp_path):
+    run = run_data(tmp_path, "toy_cluttered", trials=2, seed=6,
+                   sweep={"gain": [1.0, 2.0], "density": [1.0, 3.0]})
+    recorded = dataclasses.replace(run, manifest={**run.manifest, "draw_points": [0, 1, 2, 3]})
+    assert recorded.draw_points == [0, 1, 2, 3]  # as if gain had drawn when it ran
+    older = dataclasses.replace(run, manifest={k: v for k, v in run.manifest.items()
+                                               if k != "draw_points"})
+    assert older.draw_points == [0, 1, 0, 1]
 
 
 def test_importing_the_config_layer_loads_no_pandas_scipy_or_matplotlib():

@@ -110,7 +110,12 @@ class RunData:
     def draw_points(self) -> list[int]:
         """The draw point of every sweep point, whose point stream its trials drew
         (:func:`~trackfuse.seeding.draw_points`): ``trial_streams(seed, draw_points[p], t)``
-        re-simulates trial ``t`` of point ``p``."""
+        re-simulates trial ``t`` of point ``p``. As the manifest recorded them; a run
+        written before they were recorded gets them from the current code's
+        :attr:`~trackfuse.experiments.base.Param.draws` flags."""
+        recorded = self.manifest.get("draw_points")
+        if isinstance(recorded, list) and all(isinstance(p, int) for p in recorded):
+            return list(recorded)
         points = expand(self.sweep, self.config.get("sweep_mode", "grid"))
         return draw_points(points, self.experiment.drawing)
 

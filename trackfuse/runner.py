@@ -251,6 +251,7 @@ class Runner:
             "executor_requested": self.executor_kind,
             "workers": self.workers,
             "points": len(self.points),
+            "draw_points": list(self.draw_points),
             "trials_per_point": self.config.trials,
             "batch_size": self.config.batch_size,
             "trials_total": self.total_trials,
