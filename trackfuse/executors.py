@@ -90,6 +90,9 @@ class SerialExecutor:
 
 
 BLAS_THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+#: Warning filter (``-W`` syntax) for the resource tracker's "leaked semaphore objects"
+#: warning, printed after a ``kill -9`` of the run when the tracker cleans them up.
+TRACKER_LEAK_WARNING = "ignore:resource_tracker:UserWarning"
 
 
 def _imported_from_working_directory() -> bool:
@@ -106,9 +109,13 @@ def _start_forkserver_single_threaded() -> None:
     """
     from multiprocessing import forkserver
 
-    saved = {k: os.environ.get(k) for k in (*BLAS_THREAD_VARS, "PYTHONSAFEPATH")}
+    saved = {k: os.environ.get(k) for k in (*BLAS_THREAD_VARS, "PYTHONSAFEPATH", "PYTHONWARNINGS")}
     for key in BLAS_THREAD_VARS:
         os.environ.setdefault(key, "1")
+    # the resource tracker started with the server outlives a ``kill -9`` of this process,
+    # cleans up the pool's semaphores and warned about them on the user's terminal
+    os.environ["PYTHONWARNINGS"] = ",".join(
+        filter(None, (saved["PYTHONWARNINGS"], TRACKER_LEAK_WARNING)))
     if not _imported_from_working_directory():
         # the server runs ``python -c``, whose module path starts with the working directory
         # (Python 3.11 drops the path it is given): a ``trackfuse`` folder there, such as
