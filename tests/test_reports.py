@@ -13,9 +13,11 @@ import pandas as pd
 import pytest
 import toy_report
 from browser import chromium, decoded_images
+from PIL import Image
 
 from trackfuse import reports
 from trackfuse.harness import run_data
+from trackfuse.plots.style import RC
 from trackfuse.reports import (
     VERDICTS,
     display_table,
@@ -239,3 +241,30 @@ def test_no_report_module_spells_a_verdict_out():
         words = [node.value for node in ast.walk(ast.parse(path.read_text()))
                  if isinstance(node, ast.Constant) and node.value in VERDICTS]
         assert not words, f"{path.relative_to(ROOT)} spells out {words}"
+
+
+def test_every_figure_file_names_what_produced_it(toy_run):
+    """A figure copied out of its run folder said nothing of its config, seed or run."""
+    report = write_report(toy_run, wanted=["estimate"])
+    png, pdf = report.figures
+    source = Image.open(png).text["Source"]
+    assert source == reports.provenance(toy_run)
+    assert "seed 4" in source and "20 runs per point" in source
+    assert toy_run.manifest["run_id"] in source
+    assert source.encode() in pdf.read_bytes()  # the PDF's Subject, uncompressed
+
+
+def test_text_a_figure_adds_after_its_axes_takes_the_house_sizes(toy_run, monkeypatch):
+    """The toy report's legend (made after ``new_figure`` returned, as the esm and passive
+    figures' legends and titles were) came out in matplotlib's 10 pt, not the house 8 pt."""
+    sizes = []
+    save = reports.save_figure
+
+    def spy(fig, *args, **kwargs):
+        sizes.extend(t.get_fontsize() for ax in fig.axes for t in ax.get_legend().get_texts())
+        return save(fig, *args, **kwargs)
+
+    monkeypatch.setattr(reports, "save_figure", spy)
+    monkeypatch.setattr(reports, "drawing_processes", lambda figures: 1)
+    write_report(toy_run, wanted=["estimate"])
+    assert sizes and set(sizes) == {RC["legend.fontsize"]}

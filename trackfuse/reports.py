@@ -201,14 +201,27 @@ def display_table(table: pd.DataFrame) -> pd.DataFrame:
     return shown
 
 
-def save_figure(fig, folder: Path, name: str, formats: Sequence[str]) -> list[Path]:
-    """Save ``fig`` as ``folder/name.<fmt>`` for each format, reproducibly and atomically."""
+def provenance(run: RunData) -> str:
+    """One line naming what produced a run's figures: config file, experiment, seed, trials
+    per point and run id (embedded in every figure file: :func:`save_figure`)."""
+    source = Path(str(run.manifest.get("config_file") or "")).name or "(no file)"
+    return (f"trackfuse {run.config.get('experiment')}, config {source}, seed "
+            f"{run.config.get('seed')}, {run.config.get('trials')} runs per point, run "
+            f"{run.manifest.get('run_id')}")
+
+
+def save_figure(fig, folder: Path, name: str, formats: Sequence[str],
+                source: str = "") -> list[Path]:
+    """Save ``fig`` as ``folder/name.<fmt>`` for each format, reproducibly and atomically;
+    ``source`` (:func:`provenance`) goes into the file's metadata (PDF ``Subject``, PNG
+    ``Source``, SVG ``Description``)."""
     written = []
     for fmt in formats:
         path = folder / f"{name}.{fmt}"
         tmp = folder / f".{name}.{os.getpid()}.tmp.{fmt}"
-        metadata = {"pdf": {"CreationDate": None, "ModDate": None},
-                    "svg": {"Date": None}}.get(fmt)
+        metadata = {"pdf": {"CreationDate": None, "ModDate": None, "Subject": source},
+                    "png": {"Source": source},
+                    "svg": {"Date": None, "Description": source}}.get(fmt)
         extra = {"pil_kwargs": {"compress_level": PNG_COMPRESSION}} if fmt == "png" else {}
         fig.savefig(tmp, format=fmt, dpi=PNG_DPI, metadata=metadata, **extra)
         tmp.replace(path)
@@ -255,10 +268,13 @@ def _draw(run: RunData, module: ModuleType, names: Sequence[str],
           formats: Sequence[str]) -> Report:
     """Draw and save the figures ``names``, one at a time (the report's ``figures``,
     ``errors`` and ``not_drawn`` parts for them)."""
-    part = Report()
+    from trackfuse.plots.style import context  # matplotlib: see the module docstring
+
+    part, source = Report(), provenance(run)
     for name in names:
         try:
-            fig = module.figures(run, [name]).get(name)
+            with context():  # every text of the figure in the house sizes
+                fig = module.figures(run, [name]).get(name)
         except Exception as err:  # noqa: BLE001 - one figure's bug must not lose the others
             part.errors.append(f"figure {name}: {one_line(err)}")
             continue
@@ -266,7 +282,7 @@ def _draw(run: RunData, module: ModuleType, names: Sequence[str],
             part.not_drawn[name] = fig or "the experiment's report drew nothing for this config"
             continue
         try:
-            part.figures += save_figure(fig, run.path / "figures", name, formats)
+            part.figures += save_figure(fig, run.path / "figures", name, formats, source)
         except OSError:  # the disk (full, unwritable), not the figure: the run stops, resumable
             raise
         except Exception as err:  # noqa: BLE001 - one figure's bug must not lose the others
