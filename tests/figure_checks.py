@@ -2,7 +2,8 @@
 
 :func:`text_overlaps` finds texts that overlap or run off the figure,
 :func:`alike_legend_entries` legend entries a reader cannot tell apart, and
-:func:`inside_canvas` whether everything drawn lies inside the saved figure.
+:func:`inside_canvas` whether everything drawn lies inside the saved figure, and
+:func:`smallest_printed_text` the smallest text once the figure is printed at page width.
 """
 
 from __future__ import annotations
@@ -31,18 +32,7 @@ def text_overlaps(fig: Figure, tolerance_px: float = 1.0) -> list[tuple[str, str
     Returns ``[(text_a, text_b), ...]``; empty for a clean figure. A figure made without a
     canvas (:func:`new_figure`) is given an Agg canvas first.
     """
-    if not hasattr(fig.canvas, "get_renderer"):
-        FigureCanvasAgg(fig)
-    drawn: list[Text] = []
-    original = Text.draw
-
-    def recording(self: Text, renderer) -> None:
-        original(self, renderer)
-        if self.get_visible() and self.get_text().strip():
-            drawn.append(self)
-
-    with mock.patch.object(Text, "draw", recording):  # every Text of this process, briefly
-        fig.canvas.draw()
+    drawn = _rendered_texts(fig)
     renderer = fig.canvas.get_renderer()
     boxes = [(t.get_text(), t.get_window_extent(renderer)) for t in drawn]
     page = fig.bbox
@@ -93,3 +83,34 @@ def inside_canvas(fig: Figure) -> bool:
     box = fig.get_tightbbox(fig.canvas.get_renderer())
     return (box.x0 >= -0.01 and box.y0 >= -0.01 and box.x1 <= fig.get_figwidth() + 0.01
             and box.y1 <= fig.get_figheight() + 0.01)
+
+
+def _rendered_texts(fig: Figure) -> list[Text]:
+    """Every :class:`~matplotlib.text.Text` that renders when ``fig`` is drawn (visible,
+    non-empty, inside its axes' view), drawing it once (given an Agg canvas if it has none)."""
+    if not hasattr(fig.canvas, "get_renderer"):
+        FigureCanvasAgg(fig)
+    drawn: list[Text] = []
+    original = Text.draw
+
+    def recording(self: Text, renderer) -> None:
+        original(self, renderer)
+        if self.get_visible() and self.get_text().strip():
+            drawn.append(self)
+
+    with mock.patch.object(Text, "draw", recording):  # every Text of this process, briefly
+        fig.canvas.draw()
+    return drawn
+
+
+PRINT_WIDTH_IN = 7.16
+"""Width (in) of a two-column figure on an IEEE journal page, where a figure is printed."""
+
+
+def smallest_printed_text(fig: Figure, width_in: float = PRINT_WIDTH_IN) -> tuple[float, str]:
+    """``(size in pt, text)`` of the smallest text of ``fig`` once the figure is scaled to
+    ``width_in`` inches wide (never enlarged): a 9 pt label of an 11 in figure prints at
+    5.9 pt on a 7.16 in page."""
+    scale = min(1.0, width_in / fig.get_figwidth())
+    return min((t.get_fontsize() * scale, t.get_text()) for t in _rendered_texts(fig))
+

@@ -10,6 +10,10 @@ and a *role* that sets its emphasis:
 * ``variant``: other variants and ablations (thin, no band, drawn behind).
 
 Colours follow the Okabe-Ito palette, which stays distinct under colour-vision deficiency.
+Our methods are green circles and the paper's vermillion squares in every experiment, and no
+colour means two different methods (purple is only annealing; greys are other variants); a
+variant of a method may take its colour, drawn thin with a marker of its own
+(``traditional_5f`` beside ``traditional``).
 The two filters of ``twin_sensor`` share an association's colour and marker and differ by
 line style (MGEKF solid, EKF dashed, with open markers).
 """
@@ -54,13 +58,13 @@ LOOKS: dict[str, Look] = {
     "paper_approx": Look("paper's fused-gate PDA (reconstruction)", VERMILLION, "s", "paper"),
     "mspda_parallel": Look("parallel PDA (corrected; PDAF with one sensor)", GREEN, "o", "ours"),
     "mspda_sequential": Look("sequential PDA", BLUE, "^", "variant"),
-    "nn": Look("nearest neighbour", PURPLE, "x", "variant"),
+    "nn": Look("nearest neighbour", GREYS[0], "x", "variant"),
     # paper 001 (esm_radar)
     "improved": Look("improved fuzzy evaluation (paper)", VERMILLION, "s", "paper"),
     "traditional": Look("traditional fuzzy decision (paper's baseline)", BLUE, "o",
                         "paper_baseline"),
-    "improved_gauss": Look("improved, Gaussian membership (ours)", GREEN, "D", "ours"),
-    "traditional_5f": Look("traditional, 5 factors", ORANGE, "v", "variant"),
+    "improved_gauss": Look("improved, Gaussian membership (ours)", GREEN, "o", "ours"),
+    "traditional_5f": Look("traditional, 5 factors", BLUE, "v", "variant"),
     "improved_static": Look("improved, static weights", GREYS[0], "^", "variant"),
     "improved_3f": Look("improved, 3 factors", GREYS[1], "<", "variant"),
     "improved_no_range": Look("improved, no range factor", GREYS[2], "P", "variant"),
