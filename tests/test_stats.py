@@ -7,6 +7,7 @@ import pytest
 from scipy import stats
 
 from trackfuse.stats import (
+    PairedBinary,
     _bootstrap_t,
     _resample_counts,
     binomial_above_p,
@@ -14,6 +15,7 @@ from trackfuse.stats import (
     holm_adjusted,
     mcnemar_p,
     nees_band,
+    paired_binary,
     paired_t_p,
     percentile_mean_intervals,
     proportion_difference_interval,
@@ -205,3 +207,52 @@ def test_binomial_above_p_is_scipys_one_sided_binomial_test():
 def test_mcnemar_p_is_the_exact_two_sided_binomial_test():
     for b, c in [(2, 9), (12, 1), (15, 3), (0, 7), (50, 50), (100, 120)]:
         assert mcnemar_p(b, c) == pytest.approx(stats.binomtest(b, b + c).pvalue, rel=1e-12)
+
+
+def test_paired_binary_counts_like_a_loop_over_the_trials_both_have():
+    """(trials, 3, 2) against (trials, 1, 2), NaN where a trial has no row: every field
+    equals a count by hand, and the interval and p-value those of the counts."""
+    rng = np.random.default_rng(11)
+    x = np.where(rng.random((40, 3, 2)) < 0.1, np.nan, rng.random((40, 3, 2)) < 0.6)
+    y = np.where(rng.random((40, 1, 2)) < 0.1, np.nan, rng.random((40, 1, 2)) < 0.4)
+    x[:, 2, 1] = np.nan  # no trial at all
+    c = paired_binary(x, y)
+    assert all(getattr(c, f).shape == (3, 2) for f in PairedBinary.__dataclass_fields__)
+    for i, j in np.ndindex(3, 2):
+        pairs = [(a, b) for a, b in zip(x[:, i, j], y[:, 0, j], strict=True)
+                 if not (np.isnan(a) or np.isnan(b))]
+        n = len(pairs)
+        k_x, k_y = sum(a for a, _ in pairs), sum(b for _, b in pairs)
+        both = sum(a == b == 1 for a, b in pairs)
+        x_only, y_only = sum(a > b for a, b in pairs), sum(a < b for a, b in pairs)
+        got = (c.n, c.k_x, c.k_y, c.both, c.x_only, c.y_only)
+        assert tuple(v[i, j] for v in got) == (n, k_x, k_y, both, x_only, y_only)
+        assert c.p[i, j] == mcnemar_p(x_only, y_only)
+        if n == 0:
+            assert np.isnan([c.diff[i, j], c.low[i, j], c.high[i, j]]).all()
+            assert c.p[i, j] == 1.0
+            continue
+        assert (c.rate_x[i, j], c.rate_y[i, j]) == (k_x / n, k_y / n)
+        assert c.diff[i, j] == k_y / n - k_x / n
+        low, high = proportion_difference_interval(k_x, n, k_y, n, both)
+        assert (c.low[i, j], c.high[i, j]) == (low, high)
+    assert (c.n[2, 1], c.p[2, 1]) == (0, 1.0)
+
+
+def test_paired_binary_drops_a_trial_either_side_lacks_and_mirrors():
+    x = np.array([1, 1, 0, np.nan, 1, 0])
+    y = np.array([1, 0, 1, 1, np.nan, 1])
+    c = paired_binary(x, y)
+    assert (c.n, c.k_x, c.k_y, c.both, c.x_only, c.y_only) == (4, 2, 3, 1, 1, 2)
+    assert c.diff == pytest.approx(0.25)
+    back = paired_binary(y, x)
+    assert (back.x_only, back.y_only, back.p) == (c.y_only, c.x_only, c.p)
+    assert (back.low, back.high) == pytest.approx((-c.high, -c.low), abs=1e-15)
+
+
+def test_paired_binary_from_counts_passes_the_level_on():
+    c = PairedBinary.from_counts([50, 50], [30, 12], [38, 12], [27, 12], level=0.99)
+    low, high = proportion_difference_interval([30, 12], 50, [38, 12], 50, [27, 12], 0.99)
+    np.testing.assert_array_equal(c.low, low)
+    np.testing.assert_array_equal(c.high, high)
+    np.testing.assert_array_equal(c.p, mcnemar_p([3, 0], [11, 0]))

@@ -560,7 +560,7 @@ def test_paired_counts_decide_where_the_marginal_intervals_overlap():
     b = a.copy()
     b[0] = 0          # lost by a only
     b[36:48] = 1      # lost by b only
-    row = report._paired_counts("a", "b", pd.DataFrame({"a": a, "b": b}))
+    row = report._pairs_counts(["a", "b"], np.c_[a, b])[0]
     assert (row["n_a_only"], row["n_b_only"]) == (1, 12)
     assert wilson_interval(b.sum(), 200)[0] < wilson_interval(a.sum(), 200)[1]
     assert row["mcnemar_p"] == pytest.approx(0.0034, abs=5e-5)

@@ -45,7 +45,7 @@ from trackfuse.config import did_you_mean
 from trackfuse.results import RUNNER_COLUMNS
 from trackfuse.rundata import RunData, succeeded_rows
 from trackfuse.stats import (
-    mcnemar_p,
+    PairedBinary,
     paired_t_p,
     proportion_difference_interval,
     t_interval,
@@ -148,13 +148,11 @@ def _paired_cells(base: pd.DataFrame, new: pd.DataFrame, keys: list[str],
     is_bin = g["metric"].isin(binary).to_numpy()
     t_low, t_high = t_interval(g["diff"], g["sd"], g["n"], level)
     t_p = paired_t_p(g["diff"], g["sd"], g["n"])
-    b_low, b_high = proportion_difference_interval(g["k1"], g["n"], g["k2"], g["n"], g["both"],
-                                                   level)
-    b_p = mcnemar_p(g["k1"] - g["both"], g["k2"] - g["both"])
+    b = PairedBinary.from_counts(g["n"], g["k1"], g["k2"], g["both"], level)
     g["n_base"] = g["n_new"] = g["n"]
-    g["ci_low"] = np.where(is_bin, b_low, t_low)
-    g["ci_high"] = np.where(is_bin, b_high, t_high)
-    g["p_value"] = np.where(is_bin, b_p, t_p)
+    g["ci_low"] = np.where(is_bin, b.low, t_low)
+    g["ci_high"] = np.where(is_bin, b.high, t_high)
+    g["p_value"] = np.where(is_bin, b.p, t_p)
     g["test"] = np.where(is_bin, "paired Newcombe / exact McNemar", "paired t")
     return g
 

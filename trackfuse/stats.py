@@ -16,12 +16,13 @@ numbers, tested).
 
 Array arguments (``ArrayLike``: numbers, lists, arrays) broadcast against each other to one
 shape ``S``, and each returned array has that shape, except where a function gives its own
-shapes (:func:`holm_adjusted`, the bootstrap intervals).
+shapes (:func:`holm_adjusted`, :func:`paired_binary`, the bootstrap intervals).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -190,6 +191,52 @@ def mcnemar_p(b: ArrayLike, c: ArrayLike) -> np.ndarray:
     with np.errstate(invalid="ignore"):
         p = 2 * bdtr(np.minimum(b, c), (b + c).astype(np.int64), 0.5)
     return np.where(b + c > 0, np.minimum(p, 1.0), 1.0)
+
+
+@dataclass(frozen=True)
+class PairedBinary:
+    """Two 0/1 outcomes ``x`` and ``y`` of the same trials compared (every field of shape
+    ``S``): ``n`` trials, ``k_x`` and ``k_y`` ones, ``both`` ones in both, the discordant
+    trials ``x_only`` (1 in ``x`` only) and ``y_only``, the rates ``rate_x`` and ``rate_y``,
+    ``diff = rate_y - rate_x`` with Newcombe's paired interval ``(low, high)`` and the exact
+    McNemar ``p`` (:func:`proportion_difference_interval`, :func:`mcnemar_p`)."""
+
+    n: np.ndarray
+    k_x: np.ndarray
+    k_y: np.ndarray
+    both: np.ndarray
+    x_only: np.ndarray
+    y_only: np.ndarray
+    rate_x: np.ndarray
+    rate_y: np.ndarray
+    diff: np.ndarray
+    low: np.ndarray
+    high: np.ndarray
+    p: np.ndarray
+
+    @classmethod
+    def from_counts(cls, n: ArrayLike, k_x: ArrayLike, k_y: ArrayLike, both: ArrayLike,
+                    level: float = 0.95) -> PairedBinary:
+        """The comparison from its counts (broadcast to ``S``); rates and ``diff`` NaN and
+        ``p`` 1 where ``n`` is 0."""
+        n, k_x, k_y, both = (np.asarray(v, dtype=float) for v in (n, k_x, k_y, both))
+        x_only, y_only = k_x - both, k_y - both
+        with np.errstate(invalid="ignore", divide="ignore"):
+            rate_x, rate_y = k_x / n, k_y / n
+        low, high = proportion_difference_interval(k_x, n, k_y, n, both, level)
+        return cls(n, k_x, k_y, both, x_only, y_only, rate_x, rate_y, rate_y - rate_x, low,
+                   high, mcnemar_p(x_only, y_only))
+
+
+def paired_binary(x: ArrayLike, y: ArrayLike, level: float = 0.95) -> PairedBinary:
+    """:class:`PairedBinary` of ``y`` against ``x``: 0/1 arrays of shape ``(trials, *S)``
+    (broadcast against each other), NaN where a trial has no row; each comparison counts the
+    trials where both have one. Every field has shape ``S``."""
+    x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+    ok = ~(np.isnan(x) | np.isnan(y))
+    x, y = np.where(ok, x, 0.0), np.where(ok, y, 0.0)
+    return PairedBinary.from_counts(ok.sum(axis=0), x.sum(axis=0), y.sum(axis=0),
+                                    (x * y).sum(axis=0), level)
 
 
 def binomial_above_p(k: ArrayLike, n: ArrayLike, p0: ArrayLike) -> np.ndarray:

@@ -96,10 +96,10 @@ from trackfuse.reports import (
 )
 from trackfuse.rundata import RunData, swept_keys
 from trackfuse.stats import (
+    PairedBinary,
     holm_adjusted,
-    mcnemar_p,
+    paired_binary,
     paired_t_p,
-    proportion_difference_interval,
     t_interval,
     wilson_interval,
 )
@@ -164,12 +164,7 @@ def ablation(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
         for name in order:
             x = g[name].to_numpy()
             lo, hi = wilson_interval(x.sum(), len(x))
-            only_v = int(((x == 1) & (ref == 0)).sum())
-            only_i = int(((x == 0) & (ref == 1)).sum())
-            p = float(mcnemar_p(only_v, only_i))
-            both = int(((x == 1) & (ref == 1)).sum())
-            gain_lo, gain_hi = proportion_difference_interval(ref.sum(), len(ref), x.sum(),
-                                                              len(x), both)
+            gain = paired_binary(ref, x)
             v = ALGORITHMS[name]
             member = params["membership_norm"] if v.membership == "param" else v.membership
             out.append({
@@ -179,10 +174,11 @@ def ablation(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
                 "weights": "-" if v.membership.startswith("chi2") else
                 ("dynamic" if v.dynamic else "static"),
                 "correct_rate": x.mean(), "correct_rate_ci_low": float(lo),
-                "correct_rate_ci_high": float(hi), "gain_vs_improved": x.mean() - ref.mean(),
-                "gain_vs_improved_ci_low": float(gain_lo),
-                "gain_vs_improved_ci_high": float(gain_hi),
-                "n_variant_only": only_v, "n_improved_only": only_i, "mcnemar_p": float(p),
+                "correct_rate_ci_high": float(hi), "gain_vs_improved": float(gain.diff),
+                "gain_vs_improved_ci_low": float(gain.low),
+                "gain_vs_improved_ci_high": float(gain.high),
+                "n_variant_only": int(gain.y_only), "n_improved_only": int(gain.x_only),
+                "mcnemar_p": float(gain.p),
             })
     table = pd.DataFrame(out)
     own = table["algorithm"] == "improved"
@@ -333,14 +329,6 @@ def _ahp_rows() -> list[dict[str, Any]]:
     return out
 
 
-def _paired(a: np.ndarray, b: np.ndarray) -> tuple[float, float, float]:
-    """``mean(b) - mean(a)`` of two 0/1 arrays of the same trials, with Newcombe's paired
-    95 % interval."""
-    n = len(a)
-    lo, hi = proportion_difference_interval(a.sum(), n, b.sum(), n, both=np.sum(a * b))
-    return float(b.mean() - a.mean()), float(lo), float(hi)
-
-
 def _correct_by_point(trials: pd.DataFrame, name: str) -> pd.DataFrame:
     """``correct`` of ``name`` as a (trial x point) frame: trials share their common random
     numbers across points, so columns are paired."""
@@ -364,21 +352,17 @@ def _fmt_x(x: str, value: float) -> str:
     return f"{100 * value:g} %" if x == "radar.sigma_range_coef" else f"{value:g} m"
 
 
-def _discordant(a: np.ndarray, b: np.ndarray) -> tuple[int, int]:
-    """Trials where only ``b`` is 1 and where only ``a`` is 1 (two 0/1 arrays, same trials)."""
-    return int(np.sum((b == 1) & (a == 0))), int(np.sum((a == 1) & (b == 0)))
-
-
 def _gap_rows(item: str, anchor: str, x: str, setting: str, imp: pd.DataFrame,
               trad: pd.DataFrame, xs: list[tuple[float, int]]) -> list[dict[str, Any]]:
     """Claims on the gap improved - traditional along ``x``: clearly higher at the first
     value and narrowing (Fig. 3 only, :func:`_narrowing_row`), higher at every value
     (:func:`_always_higher_row`)."""
-    gaps = [(xv, *_paired(trad[p].to_numpy(), imp[p].to_numpy())) for xv, p in xs]
+    gaps = [(xv, paired_binary(trad[p].to_numpy(), imp[p].to_numpy())) for xv, p in xs]
     n, where = len(imp), f" ({setting})" if setting else ""
     out = []
     if x == "target.separation":
-        x0, d0, lo0, hi0 = gaps[0]
+        x0, gap = gaps[0]
+        d0, lo0, hi0 = float(gap.diff), float(gap.low), float(gap.high)
         word = claim_verdict(lo0 > 0, hi0 < 0)
         paper_gap = (ESM_RADAR.result("improved: correct rate").value
                      - ESM_RADAR.result("traditional: correct rate").value)
@@ -391,7 +375,7 @@ def _gap_rows(item: str, anchor: str, x: str, setting: str, imp: pd.DataFrame,
                            f"higher, and excludes a gap above {hi0:+.3f} (the paper's Table "
                            f"3 gap at 200 m is {paper_gap:+.3f})"}[word], f"{DOCS}#{anchor}"))
         out.append(_narrowing_row(item, anchor, x, where, imp, trad, xs))
-    out.append(_always_higher_row(item, anchor, x, where, imp, trad, xs, gaps))
+    out.append(_always_higher_row(item, anchor, x, where, n, gaps))
     return out
 
 
@@ -441,36 +425,36 @@ def _narrowing_row(item: str, anchor: str, x: str, where: str, imp: pd.DataFrame
                         f"{DOCS}#{anchor}")
 
 
-def _always_higher_row(item: str, anchor: str, x: str, where: str, imp: pd.DataFrame,
-                       trad: pd.DataFrame, xs: list[tuple[float, int]],
-                       gaps: list[tuple[float, float, float, float]]) -> dict[str, Any]:
+def _always_higher_row(item: str, anchor: str, x: str, where: str, n: int,
+                       gaps: list[tuple[float, PairedBinary]]) -> dict[str, Any]:
     """"Always higher" (abstract, over separation) / "higher throughout" (Fig. 4):
     ``agrees`` when the paired interval lies above 0 at every value (each must be shown, so
     no adjustment is needed); ``differs`` when improved is shown *lower* somewhere (exact
-    McNemar, Holm over the values); else ``inconclusive``. ``reproduced`` is the smallest
-    gap, for display."""
-    not_shown = [g for g in gaps if not g[2] > 0]
-    counts = [_discordant(trad[p].to_numpy(), imp[p].to_numpy()) for _, p in xs]
-    holm = holm_adjusted([mcnemar_p(up, down) for up, down in counts])
-    lower = [xv for (xv, _), (up, down), q in zip(xs, counts, holm, strict=True)
-             if down > up and q < ALPHA]
+    McNemar, Holm over the values); else ``inconclusive``. ``gaps``: ``(x value,
+    improved against traditional)`` per value; ``reproduced`` is the smallest gap, for
+    display."""
+    not_shown = [(xv, g) for xv, g in gaps if not g.low > 0]
+    holm = holm_adjusted([g.p for _, g in gaps])
+    lower = [xv for (xv, g), q in zip(gaps, holm, strict=True)
+             if g.x_only > g.y_only and q < ALPHA]
     word = claim_verdict(not not_shown, bool(lower))
-    tied = {xv for (xv, _), c in zip(xs, counts, strict=True) if c == (0, 0)}
-    listed = ", ".join(_fmt_x(x, g[0]) + (" (the same outcome in every trial)"
-                                          if g[0] in tied else f" ({g[1]:+.3f} "
-                                          f"[{g[2]:+.3f}, {g[3]:+.3f}])") for g in not_shown)
+    listed = ", ".join(_fmt_x(x, xv) + (" (the same outcome in every trial)"
+                                        if g.x_only == g.y_only == 0 else f" ({g.diff:+.3f} "
+                                        f"[{g.low:+.3f}, {g.high:+.3f}])")
+                       for xv, g in not_shown)
     reason = ("paired interval above 0 at every value" if word == AGREES else
               "shown lower at " + ", ".join(_fmt_x(x, v) for v in lower) + " (exact McNemar, "
-              f"Holm over the {len(xs)} values)" if word == DIFFERS else
+              f"Holm over the {len(gaps)} values)" if word == DIFFERS else
               f"not shown higher at {listed}; shown lower nowhere (exact McNemar, Holm over "
-              f"the {len(xs)} values)")
-    xm, dm, lom, him = min(gaps, key=lambda g: g[1])
+              f"the {len(gaps)} values)")
+    xm, gm = min(gaps, key=lambda xg: xg[1].diff)
     claim = ("always higher as separation varies" if x == "target.separation"
              else "higher throughout")
     return headline_row("Abstract" if x == "target.separation" else item,
                         f"smallest improved - traditional over the {len(gaps)} values, at "
-                        f"{_fmt_x(x, xm)}{where}", "improved", claim, dm, lom, him, "fraction",
-                        len(imp), word, reason, f"{DOCS}#{anchor}")
+                        f"{_fmt_x(x, xm)}{where}", "improved", claim, float(gm.diff),
+                        float(gm.low), float(gm.high), "fraction", n, word, reason,
+                        f"{DOCS}#{anchor}")
 
 
 def _trend_rows(item: str, anchor: str, x: str, setting: str, rates: dict[str, pd.DataFrame],
@@ -481,7 +465,8 @@ def _trend_rows(item: str, anchor: str, x: str, setting: str, rates: dict[str, p
     hard, easy = (xs[0], xs[-1]) if x == "target.separation" else (xs[-1], xs[0])
     out = []
     for name, r in rates.items():
-        d, lo, hi = _paired(r[easy[1]].to_numpy(), r[hard[1]].to_numpy())
+        change = paired_binary(r[easy[1]].to_numpy(), r[hard[1]].to_numpy())
+        d, lo, hi = float(change.diff), float(change.low), float(change.high)
         word = claim_verdict(hi < 0, lo > 0)
         out.append(headline_row(item, f"rate at {_fmt_x(x, hard[0])} minus at "
                                 f"{_fmt_x(x, easy[0])}" + (f" ({setting})" if setting else ""),

@@ -78,7 +78,7 @@ from trackfuse.reports import (
 from trackfuse.rundata import RunData, succeeded_rows, swept_keys
 from trackfuse.stats import (
     bootstrap_t_mean_intervals,
-    proportion_difference_interval,
+    paired_binary,
     t_interval,
     wilson_interval,
 )
@@ -609,8 +609,8 @@ def _versus_exact(runs: pd.DataFrame, exact: pd.DataFrame, metric: str) -> dict[
     n = len(both)
     row = _interval_columns(runs)
     if metric == "correct":
-        lo, hi = proportion_difference_interval(v.sum(), n, x.sum(), n,
-                                                both=np.sum((v == 1) & (x == 1)))
+        gap = paired_binary(v, x)
+        lo, hi = gap.low, gap.high
     else:
         d = x - v
         lo, hi = t_interval(d.mean(), d.std(ddof=1) if n > 1 else np.nan, n)

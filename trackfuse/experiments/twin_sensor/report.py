@@ -101,9 +101,8 @@ from trackfuse.rundata import RunData, succeeded_rows, swept_keys
 from trackfuse.stats import (
     binomial_above_p,
     holm_adjusted,
-    mcnemar_p,
     nees_band,
-    proportion_difference_interval,
+    paired_binary,
     rmse_intervals,
     t_interval,
     wilson_interval,
@@ -1200,33 +1199,20 @@ def paired_loss_table(run: RunData) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
-def _paired_counts(a: str, b: str, pair: pd.DataFrame) -> dict[str, Any]:
-    """The paired comparison of 0/1 columns ``a`` and ``b`` of ``pair`` (one row a trial)."""
-    return _pairs_counts([a, b], pair[[a, b]].to_numpy(float))[0]
-
-
 def _pairs_counts(algorithms: Sequence[str], flags: np.ndarray) -> list[dict[str, Any]]:
-    """:func:`_paired_counts` of every pair of ``algorithms`` in order, at once: ``flags``
+    """The paired comparison (:func:`~trackfuse.stats.paired_binary`) of every pair ``(a,
+    b)`` of ``algorithms`` in order, as rows of :func:`paired_loss_table`: ``flags``
     ``(trials, len(algorithms))`` 0/1, NaN where an algorithm has no row (a pair uses the
     trials both have)."""
     i, j = np.triu_indices(len(algorithms), 1)
-    x, y = flags[:, i], flags[:, j]
-    ok = ~(np.isnan(x) | np.isnan(y))
-    x, y = np.where(ok, x, 0.0), np.where(ok, y, 0.0)
-    n = ok.sum(axis=0)
-    a_only, b_only = ((x == 1) & (y == 0)).sum(axis=0), ((x == 0) & (y == 1)).sum(axis=0)
-    sx, sy = x.sum(axis=0), y.sum(axis=0)
-    lo, hi = proportion_difference_interval(sx, n, sy, n, both=(x * y).sum(axis=0))
-    p = mcnemar_p(a_only, b_only)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mx, my = sx / n, sy / n
+    c = paired_binary(flags[:, i], flags[:, j])
     return [{"algorithm_a": algorithms[i[k]], "algorithm_b": algorithms[j[k]],
-             "trials": int(n[k]), "lost_a_pct": 100 * mx[k], "lost_b_pct": 100 * my[k],
-             "b_minus_a_pct": 100 * (my[k] - mx[k]),
-             "b_minus_a_pct_ci_low": 100 * float(lo[k]),
-             "b_minus_a_pct_ci_high": 100 * float(hi[k]),
-             "n_a_only": int(a_only[k]), "n_b_only": int(b_only[k]),
-             "mcnemar_p": float(p[k])} for k in range(len(i))]
+             "trials": int(c.n[k]), "lost_a_pct": 100 * c.rate_x[k],
+             "lost_b_pct": 100 * c.rate_y[k], "b_minus_a_pct": 100 * c.diff[k],
+             "b_minus_a_pct_ci_low": 100 * float(c.low[k]),
+             "b_minus_a_pct_ci_high": 100 * float(c.high[k]),
+             "n_a_only": int(c.x_only[k]), "n_b_only": int(c.y_only[k]),
+             "mcnemar_p": float(c.p[k])} for k in range(len(i))]
 
 
 def _rmse_km(squared_errors: SeriesGroupBy) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
