@@ -166,6 +166,8 @@ def _clip(values: ArrayLike, metric: str) -> np.ndarray:
 # Shared drawing helpers
 
 
+#: Width (in) of a two-column page: a figure this wide prints its text at its own size.
+PAGE_WIDTH = 7.16
 #: Panel width (in) of the convergence figures: three make a figure 7.8 in wide, whose
 #: 9-pt tick labels print at 8 pt on a 7-in page width.
 PANEL_WIDTH = 2.6
@@ -412,7 +414,8 @@ def _noise_figure(summary: pd.DataFrame, config: dict) -> Figure | str:
         return "noise.sigma is not swept"
     groups = [k for k in _grouping_keys(config) if k != "noise.sigma" and k in summary]
     parts = list(summary.groupby(groups, sort=True)) if groups else [((), summary)]
-    fig, axes = new_figure(ncols=len(parts), nrows=2, width=3.6, height=3.0)
+    fig, axes = new_figure(ncols=len(parts), nrows=2, width=min(3.6, PAGE_WIDTH / len(parts)),
+                           height=2.6)
     axes = np.asarray(axes).reshape(2, len(parts))
     rows = (("accuracy", "accuracy (fraction)"), ("correct", "whole solution right (rate)"))
     for col, (key, part) in enumerate(parts):
@@ -425,7 +428,8 @@ def _noise_figure(summary: pd.DataFrame, config: dict) -> Figure | str:
                 _curve(ax, sel["noise.sigma"], sel, algorithm, metric, label=label)
             for x in (0.005, np.sqrt(0.005)):
                 ax.axvline(x, color="grey", lw=0.8, ls=":")
-            _count_axis(ax, part["noise.sigma"], "angle noise sd sigma", "rad")
+            _count_axis(ax, part["noise.sigma"], "noise sd sigma", "rad")
+            ax.tick_params(axis="x", labelsize=8, labelrotation=90)
         axes[0, col].set_title(_point_label(values, config, noise=False), fontsize=7)
     for (_, ylabel), ax in zip(rows, axes[:, 0], strict=True):
         ax.set_ylabel(ylabel)
@@ -434,19 +438,18 @@ def _noise_figure(summary: pd.DataFrame, config: dict) -> Figure | str:
     for ax in axes.ravel():
         ax.set_ylim(*FRACTION_LIMITS)
     legend_below(fig, *legend_entries(axes.ravel()), column_width=LEGEND_COLUMN)
-    fig.suptitle("Paper 002 setting, no paper figure: accuracy vs angle noise (the exact "
-                 "optimum: the objective's ceiling)\n"
-                 f"{config.get('trials', '')} runs per point, 95 % bands; dotted: "
-                 "sigma = 0.005 and sqrt(0.005) rad, the two readings of the paper")
+    fig.suptitle("Paper 002 setting, no paper figure: accuracy vs angle noise\n(the exact "
+                 f"optimum: the objective's ceiling); {config.get('trials', '')} runs per "
+                 "point, 95 % bands\ndotted: sigma = 0.005 and sqrt(0.005) rad, the two "
+                 "readings of the paper", fontsize=9)
     return fig
 
 
 # ---------------------------------------------------------------------------------------
 # scale: solve time, objective gap and accuracy against the number of targets
 
-#: Width and height (in) of the scale figure: one page width, so that its text prints at
-#: its own size.
-SCALE_WIDTH, SCALE_HEIGHT = 7.16, 4.4
+#: Height (in) of the scale figure, one page (:data:`PAGE_WIDTH`) wide.
+SCALE_HEIGHT = 4.4
 
 
 
@@ -667,13 +670,13 @@ def _scale_figure(run: RunData) -> Figure | str:
     axis = NAxis(tuple(sorted(float(n) for n in swept)), p.get("scene.mode", "paper") == "paper")
     names = ["exact", *_pga_names(summary)]
     ops = {name: _final_ops(summary, name) for name in names[1:]}
-    fig, axes = new_figure(ncols=3, width=SCALE_WIDTH / 3, height=SCALE_HEIGHT)
+    fig, axes = new_figure(ncols=3, width=PAGE_WIDTH / 3, height=SCALE_HEIGHT)
     _time_panel(axes[0], axis, _median_times(run), names)
     gaps = _gap_panel(axes[1], axis, checkpoint_metrics(run.trials, config), names[1:], ops)
     _accuracy_panel(axes[2], axis, summary, names, ops)
     for ax in axes:
         axis.draw(ax)
-    legend_below(fig, *legend_entries(axes), column_width=SCALE_WIDTH / 2)
+    legend_below(fig, *legend_entries(axes), column_width=PAGE_WIDTH / 2)
     scenes = (f"paper scenes M1-M{'/M'.join(f'{n:g}' for n in axis.swept)} (not joined)"
               if axis.scenes else "random scenes")
     budget = f"; PGA after {ops[names[1]]} operations" if len(names) > 1 else ""
