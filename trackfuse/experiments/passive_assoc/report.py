@@ -449,7 +449,7 @@ def _noise_figure(summary: pd.DataFrame, config: dict) -> Figure | str:
 # scale: solve time, objective gap and accuracy against the number of targets
 
 #: Height (in) of the scale figure, one page (:data:`PAGE_WIDTH`) wide.
-SCALE_HEIGHT = 4.4
+SCALE_HEIGHT = 4.8
 
 
 
@@ -677,15 +677,15 @@ def _scale_figure(run: RunData) -> Figure | str:
     for ax in axes:
         axis.draw(ax)
     legend_below(fig, *legend_entries(axes), column_width=PAGE_WIDTH / 2)
-    scenes = (f"paper scenes M1-M{'/M'.join(f'{n:g}' for n in axis.swept)} (not joined)"
+    scenes = (f"paper scenes M1-M{'/M'.join(f'{n:g}' for n in axis.swept)} (unjoined)"
               if axis.scenes else "random scenes")
     budget = f"; PGA after {ops[names[1]]} operations" if len(names) > 1 else ""
-    lines = ["Paper 002 model, no paper figure: cost and accuracy vs number of targets",
-             f"{scenes}, sigma = {p.get('noise.sigma', 0.005)} rad, {config.get('trials', '')} "
-             f"runs per point{budget}",
-             "95 % intervals. Time: median wall time per scan, order-statistic interval; one "
-             f"run, {_machine(run.manifest)}", *_gap_notes(gaps)]
-    fig.suptitle("\n".join(lines), fontsize=8)
+    fig.suptitle("Paper 002 model, no paper figure: cost and accuracy vs number of targets\n"
+                 f"{scenes}, sigma = {p.get('noise.sigma', 0.005)} rad, "
+                 f"{config.get('trials', '')} runs per point{budget}", fontsize=9)
+    notes = [f"95 % intervals. Time: median wall time per scan, order-statistic interval; one run, "
+             f"{_machine(run.manifest)}", *_gap_notes(gaps)]
+    fig.legends[-1].set_title("\n".join(notes), prop={"size": 8})  # said above the entries
     return fig
 
 
