@@ -7,14 +7,21 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from figure_checks import alike_legend_entries, inside_canvas, text_overlaps
+from figure_checks import (
+    alike_legend_entries,
+    inside_canvas,
+    smallest_printed_text,
+    text_overlaps,
+)
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.colors import to_hex
 from matplotlib.text import Text
 
 from trackfuse import harness
 from trackfuse.config import load
 from trackfuse.experiments.passive_assoc import EXPERIMENT, report
 from trackfuse.plots.algorithms import look
+from trackfuse.plots.style import context
 from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS
 from trackfuse.rundata import RunData
 from trackfuse.stats import bootstrap_t_mean_intervals
@@ -176,14 +183,102 @@ def test_title_marks_the_panels_at_fig2_setting_when_only_some_are(tmp_path):
         assert [t.endswith(report.FIG2_MARK) for t in titles] == [True, False], titles
 
 
-def test_scale_axis_is_linear_for_few_targets(tmp_path):
-    run = harness.run_data(tmp_path, "passive_assoc", {"pga.ops": 50,
+def test_scale_axis_is_linear_for_few_random_targets(tmp_path):
+    run = harness.run_data(tmp_path, "passive_assoc", {"pga.ops": 50, "scene.mode": "random",
                            "pga.checkpoints": [50], "algorithms": ["exact", "pga_paper"]},
                            {"targets.n": [5, 7, 10]}, trials=2, seed=1)
     fig = report.figures(run, ["scale"])["scale"]
     for ax in fig.axes:
         assert ax.get_xscale() == "linear"
         np.testing.assert_array_equal(ax.get_xticks(), [5, 7, 10])
+    # N is a real axis here: the paper's PGA is one curve through the three N
+    joined = [line for line in fig.axes[2].get_lines()
+              if line.get_label() == look("pga_paper").label]
+    assert len(joined) == 1 and joined[0].get_linestyle() == "-"
+    np.testing.assert_array_equal(joined[0].get_xdata(), [5, 7, 10])
+
+
+@pytest.fixture(scope="module")
+def scene_run(tmp_path_factory) -> RunData:
+    """The paper's scenes M1-M5, M1-M7, M1-M10 with a thin variant (pga_repair)."""
+    return harness.run_data(tmp_path_factory.mktemp("scenes"), "passive_assoc",
+                            {"pga.ops": 50, "pga.checkpoints": [50],
+                             "algorithms": ["exact", "pga_paper", "pga_repair"]},
+                            {"targets.n": [5, 7, 10]}, trials=3, seed=1)
+
+
+def test_paper_scenes_are_categories_whose_points_are_not_joined(scene_run):
+    """5, 7 and 10 targets are different fixed scenes of the paper: one tick per scene
+    labelled with its N, and no line runs from one scene to the next (the exact optimum's
+    dashed level stays inside its scene's slot)."""
+    fig = drawn(report.figures(scene_run, ["scale"])["scale"])
+    for ax in fig.axes:
+        assert list(ax.get_xticks()) == [0, 1, 2]
+        assert [t.get_text() for t in ax.get_xticklabels()] == ["5", "7", "10"]
+        for line in ax.get_lines():
+            if line.get_linestyle() not in ("None", "none", "") and len(line.get_xdata()) > 1:
+                assert np.ptp(line.get_xdata()) < 1, (ax.get_ylabel(), line.get_label())
+
+
+def test_every_drawn_gap_has_its_interval_and_an_open_one_an_arrow(scene_run, monkeypatch):
+    """Every PGA variant in the gap panel, the thin pga_repair too, gets interval bars; an
+    infinite upper end is drawn as an arrow to the panel's top, and the notes above the
+    legend say what the arrow means and why the bound is infinite."""
+    metrics = report.checkpoint_metrics
+
+    def one_open(trials, config):
+        table = metrics(trials, config).assign(gap_ci_low=0.0)
+        table["gap_ci_high"] = table["gap"] + 1.0  # 3 runs leave most upper ends open
+        at = (table["algorithm"] == "pga_repair") & (table["targets.n"] == 7)
+        table.loc[at, ["gap", "gap_ci_low", "gap_ci_high", "at_opt"]] = [0.2, 0.0, np.inf, 2 / 3]
+        return table
+
+    monkeypatch.setattr(report, "checkpoint_metrics", one_open)
+    fig = drawn(report.figures(scene_run, ["scale"])["scale"])
+    gap = fig.axes[1]
+    arrows = [t for t in gap.texts if t.get_gid() == report.OPEN_ARROW]
+    assert len(arrows) == 1
+    assert arrows[0].xy[1] == 1.0 and arrows[0].xycoords == ("data", "axes fraction")
+    assert arrows[0].xyann[0] == pytest.approx(1 + report.SCENE_SPREAD)  # pga_repair at N = 7
+    bar_colours = {to_hex(c.get_color()[0]) for c in gap.collections}
+    assert {to_hex(look(n).colour) for n in ("pga_paper", "pga_repair")} <= bar_colours
+    notes = fig.legends[-1].get_title().get_text()
+    assert "arrow to the top: no upper end" in notes and "only 1 of 3 runs missed J*" in notes
+
+
+def test_median_interval_takes_order_statistics():
+    """n = 50: the 18th and 33rd of the sorted values (coverage 0.967 >= 0.95); 6 values:
+    min and max; 5 values: no 95 % interval of the median."""
+    assert report.median_interval(np.arange(50.0, 0, -1)) == (25.5, 18.0, 33.0)
+    assert report.median_interval([3.0, 1, 2, 6, 5, 4]) == (3.5, 1.0, 6.0)
+    median, low, high = report.median_interval([1.0, 2, 3, 4, 5])
+    assert median == 3.0 and np.isnan(low) and np.isnan(high)
+
+
+def test_scale_time_is_the_median_of_the_trials_wall_times_on_the_named_cpu(tmp_path):
+    """The solve-time curve is the median of timings.csv's per-trial times (a few slow
+    runs on a shared machine pull the mean up), and the notes name the run's CPU."""
+    run = _scale_run(tmp_path)
+    fig = report.figures(run, ["scale"])["scale"]
+    times = pd.read_csv(run.path / "timings.csv")
+    exact = times[times["algorithm"] == "exact"].groupby("targets.n")["solve_time_s"].median()
+    line = next(x for x in fig.axes[0].get_lines() if x.get_label() == look("exact").label)
+    np.testing.assert_allclose(line.get_ydata(), 1e3 * exact.to_numpy())
+    assert "median" in fig.axes[0].get_ylabel()
+    notes = fig.legends[-1].get_title().get_text()
+    assert "median wall time" in notes and run.manifest["cpu"][0]["model"] in notes
+
+
+def test_every_figure_prints_legibly_one_page_wide(shipped_run):
+    """Printed 7.16 in wide (a two-column page), no text of any figure is under 6.5 pt and
+    none overlaps another."""
+    with context():
+        figs = report.figures(shipped_run, list(EXPERIMENT.figures))
+        for name, fig in figs.items():
+            if isinstance(fig, str):
+                continue
+            assert smallest_printed_text(fig)[0] >= 6.5, (name, smallest_printed_text(fig))
+            assert text_overlaps(fig) == [], name
 
 
 def test_headline_table_schema_verdicts_and_docs_links(shipped_run):
@@ -267,11 +362,9 @@ def test_scale_time_labels_stay_apart_on_a_range_under_one_decade(tmp_path):
     """Solve times between 0.03 and 0.2 ms (less than a decade): 0.08, 0.09 and 0.1 ms
     labelled at once would overlap; the labels stay apart and at least 2 remain."""
     run = _scale_run(tmp_path)
-    summary = run.summary.copy()
-    times = summary["metric"] == "solve_time_s"
-    mean = np.geomspace(0.03e-3, 0.19e-3, times.sum())
-    summary.loc[times, ["mean", "ci_low", "ci_high"]] = np.c_[mean, 0.9 * mean, 1.1 * mean]
-    run.__dict__["summary"] = summary
+    times = pd.read_csv(run.path / "timings.csv")
+    times["solve_time_s"] = np.geomspace(0.03e-3, 0.19e-3, len(times))
+    times.to_csv(run.path / "timings.csv", index=False)
     fig = drawn(report.figures(run, ["scale"])["scale"])
     assert text_overlaps(fig) == []
     low, high = fig.axes[0].get_ylim()

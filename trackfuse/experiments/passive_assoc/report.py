@@ -56,7 +56,9 @@ values written into panel titles; its values are read, never simulated.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Collection, Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -75,6 +77,7 @@ from trackfuse.reports import (
     claim_verdict,
     headline_row,
 )
+from trackfuse.results import TIMINGS
 from trackfuse.rundata import RunData, succeeded_rows, swept_keys
 from trackfuse.stats import (
     bootstrap_t_mean_intervals,
@@ -163,6 +166,8 @@ def _clip(values: ArrayLike, metric: str) -> np.ndarray:
 # Shared drawing helpers
 
 
+#: Width (in) of a two-column page: a figure this wide prints its text at its own size.
+PAGE_WIDTH = 7.16
 #: Panel width (in) of the convergence figures: three make a figure 7.8 in wide, whose
 #: 9-pt tick labels print at 8 pt on a 7-in page width.
 PANEL_WIDTH = 2.6
@@ -409,7 +414,8 @@ def _noise_figure(summary: pd.DataFrame, config: dict) -> Figure | str:
         return "noise.sigma is not swept"
     groups = [k for k in _grouping_keys(config) if k != "noise.sigma" and k in summary]
     parts = list(summary.groupby(groups, sort=True)) if groups else [((), summary)]
-    fig, axes = new_figure(ncols=len(parts), nrows=2, width=3.6, height=3.0)
+    fig, axes = new_figure(ncols=len(parts), nrows=2, width=min(3.6, PAGE_WIDTH / len(parts)),
+                           height=2.6)
     axes = np.asarray(axes).reshape(2, len(parts))
     rows = (("accuracy", "accuracy (fraction)"), ("correct", "whole solution right (rate)"))
     for col, (key, part) in enumerate(parts):
@@ -422,7 +428,8 @@ def _noise_figure(summary: pd.DataFrame, config: dict) -> Figure | str:
                 _curve(ax, sel["noise.sigma"], sel, algorithm, metric, label=label)
             for x in (0.005, np.sqrt(0.005)):
                 ax.axvline(x, color="grey", lw=0.8, ls=":")
-            _count_axis(ax, part["noise.sigma"], "angle noise sd sigma", "rad")
+            _count_axis(ax, part["noise.sigma"], "noise sd sigma", "rad")
+            ax.tick_params(axis="x", labelsize=8, labelrotation=90)
         axes[0, col].set_title(_point_label(values, config, noise=False), fontsize=7)
     for (_, ylabel), ax in zip(rows, axes[:, 0], strict=True):
         ax.set_ylabel(ylabel)
@@ -431,29 +438,227 @@ def _noise_figure(summary: pd.DataFrame, config: dict) -> Figure | str:
     for ax in axes.ravel():
         ax.set_ylim(*FRACTION_LIMITS)
     legend_below(fig, *legend_entries(axes.ravel()), column_width=LEGEND_COLUMN)
-    fig.suptitle("Paper 002 setting, no paper figure: accuracy vs angle noise (the exact "
-                 "optimum: the objective's ceiling)\n"
-                 f"{config.get('trials', '')} runs per point, 95 % bands; dotted: "
-                 "sigma = 0.005 and sqrt(0.005) rad, the two readings of the paper")
+    fig.suptitle("Paper 002 setting, no paper figure: accuracy vs angle noise\n(the exact "
+                 f"optimum: the objective's ceiling); {config.get('trials', '')} runs per "
+                 "point, 95 % bands\ndotted: sigma = 0.005 and sqrt(0.005) rad, the two "
+                 "readings of the paper", fontsize=9)
     return fig
 
 
 # ---------------------------------------------------------------------------------------
 # scale: solve time, objective gap and accuracy against the number of targets
 
+#: Height (in) of the scale figure, one page (:data:`PAGE_WIDTH`) wide.
+SCALE_HEIGHT = 4.8
 
-def _scale_figure(summary: pd.DataFrame, metrics: pd.DataFrame, config: dict) -> Figure | str:
+
+
+def median_interval(values: ArrayLike, level: float = 0.95) -> tuple[float, float, float]:
+    """``(median, low, high)`` of ``values``, with the distribution-free ``level`` interval of
+    the median from order statistics: ``[x_(j), x_(n+1-j)]`` (sorted, 1-based) for the
+    largest ``j`` whose coverage ``1 - 2 P(B < j)``, ``B ~ Binomial(n, 1/2)``, is at least
+    ``level`` (n = 50: the 18th and the 33rd value, coverage 0.967). Low and high are NaN
+    when even ``[min, max]`` covers less (fewer than 6 values at 95 %)."""
+    x = np.sort(np.asarray(values, dtype=float))
+    n, tail = len(x), (1 - level) / 2
+    total, below, j = 2 ** n, 0, 0
+    while j < n and (below + math.comb(n, j)) / total <= tail:  # P(B <= j) <= tail
+        below += math.comb(n, j)
+        j += 1
+    if j < 1:
+        return float(np.median(x)), np.nan, np.nan
+    return float(np.median(x)), float(x[j - 1]), float(x[n - j])
+
+
+def _median_times(run: RunData) -> pd.DataFrame:
+    """Median solve time (s) per N and algorithm at its last checkpoint, from the per-trial
+    wall times of ``timings.csv``, with its 95 % order-statistic interval
+    (:func:`median_interval`), in the columns ``mean`` (holding the median), ``ci_low`` and
+    ``ci_high`` that :func:`_series` draws; empty when the run wrote no times."""
+    columns = ["targets.n", "algorithm", "mean", "ci_low", "ci_high"]
+    if not (run.path / TIMINGS).exists():
+        return pd.DataFrame(columns=columns)
+    times = pd.read_csv(run.path / TIMINGS).dropna(subset=["solve_time_s"])
+    times = times[times["ops"] == times.groupby("algorithm")["ops"].transform("max")]
+    rows = [(n, name, *median_interval(g["solve_time_s"]))
+            for (n, name), g in times.groupby(["targets.n", "algorithm"])]
+    return pd.DataFrame(rows, columns=columns)
+
+
+#: Paper scenes as categories: the methods of one scene spread over +-SCENE_SPREAD (category
+#: units) so their interval bars stand side by side; the exact optimum's level spans
+#: +-SCENE_LEVEL.
+SCENE_SPREAD, SCENE_LEVEL = 0.24, 0.36
+#: Spread of the gap bars on a real N axis: a factor of up to 10 ** +-LOG_DODGE.
+LOG_DODGE = 0.035
+#: ``gid`` of the arrow that draws an interval with no upper end.
+OPEN_ARROW = "open upper end"
+
+
+@dataclass(frozen=True)
+class NAxis:
+    """The N axis of the scale figure: the swept target counts, drawn as categories when
+    they are the paper's fixed scenes (``scenes``: M1-M5, M1-M7 and M1-M10 are different
+    scenes, not points of one curve), else as a number axis."""
+
+    swept: tuple[float, ...]
+    scenes: bool
+
+    def x(self, values: ArrayLike) -> np.ndarray:
+        """Where each N of ``values`` is drawn: its category's index, or N itself."""
+        v = np.asarray(values, dtype=float)
+        return np.searchsorted(self.swept, v).astype(float) if self.scenes else v
+
+    def dodge(self, x: np.ndarray, slot: tuple[int, int]) -> np.ndarray:
+        """``x`` moved for the ``i``-th of ``k`` methods (``slot = (i, k)``), side by side."""
+        i, k = slot
+        offset = 0.0 if k < 2 else 2 * i / (k - 1) - 1
+        return x + SCENE_SPREAD * offset if self.scenes else x * 10 ** (LOG_DODGE * offset)
+
+    def draw(self, ax: Axes) -> None:
+        """The axis: a tick per scene labelled with its N, or :func:`_count_axis`."""
+        if not self.scenes:
+            _count_axis(ax, self.swept, "targets N", "count")
+            return
+        ax.set_xticks(range(len(self.swept)), [f"{n:g}" for n in self.swept])
+        ax.set_xlim(-0.5, len(self.swept) - 0.5)
+        ax.grid(False, axis="x")
+        ax.set_xlabel("paper scene (N targets)")
+
+
+def _scaled(rows: pd.DataFrame, metric: str, scale: float) -> pd.DataFrame:
+    """``mean``, ``ci_low``, ``ci_high`` of ``rows`` times ``scale``, the interval clipped
+    to [0, 1] for the rates (:func:`_clip`)."""
+    return pd.DataFrame({"mean": scale * rows["mean"].to_numpy(float),
+                         "ci_low": scale * _clip(rows["ci_low"], metric),
+                         "ci_high": scale * _clip(rows["ci_high"], metric)})
+
+
+def _interval_bars(ax: Axes, x: np.ndarray, rows: pd.DataFrame, name: str) -> None:
+    """``[ci_low, ci_high]`` of ``rows`` as error bars at ``x`` in ``name``'s colour; an
+    infinite upper end as an arrow from the lower end to the top of the panel (``gid``
+    :data:`OPEN_ARROW`); a NaN interval (too few runs) is not drawn."""
+    colour, width = look(name).colour, 0.6 * line_kwargs(name)["linewidth"]
+    mid, low, high = (rows[c].to_numpy(float) for c in ("mean", "ci_low", "ci_high"))
+    closed = np.isfinite(low) & np.isfinite(high)
+    ax.errorbar(x[closed], mid[closed], fmt="none", ecolor=colour, elinewidth=width, capsize=2,
+                yerr=np.maximum([mid[closed] - low[closed], high[closed] - mid[closed]], 0))
+    for xi, lo in zip(x[np.isfinite(low) & np.isposinf(high)],
+                      low[np.isfinite(low) & np.isposinf(high)], strict=True):
+        ax.annotate("", xy=(xi, 1.0), xycoords=("data", "axes fraction"), xytext=(xi, lo),
+                    textcoords="data", gid=OPEN_ARROW,
+                    arrowprops={"arrowstyle": "-|>", "color": colour, "linewidth": width,
+                                "shrinkA": 0, "shrinkB": 0, "mutation_scale": 9})
+
+
+def _exact_levels(ax: Axes, x: np.ndarray, rows: pd.DataFrame) -> None:
+    """The exact optimum on paper scenes: a dashed level across each scene's slot with its
+    95 % interval shaded light grey behind (:data:`EXACT_BAND`)."""
+    kw = line_kwargs("exact") | {"zorder": 4}
+    for i, (xi, mean, low, high) in enumerate(zip(x, rows["mean"], rows["ci_low"],
+                                                  rows["ci_high"], strict=True)):
+        span = [xi - SCENE_LEVEL, xi + SCENE_LEVEL]
+        ax.plot(span, [mean, mean], **(kw if i == 0 else kw | {"label": "_nolegend_"}))
+        if np.isfinite(low) and np.isfinite(high):
+            ax.fill_between(span, low, high, **EXACT_BAND)
+
+
+def _series(ax: Axes, axis: NAxis, rows: pd.DataFrame, name: str, metric: str,
+            slot: tuple[int, int], scale: float = 1.0) -> None:
+    """One method's ``metric`` against N (``rows`` sorted by N). Paper scenes: its points,
+    no joining line, side by side in ``slot`` (:meth:`NAxis.dodge`) with interval bars, the
+    exact optimum as levels. A real N axis: a curve (:func:`_curve`)."""
+    x = axis.x(rows["targets.n"])
+    if not axis.scenes:
+        _curve(ax, x, rows, name, metric, scale)
+        return
+    shown = _scaled(rows, metric, scale)
+    if name == "exact":
+        _exact_levels(ax, x, shown)
+        return
+    x = axis.dodge(x, slot)
+    ax.plot(x, shown["mean"], **(line_kwargs(name) | {"linestyle": "none"}))
+    _interval_bars(ax, x, shown, name)
+
+
+def _time_panel(ax: Axes, axis: NAxis, times: pd.DataFrame, names: list[str]) -> None:
+    """Median solve time per scan (ms, log axis) with its order-statistic interval."""
+    for i, name in enumerate(names):
+        rows = times[times["algorithm"] == name].sort_values("targets.n")
+        if len(rows):
+            _series(ax, axis, rows, name, "solve_time_s", (i - 1, len(names) - 1), 1e3)
+    _plain_log_axis(ax)
+    ax.set_ylabel("median solve time per scan\n(ms, log scale)")
+
+
+def _gap_panel(ax: Axes, axis: NAxis, metrics: pd.DataFrame, names: list[str],
+               ops: dict[str, int]) -> pd.DataFrame:
+    """Mean objective gap ``J* - J`` (nats, symlog) of each PGA variant at its last
+    checkpoint with every interval drawn (:func:`_interval_bars`: bars, arrows for an
+    unbounded upper end), a line joining N only on a real N axis. Returns the rows drawn."""
+    drawn = []
+    for i, name in enumerate(names):
+        rows = metrics[(metrics["algorithm"] == name) & (metrics["ops"] == ops[name])]
+        rows = rows.sort_values("targets.n").rename(
+            columns={"gap": "mean", "gap_ci_low": "ci_low", "gap_ci_high": "ci_high"})
+        x = axis.dodge(axis.x(rows["targets.n"]), (i, len(names)))
+        kw = line_kwargs(name)
+        if axis.scenes:
+            kw["linestyle"] = "none"
+        ax.plot(x, rows["mean"], **kw)
+        _interval_bars(ax, x, rows, name)
+        drawn.append(rows)
+    ax.set_yscale("symlog", linthresh=1.0)
+    ax.set_ylabel("mean objective gap J* - J\n(nats, symlog: linear below 1)")
+    return pd.concat(drawn) if drawn else pd.DataFrame(columns=["n", "at_opt", "ci_low",
+                                                                 "ci_high"])
+
+
+def _accuracy_panel(ax: Axes, axis: NAxis, summary: pd.DataFrame, names: list[str],
+                    ops: dict[str, int]) -> None:
+    """Mean measurement-level accuracy, the exact optimum included (95 % Student-t)."""
+    for i, name in enumerate(names):
+        rows = _by_x(summary, "targets.n", name, "accuracy", ops.get(name))
+        _series(ax, axis, rows, name, "accuracy", (i - 1, len(names) - 1))
+    ax.set_ylabel("mean accuracy (fraction)")
+
+
+def _machine(manifest: dict) -> str:
+    """The run's workers and CPU as its manifest records them, e.g. "2 workers, AMD EPYC"."""
+    cpus = sorted({str(c.get("model", "?")) for c in manifest.get("cpu", [])})
+    return f"{manifest.get('workers', '?')} workers, {' / '.join(cpus) or 'CPU not recorded'}"
+
+
+def _gap_notes(gaps: pd.DataFrame) -> list[str]:
+    """Caption lines on the gap intervals (``gaps``: rows of :func:`checkpoint_metrics`
+    drawn): how they are made, and what an arrow (no upper end: how many runs missed
+    ``J*`` there) and a missing bar (every run at ``J*``) mean, each only when drawn."""
+    notes = ["Gap: mean with its bootstrap-t interval, lower end clipped at 0"]
+    open_ = gaps[np.isposinf(gaps["ci_high"].to_numpy(float))]
+    if len(open_):
+        missed = np.rint(open_["n"] * (1 - open_["at_opt"])).astype(int)
+        runs = "-".join(dict.fromkeys(f"{m}" for m in (missed.min(), missed.max())))
+        notes[0] += "; arrow to the top: no upper end."
+        notes.append(f"At an arrow only {runs} of {open_['n'].max()} runs missed J*: many "
+                     "resamples hold none of them, have no spread and make the bound infinite.")
+    if ((gaps["ci_low"] == 0) & (gaps["ci_high"] == 0)).any():
+        notes.append("No bar: every run reached J* (gap 0, no spread).")
+    return notes
+
+
+def _scale_figure(run: RunData) -> Figure | str:
     """Three panels against the number of targets N, PGA at its final checkpoint.
 
-    Solve time per scan (ms, log axis; from the timing summary, 95 % t bands for the exact
-    optimum too, running to the panel's bottom where the lower end is <= 0), objective gap
-    ``J* - J`` (nats, symlog axis; PGA variants only; 95 % bootstrap-t band from
-    ``metrics``, see :func:`checkpoint_metrics`, left open where its upper end is infinite)
-    and measurement-level accuracy (fraction), the exact optimum included (its band light
-    grey, behind the others). The N axis is linear with a tick per value unless N spans
-    >= 10x over >= 4 values. A reason string instead when another key is swept too (its
-    points would give several values per N).
+    Median solve time per scan (ms, log axis; per-trial wall times from ``timings.csv``,
+    95 % order-statistic interval, :func:`median_interval`), mean objective gap ``J* - J``
+    (nats, symlog axis; PGA variants only; every interval drawn as a bar, an unbounded
+    upper end as an arrow, :func:`_gap_panel`) and mean accuracy (fraction), the exact
+    optimum included. The paper's scenes (M1-M5, M1-M7, M1-M10) are categories, their
+    points not joined; random scenes a real N axis (linear with a tick per value unless N
+    spans >= 10x over >= 4 values) with curves and bands. A reason string instead when
+    another key is swept too (its points would give several values per N).
     """
+    summary, config = run.summary, run.config
     swept = config.get("sweep", {}).get("targets.n", [])
     if len(swept) < 2:
         return "targets.n is not swept over at least 2 values"
@@ -461,38 +666,26 @@ def _scale_figure(summary: pd.DataFrame, metrics: pd.DataFrame, config: dict) ->
     if others:  # several points per N: their curves would zigzag through every setting
         return (f"targets.n is swept together with {', '.join(others)} (one curve per N "
                 "only when nothing else is swept)")
-    names = ["exact", *_pga_names(summary)]
-    fig, axes = new_figure(ncols=3, width=3.6, height=3.6)
-    times = summary[summary["metric"] == "solve_time_s"]
-    for name in names:
-        t = times[times["algorithm"] == name]
-        t = t[t["ops"] == t["ops"].max()].sort_values("targets.n")
-        if len(t):
-            _curve(axes[0], t["targets.n"], t.assign(ci_low=np.maximum(t["ci_low"], 0)),
-                   name, "solve_time_s", scale=1e3)
-    _plain_log_axis(axes[0])
-    axes[0].set_ylabel("solve time per scan (ms, log scale)")
-    for name in names[1:]:
-        s = metrics[(metrics["algorithm"] == name) & (metrics["ops"] == _final_ops(summary, name))]
-        s = s.sort_values("targets.n").rename(columns={"gap": "mean", "gap_ci_low": "ci_low",
-                                                      "gap_ci_high": "ci_high"})
-        _curve(axes[1], s["targets.n"], s, name, "gap")
-    axes[1].set_yscale("symlog", linthresh=1.0)
-    axes[1].set_ylabel("objective gap J* - J (nats,\nsymlog: linear below 1)")
-    for name in names:
-        ops = None if name == "exact" else _final_ops(summary, name)
-        s = _by_x(summary, "targets.n", name, "accuracy", ops)
-        _curve(axes[2], s["targets.n"], s, name, "accuracy")
-    axes[2].set_ylabel("accuracy (fraction)")
-    for ax in axes:
-        _count_axis(ax, swept, "number of targets N", "count")
-    legend_below(fig, *legend_entries(axes), column_width=LEGEND_COLUMN)
     p = config.get("params", {})
-    budget = f"; PGA after {_final_ops(summary, names[1])} operations" if len(names) > 1 else ""
-    fig.suptitle(f"Paper 002 model, no paper figure: cost and accuracy vs number of targets\n"
-                 f"{p.get('scene.mode', 'random')} scenes, sigma = "
-                 f"{p.get('noise.sigma', 0.005)} rad, {config.get('trials', '')} runs per "
-                 f"point, 95 % bands{budget}")
+    axis = NAxis(tuple(sorted(float(n) for n in swept)), p.get("scene.mode", "paper") == "paper")
+    names = ["exact", *_pga_names(summary)]
+    ops = {name: _final_ops(summary, name) for name in names[1:]}
+    fig, axes = new_figure(ncols=3, width=PAGE_WIDTH / 3, height=SCALE_HEIGHT)
+    _time_panel(axes[0], axis, _median_times(run), names)
+    gaps = _gap_panel(axes[1], axis, checkpoint_metrics(run.trials, config), names[1:], ops)
+    _accuracy_panel(axes[2], axis, summary, names, ops)
+    for ax in axes:
+        axis.draw(ax)
+    legend_below(fig, *legend_entries(axes), column_width=PAGE_WIDTH / 2)
+    scenes = (f"paper scenes M1-M{'/M'.join(f'{n:g}' for n in axis.swept)} (unjoined)"
+              if axis.scenes else "random scenes")
+    budget = f"; PGA after {ops[names[1]]} operations" if len(names) > 1 else ""
+    fig.suptitle("Paper 002 model, no paper figure: cost and accuracy vs number of targets\n"
+                 f"{scenes}, sigma = {p.get('noise.sigma', 0.005)} rad, "
+                 f"{config.get('trials', '')} runs per point{budget}", fontsize=9)
+    notes = [f"95 % intervals. Time: median wall time per scan, order-statistic interval; one run, "
+             f"{_machine(run.manifest)}", *_gap_notes(gaps)]
+    fig.legends[-1].set_title("\n".join(notes), prop={"size": 8})  # said above the entries
     return fig
 
 
@@ -744,8 +937,7 @@ def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure | str]:
             summary, config, "at_opt", "runs at the exact optimum (fraction)",
             "runs whose PGA solution reaches J*", False, 1.0),
         "noise": lambda: _noise_figure(summary, config),
-        "scale": lambda: _scale_figure(summary, checkpoint_metrics(run.trials, config),
-                                       config),
+        "scale": lambda: _scale_figure(run),
     }
     return {name: draw() for name, draw in drawers.items() if name in wanted}
 
