@@ -246,15 +246,6 @@ def test_every_drawn_gap_has_its_interval_and_an_open_one_an_arrow(scene_run, mo
     assert "arrow to the top: no upper end" in notes and "only 1 of 3 runs missed J*" in notes
 
 
-def test_median_interval_takes_order_statistics():
-    """n = 50: the 18th and 33rd of the sorted values (coverage 0.967 >= 0.95); 6 values:
-    min and max; 5 values: no 95 % interval of the median."""
-    assert report.median_interval(np.arange(50.0, 0, -1)) == (25.5, 18.0, 33.0)
-    assert report.median_interval([3.0, 1, 2, 6, 5, 4]) == (3.5, 1.0, 6.0)
-    median, low, high = report.median_interval([1.0, 2, 3, 4, 5])
-    assert median == 3.0 and np.isnan(low) and np.isnan(high)
-
-
 def test_scale_time_is_the_median_of_the_trials_wall_times_on_the_named_cpu(tmp_path):
     """The solve-time curve is the median of timings.csv's per-trial times (a few slow
     runs on a shared machine pull the mean up), and the notes name the run's CPU."""

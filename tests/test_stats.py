@@ -14,6 +14,7 @@ from trackfuse.stats import (
     bootstrap_t_mean_intervals,
     holm_adjusted,
     mcnemar_p,
+    median_interval,
     nees_band,
     paired_binary,
     paired_t_p,
@@ -256,3 +257,12 @@ def test_paired_binary_from_counts_passes_the_level_on():
     np.testing.assert_array_equal(c.low, low)
     np.testing.assert_array_equal(c.high, high)
     np.testing.assert_array_equal(c.p, mcnemar_p([3, 0], [11, 0]))
+
+
+def test_median_interval_takes_order_statistics():
+    """n = 50: the 18th and 33rd of the sorted values (coverage 0.967 >= 0.95); 6 values:
+    min and max; 5 values: no 95 % interval of the median."""
+    assert median_interval(np.arange(50.0, 0, -1)) == (25.5, 18.0, 33.0)
+    assert median_interval([3.0, 1, 2, 6, 5, 4]) == (3.5, 1.0, 6.0)
+    median, low, high = median_interval([1.0, 2, 3, 4, 5])
+    assert median == 3.0 and np.isnan(low) and np.isnan(high)

@@ -2,6 +2,7 @@
 
 * Proportions: Wilson score interval (Wilson 1927; Agresti & Coull 1998).
 * Means: Student-t interval on the sample mean.
+* Medians: the distribution-free order-statistic interval (binomial coverage).
 * NEES: two-sided chi-square band for the average NEES over ``n_runs`` runs of an
   ``dim``-dimensional state (Bar-Shalom, Li & Kirubarajan 2001, sec. 5.4).
 * Differences between two runs: paired or Welch t intervals for means; Newcombe's hybrid
@@ -21,6 +22,7 @@ shapes (:func:`holm_adjusted`, :func:`paired_binary`, the bootstrap intervals).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -191,6 +193,23 @@ def mcnemar_p(b: ArrayLike, c: ArrayLike) -> np.ndarray:
     with np.errstate(invalid="ignore"):
         p = 2 * bdtr(np.minimum(b, c), (b + c).astype(np.int64), 0.5)
     return np.where(b + c > 0, np.minimum(p, 1.0), 1.0)
+
+
+def median_interval(values: ArrayLike, level: float = 0.95) -> tuple[float, float, float]:
+    """``(median, low, high)`` of ``values``, with the distribution-free ``level`` interval of
+    the median from order statistics: ``[x_(j), x_(n+1-j)]`` (sorted, 1-based) for the
+    largest ``j`` whose coverage ``1 - 2 P(B < j)``, ``B ~ Binomial(n, 1/2)``, is at least
+    ``level`` (n = 50: the 18th and the 33rd value, coverage 0.967). Low and high are NaN
+    when even ``[min, max]`` covers less (fewer than 6 values at 95 %)."""
+    x = np.sort(np.asarray(values, dtype=float))
+    n, tail = len(x), (1 - level) / 2
+    total, below, j = 2 ** n, 0, 0
+    while j < n and (below + math.comb(n, j)) / total <= tail:  # P(B <= j) <= tail
+        below += math.comb(n, j)
+        j += 1
+    if j < 1:
+        return float(np.median(x)), np.nan, np.nan
+    return float(np.median(x)), float(x[j - 1]), float(x[n - j])
 
 
 @dataclass(frozen=True)

@@ -56,7 +56,6 @@ values written into panel titles; its values are read, never simulated.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -81,6 +80,7 @@ from trackfuse.results import TIMINGS
 from trackfuse.rundata import RunData, succeeded_rows, swept_keys
 from trackfuse.stats import (
     bootstrap_t_mean_intervals,
+    median_interval,
     paired_binary,
     t_interval,
     wilson_interval,
@@ -438,10 +438,10 @@ def _noise_figure(summary: pd.DataFrame, config: dict) -> Figure | str:
     for ax in axes.ravel():
         ax.set_ylim(*FRACTION_LIMITS)
     legend_below(fig, *legend_entries(axes.ravel()), column_width=LEGEND_COLUMN)
-    fig.suptitle("Paper 002 setting, no paper figure: accuracy vs angle noise\n(the exact "
-                 f"optimum: the objective's ceiling); {config.get('trials', '')} runs per "
-                 "point, 95 % bands\ndotted: sigma = 0.005 and sqrt(0.005) rad, the two "
-                 "readings of the paper", fontsize=9)
+    fig.suptitle("Paper 002 setting, no paper figure: accuracy vs angle noise "
+                 f"({config.get('trials', '')} runs per point, 95 % bands)\nexact optimum: "
+                 "the objective's ceiling; dotted: sigma = 0.005 and sqrt(0.005) rad, the "
+                 "paper's two readings", fontsize=9)
     return fig
 
 
@@ -450,24 +450,6 @@ def _noise_figure(summary: pd.DataFrame, config: dict) -> Figure | str:
 
 #: Height (in) of the scale figure, one page (:data:`PAGE_WIDTH`) wide.
 SCALE_HEIGHT = 4.8
-
-
-
-def median_interval(values: ArrayLike, level: float = 0.95) -> tuple[float, float, float]:
-    """``(median, low, high)`` of ``values``, with the distribution-free ``level`` interval of
-    the median from order statistics: ``[x_(j), x_(n+1-j)]`` (sorted, 1-based) for the
-    largest ``j`` whose coverage ``1 - 2 P(B < j)``, ``B ~ Binomial(n, 1/2)``, is at least
-    ``level`` (n = 50: the 18th and the 33rd value, coverage 0.967). Low and high are NaN
-    when even ``[min, max]`` covers less (fewer than 6 values at 95 %)."""
-    x = np.sort(np.asarray(values, dtype=float))
-    n, tail = len(x), (1 - level) / 2
-    total, below, j = 2 ** n, 0, 0
-    while j < n and (below + math.comb(n, j)) / total <= tail:  # P(B <= j) <= tail
-        below += math.comb(n, j)
-        j += 1
-    if j < 1:
-        return float(np.median(x)), np.nan, np.nan
-    return float(np.median(x)), float(x[j - 1]), float(x[n - j])
 
 
 def _median_times(run: RunData) -> pd.DataFrame:
