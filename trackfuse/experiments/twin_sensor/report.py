@@ -120,8 +120,14 @@ FIG2_LEVELS = (0.0, 9.0, 15.0)
 """Clutter levels (mean false returns) of the Fig. 2 panels, the nearest swept ones."""
 MAIN_RULE = "lost_angle"
 SINGLE_PANEL, PANEL, TIME_PANEL = (5.6, 2.9), (3.9, 2.7), (3.1, 2.3)
-"""Panel sizes (width, height) in inches: a figure of one panel, of several, against time."""
+"""Panel sizes (width, height) in inches: a figure of one panel, of several, against time;
+narrowed by :func:`_printable` where a row of them would be too wide to print."""
+MAX_WIDTH_IN = 8.7
+"""Widest figure (in): printed 7.16 in wide (a two-column page), its smallest text, 8 pt
+(legend and notes), prints at 6.5 pt or more."""
 MAX_FACETS = 4
+NOTE_PT = 8
+"""Font size (pt) of the notes inside panels: the legend's, the smallest text of a figure."""
 LEGEND_COLUMN_IN = 3.9
 """Width (inches) of a legend column: the handle and the longest entry ("parallel PDA
 (corrected; PDAF with one sensor), MGEKF", 53 characters at 8 pt)."""
@@ -356,6 +362,13 @@ def _frame(n_panels: int, ncols: int, panel: tuple[float, float], title_lines: l
     for ax in axes[n_panels:]:
         ax.set_visible(False)
     return fig, axes[:n_panels], legend_cols
+
+
+def _printable(panel: tuple[float, float], ncols: int) -> tuple[float, float]:
+    """``panel`` (width, height; in) narrowed so that a row of ``ncols`` of them, with the
+    margins of :func:`_frame`, is at most :data:`MAX_WIDTH_IN` wide."""
+    fits = (MAX_WIDTH_IN - 0.85 - (ncols - 1) * 0.55) / ncols
+    return (min(panel[0], round(fits, 2)), panel[1])
 
 
 def _title_lines(fig_width_in: float, *lines: str) -> list[str]:
@@ -628,7 +641,7 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
     zero_labels = {_zero_label(z, top) for z, top in zip(zero, tops, strict=True) if z}
     entries = len({n for _, names, _ in columns for n in names}) + claim + past \
         + len(zero_labels) + 1
-    panel = SINGLE_PANEL if n_panels == 1 else PANEL
+    panel = _printable(SINGLE_PANEL if n_panels == 1 else PANEL, ncols)
     titles = _wrapped([", ".join(t for t in (
         col_title if len(rules) == 1 else f"{col_title}, {words[rule]}",
         facet_title if len(facets) > 1 else "") if t)
@@ -678,7 +691,7 @@ def _index_figure(run: RunData) -> Figure | str:
     zero = _zero_bound(with_clutter, "index")
     top = _loss_top(pd.concat(points), zero[1])  # one y range: the same quantity
     past = any(len(_past_top(p, top)) for p in points)
-    fig, axes, cols = _figure(2, 2, PANEL, title,
+    fig, axes, cols = _figure(2, 2, _printable(PANEL, 2), title,
                               len(names) + 2 + (len(free) > 0) + past, 1)
     for ax, rule, drawn in zip(axes, rules, points, strict=True):
         _draw_rates(ax, drawn)
@@ -756,9 +769,9 @@ def _time_figure(run: RunData, draw: PanelDraw, title: Sequence[str], y_label: s
     points = _time_points(run)
     swept = swept_keys(run.config)
     per_row = 3 if len(points) % 3 == 0 or len(points) > 4 else len(points)
-    titles = _wrapped([_point_title(run.point_params(pt), swept) for pt in points],
-                      TIME_PANEL[0])
-    fig, axes, cols = _figure(len(points), per_row, TIME_PANEL, title, legend_entries,
+    panel = _printable(TIME_PANEL, per_row)
+    titles = _wrapped([_point_title(run.point_params(pt), swept) for pt in points], panel[0])
+    fig, axes, cols = _figure(len(points), per_row, panel, title, legend_entries,
                               _lines(titles))
     trials = run.trials
     drawn, fits = [], {}
@@ -767,7 +780,7 @@ def _time_figure(run: RunData, draw: PanelDraw, title: Sequence[str], y_label: s
         if succeeded_rows(frame).empty:
             ax.text(0.5, 0.5, f"all {frame['trial'].nunique()} trials failed\n(status=failed "
                     "in trials.csv)", transform=ax.transAxes, ha="center", va="center",
-                    fontsize=8)
+                    fontsize=NOTE_PT)
             ax.set_ylim(bottom=0)
         else:
             fits[i] = draw(ax, frame, run.point_params(pt))
@@ -823,7 +836,7 @@ def _fit_range_axis(ax: Axes, top: float, single_runs: np.ndarray,
     reach = float(np.nanmax(single_runs, initial=0.0))
     if reach > top:
         ax.text(0.97, 0.96, f"single runs cut at {top:g} km (highest {reach:.0f} km)",
-                transform=ax.transAxes, fontsize=7, ha="right", va="top")
+                transform=ax.transAxes, fontsize=NOTE_PT, ha="right", va="top")
     _mark_past_top(ax, [(name, t[~(hi <= top)]) for name, t, hi in bands], top)
 
 
@@ -846,16 +859,13 @@ def _pcrlb_curves(params: dict[str, Any]) -> list[tuple[np.ndarray, str, str]]:
     return [(truth, "--", PCRLB_TRUTH), (model, ":", PCRLB_FILTER)]
 
 
-def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
-                names: Sequence[str], beside: Sequence[str] = ()) -> tuple[float, AxisFit]:
-    """Range RMSE (km) with 95 % bootstrap-t bands per scan (the first algorithm's filled,
-    the second's as dashed edges, each band in the legend), the RMSE of the ``beside``
-    algorithms as thin curves on top without bands, five single runs of the first algorithm, the
-    square-root PCRLBs, and the correlation of the first algorithm's errors between the
-    first and the last scan; returns the panel's :data:`PanelDraw` pair."""
-    period = float(params["scan.period"])
+def _draw_bands(ax: Axes, frame: pd.DataFrame, period: float, names: Sequence[str],
+                beside: Sequence[str]) -> tuple[float, list[tuple[str, np.ndarray, np.ndarray]],
+                                                pd.DataFrame]:
+    """The RMSE curves of :func:`_draw_range`: ``(highest RMSE (km), [(algorithm, t (s),
+    band's upper end (km))], the first algorithm's band (per scan: rmse, lo, hi, km))``."""
     top = 0.0
-    bands = []
+    bands, first = [], pd.DataFrame()
     for name in beside:
         rmse = np.sqrt(frame[frame["algorithm"] == name].groupby("scan")["range_sq_err_m2"]
                        .mean()) / 1e3
@@ -866,6 +876,7 @@ def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
     for i, name in enumerate(names):
         rows = frame[frame["algorithm"] == name]
         band = _rmse_band(rows.groupby("scan")["range_sq_err_m2"]) / 1e3
+        first = band if i == 0 else first
         top = max(top, float(band["rmse"].max()))
         t = band.index.to_numpy(float) * period
         bands.append((name, t, band["hi"].to_numpy()))
@@ -879,6 +890,39 @@ def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
             ax.plot(t, band["lo"], color=kw["color"], lw=0.6, ls="--",
                     label=f"{label} (dashed edges)")
             ax.plot(t, band["hi"], color=kw["color"], lw=0.6, ls="--")
+    return top, bands, first
+
+
+def _below_bound_everywhere(band: pd.DataFrame, bound: np.ndarray) -> bool:
+    """Whether the RMSE of ``band`` (per scan: rmse, lo, hi, km) is below ``bound`` (km, per
+    scan) at every scan while the bound lies inside the 95 % band at every scan: one
+    sample of runs below the bound, which the runs do not show to be beaten."""
+    rmse, lo, hi = (band[c].to_numpy() for c in ("rmse", "lo", "hi"))
+    return bool(len(rmse) == len(bound) and np.all(rmse < bound)
+                and np.all((lo <= bound) & (bound <= hi)))
+
+
+def _range_note(band: pd.DataFrame, bound: np.ndarray, runs: int, scans: int,
+                corr: float) -> str:
+    """The note of a range panel: the correlation of the errors between the first and the
+    last scan, said as why the RMSE may lie below the bound at every scan where it does
+    while the bound lies inside the band (:func:`_below_bound_everywhere`)."""
+    if _below_bound_everywhere(band, bound):
+        return (f"below the bound at all {scans} scans:\none sample of {runs} runs, errors\n"
+                f"correlated across scans ({corr:.2f});\nthe bound lies inside the 95 % band")
+    return f"corr. of errors, scan 1 vs {scans}: {corr:.2f}"
+
+
+def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
+                names: Sequence[str], beside: Sequence[str] = ()) -> tuple[float, AxisFit]:
+    """Range RMSE (km) with 95 % bootstrap-t bands per scan (the first algorithm's filled,
+    the second's as dashed edges, each band in the legend), the RMSE of the ``beside``
+    algorithms as thin curves on top without bands, five single runs of the first algorithm, the
+    square-root PCRLBs, and a note (:func:`_range_note`) with the correlation of the first
+    algorithm's errors between the first and the last scan; returns the panel's
+    :data:`PanelDraw` pair."""
+    period = float(params["scan.period"])
+    top, bands, first = _draw_bands(ax, frame, period, names, beside)
     errors = frame[frame["algorithm"] == names[0]].pivot(index="trial", columns="scan",
                                                          values="range_err_m")
     single = errors.to_numpy()[:SINGLE_RUNS] / 1e3
@@ -891,8 +935,10 @@ def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
     for bound, style, label in _pcrlb_curves(params):
         ax.plot(times, bound, color="k", ls=style, lw=1.0, label=label)
     corr = float(np.corrcoef(errors.iloc[:, 0], errors.iloc[:, -1])[0, 1])
-    ax.text(0.03, 0.04, f"corr. of errors, scan 1 vs {errors.columns[-1]}: {corr:.2f}",
-            transform=ax.transAxes, fontsize=7, va="bottom", zorder=7,
+    note = _range_note(first, bounds(params)[0] / 1e3, len(errors), int(errors.columns[-1]),
+                       corr)
+    ax.text(0.03, 0.04, note, transform=ax.transAxes, fontsize=NOTE_PT, va="bottom",
+            zorder=7, linespacing=1.1,
             bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.8, "pad": 1.0})
     needed = _range_top(max(top, float(np.max(bounds(params)[0])) / 1e3), np.abs(single))
     return needed, lambda top: _fit_range_axis(ax, top, np.abs(single), bands)
@@ -975,12 +1021,13 @@ def _final_figure(run: RunData) -> Figure | str:
     title = [("Paper Fig. 2 quantified: final" if quantified else "Final")
              + f" range RMSE ({_runs(last)} runs per point)",
              _context(run, "95 % bootstrap-t intervals")]
-    panel = SINGLE_PANEL if len(facets) == 1 else PANEL if len(facets) == 2 else TIME_PANEL
+    per_row = min(len(facets), 3)
+    panel = _printable(SINGLE_PANEL if len(facets) == 1 else PANEL if len(facets) == 2
+                       else TIME_PANEL, per_row)
     titles = _wrapped([t if len(facets) > 1 else "" for t, _ in facets], panel[0])
     curves = [_final_bounds(run, frame, x_key) for _, frame in facets]
     labels = {label for facet in curves for *_, label in facet}
     points = [_final_points(frame, x_key, names) for _, frame in facets]
-    per_row = min(len(facets), 3)
     needed = {i: _final_top(p, c) for i, (p, c) in enumerate(zip(points, curves, strict=True))}
     tops = list(_shared_tops(needed, per_row).values())
     past = any(len(x) for p, top in zip(points, tops, strict=True)
