@@ -479,3 +479,89 @@ def test_a_bound_outside_the_band_gets_no_below_the_bound_note():
     assert report._below_bound_everywhere(band, np.array([11.0, 10.0]))
     assert not report._below_bound_everywhere(band, np.array([13.0, 10.0]))  # outside
     assert not report._below_bound_everywhere(band, np.array([11.0, 8.5]))  # above once
+
+
+def _run_off(run: RunData, runs: int, flag: bool) -> RunData:
+    """``run`` whose first ``runs`` trials of mspda_parallel/mgekf at clutter 8 end 300 km
+    off in range, flagged inconsistent when ``flag`` (as twin_sensor_baseline's two runs at
+    40 km: angles on target, no loss, NEES flag)."""
+    trials = run.trials.copy()
+    off = ((trials["scan"] == trials["scan"].max()) & (trials["trial"] < runs)
+           & (trials["algorithm"] == "mspda_parallel/mgekf") & (trials["clutter.mean"] == 8.0))
+    trials.loc[off, "range_sq_err_m2"] = 3e5**2
+    trials.loc[off, "inconsistent_nees"] = int(flag)
+    changed = replace(run)
+    changed.trials = trials
+    return changed
+
+
+def _joined_x(ax, name: str) -> list[np.ndarray]:
+    """x of every drawn line of ``name``'s look that joins points (solid or dashed)."""
+    colour = to_hex(line_kwargs(name)["color"])
+    return [np.asarray(line.get_xdata(), float) for line in ax.get_lines()
+            if to_hex(line.get_color()) == colour and line.get_linestyle() not in ("None", "")
+            and line.get_marker() == line_kwargs(name)["marker"]]
+
+
+def test_a_point_a_few_flagged_runs_carry_is_not_joined_and_says_so(run_50):
+    """twin_sensor_baseline's 40 km point (2 of 50 runs off in range, 95 % of the squared
+    error) read as a resonance between 30 and 50 km: such a point is now marker and
+    interval only, annotated with the count; unflagged runs (no rule of the report calls
+    them off) stay joined."""
+    name = "final_range_rmse_vs_sweep"
+    fig = report.figures(_run_off(run_50, 2, flag=True), [name])[name]
+    ax = fig.axes[0]
+    joined = _joined_x(ax, "mspda_parallel/mgekf")
+    assert joined and all(not np.any(np.abs(x - 8.0) < 0.5) for x in joined)
+    (note,) = [t.get_text() for t in ax.texts]
+    assert note.startswith("2/50 flagged runs:\n") and note.endswith("% of the MSE")
+    assert report.FEW_LABEL in _legend(fig)
+    assert text_overlaps(fig) == []
+    plain = report.figures(_run_off(run_50, 2, flag=False), [name])[name]
+    assert any(np.any(np.abs(x - 8.0) < 0.5) for x in _joined_x(plain.axes[0],
+                                                                  "mspda_parallel/mgekf"))
+    assert not plain.axes[0].texts and report.FEW_LABEL not in _legend(plain)
+
+
+def test_many_flagged_runs_are_not_a_few():
+    """Flagged runs above 10 % of a point's runs are the point's behaviour, not a few runs
+    run off: the point stays joined (twin_sensor_close, 30-90 % of runs flagged)."""
+    rows = pd.DataFrame({"x": 1.0, "algorithm": "a", "range_sq_err_m2": [100.0] * 6 + [1.0] * 44,
+                         **{rule: [1] * 6 + [0] * 44 for rule in report.RULES}})
+    assert report._few_runs_carry(rows, "x", ["a"]) == {}
+    rows.loc[5, list(report.RULES)] = 0
+    ((k, n, share),) = report._few_runs_carry(rows, "x", ["a"])["a"].values()
+    assert (k, n) == (5, 50) and share > 0.5
+
+
+@pytest.mark.parametrize(("values", "threshold"), [
+    ([0, 10, 15, 20, 40, 50, 150], 10.0),  # twin_sensor_close: 50 to 150 a wide gap
+    ([0.0, 0.015, 0.05, 0.1, 0.2], 0.015),  # twin_sensor_hard's manoeuvring indices
+    (list(range(16)), None),  # twin_sensor_orbit: an even grid
+    ([0, 1000, 2000, 5000, 10000, 20000, 30000, 40000, 50000], None),  # baseline: no wide gap
+    ([0, 5, 10, 15], None),
+    ([2000, 20000, 50000], None),
+])
+def test_a_wide_gap_beside_crowded_values_gets_a_symlog_axis(values, threshold):
+    assert report._symlog_threshold(values) == threshold
+
+
+@pytest.fixture(scope="module")
+def run_wide(tmp_path_factory) -> RunData:
+    """20 short runs at clutter 0, 10, 15, 20, 150 (twin_sensor_close's gap)."""
+    base = {**EXPERIMENT.defaults(), "algorithms": ALGORITHMS[1:3], "scan.count": 5}
+    return harness.run_data(tmp_path_factory.mktemp("wide"), EXPERIMENT, base,
+                            {"clutter.mean": [0.0, 10.0, 15.0, 20.0, 150.0]}, trials=20, seed=3)
+
+
+@pytest.mark.parametrize("name", ["loss_vs_clutter", "final_range_rmse_vs_sweep"])
+def test_clutter_with_a_wide_gap_is_drawn_on_a_symlog_axis(run_wide, name):
+    """twin_sensor_close joined 50 to 150 false returns by one long segment with the points
+    at 0-20 piled up: the axis is symmetric-log, labelled at the swept values, and the
+    points at 10, 15 and 20 lie apart on the page."""
+    ax = report.figures(run_wide, [name])[name].axes[0]
+    assert ax.get_xscale() == "symlog"
+    assert list(ax.get_xticks()) == [0.0, 10.0, 15.0, 20.0, 150.0]
+    drawn = ax.transData.transform([(v, 0.0) for v in (10.0, 15.0, 20.0, 150.0)])[:, 0]
+    assert np.min(np.diff(drawn)) / ax.figure.dpi > 0.2  # inches apart
+    assert text_overlaps(ax.figure) == []

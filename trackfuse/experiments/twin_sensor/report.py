@@ -73,7 +73,9 @@ import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
-from matplotlib.ticker import FixedLocator, MaxNLocator
+from matplotlib.scale import SymmetricalLogTransform
+from matplotlib.ticker import FixedLocator, FuncFormatter, MaxNLocator, NullLocator
+from matplotlib.transforms import IdentityTransform, Transform
 from pandas.api.typing import SeriesGroupBy
 
 from trackfuse.experiments.twin_sensor.model import PARAMS, bounds, build_scenario
@@ -464,21 +466,81 @@ def _runs(frame: pd.DataFrame) -> int:
 
 
 # --------------------------------------------------------------------------------------------
+# The swept x axis: linear, or symmetric-log where a linear one piles the values up
+
+CROWDED, WIDE_GAP, LINSCALE = 0.1, 0.4, 0.35
+"""A swept axis is drawn symmetric-log when its two closest values are nearer than
+``CROWDED`` of its span and one gap takes at least ``WIDE_GAP`` of it (a long empty stretch
+beside piled-up points); the linear part (0 to the smallest positive value) then takes
+``LINSCALE`` of a decade."""
+
+
+def _symlog_threshold(values: Any) -> float | None:
+    """The linear threshold (the smallest positive value) of a symmetric-log x axis for the
+    swept ``values`` where a linear axis would pile them up (:data:`CROWDED`,
+    :data:`WIDE_GAP`: clutter 0, 10, 15, 20, 40, 50, 150; manoeuvring index 0, 0.015, 0.05,
+    0.1, 0.2); ``None`` (linear) for an even grid (0, 1, ..., 15), one without a wide gap
+    (baseline 0, 1, 2, 5, 10, ..., 50 km), fewer than 4 values or a negative one."""
+    v = np.unique(np.asarray(values, dtype=float))
+    if len(v) < 4 or v[0] < 0:
+        return None
+    gaps = np.diff(v)
+    span = v[-1] - v[0]
+    crowded = gaps.min() < CROWDED * span and gaps.max() >= WIDE_GAP * span
+    return float(v[v > 0].min()) if crowded else None
+
+
+def _x_transform(threshold: float | None) -> Transform:
+    """Data to drawn x of an axis with :func:`_symlog_threshold` ``threshold``."""
+    if threshold is None:
+        return IdentityTransform()
+    return SymmetricalLogTransform(10, threshold, LINSCALE)
+
+
+def _dodged(x: Any, fraction: float, values: Any, threshold: float | None) -> np.ndarray:
+    """``x`` moved by ``fraction`` of the drawn span of ``values`` on an x axis of
+    :func:`_symlog_threshold` ``threshold``: the same move on the page at every x."""
+    t = _x_transform(threshold)
+
+    def drawn(a: Any) -> np.ndarray:
+        return t.transform(np.asarray(a, dtype=float).reshape(-1, 1)).ravel()
+
+    ends = drawn(values)
+    moved = drawn(x) + fraction * (float(ends.max() - ends.min()) or 1.0)
+    return t.inverted().transform(moved.reshape(-1, 1)).ravel()
+
+
+def _set_x_scale(ax: Axes, values: Any, threshold: float | None, scale: float = 1.0) -> None:
+    """Where ``threshold`` is set, a symmetric-log x axis labelled at the swept ``values``
+    (shown divided by ``scale``) with 5 % of its drawn span to spare at each end; else the
+    linear axis is kept."""
+    if threshold is None:
+        return
+    v = np.unique(np.asarray(values, float))
+    ax.set_xscale("symlog", linthresh=threshold / scale, linscale=LINSCALE)
+    ax.set_xlim(*(_dodged(v[[0, -1]], np.array([-0.05, 0.05]), v, threshold) / scale))
+    ax.xaxis.set_major_locator(FixedLocator(v / scale))
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:.3g}"))
+    ax.xaxis.set_minor_locator(NullLocator())
+
+
+# --------------------------------------------------------------------------------------------
 # Fig. 1: loss against clutter
 
 
-def _rate_points(frame: pd.DataFrame, x_key: str, rule: str,
-                 names: Sequence[str]) -> pd.DataFrame:
+def _rate_points(frame: pd.DataFrame, x_key: str, rule: str, names: Sequence[str],
+                 threshold: float | None = None) -> pd.DataFrame:
     """Rate of ``rule`` against ``x_key`` per algorithm of ``names``, one row per point and
-    algorithm: ``name``, ``x`` (offset slightly per algorithm so that equal values stay
-    visible), ``k`` flagged of ``n``, ``pct`` and its 95 % Wilson ``lo``, ``hi`` (%)."""
+    algorithm: ``name``, ``x`` (offset slightly per algorithm on the page, on an x axis of
+    :func:`_symlog_threshold` ``threshold``, so that equal values stay visible), ``k``
+    flagged of ``n``, ``pct`` and its 95 % Wilson ``lo``, ``hi`` (%)."""
     values = frame[x_key].astype(float)
-    unit = float(values.max() - values.min() or 1.0) * min(0.012, 0.03 / len(names))
+    unit = min(0.012, 0.03 / len(names))
     parts = []
     for i, name in enumerate(names):
         r = _rates(frame[frame["algorithm"] == name], x_key, rule)
-        parts.append(r.reset_index(drop=True).assign(
-            name=name, x=r.index.to_numpy(float) + unit * (i - (len(names) - 1) / 2)))
+        x = _dodged(r.index, unit * (i - (len(names) - 1) / 2), values, threshold)
+        parts.append(r.reset_index(drop=True).assign(name=name, x=x))
     return pd.concat(parts, ignore_index=True)
 
 
@@ -630,8 +692,10 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
     n_panels = len(facets) * len(columns)
     ncols = len(columns) if len(columns) > 1 else min(len(facets), MAX_FACETS)
     every_bar = max(len(names) for _, names, _ in columns) <= 2
+    threshold = _symlog_threshold(last["clutter.mean"])
     panels = [(frame, rule, _with_bars(_rate_points(frame, "clutter.mean", rule,
-                                                    _emphasis_last(names)), every_bar))
+                                                    _emphasis_last(names), threshold),
+                                       every_bar))
               for _, frame in facets for _, names, rule in columns]
     zero = [None if every_bar else _zero_bound(frame, "clutter.mean") for frame, _, _ in panels]
     tops = [_loss_top(points, z[1] if z else 0.0) for (_, _, points), z in zip(panels, zero,
@@ -654,6 +718,7 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
             _draw_claim(ax)
         _draw_rates(ax, points)
         _fit_loss_axis(ax, top, points, z)
+        _set_x_scale(ax, last["clutter.mean"], threshold)
         ax.set_xlabel(_axis_label("clutter.mean", run.params))
         ax.set_ylabel(RULES[rule][0])
         ax.set_title(panel_title)
@@ -686,7 +751,8 @@ def _index_figure(run: RunData) -> Figure | str:
              _context(run, "truth q = filter q")]
     free = last[last["clutter.mean"] == 0]
     rules = ("lost_angle", "lost_gate")
-    points = [_with_bars(_rate_points(with_clutter, "index", rule, names), False)
+    threshold = _symlog_threshold(last["index"])
+    points = [_with_bars(_rate_points(with_clutter, "index", rule, names, threshold), False)
               for rule in rules]
     zero = _zero_bound(with_clutter, "index")
     top = _loss_top(pd.concat(points), zero[1])  # one y range: the same quantity
@@ -700,6 +766,7 @@ def _index_figure(run: RunData) -> Figure | str:
             worst = free.groupby(["index", "algorithm"])[rule].mean().groupby(level=0).max()
             ax.plot(worst.index, 100 * worst, "x", color=GREYS[0], markersize=6,
                     label="no clutter (worst algorithm)", zorder=4)
+        _set_x_scale(ax, last["index"], threshold)
         ax.set_xlabel("manoeuvring index sqrt(q) T^2 / (r sigma) (1)")
         ax.set_ylabel(RULES[rule][0])
         ax.set_title(_rule_text(rule, run.params, swept_keys(run.config)))
@@ -1025,18 +1092,20 @@ def _final_figure(run: RunData) -> Figure | str:
     panel = _printable(SINGLE_PANEL if len(facets) == 1 else PANEL if len(facets) == 2
                        else TIME_PANEL, per_row)
     titles = _wrapped([t if len(facets) > 1 else "" for t, _ in facets], panel[0])
-    curves = [_final_bounds(run, frame, x_key) for _, frame in facets]
+    threshold = _symlog_threshold(last[x_key])
+    curves = [_final_bounds(run, frame, x_key, threshold) for _, frame in facets]
     labels = {label for facet in curves for *_, label in facet}
     points = [_final_points(frame, x_key, names) for _, frame in facets]
+    few = [_few_runs_carry(frame, x_key, names) for _, frame in facets]
     needed = {i: _final_top(p, c) for i, (p, c) in enumerate(zip(points, curves, strict=True))}
     tops = list(_shared_tops(needed, per_row).values())
     past = any(len(x) for p, top in zip(points, tops, strict=True)
                for _, x in _past_final_top(p, top))
     fig, axes, cols = _figure(len(facets), per_row, panel, title,
-                              len(names) + len(labels) + past, _lines(titles))
-    for ax, facet_points, bound_curves, top, facet_title in zip(axes, points, curves, tops,
-                                                                titles, strict=True):
-        _draw_final(ax, facet_points, x_key, bound_curves, top)
+                              len(names) + len(labels) + past + any(few), _lines(titles))
+    for ax, facet_points, bound_curves, top, facet_title, facet_few in zip(
+            axes, points, curves, tops, titles, few, strict=True):
+        _draw_final(ax, facet_points, x_key, bound_curves, top, facet_few, threshold)
         ax.set_xlabel(_axis_label(x_key, run.params))
         ax.set_ylabel("final range RMSE (km)")
         ax.set_title(facet_title)
@@ -1045,20 +1114,22 @@ def _final_figure(run: RunData) -> Figure | str:
         if label not in shown:  # a bound only another facet draws: its legend entry
             axes[0].plot([], [], color="k", ls=style, lw=1.0, label=label)
             shown.add(label)
-    return _finish(fig, axes[:1], cols, everywhere=(PAST_TOP_LABEL,))
+    return _finish(fig, axes[:1], cols, everywhere=(PAST_TOP_LABEL, FEW_LABEL))
 
 
-def _final_bounds(run: RunData, frame: pd.DataFrame, x_key: str
+def _final_bounds(run: RunData, frame: pd.DataFrame, x_key: str, threshold: float | None
                   ) -> list[tuple[np.ndarray, np.ndarray, str, str]]:
     """``[(x, range bound at the last scan (km), line style, label)]`` of a facet: the truth
-    model's (dashed; 41 points across the swept values and the values themselves) and the
+    model's (dashed; 41 points evenly spread on the drawn x axis, of
+    :func:`_symlog_threshold` ``threshold``, and the swept values themselves) and the
     filter's ``q``'s (dotted, at the swept values), or the truth model's alone, dash-dot and
     labelled :data:`PCRLB_BOTH`, where the two differ by less than 1 % at every swept value
     (as :func:`_pcrlb_curves` does against time)."""
     values = np.sort(frame[x_key].astype(float).unique())
     base = run.point_params(int(frame["point"].iloc[0]))
     kind = SCHEMA[x_key].kind
-    grid = np.unique(np.concatenate([np.linspace(values[0], values[-1], 41), values]))
+    grid = np.unique(np.concatenate([_dodged(values[0], np.linspace(0.0, 1.0, 41), values,
+                                             threshold), values]))
     truth = np.array([bounds({**base, x_key: kind(v)})[0][-1] / 1e3 for v in grid])
     model = np.array([bounds({**base, x_key: kind(v)}, q_model=float(base["filter.q"])
                              if x_key != "filter.q" else float(v))[0][-1] / 1e3
@@ -1069,25 +1140,81 @@ def _final_bounds(run: RunData, frame: pd.DataFrame, x_key: str
     return [(grid, truth, "--", PCRLB_TRUTH), (values, model, ":", PCRLB_FILTER)]
 
 
+FEW_RUNS, MOST_ERROR = 0.1, 0.5
+"""A point's final RMSE is carried by a few runs when the runs the ``final_scan`` table
+flags (lost by either rule, or inconsistent) are at most ``FEW_RUNS`` of its runs and carry
+more than ``MOST_ERROR`` of its summed squared range error."""
+FEW_LABEL = ("point not joined: flagged runs (lost or inconsistent, <= 10 % of its runs) "
+             "carry most of its squared error")
+FewRuns = dict[str, dict[float, tuple[int, int, float]]]
+"""Per algorithm, the swept values whose RMSE a few runs carry: ``(flagged runs, runs,
+their share of the squared error)``, from :func:`_few_runs_carry`."""
+
+
+def _few_runs_carry(frame: pd.DataFrame, x_key: str, names: Sequence[str]) -> FewRuns:
+    """:data:`FewRuns` of the last-scan rows ``frame`` against ``x_key``
+    (:data:`FEW_RUNS`, :data:`MOST_ERROR`; twin_sensor_baseline at 40 km: 2 of 50 runs,
+    inconsistent, run off in range and carry 95 % of it)."""
+    flagged = frame[list(RULES)].max(axis=1) > 0
+    out: FewRuns = {}
+    for name in names:
+        for value, rows in frame[frame["algorithm"] == name].groupby(x_key):
+            mine = flagged[rows.index]
+            k, n = int(mine.sum()), len(rows)
+            share = float(rows["range_sq_err_m2"][mine].sum() / rows["range_sq_err_m2"].sum())
+            if 0 < k <= FEW_RUNS * n and share > MOST_ERROR:
+                out.setdefault(name, {})[float(value)] = (k, n, share)
+    return out
+
+
 def _draw_final(ax: Axes, points: FinalPoints, x_key: str,
                 bound_curves: Sequence[tuple[np.ndarray, np.ndarray, str, str]],
-                top: float) -> None:
-    """Final range RMSE (km) with intervals per algorithm (``points``), dodged along x, the
-    bounds ``bound_curves`` (:func:`_final_bounds`), y up to ``top`` (:func:`_final_top`)
-    and a triangle there for each interval that passes it."""
+                top: float, few: FewRuns, threshold: float | None) -> None:
+    """Final range RMSE (km) with intervals per algorithm (``points``), dodged along x and
+    joined except at the points a few runs carry (``few``: marker and interval only,
+    annotated), the bounds ``bound_curves`` (:func:`_final_bounds`), y up to ``top``
+    (:func:`_final_top`) and a triangle there for each interval that passes it."""
     scale = _x_scale(x_key)
     values = np.unique(np.concatenate([x for x, *_ in points.values()]))
-    dodge = {name: 0.006 * (values[-1] - values[0]) * (i - (len(points) - 1) / 2)
-             for i, name in enumerate(points)}
+    shifted = {name: _dodged(x, 0.006 * (i - (len(points) - 1) / 2), values, threshold)
+               / scale for i, (name, (x, *_)) in enumerate(points.items())}
     for name, (x, rmse, lo, hi) in points.items():
-        ax.errorbar((x + dodge[name]) / scale, rmse, yerr=[rmse - lo, hi - rmse], capsize=2,
-                    elinewidth=0.8, **line_kwargs(name))
+        alone = np.isin(x, list(few.get(name, {})))
+        for keep, extra in ((~alone, {}), (alone, {"linestyle": "none", "label": "_few"})):
+            if keep.any():
+                ax.errorbar(shifted[name][keep], rmse[keep], capsize=2, elinewidth=0.8,
+                            yerr=[(rmse - lo)[keep], (hi - rmse)[keep]],
+                            **{**line_kwargs(name), **extra})
     for x_bound, bound, style, label in bound_curves:
         ax.plot(x_bound / scale, bound, color="k", ls=style, lw=1.0, label=label)
     ax.set_ylim(0.0, top)
     ax.yaxis.set_major_locator(FixedLocator(_round_ticks(top)))
-    _mark_past_top(ax, [(name, (x + dodge[name]) / scale)
+    _set_x_scale(ax, values, threshold, scale)
+    _mark_past_top(ax, [(name, shifted[name][np.isin(points[name][0], x)])
                         for name, x in _past_final_top(points, top)], top)
+    _annotate_few(ax, points, few, scale)
+
+
+def _annotate_few(ax: Axes, points: FinalPoints, few: FewRuns, scale: float) -> None:
+    """Beside each swept value where a few runs carry an algorithm's RMSE (``few``), how
+    many and what share ("2/50 flagged runs: 95 % of the MSE"), once per value; the
+    legend entry :data:`FEW_LABEL` when there is one."""
+    notes: dict[float, dict[str, float]] = {}
+    for name, at in few.items():
+        x, rmse, *_ = points[name]
+        for value, (k, n, share) in at.items():
+            y = float(rmse[x == value][0])
+            text = f"{k}/{n} flagged runs:\n{100 * share:.0f} % of the MSE"
+            notes.setdefault(value, {}).setdefault(text, y)
+    for value, texts in notes.items():
+        ax.annotate("\n".join(texts), (value / scale, max(texts.values())),
+                    xytext=(-7, 0), textcoords="offset points", ha="right", va="center",
+                    fontsize=NOTE_PT, zorder=7, bbox={"facecolor": "white",
+                                                      "edgecolor": "none", "alpha": 0.8,
+                                                      "pad": 1.0})
+    if notes:
+        ax.plot([], [], ls="none", marker="o", markerfacecolor="none", color=GREYS[0],
+                label=FEW_LABEL)
 
 
 # --------------------------------------------------------------------------------------------
