@@ -565,3 +565,24 @@ def test_clutter_with_a_wide_gap_is_drawn_on_a_symlog_axis(run_wide, name):
     drawn = ax.transData.transform([(v, 0.0) for v in (10.0, 15.0, 20.0, 150.0)])[:, 0]
     assert np.min(np.diff(drawn)) / ax.figure.dpi > 0.2  # inches apart
     assert text_overlaps(ax.figure) == []
+
+
+def test_a_curve_under_an_equal_one_shows_around_it(run_50):
+    """fig1_claim's parallel PDA lay at 0 % under the paper's curve, its legend entry
+    matching nothing visible: a covered curve is now wider with larger open markers (in
+    the legend too); curves that differ keep their looks."""
+    name = "loss_vs_clutter"
+    fig = report.figures(_flagged(run_50, {}), [name])[name]
+    ours, paper = _curve(fig.axes[0], "mspda_parallel/mgekf"), _curve(fig.axes[0],
+                                                                      "paper_approx/mgekf")
+    lines = fig.axes[0].get_lines()
+    assert lines.index(ours) < lines.index(paper)  # drawn first, underneath
+    assert ours.get_linewidth() >= paper.get_linewidth() + 2
+    assert ours.get_markersize() > paper.get_markersize() and \
+        ours.get_markerfacecolor() == "none"
+    handle = _legend_handle(fig, look("mspda_parallel/mgekf").label)
+    assert handle.get_linewidth() == ours.get_linewidth()
+    apart = report.figures(_flagged(run_50, {("paper_approx/mgekf", 8.0, "lost_angle"): 3}),
+                           [name])[name]
+    assert _curve(apart.axes[0], "mspda_parallel/mgekf").get_linewidth() == \
+        line_kwargs("mspda_parallel/mgekf")["linewidth"]

@@ -550,12 +550,31 @@ def _with_bars(points: pd.DataFrame, every_bar: bool) -> pd.DataFrame:
     return points.assign(bar=True if every_bar else points["k"] > 0)
 
 
+def _hidden_curves(points: pd.DataFrame) -> set[str]:
+    """The curves of :func:`_rate_points` that a curve drawn after them covers: equal rates
+    at every swept value (fig1_claim: both at 0 % everywhere)."""
+    curves = [(str(name), r["pct"].to_numpy()) for name, r in points.groupby("name",
+                                                                             sort=False)]
+    return {name for i, (name, pct) in enumerate(curves)
+            if any(len(pct) == len(later) and np.array_equal(pct, later)
+                   for _, later in curves[i + 1:])}
+
+
+def _under_kwargs(kw: dict[str, Any]) -> dict[str, Any]:
+    """``kw`` of a curve another covers (:func:`_hidden_curves`): wider, with larger open
+    markers, so that it shows around the curve on top of it."""
+    return {**kw, "linewidth": kw["linewidth"] + 2.5, "markersize": 8,
+            "markerfacecolor": "none", "markeredgewidth": 1.3}
+
+
 def _draw_rates(ax: Axes, points: pd.DataFrame) -> None:
     """The curves of :func:`_rate_points` (with :func:`_with_bars`), each with its 95 %
-    Wilson error bars where ``bar``."""
+    Wilson error bars where ``bar``; a curve another covers drawn around it
+    (:func:`_under_kwargs`)."""
+    hidden = _hidden_curves(points)
     for name, r in points.groupby("name", sort=False):
         kw = line_kwargs(str(name))
-        ax.plot(r["x"], r["pct"], **kw)
+        ax.plot(r["x"], r["pct"], **(_under_kwargs(kw) if name in hidden else kw))
         bars = r[r["bar"]]
         ax.errorbar(bars["x"], bars["pct"], yerr=[bars["pct"] - bars["lo"],
                                                   bars["hi"] - bars["pct"]],
