@@ -586,3 +586,41 @@ def test_a_curve_under_an_equal_one_shows_around_it(run_50):
                            [name])[name]
     assert _curve(apart.axes[0], "mspda_parallel/mgekf").get_linewidth() == \
         line_kwargs("mspda_parallel/mgekf")["linewidth"]
+
+
+def test_anees_panels_share_one_log_axis_with_the_band_inside(run_50):
+    """twin_sensor_close and _hard's ANEES panels each had their own linear y range (0-7 to
+    0-60): they now share one log axis that holds every curve and chi-square band, even
+    when one panel's ANEES is ten times the others'."""
+    trials = run_50.trials.copy()
+    trials.loc[trials["clutter.mean"] == 15.0, "nees"] *= 10
+    wild = replace(run_50)
+    wild.trials = trials
+    fig = report.figures(wild, ["anees_vs_time"])["anees_vs_time"]
+    axes = [ax for ax in fig.axes if ax.get_visible()]
+    assert {ax.get_yscale() for ax in axes} == {"log"}
+    assert len({ax.get_ylim() for ax in axes}) == 1
+    low, high = axes[0].get_ylim()
+    for ax in axes:
+        drawn = np.concatenate([line.get_ydata() for line in ax.get_lines()])
+        assert low <= np.nanmin(drawn) and np.nanmax(drawn) <= high
+        (band,) = ax.patches  # the chi-square band, inside the axis
+        corners = band.get_transform().transform(band.get_path().vertices)
+        inside = ax.transAxes.inverted().transform(corners)[:, 1]
+        assert np.all((inside >= 0) & (inside <= 1))
+    assert low in axes[0].get_yticks() and high in axes[0].get_yticks()
+    assert text_overlaps(fig) == []
+
+
+def test_a_swept_q_is_titled_by_its_manoeuvring_index():
+    """twin_sensor_hard's panels were titled "truth and filter q 160000 m^2/s^4": the study
+    is about the manoeuvring index, so the panel says that (q stays in the caption)."""
+    params = {**EXPERIMENT.defaults(), "target.q": 160000.0, "filter.q": 160000.0,
+              "clutter.mean": 40.0}
+    swept = ["target.q", "filter.q", "clutter.mean"]
+    assert report._point_title(params, swept) == \
+        "manoeuvring index 0.2, mean 40 false returns per scan"
+    assert report._point_title({**params, "target.q": 900.0, "filter.q": 900.0}, swept) \
+        .startswith("manoeuvring index 0.015,")
+    assert report._point_title({**params, "filter.q": 900.0}, swept) == \
+        "manoeuvring index 0.2, filter q 900 m^2/s^4, mean 40 false returns per scan"

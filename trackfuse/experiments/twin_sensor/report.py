@@ -416,13 +416,25 @@ def _lines(titles: Sequence[str]) -> int:
 
 
 def _point_title(params: dict[str, Any], swept: Sequence[str]) -> str:
-    """A sweep point's swept values in words; equal truth and filter q said once."""
+    """A sweep point's swept values in words; a swept truth q as its manoeuvring index
+    (:func:`_manoeuvring_index`), the filter's q left out when equal to it
+    (:func:`_q_matched` says so in the figure's title)."""
     keys = list(swept)
     parts = []
-    if {"target.q", "filter.q"} <= set(keys) and params["target.q"] == params["filter.q"]:
-        keys = [k for k in keys if k not in ("target.q", "filter.q")]
-        parts.append(f"truth and filter q {float(params['target.q']):g} m^2/s^4")
+    if "target.q" in keys:
+        equal = params["target.q"] == params.get("filter.q")
+        keys = [k for k in keys if k != "target.q" and not (equal and k == "filter.q")]
+        parts.append(f"manoeuvring index {_manoeuvring_index(params):.2g}")
     return ", ".join(parts + [_value_text(k, params[k]) for k in keys]) or "all runs"
+
+
+def _q_matched(run: RunData, points: Sequence[int]) -> str:
+    """"truth q = filter q" when the truth's q is swept and every one of ``points`` has the
+    filter's q equal to it (:func:`_point_title` then gives only the index), else ""."""
+    params = [run.point_params(pt) for pt in points]
+    swept = "target.q" in swept_keys(run.config)
+    return "truth q = filter q" if swept and all(p["target.q"] == p["filter.q"]
+                                                 for p in params) else ""
 
 
 def _finish(fig: Figure, axes: Sequence[Axes], legend_cols: int,
@@ -857,6 +869,7 @@ def _time_figure(run: RunData, draw: PanelDraw, title: Sequence[str], y_label: s
     per_row = 3 if len(points) % 3 == 0 or len(points) > 4 else len(points)
     panel = _printable(TIME_PANEL, per_row)
     titles = _wrapped([_point_title(run.point_params(pt), swept) for pt in points], panel[0])
+    title = [*title[:-1], "; ".join(t for t in (title[-1], _q_matched(run, points)) if t)]
     fig, axes, cols = _figure(len(points), per_row, panel, title, legend_entries,
                               _lines(titles))
     trials = run.trials
@@ -1044,32 +1057,67 @@ def _range_figure(run: RunData) -> Figure:
                         {*labels, PAST_TOP_LABEL})
 
 
-def _fit_nees_axis(ax: Axes, top: float) -> None:
-    """y from 0 to ``top`` (a tick at least 3 % above the highest marker), labelled there."""
-    ax.set_ylim(0.0, top)
-    ax.yaxis.set_major_locator(FixedLocator(_round_ticks(top)))
+LOG_STEPS = (1.0, 2.0, 3.0, 5.0)
+"""Labelled values of a log axis in each decade."""
+
+
+def _log_ticks(low: float, high: float) -> np.ndarray:
+    """The values of :data:`LOG_STEPS` times a power of ten from the last at or below
+    ``low`` to the first at or above ``high`` (both > 0)."""
+    decades = np.arange(math.floor(math.log10(low)) - 1, math.ceil(math.log10(high)) + 1)
+    ticks = np.sort([step * 10.0**d for d in decades for step in LOG_STEPS])
+    return ticks[(ticks >= ticks[ticks <= low].max()) & (ticks <= ticks[ticks >= high].min())]
+
+
+def _anees(frame: pd.DataFrame, name: str) -> pd.Series:
+    """6-state ANEES of ``name`` per scan in the rows ``frame``."""
+    return frame[frame["algorithm"] == name].groupby("scan")["nees"].mean()
+
+
+def _anees_range(run: RunData, names: Sequence[str]) -> tuple[float, float]:
+    """``(low, high)`` of every ANEES curve of ``names`` and every 95 % chi-square band of
+    the panels of :func:`_time_points`: one log y range for all of them."""
+    values = []
+    for pt in _time_points(run):
+        frame = succeeded_rows(run.trials[run.trials["point"] == pt])
+        if not frame.empty:
+            values += [*nees_band(6, int(frame["trial"].nunique())),
+                       *(v for n in names for v in _anees(frame, n).to_numpy())]
+    finite = np.array([v for v in values if np.isfinite(v) and v > 0] or [6.0])
+    return float(finite.min()), float(finite.max())
+
+
+def _fit_nees_axis(ax: Axes, ticks: np.ndarray) -> None:
+    """A log y axis from the first to the last of ``ticks`` (:func:`_log_ticks`), labelled
+    at each of them."""
+    ax.set_yscale("log")
+    ax.set_ylim(float(ticks[0]), float(ticks[-1]))
+    ax.yaxis.set_major_locator(FixedLocator(ticks))
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:.3g}"))
+    ax.yaxis.set_minor_locator(NullLocator())
 
 
 def _nees_figure(run: RunData) -> Figure:
-    """Diagnostic: 6-state ANEES against time (s) with its 95 % chi-square band."""
+    """Diagnostic: 6-state ANEES against time (s) with its 95 % chi-square band, every panel
+    on one log y axis (:func:`_anees_range`), so that panels compare."""
     algorithms = run.config["params"]["algorithms"]
     names = list(dict.fromkeys(_headline_pair(algorithms) + _main_algorithms(algorithms)))
+    low, high = _anees_range(run, names)
+    ticks = _log_ticks(low / 1.05, high * 1.05)
 
     def draw(ax: Axes, frame: pd.DataFrame, params: dict[str, Any]) -> tuple[float, AxisFit]:
         period = float(params["scan.period"])
-        n_runs = int(frame["trial"].nunique())
-        lo, hi = nees_band(6, n_runs)
+        lo, hi = nees_band(6, int(frame["trial"].nunique()))
         ax.axhspan(lo, hi, color="k", alpha=0.12, lw=0, label="95 % chi-square band")
         ax.axhline(6.0, color="k", lw=0.8)
-        highest = hi
         for name in names:
-            anees = frame[frame["algorithm"] == name].groupby("scan")["nees"].mean()
+            anees = _anees(frame, name)
             ax.plot(anees.index * period, anees, **_time_curve_kwargs(name))
-            highest = max(highest, float(anees.max()))
-        return _tick_ceiling(1.03 * highest), lambda top: _fit_nees_axis(ax, top)
+        return float(ticks[-1]), lambda _top: _fit_nees_axis(ax, ticks)
 
     title = [f"Diagnostic: average NEES (6 states) against time ({_runs(run.trials)} runs per "
-             "point)", _context(run, "a consistent filter stays inside the band")]
+             "point)", _context(run, "a consistent filter stays inside the band; log scale, "
+                        "the same in every panel")]
     return _time_figure(run, draw, title, "ANEES (1)", len(names) + 1)
 
 
