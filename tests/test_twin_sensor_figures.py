@@ -6,7 +6,7 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 import pytest
-from figure_checks import text_overlaps
+from figure_checks import smallest_printed_text, text_overlaps
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import to_hex
 from matplotlib.container import ErrorbarContainer
@@ -14,6 +14,7 @@ from matplotlib.container import ErrorbarContainer
 from trackfuse import harness
 from trackfuse.experiments.twin_sensor import EXPERIMENT, report
 from trackfuse.plots.algorithms import GREYS, line_kwargs, look
+from trackfuse.plots.style import context
 from trackfuse.rundata import RunData
 
 LOSS_FIGURES = ("loss_vs_clutter", "loss_vs_clutter_ablation", "loss_gate_and_nees_vs_clutter")
@@ -624,3 +625,31 @@ def test_a_swept_q_is_titled_by_its_manoeuvring_index():
         .startswith("manoeuvring index 0.015,")
     assert report._point_title({**params, "filter.q": 900.0}, swept) == \
         "manoeuvring index 0.2, filter q 900 m^2/s^4, mean 40 false returns per scan"
+
+
+@pytest.fixture(scope="module")
+def run_hard(tmp_path_factory) -> RunData:
+    """twin_sensor_hard's zipped sweep (truth and filter q with clutter), 10 short runs."""
+    base = {**EXPERIMENT.defaults(), "algorithms": ALGORITHMS, "scan.count": 5,
+            "clutter.model": "window", "clutter.window": 0.1}
+    q = [0.0, 160000.0, 0.0, 900.0, 10000.0, 40000.0, 160000.0]
+    return harness.run_data(tmp_path_factory.mktemp("hard"), EXPERIMENT, base,
+                            {"target.q": q, "filter.q": q,
+                             "clutter.mean": [0.0, 0.0, 40.0, 40.0, 40.0, 40.0, 40.0]},
+                            trials=10, seed=3, sweep_mode="zip")
+
+
+@pytest.mark.parametrize("fixture", ["run_50", "run_wide", "run_hard"])
+def test_every_figure_prints_its_smallest_text_at_6_5_pt_without_overlaps(fixture, request):
+    """The three-panel figures were 11.25 in wide, their 7-9 pt text 4.5-5.7 pt once printed
+    7.16 in wide: every figure is now at most 8.7 in wide, its notes at 8 pt, so its
+    smallest text prints at 6.5 pt or more, and no text overlaps another."""
+    run = request.getfixturevalue(fixture)
+    drawn = {name: fig for name, fig in report.figures(run, EXPERIMENT.figures).items()
+             if not isinstance(fig, str)}
+    assert len(drawn) >= 3
+    with context():
+        for name, fig in drawn.items():
+            size, text = smallest_printed_text(fig)
+            assert size >= 6.5, (name, fig.get_figwidth(), text)
+            assert text_overlaps(fig) == [], name
