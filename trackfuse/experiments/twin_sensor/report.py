@@ -562,31 +562,34 @@ def _with_bars(points: pd.DataFrame, every_bar: bool) -> pd.DataFrame:
     return points.assign(bar=True if every_bar else points["k"] > 0)
 
 
-def _hidden_curves(points: pd.DataFrame) -> set[str]:
-    """The curves of :func:`_rate_points` that a curve drawn after them covers: equal rates
-    at every swept value (fig1_claim: both at 0 % everywhere)."""
+def _curve_kwargs(points: pd.DataFrame) -> dict[str, dict[str, Any]]:
+    """Line keyword arguments of each curve of :func:`_rate_points`, in drawing order; a
+    curve equal at every swept value to curves drawn after it (fig1_claim: both at 0 %
+    everywhere) is wider than the widest of them and has larger open markers, so that it
+    shows around them (nested when several coincide)."""
     curves = [(str(name), r["pct"].to_numpy()) for name, r in points.groupby("name",
                                                                              sort=False)]
-    return {name for i, (name, pct) in enumerate(curves)
-            if any(len(pct) == len(later) and np.array_equal(pct, later)
-                   for _, later in curves[i + 1:])}
-
-
-def _under_kwargs(kw: dict[str, Any]) -> dict[str, Any]:
-    """``kw`` of a curve another covers (:func:`_hidden_curves`): wider, with larger open
-    markers, so that it shows around the curve on top of it."""
-    return {**kw, "linewidth": kw["linewidth"] + 2.5, "markersize": 8,
-            "markerfacecolor": "none", "markeredgewidth": 1.3}
+    kwargs: dict[str, dict[str, Any]] = {}
+    for i in reversed(range(len(curves))):
+        name, pct = curves[i]
+        kw = line_kwargs(name)
+        over = [kwargs[later] for later, p in curves[i + 1:]
+                if len(p) == len(pct) and np.array_equal(p, pct)]
+        if over:
+            kw.update(linewidth=max(k["linewidth"] for k in over) + 2.2,
+                      markersize=max(k.get("markersize", 4.0) for k in over) + 3.5,
+                      markerfacecolor="none", markeredgewidth=1.3)
+        kwargs[name] = kw
+    return {name: kwargs[name] for name, _ in curves}
 
 
 def _draw_rates(ax: Axes, points: pd.DataFrame) -> None:
-    """The curves of :func:`_rate_points` (with :func:`_with_bars`), each with its 95 %
-    Wilson error bars where ``bar``; a curve another covers drawn around it
-    (:func:`_under_kwargs`)."""
-    hidden = _hidden_curves(points)
+    """The curves of :func:`_rate_points` (with :func:`_with_bars`; looks of
+    :func:`_curve_kwargs`), each with its 95 % Wilson error bars where ``bar``."""
+    looks = _curve_kwargs(points)
     for name, r in points.groupby("name", sort=False):
-        kw = line_kwargs(str(name))
-        ax.plot(r["x"], r["pct"], **(_under_kwargs(kw) if name in hidden else kw))
+        kw = looks[str(name)]
+        ax.plot(r["x"], r["pct"], **kw)
         bars = r[r["bar"]]
         ax.errorbar(bars["x"], bars["pct"], yerr=[bars["pct"] - bars["lo"],
                                                   bars["hi"] - bars["pct"]],
