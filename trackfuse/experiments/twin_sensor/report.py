@@ -418,7 +418,7 @@ def _lines(titles: Sequence[str]) -> int:
 def _point_title(params: dict[str, Any], swept: Sequence[str]) -> str:
     """A sweep point's swept values in words; a swept truth q as its manoeuvring index
     (:func:`_manoeuvring_index`), the filter's q left out when equal to it
-    (:func:`_q_matched` says so in the figure's title)."""
+    (:func:`_per_point` says so in the figure's title)."""
     keys = list(swept)
     parts = []
     if "target.q" in keys:
@@ -428,13 +428,14 @@ def _point_title(params: dict[str, Any], swept: Sequence[str]) -> str:
     return ", ".join(parts + [_value_text(k, params[k]) for k in keys]) or "all runs"
 
 
-def _q_matched(run: RunData, points: Sequence[int]) -> str:
-    """"truth q = filter q" when the truth's q is swept and every one of ``points`` has the
-    filter's q equal to it (:func:`_point_title` then gives only the index), else ""."""
-    params = [run.point_params(pt) for pt in points]
-    swept = "target.q" in swept_keys(run.config)
-    return "truth q = filter q" if swept and all(p["target.q"] == p["filter.q"]
-                                                 for p in params) else ""
+def _per_point(run: RunData) -> str:
+    """"n runs per point" of a time figure, with "truth q = filter q" when the truth's q is
+    swept and every panel's filter q equals it (:func:`_point_title` then gives only the
+    manoeuvring index)."""
+    params = [run.point_params(pt) for pt in _time_points(run)]
+    matched = "target.q" in swept_keys(run.config) and all(
+        p["target.q"] == p["filter.q"] for p in params)
+    return f"{_runs(run.trials)} runs per point" + ("; truth q = filter q" if matched else "")
 
 
 def _finish(fig: Figure, axes: Sequence[Axes], legend_cols: int,
@@ -872,7 +873,6 @@ def _time_figure(run: RunData, draw: PanelDraw, title: Sequence[str], y_label: s
     per_row = 3 if len(points) % 3 == 0 or len(points) > 4 else len(points)
     panel = _printable(TIME_PANEL, per_row)
     titles = _wrapped([_point_title(run.point_params(pt), swept) for pt in points], panel[0])
-    title = [*title[:-1], "; ".join(t for t in (title[-1], _q_matched(run, points)) if t)]
     fig, axes, cols = _figure(len(points), per_row, panel, title, legend_entries,
                               _lines(titles))
     trials = run.trials
@@ -1051,8 +1051,8 @@ def _range_figure(run: RunData) -> Figure:
     algorithms = run.config["params"]["algorithms"]
     names = _headline_pair(algorithms)
     beside = [n for n in _main_algorithms(algorithms) if n not in names]
-    title = [f"{_fig_words(run, 2)}: range RMSE against time ({_runs(run.trials)} runs per "
-             "point)", _context(run, "95 % bootstrap-t bands; grey: single runs")]
+    title = [f"{_fig_words(run, 2)}: range RMSE against time ({_per_point(run)})",
+             _context(run, "95 % bootstrap-t bands; grey: single runs")]
     labels = {label for pt in _time_points(run)
               for _, _, label in _pcrlb_curves(run.point_params(pt))}
     return _time_figure(run, lambda ax, f, p: _draw_range(ax, f, p, names, beside), title,
@@ -1118,9 +1118,8 @@ def _nees_figure(run: RunData) -> Figure:
             ax.plot(anees.index * period, anees, **_time_curve_kwargs(name))
         return float(ticks[-1]), lambda _top: _fit_nees_axis(ax, ticks)
 
-    title = [f"Diagnostic: average NEES (6 states) against time ({_runs(run.trials)} runs per "
-             "point)", _context(run, "a consistent filter stays inside the band; log scale, "
-                        "the same in every panel")]
+    title = [f"Diagnostic: average NEES (6 states) against time ({_per_point(run)})",
+             _context(run, "a consistent filter stays inside the band")]
     return _time_figure(run, draw, title, "ANEES (1)", len(names) + 1)
 
 
