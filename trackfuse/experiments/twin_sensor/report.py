@@ -73,7 +73,9 @@ import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
-from matplotlib.ticker import FixedLocator, MaxNLocator
+from matplotlib.scale import SymmetricalLogTransform
+from matplotlib.ticker import FixedLocator, FuncFormatter, MaxNLocator, NullLocator
+from matplotlib.transforms import IdentityTransform, Transform
 from pandas.api.typing import SeriesGroupBy
 
 from trackfuse.experiments.twin_sensor.model import PARAMS, bounds, build_scenario
@@ -119,8 +121,14 @@ FIG2_LEVELS = (0.0, 9.0, 15.0)
 """Clutter levels (mean false returns) of the Fig. 2 panels, the nearest swept ones."""
 MAIN_RULE = "lost_angle"
 SINGLE_PANEL, PANEL, TIME_PANEL = (5.6, 2.9), (3.9, 2.7), (3.1, 2.3)
-"""Panel sizes (width, height) in inches: a figure of one panel, of several, against time."""
+"""Panel sizes (width, height) in inches: a figure of one panel, of several, against time;
+narrowed by :func:`_printable` where a row of them would be too wide to print."""
+MAX_WIDTH_IN = 8.7
+"""Widest figure (in): printed 7.16 in wide (a two-column page), its smallest text, 8 pt
+(legend and notes), prints at 6.5 pt or more."""
 MAX_FACETS = 4
+NOTE_PT = 8
+"""Font size (pt) of the notes inside panels: the legend's, the smallest text of a figure."""
 LEGEND_COLUMN_IN = 3.9
 """Width (inches) of a legend column: the handle and the longest entry ("parallel PDA
 (corrected; PDAF with one sensor), MGEKF", 53 characters at 8 pt)."""
@@ -357,6 +365,13 @@ def _frame(n_panels: int, ncols: int, panel: tuple[float, float], title_lines: l
     return fig, axes[:n_panels], legend_cols
 
 
+def _printable(panel: tuple[float, float], ncols: int) -> tuple[float, float]:
+    """``panel`` (width, height; in) narrowed so that a row of ``ncols`` of them, with the
+    margins of :func:`_frame`, is at most :data:`MAX_WIDTH_IN` wide."""
+    fits = (MAX_WIDTH_IN - 0.85 - (ncols - 1) * 0.55) / ncols
+    return (min(panel[0], round(fits, 2)), panel[1])
+
+
 def _title_lines(fig_width_in: float, *lines: str) -> list[str]:
     """``lines`` wrapped to the figure width (about 11.5 characters per inch at 10 pt)."""
     chars = max(40, int(fig_width_in * 11.5))
@@ -400,13 +415,26 @@ def _lines(titles: Sequence[str]) -> int:
 
 
 def _point_title(params: dict[str, Any], swept: Sequence[str]) -> str:
-    """A sweep point's swept values in words; equal truth and filter q said once."""
+    """A sweep point's swept values in words; a swept truth q as its manoeuvring index
+    (:func:`_manoeuvring_index`), the filter's q left out when equal to it
+    (:func:`_per_point` says so in the figure's title)."""
     keys = list(swept)
     parts = []
-    if {"target.q", "filter.q"} <= set(keys) and params["target.q"] == params["filter.q"]:
-        keys = [k for k in keys if k not in ("target.q", "filter.q")]
-        parts.append(f"truth and filter q {float(params['target.q']):g} m^2/s^4")
+    if "target.q" in keys:
+        equal = params["target.q"] == params.get("filter.q")
+        keys = [k for k in keys if k != "target.q" and not (equal and k == "filter.q")]
+        parts.append(f"manoeuvring index {_manoeuvring_index(params):.2g}")
     return ", ".join(parts + [_value_text(k, params[k]) for k in keys]) or "all runs"
+
+
+def _per_point(run: RunData) -> str:
+    """"n runs per point" of a time figure, with "truth q = filter q" when the truth's q is
+    swept and every panel's filter q equals it (:func:`_point_title` then gives only the
+    manoeuvring index)."""
+    params = [run.point_params(pt) for pt in _time_points(run)]
+    matched = "target.q" in swept_keys(run.config) and all(
+        p["target.q"] == p["filter.q"] for p in params)
+    return f"{_runs(run.trials)} runs per point" + ("; truth q = filter q" if matched else "")
 
 
 def _finish(fig: Figure, axes: Sequence[Axes], legend_cols: int,
@@ -450,21 +478,81 @@ def _runs(frame: pd.DataFrame) -> int:
 
 
 # --------------------------------------------------------------------------------------------
+# The swept x axis: linear, or symmetric-log where a linear one piles the values up
+
+CROWDED, WIDE_GAP, LINSCALE = 0.1, 0.4, 0.35
+"""A swept axis is drawn symmetric-log when its two closest values are nearer than
+``CROWDED`` of its span and one gap takes at least ``WIDE_GAP`` of it (a long empty stretch
+beside piled-up points); the linear part (0 to the smallest positive value) then takes
+``LINSCALE`` of a decade."""
+
+
+def _symlog_threshold(values: Any) -> float | None:
+    """The linear threshold (the smallest positive value) of a symmetric-log x axis for the
+    swept ``values`` where a linear axis would pile them up (:data:`CROWDED`,
+    :data:`WIDE_GAP`: clutter 0, 10, 15, 20, 40, 50, 150; manoeuvring index 0, 0.015, 0.05,
+    0.1, 0.2); ``None`` (linear) for an even grid (0, 1, ..., 15), one without a wide gap
+    (baseline 0, 1, 2, 5, 10, ..., 50 km), fewer than 4 values or a negative one."""
+    v = np.unique(np.asarray(values, dtype=float))
+    if len(v) < 4 or v[0] < 0:
+        return None
+    gaps = np.diff(v)
+    span = v[-1] - v[0]
+    crowded = gaps.min() < CROWDED * span and gaps.max() >= WIDE_GAP * span
+    return float(v[v > 0].min()) if crowded else None
+
+
+def _x_transform(threshold: float | None) -> Transform:
+    """Data to drawn x of an axis with :func:`_symlog_threshold` ``threshold``."""
+    if threshold is None:
+        return IdentityTransform()
+    return SymmetricalLogTransform(10, threshold, LINSCALE)
+
+
+def _dodged(x: Any, fraction: float, values: Any, threshold: float | None) -> np.ndarray:
+    """``x`` moved by ``fraction`` of the drawn span of ``values`` on an x axis of
+    :func:`_symlog_threshold` ``threshold``: the same move on the page at every x."""
+    t = _x_transform(threshold)
+
+    def drawn(a: Any) -> np.ndarray:
+        return t.transform(np.asarray(a, dtype=float).reshape(-1, 1)).ravel()
+
+    ends = drawn(values)
+    moved = drawn(x) + fraction * (float(ends.max() - ends.min()) or 1.0)
+    return t.inverted().transform(moved.reshape(-1, 1)).ravel()
+
+
+def _set_x_scale(ax: Axes, values: Any, threshold: float | None, scale: float = 1.0) -> None:
+    """Where ``threshold`` is set, a symmetric-log x axis labelled at the swept ``values``
+    (shown divided by ``scale``) with 5 % of its drawn span to spare at each end; else the
+    linear axis is kept."""
+    if threshold is None:
+        return
+    v = np.unique(np.asarray(values, float))
+    ax.set_xscale("symlog", linthresh=threshold / scale, linscale=LINSCALE)
+    ax.set_xlim(*(_dodged(v[[0, -1]], np.array([-0.05, 0.05]), v, threshold) / scale))
+    ax.xaxis.set_major_locator(FixedLocator(v / scale))
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:.3g}"))
+    ax.xaxis.set_minor_locator(NullLocator())
+
+
+# --------------------------------------------------------------------------------------------
 # Fig. 1: loss against clutter
 
 
-def _rate_points(frame: pd.DataFrame, x_key: str, rule: str,
-                 names: Sequence[str]) -> pd.DataFrame:
+def _rate_points(frame: pd.DataFrame, x_key: str, rule: str, names: Sequence[str],
+                 threshold: float | None = None) -> pd.DataFrame:
     """Rate of ``rule`` against ``x_key`` per algorithm of ``names``, one row per point and
-    algorithm: ``name``, ``x`` (offset slightly per algorithm so that equal values stay
-    visible), ``k`` flagged of ``n``, ``pct`` and its 95 % Wilson ``lo``, ``hi`` (%)."""
+    algorithm: ``name``, ``x`` (offset slightly per algorithm on the page, on an x axis of
+    :func:`_symlog_threshold` ``threshold``, so that equal values stay visible), ``k``
+    flagged of ``n``, ``pct`` and its 95 % Wilson ``lo``, ``hi`` (%)."""
     values = frame[x_key].astype(float)
-    unit = float(values.max() - values.min() or 1.0) * min(0.012, 0.03 / len(names))
+    unit = min(0.012, 0.03 / len(names))
     parts = []
     for i, name in enumerate(names):
         r = _rates(frame[frame["algorithm"] == name], x_key, rule)
-        parts.append(r.reset_index(drop=True).assign(
-            name=name, x=r.index.to_numpy(float) + unit * (i - (len(names) - 1) / 2)))
+        x = _dodged(r.index, unit * (i - (len(names) - 1) / 2), values, threshold)
+        parts.append(r.reset_index(drop=True).assign(name=name, x=x))
     return pd.concat(parts, ignore_index=True)
 
 
@@ -474,11 +562,33 @@ def _with_bars(points: pd.DataFrame, every_bar: bool) -> pd.DataFrame:
     return points.assign(bar=True if every_bar else points["k"] > 0)
 
 
+def _curve_kwargs(points: pd.DataFrame) -> dict[str, dict[str, Any]]:
+    """Line keyword arguments of each curve of :func:`_rate_points`, in drawing order; a
+    curve equal at every swept value to curves drawn after it (fig1_claim: both at 0 %
+    everywhere) is wider than the widest of them and has larger open markers, so that it
+    shows around them (nested when several coincide)."""
+    curves = [(str(name), r["pct"].to_numpy()) for name, r in points.groupby("name",
+                                                                             sort=False)]
+    kwargs: dict[str, dict[str, Any]] = {}
+    for i in reversed(range(len(curves))):
+        name, pct = curves[i]
+        kw = line_kwargs(name)
+        over = [kwargs[later] for later, p in curves[i + 1:]
+                if len(p) == len(pct) and np.array_equal(p, pct)]
+        if over:
+            kw.update(linewidth=max(k["linewidth"] for k in over) + 2.2,
+                      markersize=max(k.get("markersize", 4.0) for k in over) + 3.5,
+                      markerfacecolor="none", markeredgewidth=1.3)
+        kwargs[name] = kw
+    return {name: kwargs[name] for name, _ in curves}
+
+
 def _draw_rates(ax: Axes, points: pd.DataFrame) -> None:
-    """The curves of :func:`_rate_points` (with :func:`_with_bars`), each with its 95 %
-    Wilson error bars where ``bar``."""
+    """The curves of :func:`_rate_points` (with :func:`_with_bars`; looks of
+    :func:`_curve_kwargs`), each with its 95 % Wilson error bars where ``bar``."""
+    looks = _curve_kwargs(points)
     for name, r in points.groupby("name", sort=False):
-        kw = line_kwargs(str(name))
+        kw = looks[str(name)]
         ax.plot(r["x"], r["pct"], **kw)
         bars = r[r["bar"]]
         ax.errorbar(bars["x"], bars["pct"], yerr=[bars["pct"] - bars["lo"],
@@ -616,8 +726,10 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
     n_panels = len(facets) * len(columns)
     ncols = len(columns) if len(columns) > 1 else min(len(facets), MAX_FACETS)
     every_bar = max(len(names) for _, names, _ in columns) <= 2
+    threshold = _symlog_threshold(last["clutter.mean"])
     panels = [(frame, rule, _with_bars(_rate_points(frame, "clutter.mean", rule,
-                                                    _emphasis_last(names)), every_bar))
+                                                    _emphasis_last(names), threshold),
+                                       every_bar))
               for _, frame in facets for _, names, rule in columns]
     zero = [None if every_bar else _zero_bound(frame, "clutter.mean") for frame, _, _ in panels]
     tops = [_loss_top(points, z[1] if z else 0.0) for (_, _, points), z in zip(panels, zero,
@@ -627,7 +739,7 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
     zero_labels = {_zero_label(z, top) for z, top in zip(zero, tops, strict=True) if z}
     entries = len({n for _, names, _ in columns for n in names}) + claim + past \
         + len(zero_labels) + 1
-    panel = SINGLE_PANEL if n_panels == 1 else PANEL
+    panel = _printable(SINGLE_PANEL if n_panels == 1 else PANEL, ncols)
     titles = _wrapped([", ".join(t for t in (
         col_title if len(rules) == 1 else f"{col_title}, {words[rule]}",
         facet_title if len(facets) > 1 else "") if t)
@@ -640,6 +752,7 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
             _draw_claim(ax)
         _draw_rates(ax, points)
         _fit_loss_axis(ax, top, points, z)
+        _set_x_scale(ax, last["clutter.mean"], threshold)
         ax.set_xlabel(_axis_label("clutter.mean", run.params))
         ax.set_ylabel(RULES[rule][0])
         ax.set_title(panel_title)
@@ -672,12 +785,13 @@ def _index_figure(run: RunData) -> Figure | str:
              _context(run, "truth q = filter q")]
     free = last[last["clutter.mean"] == 0]
     rules = ("lost_angle", "lost_gate")
-    points = [_with_bars(_rate_points(with_clutter, "index", rule, names), False)
+    threshold = _symlog_threshold(last["index"])
+    points = [_with_bars(_rate_points(with_clutter, "index", rule, names, threshold), False)
               for rule in rules]
     zero = _zero_bound(with_clutter, "index")
     top = _loss_top(pd.concat(points), zero[1])  # one y range: the same quantity
     past = any(len(_past_top(p, top)) for p in points)
-    fig, axes, cols = _figure(2, 2, PANEL, title,
+    fig, axes, cols = _figure(2, 2, _printable(PANEL, 2), title,
                               len(names) + 2 + (len(free) > 0) + past, 1)
     for ax, rule, drawn in zip(axes, rules, points, strict=True):
         _draw_rates(ax, drawn)
@@ -686,6 +800,7 @@ def _index_figure(run: RunData) -> Figure | str:
             worst = free.groupby(["index", "algorithm"])[rule].mean().groupby(level=0).max()
             ax.plot(worst.index, 100 * worst, "x", color=GREYS[0], markersize=6,
                     label="no clutter (worst algorithm)", zorder=4)
+        _set_x_scale(ax, last["index"], threshold)
         ax.set_xlabel("manoeuvring index sqrt(q) T^2 / (r sigma) (1)")
         ax.set_ylabel(RULES[rule][0])
         ax.set_title(_rule_text(rule, run.params, swept_keys(run.config)))
@@ -755,9 +870,9 @@ def _time_figure(run: RunData, draw: PanelDraw, title: Sequence[str], y_label: s
     points = _time_points(run)
     swept = swept_keys(run.config)
     per_row = 3 if len(points) % 3 == 0 or len(points) > 4 else len(points)
-    titles = _wrapped([_point_title(run.point_params(pt), swept) for pt in points],
-                      TIME_PANEL[0])
-    fig, axes, cols = _figure(len(points), per_row, TIME_PANEL, title, legend_entries,
+    panel = _printable(TIME_PANEL, per_row)
+    titles = _wrapped([_point_title(run.point_params(pt), swept) for pt in points], panel[0])
+    fig, axes, cols = _figure(len(points), per_row, panel, title, legend_entries,
                               _lines(titles))
     trials = run.trials
     drawn, fits = [], {}
@@ -766,7 +881,7 @@ def _time_figure(run: RunData, draw: PanelDraw, title: Sequence[str], y_label: s
         if succeeded_rows(frame).empty:
             ax.text(0.5, 0.5, f"all {frame['trial'].nunique()} trials failed\n(status=failed "
                     "in trials.csv)", transform=ax.transAxes, ha="center", va="center",
-                    fontsize=8)
+                    fontsize=NOTE_PT)
             ax.set_ylim(bottom=0)
         else:
             fits[i] = draw(ax, frame, run.point_params(pt))
@@ -822,7 +937,7 @@ def _fit_range_axis(ax: Axes, top: float, single_runs: np.ndarray,
     reach = float(np.nanmax(single_runs, initial=0.0))
     if reach > top:
         ax.text(0.97, 0.96, f"single runs cut at {top:g} km (highest {reach:.0f} km)",
-                transform=ax.transAxes, fontsize=7, ha="right", va="top")
+                transform=ax.transAxes, fontsize=NOTE_PT, ha="right", va="top")
     _mark_past_top(ax, [(name, t[~(hi <= top)]) for name, t, hi in bands], top)
 
 
@@ -845,16 +960,13 @@ def _pcrlb_curves(params: dict[str, Any]) -> list[tuple[np.ndarray, str, str]]:
     return [(truth, "--", PCRLB_TRUTH), (model, ":", PCRLB_FILTER)]
 
 
-def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
-                names: Sequence[str], beside: Sequence[str] = ()) -> tuple[float, AxisFit]:
-    """Range RMSE (km) with 95 % bootstrap-t bands per scan (the first algorithm's filled,
-    the second's as dashed edges, each band in the legend), the RMSE of the ``beside``
-    algorithms as thin curves on top without bands, five single runs of the first algorithm, the
-    square-root PCRLBs, and the correlation of the first algorithm's errors between the
-    first and the last scan; returns the panel's :data:`PanelDraw` pair."""
-    period = float(params["scan.period"])
+def _draw_bands(ax: Axes, frame: pd.DataFrame, period: float, names: Sequence[str],
+                beside: Sequence[str]) -> tuple[float, list[tuple[str, np.ndarray, np.ndarray]],
+                                                pd.DataFrame]:
+    """The RMSE curves of :func:`_draw_range`: ``(highest RMSE (km), [(algorithm, t (s),
+    band's upper end (km))], the first algorithm's band (per scan: rmse, lo, hi, km))``."""
     top = 0.0
-    bands = []
+    bands, first = [], pd.DataFrame()
     for name in beside:
         rmse = np.sqrt(frame[frame["algorithm"] == name].groupby("scan")["range_sq_err_m2"]
                        .mean()) / 1e3
@@ -865,6 +977,7 @@ def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
     for i, name in enumerate(names):
         rows = frame[frame["algorithm"] == name]
         band = _rmse_band(rows.groupby("scan")["range_sq_err_m2"]) / 1e3
+        first = band if i == 0 else first
         top = max(top, float(band["rmse"].max()))
         t = band.index.to_numpy(float) * period
         bands.append((name, t, band["hi"].to_numpy()))
@@ -878,6 +991,39 @@ def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
             ax.plot(t, band["lo"], color=kw["color"], lw=0.6, ls="--",
                     label=f"{label} (dashed edges)")
             ax.plot(t, band["hi"], color=kw["color"], lw=0.6, ls="--")
+    return top, bands, first
+
+
+def _below_bound_everywhere(band: pd.DataFrame, bound: np.ndarray) -> bool:
+    """Whether the RMSE of ``band`` (per scan: rmse, lo, hi, km) is below ``bound`` (km, per
+    scan) at every scan while the bound lies inside the 95 % band at every scan: one
+    sample of runs below the bound, which the runs do not show to be beaten."""
+    rmse, lo, hi = (band[c].to_numpy() for c in ("rmse", "lo", "hi"))
+    return bool(len(rmse) == len(bound) and np.all(rmse < bound)
+                and np.all((lo <= bound) & (bound <= hi)))
+
+
+def _range_note(band: pd.DataFrame, bound: np.ndarray, runs: int, scans: int,
+                corr: float) -> str:
+    """The note of a range panel: the correlation of the errors between the first and the
+    last scan, said as why the RMSE may lie below the bound at every scan where it does
+    while the bound lies inside the band (:func:`_below_bound_everywhere`)."""
+    if _below_bound_everywhere(band, bound):
+        return (f"below the bound at all {scans} scans:\none sample of {runs} runs, errors\n"
+                f"correlated across scans ({corr:.2f});\nthe bound lies inside the 95 % band")
+    return f"corr. of errors, scan 1 vs {scans}: {corr:.2f}"
+
+
+def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
+                names: Sequence[str], beside: Sequence[str] = ()) -> tuple[float, AxisFit]:
+    """Range RMSE (km) with 95 % bootstrap-t bands per scan (the first algorithm's filled,
+    the second's as dashed edges, each band in the legend), the RMSE of the ``beside``
+    algorithms as thin curves on top without bands, five single runs of the first algorithm, the
+    square-root PCRLBs, and a note (:func:`_range_note`) with the correlation of the first
+    algorithm's errors between the first and the last scan; returns the panel's
+    :data:`PanelDraw` pair."""
+    period = float(params["scan.period"])
+    top, bands, first = _draw_bands(ax, frame, period, names, beside)
     errors = frame[frame["algorithm"] == names[0]].pivot(index="trial", columns="scan",
                                                          values="range_err_m")
     single = errors.to_numpy()[:SINGLE_RUNS] / 1e3
@@ -890,8 +1036,10 @@ def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
     for bound, style, label in _pcrlb_curves(params):
         ax.plot(times, bound, color="k", ls=style, lw=1.0, label=label)
     corr = float(np.corrcoef(errors.iloc[:, 0], errors.iloc[:, -1])[0, 1])
-    ax.text(0.03, 0.04, f"corr. of errors, scan 1 vs {errors.columns[-1]}: {corr:.2f}",
-            transform=ax.transAxes, fontsize=7, va="bottom", zorder=7,
+    note = _range_note(first, bounds(params)[0] / 1e3, len(errors), int(errors.columns[-1]),
+                       corr)
+    ax.text(0.03, 0.04, note, transform=ax.transAxes, fontsize=NOTE_PT, va="bottom",
+            zorder=7, linespacing=1.1,
             bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.8, "pad": 1.0})
     needed = _range_top(max(top, float(np.max(bounds(params)[0])) / 1e3), np.abs(single))
     return needed, lambda top: _fit_range_axis(ax, top, np.abs(single), bands)
@@ -902,8 +1050,8 @@ def _range_figure(run: RunData) -> Figure:
     algorithms = run.config["params"]["algorithms"]
     names = _headline_pair(algorithms)
     beside = [n for n in _main_algorithms(algorithms) if n not in names]
-    title = [f"{_fig_words(run, 2)}: range RMSE against time ({_runs(run.trials)} runs per "
-             "point)", _context(run, "95 % bootstrap-t bands; grey: single runs")]
+    title = [f"{_fig_words(run, 2)}: range RMSE against time ({_per_point(run)})",
+             _context(run, "95 % bootstrap-t bands; grey: single runs")]
     labels = {label for pt in _time_points(run)
               for _, _, label in _pcrlb_curves(run.point_params(pt))}
     return _time_figure(run, lambda ax, f, p: _draw_range(ax, f, p, names, beside), title,
@@ -911,32 +1059,66 @@ def _range_figure(run: RunData) -> Figure:
                         {*labels, PAST_TOP_LABEL})
 
 
-def _fit_nees_axis(ax: Axes, top: float) -> None:
-    """y from 0 to ``top`` (a tick at least 3 % above the highest marker), labelled there."""
-    ax.set_ylim(0.0, top)
-    ax.yaxis.set_major_locator(FixedLocator(_round_ticks(top)))
+LOG_STEPS = (1.0, 2.0, 3.0, 5.0)
+"""Labelled values of a log axis in each decade."""
+
+
+def _log_ticks(low: float, high: float) -> np.ndarray:
+    """The values of :data:`LOG_STEPS` times a power of ten from the last at or below
+    ``low`` to the first at or above ``high`` (both > 0)."""
+    decades = np.arange(math.floor(math.log10(low)) - 1, math.ceil(math.log10(high)) + 1)
+    ticks = np.sort([step * 10.0**d for d in decades for step in LOG_STEPS])
+    return ticks[(ticks >= ticks[ticks <= low].max()) & (ticks <= ticks[ticks >= high].min())]
+
+
+def _anees(frame: pd.DataFrame, name: str) -> pd.Series:
+    """6-state ANEES of ``name`` per scan in the rows ``frame``."""
+    return frame[frame["algorithm"] == name].groupby("scan")["nees"].mean()
+
+
+def _anees_range(run: RunData, names: Sequence[str]) -> tuple[float, float]:
+    """``(low, high)`` of every ANEES curve of ``names`` and every 95 % chi-square band of
+    the panels of :func:`_time_points`: one log y range for all of them."""
+    values = []
+    for pt in _time_points(run):
+        frame = succeeded_rows(run.trials[run.trials["point"] == pt])
+        if not frame.empty:
+            values += [*nees_band(6, int(frame["trial"].nunique())),
+                       *(v for n in names for v in _anees(frame, n).to_numpy())]
+    finite = np.array([v for v in values if np.isfinite(v) and v > 0] or [6.0])
+    return float(finite.min()), float(finite.max())
+
+
+def _fit_nees_axis(ax: Axes, ticks: np.ndarray) -> None:
+    """A log y axis from the first to the last of ``ticks`` (:func:`_log_ticks`), labelled
+    at each of them."""
+    ax.set_yscale("log")
+    ax.set_ylim(float(ticks[0]), float(ticks[-1]))
+    ax.yaxis.set_major_locator(FixedLocator(ticks))
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:.3g}"))
+    ax.yaxis.set_minor_locator(NullLocator())
 
 
 def _nees_figure(run: RunData) -> Figure:
-    """Diagnostic: 6-state ANEES against time (s) with its 95 % chi-square band."""
+    """Diagnostic: 6-state ANEES against time (s) with its 95 % chi-square band, every panel
+    on one log y axis (:func:`_anees_range`), so that panels compare."""
     algorithms = run.config["params"]["algorithms"]
     names = list(dict.fromkeys(_headline_pair(algorithms) + _main_algorithms(algorithms)))
+    low, high = _anees_range(run, names)
+    ticks = _log_ticks(low / 1.05, high * 1.05)
 
     def draw(ax: Axes, frame: pd.DataFrame, params: dict[str, Any]) -> tuple[float, AxisFit]:
         period = float(params["scan.period"])
-        n_runs = int(frame["trial"].nunique())
-        lo, hi = nees_band(6, n_runs)
+        lo, hi = nees_band(6, int(frame["trial"].nunique()))
         ax.axhspan(lo, hi, color="k", alpha=0.12, lw=0, label="95 % chi-square band")
         ax.axhline(6.0, color="k", lw=0.8)
-        highest = hi
         for name in names:
-            anees = frame[frame["algorithm"] == name].groupby("scan")["nees"].mean()
+            anees = _anees(frame, name)
             ax.plot(anees.index * period, anees, **_time_curve_kwargs(name))
-            highest = max(highest, float(anees.max()))
-        return _tick_ceiling(1.03 * highest), lambda top: _fit_nees_axis(ax, top)
+        return float(ticks[-1]), lambda _top: _fit_nees_axis(ax, ticks)
 
-    title = [f"Diagnostic: average NEES (6 states) against time ({_runs(run.trials)} runs per "
-             "point)", _context(run, "a consistent filter stays inside the band")]
+    title = [f"Diagnostic: average NEES (6 states) against time ({_per_point(run)})",
+             _context(run, "a consistent filter stays inside the band")]
     return _time_figure(run, draw, title, "ANEES (1)", len(names) + 1)
 
 
@@ -974,21 +1156,24 @@ def _final_figure(run: RunData) -> Figure | str:
     title = [("Paper Fig. 2 quantified: final" if quantified else "Final")
              + f" range RMSE ({_runs(last)} runs per point)",
              _context(run, "95 % bootstrap-t intervals")]
-    panel = SINGLE_PANEL if len(facets) == 1 else PANEL if len(facets) == 2 else TIME_PANEL
+    per_row = min(len(facets), 3)
+    panel = _printable(SINGLE_PANEL if len(facets) == 1 else PANEL if len(facets) == 2
+                       else TIME_PANEL, per_row)
     titles = _wrapped([t if len(facets) > 1 else "" for t, _ in facets], panel[0])
-    curves = [_final_bounds(run, frame, x_key) for _, frame in facets]
+    threshold = _symlog_threshold(last[x_key])
+    curves = [_final_bounds(run, frame, x_key, threshold) for _, frame in facets]
     labels = {label for facet in curves for *_, label in facet}
     points = [_final_points(frame, x_key, names) for _, frame in facets]
-    per_row = min(len(facets), 3)
+    few = [_few_runs_carry(frame, x_key, names) for _, frame in facets]
     needed = {i: _final_top(p, c) for i, (p, c) in enumerate(zip(points, curves, strict=True))}
     tops = list(_shared_tops(needed, per_row).values())
     past = any(len(x) for p, top in zip(points, tops, strict=True)
                for _, x in _past_final_top(p, top))
     fig, axes, cols = _figure(len(facets), per_row, panel, title,
-                              len(names) + len(labels) + past, _lines(titles))
-    for ax, facet_points, bound_curves, top, facet_title in zip(axes, points, curves, tops,
-                                                                titles, strict=True):
-        _draw_final(ax, facet_points, x_key, bound_curves, top)
+                              len(names) + len(labels) + past + any(few), _lines(titles))
+    for ax, facet_points, bound_curves, top, facet_title, facet_few in zip(
+            axes, points, curves, tops, titles, few, strict=True):
+        _draw_final(ax, facet_points, x_key, bound_curves, top, facet_few, threshold)
         ax.set_xlabel(_axis_label(x_key, run.params))
         ax.set_ylabel("final range RMSE (km)")
         ax.set_title(facet_title)
@@ -997,20 +1182,22 @@ def _final_figure(run: RunData) -> Figure | str:
         if label not in shown:  # a bound only another facet draws: its legend entry
             axes[0].plot([], [], color="k", ls=style, lw=1.0, label=label)
             shown.add(label)
-    return _finish(fig, axes[:1], cols, everywhere=(PAST_TOP_LABEL,))
+    return _finish(fig, axes[:1], cols, everywhere=(PAST_TOP_LABEL, FEW_LABEL))
 
 
-def _final_bounds(run: RunData, frame: pd.DataFrame, x_key: str
+def _final_bounds(run: RunData, frame: pd.DataFrame, x_key: str, threshold: float | None
                   ) -> list[tuple[np.ndarray, np.ndarray, str, str]]:
     """``[(x, range bound at the last scan (km), line style, label)]`` of a facet: the truth
-    model's (dashed; 41 points across the swept values and the values themselves) and the
+    model's (dashed; 41 points evenly spread on the drawn x axis, of
+    :func:`_symlog_threshold` ``threshold``, and the swept values themselves) and the
     filter's ``q``'s (dotted, at the swept values), or the truth model's alone, dash-dot and
     labelled :data:`PCRLB_BOTH`, where the two differ by less than 1 % at every swept value
     (as :func:`_pcrlb_curves` does against time)."""
     values = np.sort(frame[x_key].astype(float).unique())
     base = run.point_params(int(frame["point"].iloc[0]))
     kind = SCHEMA[x_key].kind
-    grid = np.unique(np.concatenate([np.linspace(values[0], values[-1], 41), values]))
+    grid = np.unique(np.concatenate([_dodged(values[0], np.linspace(0.0, 1.0, 41), values,
+                                             threshold), values]))
     truth = np.array([bounds({**base, x_key: kind(v)})[0][-1] / 1e3 for v in grid])
     model = np.array([bounds({**base, x_key: kind(v)}, q_model=float(base["filter.q"])
                              if x_key != "filter.q" else float(v))[0][-1] / 1e3
@@ -1021,25 +1208,81 @@ def _final_bounds(run: RunData, frame: pd.DataFrame, x_key: str
     return [(grid, truth, "--", PCRLB_TRUTH), (values, model, ":", PCRLB_FILTER)]
 
 
+FEW_RUNS, MOST_ERROR = 0.1, 0.5
+"""A point's final RMSE is carried by a few runs when the runs the ``final_scan`` table
+flags (lost by either rule, or inconsistent) are at most ``FEW_RUNS`` of its runs and carry
+more than ``MOST_ERROR`` of its summed squared range error."""
+FEW_LABEL = ("point not joined: flagged runs (lost or inconsistent, <= 10 % of its runs) "
+             "carry most of its squared error")
+FewRuns = dict[str, dict[float, tuple[int, int, float]]]
+"""Per algorithm, the swept values whose RMSE a few runs carry: ``(flagged runs, runs,
+their share of the squared error)``, from :func:`_few_runs_carry`."""
+
+
+def _few_runs_carry(frame: pd.DataFrame, x_key: str, names: Sequence[str]) -> FewRuns:
+    """:data:`FewRuns` of the last-scan rows ``frame`` against ``x_key``
+    (:data:`FEW_RUNS`, :data:`MOST_ERROR`; twin_sensor_baseline at 40 km: 2 of 50 runs,
+    inconsistent, run off in range and carry 95 % of it)."""
+    flagged = frame[list(RULES)].max(axis=1) > 0
+    out: FewRuns = {}
+    for name in names:
+        for value, rows in frame[frame["algorithm"] == name].groupby(x_key):
+            mine = flagged[rows.index]
+            k, n = int(mine.sum()), len(rows)
+            share = float(rows["range_sq_err_m2"][mine].sum() / rows["range_sq_err_m2"].sum())
+            if 0 < k <= FEW_RUNS * n and share > MOST_ERROR:
+                out.setdefault(name, {})[float(value)] = (k, n, share)
+    return out
+
+
 def _draw_final(ax: Axes, points: FinalPoints, x_key: str,
                 bound_curves: Sequence[tuple[np.ndarray, np.ndarray, str, str]],
-                top: float) -> None:
-    """Final range RMSE (km) with intervals per algorithm (``points``), dodged along x, the
-    bounds ``bound_curves`` (:func:`_final_bounds`), y up to ``top`` (:func:`_final_top`)
-    and a triangle there for each interval that passes it."""
+                top: float, few: FewRuns, threshold: float | None) -> None:
+    """Final range RMSE (km) with intervals per algorithm (``points``), dodged along x and
+    joined except at the points a few runs carry (``few``: marker and interval only,
+    annotated), the bounds ``bound_curves`` (:func:`_final_bounds`), y up to ``top``
+    (:func:`_final_top`) and a triangle there for each interval that passes it."""
     scale = _x_scale(x_key)
     values = np.unique(np.concatenate([x for x, *_ in points.values()]))
-    dodge = {name: 0.006 * (values[-1] - values[0]) * (i - (len(points) - 1) / 2)
-             for i, name in enumerate(points)}
+    shifted = {name: _dodged(x, 0.006 * (i - (len(points) - 1) / 2), values, threshold)
+               / scale for i, (name, (x, *_)) in enumerate(points.items())}
     for name, (x, rmse, lo, hi) in points.items():
-        ax.errorbar((x + dodge[name]) / scale, rmse, yerr=[rmse - lo, hi - rmse], capsize=2,
-                    elinewidth=0.8, **line_kwargs(name))
+        alone = np.isin(x, list(few.get(name, {})))
+        for keep, extra in ((~alone, {}), (alone, {"linestyle": "none", "label": "_few"})):
+            if keep.any():
+                ax.errorbar(shifted[name][keep], rmse[keep], capsize=2, elinewidth=0.8,
+                            yerr=[(rmse - lo)[keep], (hi - rmse)[keep]],
+                            **{**line_kwargs(name), **extra})
     for x_bound, bound, style, label in bound_curves:
         ax.plot(x_bound / scale, bound, color="k", ls=style, lw=1.0, label=label)
     ax.set_ylim(0.0, top)
     ax.yaxis.set_major_locator(FixedLocator(_round_ticks(top)))
-    _mark_past_top(ax, [(name, (x + dodge[name]) / scale)
+    _set_x_scale(ax, values, threshold, scale)
+    _mark_past_top(ax, [(name, shifted[name][np.isin(points[name][0], x)])
                         for name, x in _past_final_top(points, top)], top)
+    _annotate_few(ax, points, few, scale)
+
+
+def _annotate_few(ax: Axes, points: FinalPoints, few: FewRuns, scale: float) -> None:
+    """Beside each swept value where a few runs carry an algorithm's RMSE (``few``), how
+    many and what share ("2/50 flagged runs: 95 % of the MSE"), once per value; the
+    legend entry :data:`FEW_LABEL` when there is one."""
+    notes: dict[float, dict[str, float]] = {}
+    for name, at in few.items():
+        x, rmse, *_ = points[name]
+        for value, (k, n, share) in at.items():
+            y = float(rmse[x == value][0])
+            text = f"{k}/{n} flagged runs:\n{100 * share:.0f} % of the MSE"
+            notes.setdefault(value, {}).setdefault(text, y)
+    for value, texts in notes.items():
+        ax.annotate("\n".join(texts), (value / scale, max(texts.values())),
+                    xytext=(-7, 0), textcoords="offset points", ha="right", va="center",
+                    fontsize=NOTE_PT, zorder=7, bbox={"facecolor": "white",
+                                                      "edgecolor": "none", "alpha": 0.8,
+                                                      "pad": 1.0})
+    if notes:
+        ax.plot([], [], ls="none", marker="o", markerfacecolor="none", color=GREYS[0],
+                label=FEW_LABEL)
 
 
 # --------------------------------------------------------------------------------------------
