@@ -6,6 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+import trackfuse
 from trackfuse import harness
 from trackfuse.compare import compare_runs, compare_trials
 
@@ -178,3 +179,17 @@ def test_runs_of_one_seed_and_different_trial_counts_pair_on_the_shared_trials(t
     assert not unpaired.paired and "seeds differ, 3 and 4" in unpaired.pairing
     assert unpaired.config_differences == (("trials", 30, 60), ("seed", 3, 4),
                                            ("params.n", 5, 6))
+
+
+def test_compare_refuses_a_run_whose_every_trial_failed_and_a_run_against_itself(tmp_path):
+    """A run of failed trials has no row-key columns: compare crashed with a KeyError
+    traceback (exit 1, which `--fail-on-regression` reads as a regression); a run compared
+    with itself passed the gate, so a typo in a CI script always passed."""
+    base = harness.run_data(tmp_path / "a", "toy_gaussian", {"n": 5}, trials=4, seed=3)
+    failed = harness.run_data(tmp_path / "b", "toy_gaussian", {"n": 5, "fail_every": 1},
+                              trials=4, seed=3)
+    for pair in ((base, failed), (failed, base)):
+        with pytest.raises(ValueError, match="every trial of the run failed"):
+            compare_runs(*pair)
+    with pytest.raises(ValueError, match="the same run"):
+        compare_runs(base, trackfuse.load(base.path))

@@ -260,7 +260,13 @@ def compare_runs(base: RunData, new: RunData, tolerance: Mapping[str, float] | N
                          f"{new.config['experiment']!r}")
     if list(base.sweep) != list(new.sweep):
         raise ValueError(f"different swept keys: {list(base.sweep)} and {list(new.sweep)}")
+    if base.path.resolve() == new.path.resolve():
+        raise ValueError(f"{base.path}: BASE and NEW are the same run; compare needs two runs")
     for run in (base, new):
+        if succeeded_rows(run.trials).empty:
+            raise ValueError(f"{run.path}: every trial of the run failed "
+                             f"({run.manifest.get('trials_failed', '?')} of "
+                             f"{run.manifest.get('trials_total', '?')}): nothing to compare")
         points = [repr([p[k] for k in run.sweep]) for p in run.points]
         if len(set(points)) < len(points):
             raise ValueError(f"{run.path}: a sweep point comes twice (a run of a version "
