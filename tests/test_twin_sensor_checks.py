@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import trackfuse
 
 from trackfuse.config import ConfigError, build
 from trackfuse.experiments.twin_sensor.checks import GEOMETRY_KEYS
@@ -119,3 +120,13 @@ def test_validating_a_config_does_not_import_scipy():
     probe = ("import sys; from trackfuse.config import load; "
              f"load({str(ORBIT)!r}); assert 'scipy' not in sys.modules, 'scipy imported'")
     subprocess.run([sys.executable, "-c", probe], check=True)
+
+
+@pytest.mark.parametrize("key", ["target.position", "platform.start", "target.velocity"])
+def test_validate_refuses_a_position_or_velocity_beyond_any_scenario(key, write_config):
+    """`target.position: [0, 1e160, 4000]` was accepted: the run reported complete with every
+    metric NaN under pages of numpy overflow warnings."""
+    cfg = write_config(f"experiment: twin_sensor\ntrials: 2\nparams:\n  {key}: [0.0, 1e160, 0.0]\n")
+    result = trackfuse("validate", cfg)
+    assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr
+    assert f"params.{key}:" in result.stderr and "allowed: a list of 3 numbers in" in result.stderr
