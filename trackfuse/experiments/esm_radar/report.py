@@ -677,7 +677,7 @@ PAPER_ZORDER = 1.5
 #: Sideways offsets (points) of the curves drawn with error bars (variants, references), by
 #: their order in the figure: beside the banded curves' markers and each other's, so that
 #: equal rates stay in sight; their data stay at the grid values. Constant on the page:
-#: 3 points is about 5 % of x on the separation axis (50 m to 2 km in a panel 3 in wide),
+#: 3 points is about 6 % of x on the separation axis (50 m to 2 km in a panel 2.8 in wide),
 #: so that a cluster stays at its setting, well apart from 750 m and 1000 m.
 BAR_DODGE_PT = (-3.0, 3.0, -6.0, 6.0, -9.0, 9.0)
 #: Drawing order of the curves with error bars: thin, above the thick banded ones (3).
@@ -980,6 +980,13 @@ def _star_notes(run: RunData, drawn: bool) -> list[str]:
             for key, symbol in PAPER_GIVES_NO.items() if drawn and key in run.sweep]
 
 
+def _balanced(text: str, chars: int) -> int:
+    """A line width for wrapping ``text`` into as few lines of at most ``chars`` as
+    :func:`textwrap.wrap` needs, about equally long (not a last line of one word)."""
+    lines = len(textwrap.wrap(text, chars))
+    return min(chars, -(-len(text) // lines) + 12) if lines > 1 else chars
+
+
 def _wrap_suptitle(fig: Figure, title: str) -> None:
     """``title`` as ``fig``'s suptitle, each line wrapped to the figure's width between its
     ``; ``-separated parts, a part longer than a line between its words."""
@@ -988,7 +995,7 @@ def _wrap_suptitle(fig: Figure, title: str) -> None:
     for line in title.split("\n"):
         lines.append("")
         pieces = [(k == 0, piece) for whole in line.split("; ")
-                  for k, piece in enumerate(textwrap.wrap(whole, chars))]
+                  for k, piece in enumerate(textwrap.wrap(whole, _balanced(whole, chars)))]
         for first, piece in pieces:
             sep = ";" if first else ""
             joined = f"{lines[-1]}{sep} {piece}" if lines[-1] else piece
