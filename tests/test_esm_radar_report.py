@@ -8,20 +8,34 @@ import matplotlib.figure
 import numpy as np
 import pandas as pd
 import pytest
-from figure_checks import alike_legend_entries, inside_canvas, text_overlaps
+from figure_checks import (
+    alike_legend_entries,
+    inside_canvas,
+    smallest_printed_text,
+    text_overlaps,
+)
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import PolyCollection
 from matplotlib.colors import to_rgba
 
 from trackfuse import harness
 from trackfuse.config import load
 from trackfuse.experiments.esm_radar import EXPERIMENT, model, report
 from trackfuse.plots.algorithms import look
+from trackfuse.plots.style import RC, context
 from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS, save_figure
 from trackfuse.rundata import RunData
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = sorted(ROOT.glob("configs/esm_radar_*.yaml"))
 UNIT = re.compile(r"\(.+\)")
+
+
+
+def house_figures(run: RunData, names: list[str]) -> dict:
+    """The report's figures drawn as the report draws them: inside the house style."""
+    with context():
+        return report.figures(run, names)
 
 
 @pytest.fixture(scope="module", params=CONFIGS, ids=lambda p: p.stem)
@@ -47,7 +61,7 @@ def categorical(axis) -> bool:
 
 
 def test_every_figure_of_every_shipped_config_is_drawn_cleanly(shipped_run):
-    figs = report.figures(shipped_run, list(EXPERIMENT.figures))
+    figs = house_figures(shipped_run, list(EXPERIMENT.figures))
     assert set(figs) == set(EXPERIMENT.figures)
     run_algorithms = set(shipped_run.params["algorithms"])
     for name, fig in figs.items():
@@ -59,7 +73,9 @@ def test_every_figure_of_every_shipped_config_is_drawn_cleanly(shipped_run):
         assert text_overlaps(fig) == [], name
         assert inside_canvas(fig), name
         assert alike_legend_entries(fig) == [], name
-        assert fig.get_suptitle().count("\n") <= 1, name
+        assert fig.get_suptitle().count("\n") <= 3, name  # wrapped to the figure's width
+        # printed on a 7.16 in page, no text under 6.5 pt (it was 5.5 pt in 10.4 in figures)
+        assert smallest_printed_text(fig)[0] >= 6.5, (name, smallest_printed_text(fig))
         for ax in (a for a in fig.axes if a.has_data()):
             if not categorical(ax.yaxis):
                 assert UNIT.search(ax.get_ylabel()), (name, ax.get_ylabel())
@@ -90,7 +106,7 @@ def _cut_markers(fig: matplotlib.figure.Figure) -> list[str]:
 def test_figures_say_log_scale_fit_their_labels_and_cut_no_marker(shipped_run):
     """A log axis says so in its label; a y label is no taller than its axes (it ran into
     the title); no marker is cut by an axes edge (a rate of 100 % sat on the top spine)."""
-    figs = report.figures(shipped_run, list(EXPERIMENT.figures))
+    figs = house_figures(shipped_run, list(EXPERIMENT.figures))
     for name, fig in ((n, drawn(f)) for n, f in figs.items() if not isinstance(f, str)):
         renderer = fig.canvas.get_renderer()
         assert _cut_markers(fig) == [], name
@@ -107,10 +123,19 @@ def _lines(fig, prefix: str) -> list:
     return [ln for ax in fig.axes for ln in ax.get_lines() if ln.get_label().startswith(prefix)]
 
 
+def _star_settings(run: RunData, x: str, star) -> set[float]:
+    """The values of ``x`` at which the paper's values ``star`` are drawn: its x data on a
+    curve panel, the category it is drawn in (nearest slot) in a categories panel."""
+    values = sorted({p[x] for p in run.points})
+    if len(values) <= report.MAX_CATEGORIES:
+        return {values[round(v)] for v in star.get_xdata()}
+    return {v / report.AXES[x][1] for v in star.get_xdata()}
+
+
 def test_main_figure_draws_our_rates_the_papers_values_and_chance(shipped_run):
     """The paper's Table 3 values are drawn at every point of the run at its setting (200 m,
     1 %, the 1 km weave) whatever else is swept (d/lambda, the index), and nowhere else."""
-    fig = report.figures(shipped_run, ["correct_rate"])["correct_rate"]
+    fig = house_figures(shipped_run, ["correct_rate"])["correct_rate"]
     stars = _lines(fig, "paper's Table 3")
     at = [p for p in shipped_run.points if report.at_paper_setting(p)]
     values = {"improved": 74.0, "traditional": 55.2}
@@ -125,12 +150,11 @@ def test_main_figure_draws_our_rates_the_papers_values_and_chance(shipped_run):
         if x is None:  # one row per method: the star's x is the paper's rate
             assert np.allclose(star.get_xdata(), value)
         else:  # at the x of each point at the paper's setting, the paper's rate as y
-            scale = report.AXES[x][1]
-            assert set(star.get_xdata()) <= {scale * p[x] for p in at}
+            assert _star_settings(shipped_run, x, star) <= {p[x] for p in at}
             assert np.allclose(star.get_ydata(), value)
     if x is not None and stars:
-        assert {v for ln in stars for v in ln.get_xdata()} == {
-            report.AXES[x][1] * p[x] for p in at}
+        assert set().union(*(_star_settings(shipped_run, x, ln) for ln in stars)) == {
+            p[x] for p in at}
     chance = _lines(fig, "chance between T1 and T2 (50 %)")
     assert chance and all(50.0 in np.ravel(ln.get_xydata()) for ln in chance)
     labels = {ln.get_label() for ax in fig.axes for ln in ax.get_lines()}
@@ -141,7 +165,7 @@ def test_curves_are_the_summary_means(tmp_path):
     run = harness.run_data(tmp_path, "esm_radar", {"algorithms": ["traditional", "improved"]},
                            {"target.separation": [100.0, 300.0, 1000.0, 2000.0]}, trials=10,
                            seed=3)
-    fig = report.figures(run, ["correct_rate"])["correct_rate"]
+    fig = house_figures(run, ["correct_rate"])["correct_rate"]
     (line,) = _lines(fig, "improved fuzzy evaluation (paper)")
     s = run.summary.query("metric == 'correct' and algorithm == 'improved'")
     np.testing.assert_allclose(line.get_ydata(), 100 * s.sort_values("target.separation")["mean"])
@@ -153,7 +177,7 @@ def test_curves_are_the_summary_means(tmp_path):
 def test_groups_without_their_algorithms_give_a_reason(tmp_path):
     run = harness.run_data(tmp_path, "esm_radar", {"algorithms": ["traditional", "improved"]},
                            None, trials=4, seed=1)
-    figs = report.figures(run, list(EXPERIMENT.figures))
+    figs = house_figures(run, list(EXPERIMENT.figures))
     assert isinstance(figs["correct_rate_references"], str)
     assert isinstance(figs["correct_rate_ablations"], str)
     assert isinstance(figs["correct_rate"], matplotlib.figure.Figure)
@@ -266,7 +290,7 @@ def test_trajectory_places_the_esm_track_on_the_truth_without_noise(tmp_path):
                            seed=4)
     errors = model.decode_series(run.trials["esm_range_error_per_scan_m"].dropna())
     assert np.all(np.abs(errors) <= 0.5)  # written to the metre
-    fig = report.figures(run, ["trajectory"])["trajectory"]
+    fig = house_figures(run, ["trajectory"])["trajectory"]
     (esm,) = _lines(fig, "ESM TDOA-DF location")
     t = model.esm_times(run.point_params(0))
     truth = model.scenario(run.point_params(0)).states(t)[0][:, model.TRUE_TRACK] / 1e3
@@ -285,7 +309,7 @@ def test_per_scan_figures_never_simulate(shipped_run, monkeypatch):
 
     for name in ("simulate", "run_batch", "evaluate", "manoeuvre_alpha"):
         monkeypatch.setattr(model, name, refuse)
-    figs = report.figures(shipped_run, ["trajectory", "manoeuvre"])
+    figs = house_figures(shipped_run, ["trajectory", "manoeuvre"])
     assert all(isinstance(f, matplotlib.figure.Figure) for f in figs.values())
 
 
@@ -295,7 +319,7 @@ def test_runs_without_per_scan_columns_say_why(tmp_path):
     old = run.trials.drop(columns=[c for c in run.trials if c.endswith("_per_scan")
                                    or "_per_scan_" in c])
     run.__dict__["trials"] = old
-    figs = report.figures(run, ["trajectory", "manoeuvre"])
+    figs = house_figures(run, ["trajectory", "manoeuvre"])
     assert figs == {"trajectory": report.NO_SERIES, "manoeuvre": report.NO_SERIES}
 
 
@@ -308,7 +332,7 @@ def test_every_grid_value_of_a_log_axis_is_labelled(tmp_path):
     for key, (grid, scale) in grids.items():
         run = harness.run_data(tmp_path / key, "esm_radar", {"algorithms": ["improved"]},
                                {key: grid}, trials=2, seed=1)
-        fig = drawn(report.figures(run, ["correct_rate"])["correct_rate"])
+        fig = drawn(house_figures(run, ["correct_rate"])["correct_rate"])
         ticks = [t.get_text() for t in fig.axes[0].get_xticklabels() if t.get_text()]
         assert ticks == [f"{scale * v:g}" for v in grid], key
         assert text_overlaps(fig) == [], key
@@ -330,23 +354,22 @@ def test_tick_labels_measured_by_the_layout_alone_give_the_bytes_of_a_full_draw(
         tmp_path, monkeypatch):
     """Crowded (Fig. 3 grid, two panels) and nearly crowded x labels: the figure files are the
     same whether the labels are measured after the layout alone or after a full draw. The
-    second grid's labels keep ~7 px apart once laid out but would touch at the panels' places
-    before the layout, so the layout cannot be skipped."""
+    second grid's labels keep ~9 px apart once laid out (in the figure's 7.16 in)."""
     grids = {"crowded": [50.0, 100.0, 200.0, 300.0, 500.0, 750.0, 1000.0, 1500.0, 2000.0],
-             "nearly": [100.0, 200.0, 300.0, 500.0, 750.0, 1000.0, 2000.0]}
+             "nearly": [100.0, 200.0, 300.0, 500.0, 750.0, 2000.0]}
     for name, grid in grids.items():
         run = harness.run_data(tmp_path / name, "esm_radar",
                                {"algorithms": ["traditional", "improved"]},
                                {"target.separation": grid, "radar.factor_model":
                                 ["table", "derived"]}, trials=2, seed=1)
-        fig = report.figures(run, ["correct_rate"])["correct_rate"]
+        fig = house_figures(run, ["correct_rate"])["correct_rate"]
         rotations = {t.get_rotation() for ax in fig.axes if ax.get_visible()
                      for t in ax.get_xticklabels()}
         assert rotations == ({90.0} if name == "crowded" else {0.0}), name
         save_figure(fig, tmp_path, f"{name}_layout", ["png", "pdf"])
         with monkeypatch.context() as patched:
             patched.setattr(report, "_upright_crowded_ticks", _upright_after_a_full_draw)
-            fig = report.figures(run, ["correct_rate"])["correct_rate"]
+            fig = house_figures(run, ["correct_rate"])["correct_rate"]
         save_figure(fig, tmp_path, f"{name}_draw", ["png", "pdf"])
         for fmt in ("png", "pdf"):
             assert (tmp_path / f"{name}_layout.{fmt}").read_bytes() == \
@@ -387,7 +410,7 @@ def test_papers_values_sit_beside_our_markers_and_under_them(tmp_path):
     under our curves (zorder) and to the right of our point (display x), its data kept."""
     run = harness.run_data(tmp_path, "esm_radar", {"algorithms": ["traditional", "improved"]},
                            {"target.separation": [100.0, 200.0, 300.0]}, trials=4, seed=2)
-    fig = drawn(report.figures(run, ["correct_rate"])["correct_rate"])
+    fig = drawn(house_figures(run, ["correct_rate"])["correct_rate"])
     ax = fig.axes[0]
     stars = [ln for ln in ax.get_lines() if ln.get_label().startswith("paper's Table 3")]
     assert len(stars) == 2
@@ -409,7 +432,7 @@ def test_trajectory_legend_tells_every_entry_apart(tmp_path):
     cfg = load(ROOT / "configs" / "esm_radar_snake_cross.yaml")
     run = harness.run_data(tmp_path, "esm_radar", {**cfg.params, "algorithms": ["improved"]},
                            None, trials=3, seed=cfg.seed)
-    fig = report.figures(run, ["trajectory"])["trajectory"]
+    fig = house_figures(run, ["trajectory"])["trajectory"]
     (legend,) = fig.legends
     looks = [(to_rgba(h.get_color()), h.get_linestyle(), h.get_marker())
              for h in legend.legend_handles]
@@ -434,3 +457,65 @@ def test_ablation_caption_names_only_ablations_every_drawing_config_runs():
             continue
         for name, words in ABLATION_WORDS.items():
             assert words not in caption or name in cfg.params["algorithms"], (path.stem, name)
+
+
+def test_the_papers_values_name_the_setting_of_the_rates_beside_them(shipped_run):
+    """The paper's Table 3 stars sat beside rates run under 'derived' radar factors without
+    saying so (under 'table' the same method scores 99.8 %): every panel with stars names
+    the radar-factor model in its title or the figure's; the stars drawn at every d/λ say
+    that the paper gives none."""
+    fig = house_figures(shipped_run, ["correct_rate"])["correct_rate"]
+    with_stars = [ax for ax in fig.axes if _lines_of(ax, "paper's Table 3")]
+    for ax in with_stars:
+        named = {m for m in ("table", "derived") if f"radar factors '{m}'" in
+                 ax.get_title() + fig.get_suptitle().replace("\n", " ")}
+        assert len(named) == 1, (ax.get_title(), fig.get_suptitle())
+    notes = fig.legends[0].get_title().get_text()
+    swept_spacing = with_stars and "phase.d_over_lambda" in shipped_run.sweep
+    assert ("the paper gives no d/λ" in notes) == bool(swept_spacing), notes
+
+
+def _lines_of(ax, prefix: str) -> list:
+    return [ln for ln in ax.get_lines() if ln.get_label().startswith(prefix)]
+
+
+def test_two_settings_are_drawn_as_categories_not_joined(shipped_run):
+    """"No weave" and "weave" (and the two d/λ) were joined by a line as if a trend ran
+    between them: a swept value with two settings is a category, each method's rates
+    markers with error bars and no line, ticked with the setting's name."""
+    s = shipped_run.summary.query("metric == 'correct'")
+    x = report._numeric_axis(shipped_run.config, s)
+    if x is None or s[x].nunique() > report.MAX_CATEGORIES:
+        return
+    fig = drawn(house_figures(shipped_run, ["correct_rate"])["correct_rate"])
+    labels = {look(n).label for n in report.GROUPS["correct_rate"]}
+    for ax in fig.axes:
+        methods = [c for c in ax.containers if c.get_label() in labels]
+        assert methods and all(c.lines[0].get_linestyle() == "None" for c in methods)
+        assert all(c.lines[1] for c in methods)  # each rate with its error bar
+        assert not any(isinstance(c, PolyCollection) for c in ax.collections)  # no band
+        ticks = [t.get_text() for t in ax.get_xticklabels()]
+        assert ticks == [report._category_words(x, v) for v in sorted(s[x].unique())]
+    if x == "snake.amplitude":
+        assert ticks == ["no weave (0 m)", "weave (1000 m)"]
+
+
+def test_one_method_over_settings_is_one_panel_with_readable_rows(shipped_run):
+    """The baseline alone over three spread rules filled a 2 x 2 grid (one slot empty)
+    titled with raw config keys ("baseline.spread = nominal"): one panel, a row a setting
+    in words; and every panel title is at the house title size (they were 8 pt)."""
+    for name, fig in house_figures(shipped_run, list(EXPERIMENT.figures)).items():
+        if isinstance(fig, str):
+            continue
+        texts = [t.get_text() for ax in fig.axes for t in (ax.title, *ax.get_yticklabels())]
+        assert not any(" = " in t and "." in t.split(" = ")[0] for t in texts), (name, texts)
+        assert all(ax.get_visible() for ax in fig.axes), name
+        for ax in fig.axes:
+            if ax.get_title():
+                assert ax.title.get_fontsize() >= RC["axes.titlesize"], (name, ax.get_title())
+    if "baseline.spread" in shipped_run.sweep:
+        fig = house_figures(shipped_run, ["correct_rate"])["correct_rate"]
+        (ax,) = fig.axes
+        rows = [t.get_text() for t in ax.get_yticklabels()]
+        assert len(rows) == len(shipped_run.sweep["baseline.spread"])
+        assert all("spread" in r for r in rows), rows

@@ -16,8 +16,10 @@ FIGURES = {
         "correct-association rate (%) of the paper's method, its baseline and ours (those "
         "run) with 95 % Wilson intervals: one row per method beside the paper's Table 3 "
         "values (open stars) when nothing numeric is swept, curves against separation "
-        "(Fig. 3) or radar range error (Fig. 4) otherwise, the paper's values drawn just "
-        "right of their setting",
+        "(Fig. 3) or radar range error (Fig. 4), or categories for a sweep of two settings "
+        "(weave or not, d/λ), the paper's values drawn just right of their setting; the "
+        "panel titles or the title name the radar-factor model of the rates beside the stars "
+        "(the paper's method scores far higher under 'table' than under 'derived')",
         "Table 3, Figs. 3-4"),
     "correct_rate_ablations": FigureSpec(
         "the same for the ablations of the paper's method that the config runs (each one "

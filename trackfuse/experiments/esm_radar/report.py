@@ -548,6 +548,18 @@ WORDS = {("radar.factor_model", "table"): "radar TDOA/phase with their own noise
          ("alpha.index", "nis_tdoa"): "NIS index", ("alpha.index", "literal"): "literal index",
          ("alpha.max_mode", "chi2"): "α_max chi-square", ("alpha.max_mode", "fixed"): "α_max fixed",
          ("alpha.max_mode", "running_max"): "α_max running maximum"}
+#: Words of the figures' panel titles and category labels for categorical keys (the tables
+#: keep :data:`WORDS`): the radar-factor model named by its config value, what it means below.
+TITLE_WORDS = {("radar.factor_model", "table"):
+               "radar factors 'table'\n(own TDOA/phase noise)",
+               ("radar.factor_model", "derived"):
+               "radar factors 'derived'\n(TDOA/phase from position)",
+               ("baseline.spread", "nominal"): "spread static, nominal geometry",
+               ("baseline.spread", "trial_mean"): "spread static, trial mean",
+               ("baseline.spread", "per_sample"): "spread recomputed per sample"}
+#: Swept keys whose value the paper does not give, by their symbol: the paper's Table 3
+#: values drawn at every value of such a key say so.
+PAPER_GIVES_NO = {"phase.d_over_lambda": "d/λ"}
 #: Paper figure drawn by ``correct_rate`` for each numeric swept key.
 PAPER_FIGURE = {"target.separation": "Fig. 3", "radar.sigma_range_coef": "Fig. 4"}
 #: The algorithms of each correct-rate figure: the paper's pair and ours, the ablations
@@ -619,11 +631,16 @@ def _set_x_axis(ax: Axes, key: str, values: np.ndarray) -> None:
     ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
 
 
+def _title_words(key: str, value: Any) -> str:
+    """A swept value in a panel title (:data:`TITLE_WORDS`, else :func:`_value_words`)."""
+    return TITLE_WORDS.get((key, value)) or _value_words(key, value)
+
+
 def _panels(summary: pd.DataFrame, keys: Sequence[str]) -> list[tuple[str, pd.DataFrame]]:
     """(title, rows) per combination of ``keys`` in the summary (one panel each)."""
     if not keys:
         return [("", summary)]
-    return [("; ".join(_value_words(k, v) for k, v in zip(keys, np.atleast_1d(key),
+    return [("; ".join(_title_words(k, v) for k, v in zip(keys, np.atleast_1d(key),
                                                           strict=True)), g)
             for key, g in summary.groupby(list(keys), sort=False)]
 
@@ -644,31 +661,46 @@ PAPER_DODGE_PT = 9.0
 PAPER_ZORDER = 1.5
 #: Sideways offsets (points) of the curves drawn with error bars (variants, references), by
 #: their order in the figure: beside the banded curves' markers and each other's, so that
-#: equal rates stay in sight; their data stay at the grid values.
-BAR_DODGE_PT = (-7.0, 7.0, -14.0, 14.0, -21.0, 21.0)
+#: equal rates stay in sight; their data stay at the grid values. Constant on the page:
+#: 3 points is about 6 % of x on the separation axis (50 m to 2 km in a panel 2.8 in wide),
+#: so that a cluster stays at its setting, well apart from 750 m and 1000 m.
+BAR_DODGE_PT = (-3.0, 3.0, -6.0, 6.0, -9.0, 9.0)
 #: Drawing order of the curves with error bars: thin, above the thick banded ones (3).
 BAR_ZORDER = 3.5
 #: Room (fraction of the data range) each side of a curve panel's x data, for the markers
-#: drawn aside (:data:`PAPER_DODGE_PT`, :data:`BAR_DODGE_PT`): about 19 points of a panel
-#: 4 inches wide.
+#: drawn aside (:data:`PAPER_DODGE_PT`, :data:`BAR_DODGE_PT`).
 X_MARGIN = 0.08
+#: A numeric swept key with at most this many values is drawn as categories, not as a
+#: curve: two settings ("no weave" and "weave") joined by a line would suggest a trend.
+MAX_CATEGORIES = 2
+#: Sideways step (in categories) between the methods drawn side by side in one category.
+CATEGORY_STEP = 0.13
+#: Marker size (points) of a rate drawn with its error bar alone (categories, rows).
+DOT_MARKER = 6.0
 
 
-def _paper_markers(ax: Axes, at: Sequence[float], names: Sequence[str],
-                   rows: dict[str, float] | None = None) -> None:
+def _paper_markers(ax: Axes, names: Sequence[str],
+                   place: Callable[[float, str], tuple[list[float], list[float]]],
+                   where: str = "", dodge_pt: float = 0.0) -> None:
     """The paper's Table 3 rates (%) as open stars in each method's colour, under our
-    markers: at each x of ``at`` drawn :data:`PAPER_DODGE_PT` to its right (curves; the
-    data stay at ``at``), or 0.3 below the method's row ``rows[name]`` (dot plot)."""
-    dot = rows is not None
-    where = "" if dot else ", drawn just right of its setting"
-    transform = ax.transData if dot else offset_copy(ax.transData, fig=ax.figure,
-                                                     x=PAPER_DODGE_PT, units="points")
+    markers, where ``place(value, name)`` puts them (data ``(xs, ys)``), drawn ``dodge_pt``
+    points to the right; ``where`` ends the legend label."""
+    transform = offset_copy(ax.transData, fig=ax.figure, x=dodge_pt, units="points")
     for name in (n for n in PAPER_PAIR if n in names):
         value = 100 * ESM_RADAR.result(f"{name}: correct rate").value
-        xy = ([value], [rows[name] - 0.3]) if dot else (list(at), [value] * len(at))
-        ax.plot(*xy, linestyle="none", marker="*", markersize=11, markerfacecolor="white",
+        xs, ys = place(value, name)
+        if not xs:
+            continue
+        ax.plot(xs, ys, linestyle="none", marker="*", markersize=11, markerfacecolor="white",
                 markeredgecolor=look(name).colour, markeredgewidth=1.4, zorder=PAPER_ZORDER,
                 transform=transform, label=f"paper's Table 3: {name} {value:.1f} %{where}")
+
+
+def _rate_arrays(rows: pd.DataFrame, name: str, x: str) -> tuple[pd.DataFrame, np.ndarray,
+                                                                  np.ndarray, np.ndarray]:
+    """The rows of ``name`` sorted by ``x`` and its rate, interval low and high (%)."""
+    g = rows[rows["algorithm"] == name].sort_values(x)
+    return g, *(100 * g[c].to_numpy(float) for c in ("mean", "ci_low", "ci_high"))
 
 
 def _curve_panel(ax: Axes, rows: pd.DataFrame, x: str, names: Sequence[str],
@@ -679,9 +711,8 @@ def _curve_panel(ax: Axes, rows: pd.DataFrame, x: str, names: Sequence[str],
     scale = AXES.get(x, (x, 1.0))[1]
     barred = [n for n in names if not look(n).emphasised]
     for name in names:
-        g = rows[rows["algorithm"] == name].sort_values(x)
+        g, mean, lo, hi = _rate_arrays(rows, name, x)
         xs = scale * g[x].to_numpy(float)
-        mean, lo, hi = (100 * g[c].to_numpy(float) for c in ("mean", "ci_low", "ci_high"))
         kw = {**line_kwargs(name), "clip_on": False}  # a marker at 100 % is drawn whole
         if look(name).role == "paper":  # on top of ours where both reach 100 %
             kw["zorder"] += 0.1
@@ -691,27 +722,70 @@ def _curve_panel(ax: Axes, rows: pd.DataFrame, x: str, names: Sequence[str],
         marker, style = REFERENCE_STYLES.get(name, (kw["marker"], kw["linestyle"]))
         aside = offset_copy(ax.transData, fig=ax.figure,
                             x=BAR_DODGE_PT[barred.index(name)], units="points")
-        ax.errorbar(xs, mean, yerr=[mean - lo, hi - mean], transform=aside, capsize=2,
+        ax.errorbar(xs, mean, yerr=[mean - lo, hi - mean], transform=aside, capsize=1.5,
                     elinewidth=0.8, **{**kw, "marker": marker, "linestyle": style,
                                        "zorder": BAR_ZORDER})
-    if paper_xs:
-        _paper_markers(ax, paper_xs, names)
+    _paper_markers(ax, names, lambda v, _: (list(paper_xs), [v] * len(paper_xs)),
+                   ", drawn just right of its setting", PAPER_DODGE_PT)
     _set_x_axis(ax, x, scale * rows[x].to_numpy(float))
     ax.margins(x=X_MARGIN)
+    _rate_axis_lines(ax)
+
+
+def _rate_axis_lines(ax: Axes) -> None:
+    """Chance (dotted) and the y label of a panel with the rate on y."""
     reference_line(ax, 100 * CHANCE, "chance between T1 and T2 (50 %)", **CHANCE_STYLE)
     ax.set_ylabel("correct association\nrate (%)")
 
 
-def _interval_entries(names: Sequence[str]) -> tuple[list, list[str]]:
-    """Legend entries saying what the intervals of a curve figure of ``names`` are: the
-    emphasised methods' shaded bands, the others' error bars."""
+def _category_words(x: str, value: float) -> str:
+    """A category's tick label: ``no weave (0 m)`` / ``weave (1000 m)`` for the snake
+    amplitude, else the axis symbol and value (``d/λ = 0.5``, ``separation = 200 m``)."""
+    if x == "snake.amplitude":
+        return f"{'weave' if value > 0 else 'no weave'} ({value:g} m)"
+    label, scale = AXES.get(x, (x, 1.0))
+    name, _, unit = label.rpartition(" (")
+    unit = unit.rstrip(")")
+    return f"{name.split()[-1]} = {scale * value:g}" + ("" if unit == "1" else f" {unit}")
+
+
+def _category_panel(ax: Axes, rows: pd.DataFrame, x: str, names: Sequence[str],
+                    paper_xs: Sequence[float]) -> None:
+    """Correct rate (%) of ``names`` at each value of ``x`` drawn as a category: markers
+    with 95 % Wilson error bars side by side (:data:`CATEGORY_STEP`), no line joining the
+    categories; the paper's values right of the methods at ``paper_xs`` (scaled x)."""
+    scale = AXES.get(x, (x, 1.0))[1]
+    values = sorted(rows[x].unique())
+    shifts = CATEGORY_STEP * (np.arange(len(names)) - (len(names) - 1) / 2)
+    for name, shift in zip(names, shifts, strict=True):
+        g, mean, lo, hi = _rate_arrays(rows, name, x)
+        kw = {**line_kwargs(name), "clip_on": False}
+        slots = [values.index(v) + shift for v in g[x]]
+        ax.errorbar(slots, mean, yerr=[mean - lo, hi - mean], capsize=2, **{
+            **kw, "marker": REFERENCE_STYLES.get(name, (kw["marker"],))[0],
+            "linestyle": "none", "markersize": DOT_MARKER})
+    at = [i + shifts[-1] + CATEGORY_STEP for i, v in enumerate(values)
+          if any(np.isclose(scale * v, p) for p in paper_xs)]
+    _paper_markers(ax, names, lambda v, _: (at, [v] * len(at)), ", drawn right of our rates")
+    ax.set_xticks(range(len(values)), [_category_words(x, v) for v in values])
+    ax.set_xlim(-0.5, len(values) - 0.5)
+    ax.grid(False, axis="x")
+    ax.set_xlabel(AXES.get(x, (x,))[0])
+    _rate_axis_lines(ax)
+
+
+def _interval_entries(names: Sequence[str], layout: str) -> tuple[list, list[str]]:
+    """Legend entries saying what the intervals of a curve or category figure of ``names``
+    are: the emphasised methods' shaded bands and the others' error bars on curves, every
+    method's error bars in categories."""
     handles, labels = [], []
-    if any(look(n).emphasised for n in names):
+    if layout == "curves" and any(look(n).emphasised for n in names):
         handles.append(Patch(facecolor="0.5", alpha=0.3))
         labels.append("shaded band: 95 % Wilson interval")
-    if not all(look(n).emphasised for n in names):
+    if layout == "categories" or not all(look(n).emphasised for n in names):
         handles.append(Line2D([], [], color="0.3", marker="|", markersize=10, linestyle="none"))
-        labels.append("error bar: 95 % Wilson interval, shifted sideways")
+        labels.append("error bar: 95 % Wilson interval"
+                      + (", shifted sideways" if layout == "curves" else ""))
     return handles, labels
 
 
@@ -740,35 +814,46 @@ def _coincidences(panels: Sequence[tuple[str, pd.DataFrame]], x: str, names: Seq
             + f"{look(b).label} coincides with {look(a).label}" for (b, a), at in found.items()]
 
 
-def _dot_panel(ax: Axes, rows: pd.DataFrame, names: Sequence[str], paper: bool) -> None:
-    """Table 3 layout: one row per method, our rate (%) with its Wilson interval and the
-    paper's value beside it (open star)."""
-    ys = {name: len(names) - 1 - i for i, name in enumerate(names)}
-    for name in names:
-        g = rows[rows["algorithm"] == name].iloc[0]
+def _star_rows(entries: Sequence[tuple[str, str, pd.Series, bool]], ys: Sequence[float]
+               ) -> dict[str, list[float]]:
+    """Per algorithm, the y of the paper's value (0.3 below the row) in every row of
+    ``entries`` at the paper's setting (:func:`_dot_rows`)."""
+    out: dict[str, list[float]] = {}
+    for (_, name, _, at), y in zip(entries, ys, strict=True):
+        if at:
+            out.setdefault(name, []).append(y - 0.3)
+    return out
+
+
+def _dot_rows(ax: Axes, entries: Sequence[tuple[str, str, pd.Series, bool]]) -> None:
+    """Table 3 layout: one row per entry ``(tick label, algorithm, its summary row, at the
+    paper's setting)``, top down, our rate (%) with its Wilson interval and, at the paper's
+    setting, the paper's value (open star) just below it."""
+    ys = np.arange(len(entries), dtype=float)[::-1]
+    for (_, name, g, _), y in zip(entries, ys, strict=True):
         lk = look(name)
-        ax.errorbar(100 * g["mean"], ys[name], xerr=[[100 * (g["mean"] - g["ci_low"])],
-                                                     [100 * (g["ci_high"] - g["mean"])]],
+        ax.errorbar(100 * g["mean"], y, xerr=[[100 * (g["mean"] - g["ci_low"])],
+                                              [100 * (g["ci_high"] - g["mean"])]],
                     fmt=REFERENCE_STYLES.get(name, (lk.marker or "o",))[0], color=lk.colour,
-                    markersize=7, capsize=4, linewidth=2.0 if lk.emphasised else 1.0,
-                    clip_on=False)
+                    markersize=DOT_MARKER + 1, capsize=4, clip_on=False,
+                    linewidth=2.0 if lk.emphasised else 1.0)
     ax.plot([], [], marker="o", color="k", label="this run: rate, 95 % Wilson interval")
-    if paper:
-        _paper_markers(ax, [0.0], names, rows=ys)
+    stars = _star_rows(entries, ys)
+    _paper_markers(ax, list(stars), lambda v, name: ([v] * len(stars[name]), stars[name]))
     ax.axvline(100 * CHANCE, label="chance between T1 and T2 (50 %)", **CHANCE_STYLE)
-    ax.set_yticks(list(ys.values()), [look(n).label for n in names])
-    ax.set_ylim(-0.8, len(names) - 0.4)
-    ax.set_xlabel("correct association rate (%), 95 % Wilson interval")
+    ax.set_yticks(list(ys), [label for label, *_ in entries])
+    ax.set_ylim(-0.8, len(entries) - 0.4)
+    ax.set_xlabel("correct association rate (%)")
 
 
-def _rate_legend(axes: Sequence[Axes], names: Sequence[str], curves: bool
+def _rate_legend(axes: Sequence[Axes], names: Sequence[str], layout: str
                  ) -> tuple[list, list[str]]:
-    """Legend entries of a rate figure: the methods in the order of ``names``, then (curves)
-    what the intervals are, then the rest (the paper's values, chance)."""
+    """Legend entries of a rate figure: the methods in the order of ``names``, then (curves,
+    categories) what the intervals are, then the rest (the paper's values, chance)."""
     handles, labels = legend_entries(axes)
     order = [look(n).label for n in names]
-    if curves:
-        extra = _interval_entries(names)
+    if layout in ("curves", "categories"):
+        extra = _interval_entries(names, layout)
         handles, labels, order = handles + extra[0], labels + extra[1], order + extra[1]
     ranked = sorted(zip(handles, labels, strict=True),
                     key=lambda e: order.index(e[1]) if e[1] in order else len(order))
@@ -803,8 +888,108 @@ def _rate_title(run: RunData, group: str, x: str | None, names: Sequence[str],
     else:
         head, tail = f"Paper 001, {drawn}: {what}", ""
     fixed = [_value_words(k, run.params[k]) for k in PAPER_TABLE3_SETTING if k not in run.sweep]
+    if "radar.factor_model" not in run.sweep:  # the setting every rate here depends on
+        fixed.append(f"radar factors '{run.params['radar.factor_model']}'")
     return (f"{head}\n{tail}{run.config['trials']} trials per point; " + "; ".join(fixed)
             + ("" if paper else "; not a figure of the paper"))
+
+
+#: Width (in) of a figure printed across a two-column page: a rate figure of several panels
+#: is drawn at it, so that its text prints at its own size.
+PAGE_IN = 7.16
+#: Title size (pt) of the suptitles (matplotlib's "large" at the house 9 pt), and about how
+#: wide a character of it is (in ems), to wrap a suptitle to the figure's width.
+SUPTITLE_PT, CHAR_EM = 10.8, 0.53
+
+
+def _layout(x: str | None, summary: pd.DataFrame, names: Sequence[str], n_panels: int
+            ) -> str:
+    """How a rate figure is laid out: ``curves`` against a numeric ``x`` of more than
+    :data:`MAX_CATEGORIES` values, ``categories`` for fewer; without ``x`` one row per
+    method in each panel (``rows``), or for one method one panel with a row per setting of
+    the other swept keys (``settings``: three panels of one dot each filled a 2 x 2 grid)."""
+    if x is not None:
+        return "categories" if summary[x].nunique() <= MAX_CATEGORIES else "curves"
+    return "settings" if len(names) == 1 and n_panels > 1 else "rows"
+
+
+def _rate_columns(layout: str, n_panels: int) -> int:
+    """Panels a row: up to 3 on x (curves, categories), up to 2 in the rows layout."""
+    return 1 if layout == "settings" else min(n_panels, 3 if layout in (
+        "curves", "categories") else 2)
+
+
+def _rate_axes(layout: str, n_panels: int, n_rows: int) -> tuple[Figure, np.ndarray]:
+    """The figure and one axes per panel (row-major) of a rate figure: several panels at
+    :data:`PAGE_IN` wide, one narrower; a rows layout ``n_rows`` rows tall."""
+    ncols = _rate_columns(layout, n_panels)
+    n_axes = 1 if layout == "settings" else n_panels
+    across = layout in ("curves", "categories")
+    width = PAGE_IN / ncols if ncols > 1 else (4.8 if across else 6.0)
+    fig, axes = new_figure(ncols=ncols, nrows=-(-n_axes // ncols), width=width,
+                           height=CURVE_ROW_IN if across else 0.55 * n_rows + 2.0)
+    axes = np.atleast_1d(axes)
+    for ax in axes[n_axes:]:
+        ax.set_visible(False)
+    return fig, axes[:n_axes]
+
+
+def _algorithm_row(rows: pd.DataFrame, name: str) -> pd.Series:
+    """The summary row of ``name`` in a one-point ``rows``."""
+    return rows[rows["algorithm"] == name].iloc[0]
+
+
+def _draw_rate_panels(axes: Sequence[Axes], layout: str,
+                      panels: Sequence[tuple[str, pd.DataFrame]], names: Sequence[str],
+                      x: str | None, paper_xs: Sequence[Sequence[float]]) -> None:
+    """Draw every panel of a rate figure in its ``layout`` (:func:`_layout`), titled."""
+    row = _algorithm_row
+    if layout == "settings":
+        (name,) = names
+        _dot_rows(axes[0], [(title, name, row(rows, name), bool(at))
+                            for (title, rows), at in zip(panels, paper_xs, strict=True)])
+        axes[0].set_title(look(name).label)
+        return
+    for ax, (title, rows), at in zip(axes, panels, paper_xs, strict=True):
+        if layout == "rows":
+            _dot_rows(ax, [(look(n).label, n, row(rows, n), bool(at)) for n in names])
+        else:
+            (_curve_panel if layout == "curves" else _category_panel)(ax, rows, x, names, at)
+        ax.set_title(title)
+
+
+def _star_notes(run: RunData, drawn: bool) -> list[str]:
+    """When the paper's Table 3 values are drawn: a sentence for each swept key the paper
+    gives no value of (:data:`PAPER_GIVES_NO`), at every value of which they are drawn."""
+    return [f"paper's Table 3 values drawn at every {symbol}: the paper gives no {symbol}"
+            for key, symbol in PAPER_GIVES_NO.items() if drawn and key in run.sweep]
+
+
+def _balanced(text: str, chars: int) -> int:
+    """A line width for wrapping ``text`` into as few lines of at most ``chars`` as
+    :func:`textwrap.wrap` needs, about equally long (not a last line of one word)."""
+    lines = len(textwrap.wrap(text, chars))
+    return min(chars, -(-len(text) // lines) + 12) if lines > 1 else chars
+
+
+def _wrap_suptitle(fig: Figure, title: str) -> None:
+    """``title`` as ``fig``'s suptitle, each line wrapped to the figure's width between its
+    ``; ``-separated parts, a part longer than a line between its words."""
+    chars = int(fig.get_figwidth() * 72 / (SUPTITLE_PT * CHAR_EM))
+    lines: list[str] = []
+    for line in title.split("\n"):
+        lines.append("")
+        pieces = [(k == 0, piece) for whole in line.split("; ")
+                  for k, piece in enumerate(textwrap.wrap(whole, _balanced(whole, chars)))]
+        for first, piece in pieces:
+            sep = ";" if first else ""
+            joined = f"{lines[-1]}{sep} {piece}" if lines[-1] else piece
+            if len(joined) > chars and lines[-1]:
+                lines[-1] += sep
+                lines.append(piece)
+            else:
+                lines[-1] = joined
+    fig.suptitle("\n".join(lines))
 
 
 def _rate_figure(run: RunData, group: str) -> Figure | str:
@@ -821,27 +1006,19 @@ def _rate_figure(run: RunData, group: str) -> Figure | str:
     panels = _panels(s, [k for k in swept_keys(run.config) if k != x])
     if len(panels) > 9:
         return f"{len(panels)} panels (more than 9 combinations of the other swept keys)"
-    ncols = min(len(panels), 3 if x else 2)
-    height = CURVE_ROW_IN if x else 0.5 * len(names) + 1.6
-    # one curve panel alone gets the width its two-line title needs
-    width = (4.6 if ncols > 1 else 6.4) if x else 5.2
-    fig, axes = new_figure(ncols=ncols, nrows=-(-len(panels) // ncols), width=width,
-                           height=height)
-    axes = np.atleast_1d(axes)[:len(panels)]
+    layout = _layout(x, s, names, len(panels))
+    fig, axes = _rate_axes(layout, len(panels),
+                           len(panels) if layout == "settings" else len(names))
     paper_xs = [_paper_xs(run, rows, x) if group == "correct_rate" else [] for _, rows in panels]
-    for ax, (title, rows), at in zip(axes, panels, paper_xs, strict=True):
-        if x:
-            _curve_panel(ax, rows, x, names, at)
-        else:
-            _dot_panel(ax, rows, names, bool(at))
-        ax.set_title(title, fontsize=8)
-    for ax in fig.axes[len(panels):]:
-        ax.set_visible(False)
+    _draw_rate_panels(axes, layout, panels, names, x, paper_xs)
     _share_rate_axis(axes, "y" if x else "x", s)
-    legend_below(fig, *_rate_legend(axes, names, bool(x)))
-    if x and (same := _coincidences(panels, x, names, ncols)):  # said above the entries
-        fig.legends[-1].set_title("\n".join(same))
-    fig.suptitle(_rate_title(run, group, x, names, any(paper_xs)))
+    legend_below(fig, *_rate_legend(axes, names, layout))
+    notes = _star_notes(run, any(paper_xs)) + (  # said above the legend's entries
+        _coincidences(panels, x, names, _rate_columns(layout, len(panels)))
+        if layout == "curves" else [])
+    if notes:
+        fig.legends[-1].set_title("\n".join(notes))
+    _wrap_suptitle(fig, _rate_title(run, group, x, names, any(paper_xs)))
     if x:
         _grow_for_legend(fig)
         _upright_crowded_ticks(fig, axes)
@@ -948,8 +1125,8 @@ def _tracks_panel(ax: Axes, params: Mapping[str, Any], row: pd.Series) -> None:
             markersize=4, label=f"ESM TDOA-DF location (trial {int(row['trial'])})")
     ax.set_xlabel("x (km)")
     ax.set_ylabel("y (km)")
-    ax.set_title(f"one trial; separation {params['target.separation']:g} m; sensors at "
-                 f"(0, 0) and ({params['geometry.baseline'] / 1e3:g} km, 0)", fontsize=8)
+    ax.set_title(f"one trial; separation {params['target.separation']:g} m;\nsensors at "
+                 f"(0, 0) and ({params['geometry.baseline'] / 1e3:g} km, 0)")
 
 
 def _index_panel(ax: Axes, run: RunData, row: pd.Series, params: Mapping[str, Any]) -> None:
@@ -975,7 +1152,7 @@ def _index_panel(ax: Axes, run: RunData, row: pd.Series, params: Mapping[str, An
         twin.set_ylabel("range weight a₁ (1)")
         twin.grid(False)
     ax.set_title("one trial: index" + (" and range weight" if weights else "") + " per scan"
-                 + ("" if weights else " (no dynamic-weight algorithm run)"), fontsize=8)
+                 + ("" if weights else "\n(no dynamic-weight algorithm run)"))
 
 
 def _range_error_panel(ax: Axes, esm: pd.DataFrame, params: Mapping[str, Any]) -> None:
@@ -994,8 +1171,12 @@ def _range_error_panel(ax: Axes, esm: pd.DataFrame, params: Mapping[str, Any]) -
     ax.yaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("time (s)")
     ax.set_ylabel("ESM range error\n(m, log scale)")
-    ax.set_title(f"all {len(esm)} trials of this point", fontsize=8)
+    ax.set_title(f"all {len(esm)} trials of this point")
 
+
+#: Characters per line of a panel title at the house title size in a panel of half the
+#: page's width (about 3 in).
+PANEL_TITLE_CHARS = 36
 
 TRAJECTORY_SIZE = (8.6, 6.4)
 """Width and height (in) of the trajectory figure: readable at a page's 7 in (it was 12.9 in
@@ -1072,8 +1253,8 @@ def _manoeuvre_figure(run: RunData) -> Figure | str:
         return f"{len(groups)} settings of the ESM track (more than 9 curves per panel)"
     weights = [_weight_series(run.trials, p, rows["trial"].tolist()) for _, p, rows in groups]
     weight_name = next((w[0] for w in weights if w is not None), "")
-    fig, axes = new_figure(ncols=2 if weight_name else 1, width=5.0 if weight_name else 6.4,
-                           height=CURVE_ROW_IN + 0.3)
+    fig, axes = new_figure(ncols=2 if weight_name else 1,
+                           width=PAGE_IN / 2 if weight_name else 4.8, height=CURVE_ROW_IN + 0.3)
     axes = np.atleast_1d(axes)
     ax = axes[0]
     colours = ["0.2"] if len(groups) == 1 else [
@@ -1097,7 +1278,7 @@ def _manoeuvre_figure(run: RunData) -> Figure | str:
     for a, ylabel, title in panels:
         a.set_xlabel("time (s)")
         a.set_ylabel(ylabel)
-        a.set_title(title, fontsize=8)
+        a.set_title(textwrap.fill(title, PANEL_TITLE_CHARS))
     legend_below(fig, *legend_entries(axes))  # one legend for both panels, below them
     _grow_for_legend(fig)
     fig.suptitle(f"Manoeuvre index ({' and '.join(indices)})"
