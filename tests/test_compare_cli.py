@@ -141,6 +141,7 @@ def test_the_summary_says_how_trials_pair_what_config_differs_and_what_is_gated(
     assert report["paired"] and report["config_differences"] == [
         {"key": "trials", "base": 30, "new": 45}]
     assert {c["n_new"] for c in report["cells"]} == {30}
-    same = _compare(base, base).stdout.splitlines()
+    again = run_data(tmp_path / "c", "toy_gaussian", {}, sweep, trials=30, seed=3).path
+    same = _compare(base, again).stdout.splitlines()
     assert same[0].endswith("trial by trial (same seed 3, 30 trials per point)")
     assert same[1] == "config: the same in both runs"

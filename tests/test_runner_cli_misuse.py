@@ -191,8 +191,8 @@ def _small_run(out: Path, *extra: str) -> Path:
 def test_compare_tolerance_for_an_unknown_metric_is_refused(tmp_path):
     """`--tolerance accuraci=0.5` (a typo) was accepted and silently ignored, so a CI gate
     ran without the tolerance its author wrote."""
-    run = _small_run(tmp_path / "a")
-    result = trackfuse("compare", run, run, "--fail-on-regression", "--tolerance",
+    run, again = _small_run(tmp_path / "a"), _small_run(tmp_path / "b")
+    result = trackfuse("compare", run, again, "--fail-on-regression", "--tolerance",
                        "accuraci=0.5")
     assert result.returncode == 2, result.stdout
     assert "accuraci" in result.stderr and len(result.stderr.strip().splitlines()) == 1

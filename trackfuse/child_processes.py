@@ -19,6 +19,8 @@ import select
 import signal
 import threading
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 
 def ignore_ctrl_c() -> None:
@@ -56,3 +58,36 @@ def process_alive(pid: int) -> bool:
     except PermissionError:  # alive, under another user
         return True
     return True
+
+
+#: The signals that stop a command (Ctrl-C, and SIGTERM, which the command line maps to it).
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+@contextmanager
+def ctrl_c_held() -> Iterator[None]:
+    """Hold a Ctrl-C or SIGTERM that arrives inside the block until the block ends, then
+    raise it as the handler in place would. Around what starts a child process (a pool's
+    ``submit``, the first submit of a fork pool): one arriving inside ``Process.start`` or
+    ``os.fork`` left a worker the pool did not know of, which printed a traceback after the
+    command had exited, or was raised inside a fork hook, printed as "Exception ignored" and
+    lost (the run went on and exited 0). Only in the main thread (elsewhere a no-op)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: list[tuple[int, object]] = []
+    handlers = {s: signal.signal(s, lambda signum, frame: caught.append((signum, frame)))
+                for s in STOP_SIGNALS}
+    try:
+        yield
+    finally:
+        for s, handler in handlers.items():
+            signal.signal(s, handler)
+        if caught:
+            signum, frame = caught[0]
+            handler = handlers[signum]
+            if callable(handler):
+                handler(signum, frame)
+            elif handler == signal.SIG_DFL:
+                signal.raise_signal(signum)
+

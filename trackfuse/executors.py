@@ -27,12 +27,11 @@ import threading
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
-from contextlib import contextmanager
 from itertools import islice
 from pathlib import Path
 from typing import Any
 
-from trackfuse.child_processes import setup_child
+from trackfuse.child_processes import ctrl_c_held, setup_child
 
 KINDS = ("serial", "process", "dask")
 MAX_POOL_RESTARTS = 3
@@ -51,28 +50,6 @@ def default_workers() -> int:
         return len(os.sched_getaffinity(0))
     except AttributeError:
         return os.cpu_count() or 1
-
-
-@contextmanager
-def ctrl_c_held() -> Iterator[None]:
-    """Hold a Ctrl-C that arrives inside the block until the block ends, then raise it as
-    the handler in place would. Around the pool's ``submit``, which may start a worker: a
-    Ctrl-C inside ``Process.start`` left a worker the pool did not know of yet, which the
-    abort did not end; it printed a traceback after the command had exited (its semaphores
-    were gone). Only in the main thread (elsewhere a no-op)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    caught: list[object] = []
-    handler = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(frame))
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, handler)
-        if caught and callable(handler):
-            handler(signal.SIGINT, caught[0])
-        elif caught and handler == signal.SIG_DFL:
-            signal.raise_signal(signal.SIGINT)
 
 
 class SerialExecutor:

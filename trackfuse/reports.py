@@ -52,7 +52,7 @@ from typing import Any
 
 import pandas as pd
 
-from trackfuse.child_processes import setup_child
+from trackfuse.child_processes import ctrl_c_held, setup_child
 from trackfuse.coerce import one_line
 from trackfuse.environment import cpu_words, recorded_cpus
 from trackfuse.failures import first_failure
@@ -329,8 +329,9 @@ def _write_figures(run: RunData, module: ModuleType, wanted: Sequence[str],
             with ProcessPoolExecutor(processes, multiprocessing.get_context("fork"),
                                      initializer=setup_child,
                                      initargs=(os.getpid(),)) as pool:
-                drawing = [pool.submit(_draw_in_fork, name) for name in wanted]
                 try:
+                    with ctrl_c_held():  # the forks: see ctrl_c_held
+                        drawing = [pool.submit(_draw_in_fork, name) for name in wanted]
                     meanwhile()
                     parts = [future.result() for future in drawing]
                 except KeyboardInterrupt:  # stop now: no figure more
