@@ -375,3 +375,11 @@ def test_the_high_rate_verdict_follows_the_margin_below_the_optimum(shipped_run)
         expected = ("agrees" if high <= margin else "differs" if low > margin
                     else "inconclusive")
         assert row["verdict"] == expected, row["reason"]
+
+
+@pytest.mark.parametrize("cpu", [{"model": "AMD EPYC"}, [{"model": "AMD EPYC"}], None])
+def test_the_machine_words_read_every_manifest_form_of_the_cpu(cpu):
+    """A run recorded before the manifest listed its CPUs (``cpu`` one dict, or none) made
+    the scale figure fail with an AttributeError."""
+    words = report._machine({"workers": 2, "cpu": cpu})
+    assert words == ("2 workers, AMD EPYC" if cpu else "2 workers, CPU not recorded")

@@ -58,7 +58,7 @@ LOOKS: dict[str, Look] = {
     "paper_approx": Look("paper's fused-gate PDA (reconstruction)", VERMILLION, "s", "paper"),
     "mspda_parallel": Look("parallel PDA (corrected; PDAF with one sensor)", GREEN, "o", "ours"),
     "mspda_sequential": Look("sequential PDA", BLUE, "^", "variant"),
-    "nn": Look("nearest neighbour", GREYS[0], "x", "variant"),
+    "nn": Look("nearest neighbour", GREYS[0], "h", "variant"),
     # paper 001 (esm_radar)
     "improved": Look("improved fuzzy evaluation (paper)", VERMILLION, "s", "paper"),
     "traditional": Look("traditional fuzzy decision (paper's baseline)", BLUE, "o",

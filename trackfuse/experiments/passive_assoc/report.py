@@ -65,6 +65,7 @@ import pandas as pd
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 from numpy.typing import ArrayLike
 
+from trackfuse.environment import recorded_cpus
 from trackfuse.plots.algorithms import line_kwargs, look
 from trackfuse.plots.style import band, legend_below, legend_entries, new_figure, wants_log_axis
 from trackfuse.reported import PASSIVE_ASSOC
@@ -607,7 +608,7 @@ def _accuracy_panel(ax: Axes, axis: NAxis, summary: pd.DataFrame, names: list[st
 
 def _machine(manifest: dict) -> str:
     """The run's workers and CPU as its manifest records them, e.g. "2 workers, AMD EPYC"."""
-    cpus = sorted({str(c.get("model", "?")) for c in manifest.get("cpu", [])})
+    cpus = sorted({str(c.get("model", "?")) for c in recorded_cpus(manifest.get("cpu"))})
     return f"{manifest.get('workers', '?')} workers, {' / '.join(cpus) or 'CPU not recorded'}"
 
 
