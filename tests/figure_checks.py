@@ -17,6 +17,8 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.text import Text
 
+from trackfuse.plots.style import PAGE_WIDTH_IN
+
 OUTSIDE = "<outside the figure>"
 """The partner :func:`text_overlaps` gives a text that runs off the figure."""
 
@@ -103,11 +105,7 @@ def _rendered_texts(fig: Figure) -> list[Text]:
     return drawn
 
 
-PRINT_WIDTH_IN = 7.16
-"""Width (in) of a two-column figure on an IEEE journal page, where a figure is printed."""
-
-
-def smallest_printed_text(fig: Figure, width_in: float = PRINT_WIDTH_IN) -> tuple[float, str]:
+def smallest_printed_text(fig: Figure, width_in: float = PAGE_WIDTH_IN) -> tuple[float, str]:
     """``(size in pt, text)`` of the smallest text of ``fig`` once the figure is scaled to
     ``width_in`` inches wide (never enlarged): a 9 pt label of an 11 in figure prints at
     5.9 pt on a 7.16 in page."""

@@ -317,17 +317,17 @@ def test_checkpoint_gap_bounds_are_each_groups_own_bootstrap_to_the_last_bit():
         assert (row.gap_ci_low, row.gap_ci_high) == (max(low, 0.0), high)
 
 
-def _scale_run(tmp_path):
+def _scale_run(tmp_path, trials: int = 4):
     return harness.run_data(tmp_path, "passive_assoc",
                             {"pga.ops": 100, "pga.checkpoints": [100], "scene.mode": "random",
                              "algorithms": ["exact", "pga_paper", "pga_evict"]},
-                            {"targets.n": [5, 10, 20, 50]}, trials=4, seed=5)
+                            {"targets.n": [5, 10, 20, 50]}, trials=trials, seed=5)
 
 
 def test_scale_time_axis_reads_in_plain_decimals_with_every_curve_banded(tmp_path):
     """The solve-time axis is labelled 0.1, 1, 10 (no 4x10^-1 mathtext) and the exact
     optimum's time has its interval band like the others."""
-    fig = drawn(report.figures(_scale_run(tmp_path), ["scale"])["scale"])
+    fig = drawn(report.figures(_scale_run(tmp_path, trials=8), ["scale"])["scale"])
     time_ax = fig.axes[0]
     labels = [t.get_text() for t in (*time_ax.get_yticklabels(),
                                      *time_ax.get_yticklabels(minor=True)) if t.get_text()]
@@ -335,6 +335,9 @@ def test_scale_time_axis_reads_in_plain_decimals_with_every_curve_banded(tmp_pat
     exact = [c for c in time_ax.collections if np.allclose(c.get_facecolor()[0][:3], 0.0)]
     assert len(exact) == 1  # the exact optimum's band (black at low alpha)
     assert len(time_ax.collections) == 3  # and one band per PGA variant
+    for band in time_ax.collections:  # each a real interval (6+ trials: median_interval)
+        extent = band.get_paths()[0].get_extents()
+        assert np.isfinite([extent.y0, extent.y1]).all() and extent.y1 > extent.y0
 
 
 def test_exact_optimum_band_lies_light_and_behind_the_algorithms_bands(tmp_path):

@@ -23,6 +23,9 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+PAGE_WIDTH_IN = 7.16
+"""Width (in) of a two-column figure on an IEEE journal page: the widest a figure prints."""
+
 RC = {
     "figure.dpi": 110,
     "savefig.dpi": 200,

@@ -75,6 +75,7 @@ from trackfuse.experiments.esm_radar.model import (
 )
 from trackfuse.plots.algorithms import line_kwargs, look
 from trackfuse.plots.style import (
+    PAGE_WIDTH_IN,
     band,
     legend_below,
     legend_entries,
@@ -896,8 +897,6 @@ def _rate_title(run: RunData, group: str, x: str | None, names: Sequence[str],
 
 #: Width (in) of a figure printed across a two-column page: a rate figure of several panels
 #: is drawn at it, so that its text prints at its own size.
-PAGE_IN = 7.16
-#: Title size (pt) of the suptitles (matplotlib's "large" at the house 9 pt), and about how
 #: wide a character of it is (in ems), to wrap a suptitle to the figure's width.
 SUPTITLE_PT, CHAR_EM = 10.8, 0.53
 
@@ -921,11 +920,11 @@ def _rate_columns(layout: str, n_panels: int) -> int:
 
 def _rate_axes(layout: str, n_panels: int, n_rows: int) -> tuple[Figure, np.ndarray]:
     """The figure and one axes per panel (row-major) of a rate figure: several panels at
-    :data:`PAGE_IN` wide, one narrower; a rows layout ``n_rows`` rows tall."""
+    :data:`PAGE_WIDTH_IN` wide, one narrower; a rows layout ``n_rows`` rows tall."""
     ncols = _rate_columns(layout, n_panels)
     n_axes = 1 if layout == "settings" else n_panels
     across = layout in ("curves", "categories")
-    width = PAGE_IN / ncols if ncols > 1 else (4.8 if across else 6.0)
+    width = PAGE_WIDTH_IN / ncols if ncols > 1 else (4.8 if across else 6.0)
     fig, axes = new_figure(ncols=ncols, nrows=-(-n_axes // ncols), width=width,
                            height=CURVE_ROW_IN if across else 0.55 * n_rows + 2.0)
     axes = np.atleast_1d(axes)
@@ -1254,7 +1253,8 @@ def _manoeuvre_figure(run: RunData) -> Figure | str:
     weights = [_weight_series(run.trials, p, rows["trial"].tolist()) for _, p, rows in groups]
     weight_name = next((w[0] for w in weights if w is not None), "")
     fig, axes = new_figure(ncols=2 if weight_name else 1,
-                           width=PAGE_IN / 2 if weight_name else 4.8, height=CURVE_ROW_IN + 0.3)
+                           width=PAGE_WIDTH_IN / 2 if weight_name else 4.8,
+                           height=CURVE_ROW_IN + 0.3)
     axes = np.atleast_1d(axes)
     ax = axes[0]
     colours = ["0.2"] if len(groups) == 1 else [

@@ -67,7 +67,14 @@ from numpy.typing import ArrayLike
 
 from trackfuse.environment import recorded_cpus
 from trackfuse.plots.algorithms import line_kwargs, look
-from trackfuse.plots.style import band, legend_below, legend_entries, new_figure, wants_log_axis
+from trackfuse.plots.style import (
+    PAGE_WIDTH_IN,
+    band,
+    legend_below,
+    legend_entries,
+    new_figure,
+    wants_log_axis,
+)
 from trackfuse.reported import PASSIVE_ASSOC
 from trackfuse.reports import (
     AGREES,
@@ -168,8 +175,6 @@ def _clip(values: ArrayLike, metric: str) -> np.ndarray:
 
 
 #: Width (in) of a two-column page: a figure this wide prints its text at its own size.
-PAGE_WIDTH = 7.16
-#: Panel width (in) of the convergence figures: three make a figure 7.8 in wide, whose
 #: 9-pt tick labels print at 8 pt on a 7-in page width.
 PANEL_WIDTH = 2.6
 #: Legend column width (in) below the figures: two columns in 7.8 in.
@@ -415,7 +420,7 @@ def _noise_figure(summary: pd.DataFrame, config: dict) -> Figure | str:
         return "noise.sigma is not swept"
     groups = [k for k in _grouping_keys(config) if k != "noise.sigma" and k in summary]
     parts = list(summary.groupby(groups, sort=True)) if groups else [((), summary)]
-    fig, axes = new_figure(ncols=len(parts), nrows=2, width=min(3.6, PAGE_WIDTH / len(parts)),
+    fig, axes = new_figure(ncols=len(parts), nrows=2, width=min(3.6, PAGE_WIDTH_IN / len(parts)),
                            height=2.6)
     axes = np.asarray(axes).reshape(2, len(parts))
     rows = (("accuracy", "accuracy (fraction)"), ("correct", "whole solution right (rate)"))
@@ -449,7 +454,7 @@ def _noise_figure(summary: pd.DataFrame, config: dict) -> Figure | str:
 # ---------------------------------------------------------------------------------------
 # scale: solve time, objective gap and accuracy against the number of targets
 
-#: Height (in) of the scale figure, one page (:data:`PAGE_WIDTH`) wide.
+#: Height (in) of the scale figure, one page (:data:`PAGE_WIDTH_IN`) wide.
 SCALE_HEIGHT = 4.8
 
 
@@ -653,13 +658,13 @@ def _scale_figure(run: RunData) -> Figure | str:
     axis = NAxis(tuple(sorted(float(n) for n in swept)), p.get("scene.mode", "paper") == "paper")
     names = ["exact", *_pga_names(summary)]
     ops = {name: _final_ops(summary, name) for name in names[1:]}
-    fig, axes = new_figure(ncols=3, width=PAGE_WIDTH / 3, height=SCALE_HEIGHT)
+    fig, axes = new_figure(ncols=3, width=PAGE_WIDTH_IN / 3, height=SCALE_HEIGHT)
     _time_panel(axes[0], axis, _median_times(run), names)
     gaps = _gap_panel(axes[1], axis, checkpoint_metrics(run.trials, config), names[1:], ops)
     _accuracy_panel(axes[2], axis, summary, names, ops)
     for ax in axes:
         axis.draw(ax)
-    legend_below(fig, *legend_entries(axes), column_width=PAGE_WIDTH / 2)
+    legend_below(fig, *legend_entries(axes), column_width=PAGE_WIDTH_IN / 2)
     scenes = (f"paper scenes M1-M{'/M'.join(f'{n:g}' for n in axis.swept)} (unjoined)"
               if axis.scenes else "random scenes")
     budget = f"; PGA after {ops[names[1]]} operations" if len(names) > 1 else ""
