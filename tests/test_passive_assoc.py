@@ -41,11 +41,16 @@ def strip_times(rows):
     return [{k: v for k, v in r.items() if not k.endswith("_time_s")} for r in rows]
 
 
-def test_a_parameter_marked_draws_false_changes_neither_the_scan_nor_the_point_stream(
+# draws=False parameters that change the targets' returns (scale or threshold common-stream
+# draws) but not the false alarms, which come from the point stream
+SCENE_SCALES = {"noise.sigma", "noise.reading", "sensor.p_d"}
+
+
+def test_a_parameter_marked_draws_false_leaves_the_false_alarms_and_the_point_stream_alone(
         monkeypatch):
     """Sweep points that differ only in such a parameter share their false alarms (the
-    runner's draw points), so it must leave the simulated scan alone and take nothing else
-    from the point stream."""
+    runner's draw points), so it must leave them alone and take nothing else from the point
+    stream; a solver setting leaves the whole scan alone."""
     scans = []
     simulate_scan = model.simulate_scan
     monkeypatch.setattr(model, "simulate_scan",
@@ -58,14 +63,25 @@ def test_a_parameter_marked_draws_false_changes_neither_the_scan_nor_the_point_s
         EXPERIMENT.run_trial(p, streams)
         return [*scans[-1].z, *scans[-1].labels], streams.point.random()
 
+    def false_alarms(p):
+        z1, z2, lab1, lab2 = scan(p)[0]
+        return [np.sort(z[lab < 0], axis=0) for z, lab in ((z1, lab1), (z2, lab2))]
+
     ref, ref_next = scan(base)
+    ref_alarms = false_alarms(base)
+    assert sum(len(a) for a in ref_alarms) > 0
     quiet = [p for p in EXPERIMENT.params if not p.draws]
-    assert {"pga.p_m", "assoc.cost", "algorithms"} <= {p.key for p in quiet}
+    assert {"pga.p_m", "assoc.cost", "algorithms"} | SCENE_SCALES <= {p.key for p in quiet}
     for param in quiet:
-        got, got_next = scan({**base, param.key: another_value(param, base[param.key])})
-        for a, b in zip(got, ref, strict=True):
-            np.testing.assert_array_equal(a, b, err_msg=param.key)
+        other = {**base, param.key: another_value(param, base[param.key])}
+        got, got_next = scan(other)
         assert got_next == ref_next, param.key
+        if param.key in SCENE_SCALES:
+            for a, b in zip(false_alarms(other), ref_alarms, strict=True):
+                np.testing.assert_array_equal(a, b, err_msg=param.key)
+        else:
+            for a, b in zip(got, ref, strict=True):
+                np.testing.assert_array_equal(a, b, err_msg=param.key)
     changed = scan({**base, "clutter.p_f": 0.9})[0]  # the check sees a change
     assert any(not np.array_equal(a, b) for a, b in zip(changed, ref, strict=True))
 

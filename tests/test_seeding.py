@@ -61,7 +61,8 @@ def test_a_draw_point_is_the_first_point_with_the_same_simulated_values(path):
 def test_only_the_shipped_configs_with_a_non_drawing_axis_share_clutter_across_points():
     """Every other shipped config draws exactly the clutter it drew before draw points
     existed (each point its own stream), so its numbers are unchanged; these are the ones
-    whose sweep adds a parameter that changes only what is computed."""
+    whose sweep adds a parameter that changes only what is computed, and the angle-noise
+    study, whose noise levels share their false alarms."""
     sharing = set()
     for path in LOADABLE:
         points, mapped = _mapped(path)
@@ -69,10 +70,11 @@ def test_only_the_shipped_configs_with_a_non_drawing_axis_share_clutter_across_p
             sharing.add(path.stem)
     expected = {"passive_mutation", "passive_mutation_ci", "twin_sensor_range",
                 "twin_sensor_stonesoup_jacobian", "esm_radar_baseline_spread",
-                "esm_radar_weave"}
+                "esm_radar_weave", "passive_noise", "passive_noise_ci"}
     assert sharing == {name for name in expected if HAS_STONESOUP or name not in NEEDS_EXTRA}
 
 
 def test_the_mutation_study_shares_clutter_across_p_m_and_not_across_targets():
     assert _mapped(CONFIGS / "passive_mutation.yaml")[1] == [0, 1, 2] * 4  # p_m x targets.n
     assert _mapped(CONFIGS / "twin_sensor_range.yaml")[1] == [0] * 9  # cue x filter q
+    assert _mapped(CONFIGS / "passive_noise.yaml")[1] == [0, 1, 2] * 5  # sigma x targets.n

@@ -40,7 +40,10 @@ trial, computed even when ``exact`` is not listed):
 
 Random streams: ``truth, noise, shuffle, algo`` are spawned from the trial's common stream
 (the same at every sweep point) and the false alarms come from its point stream (shared by
-sweep points that differ only in the solver settings, ``draws=False``);
+sweep points that differ only in parameters marked ``draws=False``: the solver settings, and
+the angle noise and detection probability, which scale or threshold common-stream draws and
+leave the false alarms' distribution unchanged, so a noise sweep compares on the same false
+alarms too);
 the PGA variants take fixed children of ``algo`` by their position in :data:`VARIANTS`
 (append new variants at the end), so adding or removing an algorithm in a config changes no
 other number.
@@ -89,10 +92,12 @@ PARAMS = (
           low=1, high=2000),
     Param("noise.sigma", 0.005, "the paper's angle-error figure (azimuth and elevation, both "
           "sensors), read as a standard deviation or a variance per noise.reading", "rad", low=1e-7,
-          high=1.0),
+          high=1.0, draws=False),
     Param("noise.reading", "std", "reading of noise.sigma: 'std' (sigma = value) or "
-          "'variance' (sigma = sqrt(value), in rad^2)", kind=str, choices=("std", "variance")),
-    Param("sensor.p_d", 0.95, "detection probability of each sensor", "1", low=1e-3, high=1.0),
+          "'variance' (sigma = sqrt(value), in rad^2)", kind=str, choices=("std", "variance"),
+          draws=False),
+    Param("sensor.p_d", 0.95, "detection probability of each sensor", "1", low=1e-3, high=1.0,
+          draws=False),
     Param("clutter.p_f", 0.05, "false alarms per sensor: Poisson(p_f N) or Binomial(N, p_f)", "1",
           low=0.0, high=1.0),
     Param("clutter.model", "poisson", "false-alarm count model", kind=str,

@@ -24,7 +24,8 @@ the target with probability ``P_D`` and reports Poisson clutter:
 Each trial spawns independent generators for truth, initialization and sensor noise from its
 common stream (the same at every sweep point) and draws clutter from its point stream (shared
 by sweep points that differ only in parameters marked ``draws=False``: the filter, its
-initialization, gating and scoring), so adding an algorithm never changes the simulated data
+initialization, gating and scoring, and the sensors' noise and detection probabilities,
+which scale or threshold common-stream draws), so adding an algorithm never changes the simulated data
 and sweep points compare on the same targets and noise. Every algorithm (association variant
 x covariance form, see :mod:`trackfuse.tracking.pda`) starts from the same
 ``x0 ~ N(x_true(0), P0)``. The range standard deviation of ``P0`` (the radar cue) is
@@ -148,15 +149,16 @@ PARAMS = (
     Param("sensors.baseline_angle", 90.0, "Direction of the baseline from the initial line of "
           "sight (90 = broadside)", "deg", low=-360.0, high=360.0),
     Param("sensors.sigma_az", 0.01, "Azimuth noise standard deviation of sensor 1 (paper: 0.01)",
-          "rad", low=1e-6, high=1.0),
+          "rad", low=1e-6, high=1.0, draws=False),
     Param("sensors.sigma_el_ratio", 1.0, "Elevation noise standard deviation relative to the "
           "azimuth one (1: equal accuracy, the default sigma_el = 0.01 rad)", "1", low=1e-3,
-          high=1e3),
-    Param("sensors.pd", 1.0, "Detection probability of sensor 1", "1", low=0.0, high=1.0),
+          high=1e3, draws=False),
+    Param("sensors.pd", 1.0, "Detection probability of sensor 1", "1", low=0.0, high=1.0,
+          draws=False),
     Param("sensor2.noise_ratio", 1.0, "Sensor 2 noise standard deviations relative to sensor 1",
-          "1", low=1e-3, high=1e3),
+          "1", low=1e-3, high=1e3, draws=False),
     Param("sensor2.pd_ratio", 1.0, "Sensor 2 detection probability relative to sensor 1", "1",
-          low=0.0, high=1.0),
+          low=0.0, high=1.0, draws=False),
     Param("clutter.model", "in_gate", "Clutter model: uniform in each filter's gate, or in a "
           "fixed window about the true line of sight", kind=str, choices=("in_gate", "window")),
     Param("clutter.mean", 0.0, "Mean number of false returns per sensor and scan (in the gate "
