@@ -250,6 +250,19 @@ def test_the_narrowing_verdict_does_not_pick_its_yardstick_from_the_data():
     assert [monotone[k]["verdict"] for k in ("closest", "narrows")] == ["agrees", "agrees"]
 
 
+def test_the_narrowing_verdict_agrees_exactly_when_its_interval_lies_above_zero():
+    """The pre-specified comparison (closest against widest) was judged on a Holm-adjusted
+    p beside its unadjusted interval: at 40 and 50 trials the row showed an interval above 0
+    and said inconclusive. The verdict now reads the interval it shows."""
+    for n in (30, 40, 50, 60):
+        row = _gap_verdicts({50: 0.5, 300: 0.5, 2000: 0.9}, {50: 0.6, 300: 0.55, 2000: 0.9},
+                            n)["narrows"]
+        assert row["reproduced"] == pytest.approx(0.1)
+        assert (row["verdict"] == "agrees") == (row["ci_low"] > 0), n
+        assert row["verdict"] in ("agrees", "inconclusive")
+    assert row["verdict"] == "agrees"
+
+
 def test_curve_verdicts_with_too_few_trials_never_say_differs():
     """30 trials and a small widening (+0.03 to +0.10): no verdict can be reached."""
     rows = _gap_verdicts({50: 0.5, 300: 0.5, 2000: 1.0}, {50: 0.53, 300: 0.6, 2000: 1.0}, 30)
