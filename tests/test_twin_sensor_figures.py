@@ -619,12 +619,33 @@ def test_a_swept_q_is_titled_by_its_manoeuvring_index():
     params = {**EXPERIMENT.defaults(), "target.q": 160000.0, "filter.q": 160000.0,
               "clutter.mean": 40.0}
     swept = ["target.q", "filter.q", "clutter.mean"]
-    assert report._point_title(params, swept) == \
+    assert report._point_title(params, swept, matched=True) == \
         "manoeuvring index 0.2, mean 40 false returns per scan"
-    assert report._point_title({**params, "target.q": 900.0, "filter.q": 900.0}, swept) \
-        .startswith("manoeuvring index 0.015,")
-    assert report._point_title({**params, "filter.q": 900.0}, swept) == \
+    assert report._point_title({**params, "target.q": 900.0, "filter.q": 900.0}, swept,
+                               matched=True).startswith("manoeuvring index 0.015,")
+    assert report._point_title({**params, "filter.q": 900.0}, swept, matched=False) == \
         "manoeuvring index 0.2, filter q 900 m^2/s^4, mean 40 false returns per scan"
+
+
+def test_a_panel_whose_filter_q_equals_the_truths_says_it_unless_the_title_does(tmp_path):
+    """A target.q x filter.q grid: the panels where the two were equal left the filter's q
+    out while the figure's title said nothing of it (a reader could not tell which filter q
+    they used). Every panel now gives it; only when every panel's filter q is the truth's
+    does the title say "truth q = filter q" once (twin_sensor_hard, test below). The
+    manoeuvring-index figure, whose title says truth q = filter q, is not drawn from
+    such a grid (it would pool two filter qs at one index)."""
+    base = {**EXPERIMENT.defaults(), "algorithms": ALGORITHMS[1:3], "scan.count": 5,
+            "clutter.model": "window", "clutter.window": 0.1, "clutter.mean": 40.0}
+    run = harness.run_data(tmp_path, EXPERIMENT, base,
+                           {"target.q": [0.0, 900.0, 10000.0], "filter.q": [0.0, 900.0]},
+                           trials=4, seed=3)
+    figs = report.figures(run, EXPERIMENT.figures)
+    for name in ("range_error_vs_time", "anees_vs_time"):
+        titles = [ax.get_title().replace("\n", " ") for ax in figs[name].axes
+                  if ax.get_visible()]
+        assert len(titles) == 6 and all("filter q " in t for t in titles), titles
+        assert "truth q = filter q" not in figs[name].get_suptitle()
+    assert figs["loss_vs_manoeuvring_index"].startswith("needs filter.q equal to target.q")
 
 
 @pytest.fixture(scope="module")
@@ -637,6 +658,15 @@ def run_hard(tmp_path_factory) -> RunData:
                             {"target.q": q, "filter.q": q,
                              "clutter.mean": [0.0, 0.0, 40.0, 40.0, 40.0, 40.0, 40.0]},
                             trials=10, seed=3, sweep_mode="zip")
+
+
+def test_a_matched_q_is_said_once_in_the_title(run_hard):
+    """twin_sensor_hard: the filter's q is the truth's at every point, said once in the
+    figure's title; the panels give the manoeuvring index alone."""
+    for name, fig in report.figures(run_hard, ["range_error_vs_time", "anees_vs_time"]).items():
+        assert "truth q = filter q" in fig.get_suptitle(), name
+        titles = [ax.get_title() for ax in fig.axes if ax.get_visible()]
+        assert all(t.startswith("manoeuvring index") and "filter q" not in t for t in titles)
 
 
 @pytest.mark.parametrize("fixture", ["run_50", "run_wide", "run_hard"])

@@ -414,26 +414,29 @@ def _lines(titles: Sequence[str]) -> int:
     return max((t.count("\n") + 1 for t in titles if t), default=0)
 
 
-def _point_title(params: dict[str, Any], swept: Sequence[str]) -> str:
+def _point_title(params: dict[str, Any], swept: Sequence[str], matched: bool) -> str:
     """A sweep point's swept values in words; a swept truth q as its manoeuvring index
-    (:func:`_manoeuvring_index`), the filter's q left out when equal to it
-    (:func:`_per_point` says so in the figure's title)."""
+    (:func:`_manoeuvring_index`), the filter's q left out only when ``matched`` (the
+    figure's title then says "truth q = filter q" for every panel: :func:`_q_matched`)."""
     keys = list(swept)
     parts = []
     if "target.q" in keys:
-        equal = params["target.q"] == params.get("filter.q")
-        keys = [k for k in keys if k != "target.q" and not (equal and k == "filter.q")]
+        keys = [k for k in keys if k != "target.q" and not (matched and k == "filter.q")]
         parts.append(f"manoeuvring index {_manoeuvring_index(params):.2g}")
     return ", ".join(parts + [_value_text(k, params[k]) for k in keys]) or "all runs"
 
 
+def _q_matched(run: RunData, points: Sequence[int]) -> bool:
+    """Whether the truth's q is swept and the filter's q equals it at every one of the
+    sweep ``points`` (twin_sensor_hard): said once in the figure's title, not per panel."""
+    return "target.q" in swept_keys(run.config) and all(
+        run.point_params(pt)["target.q"] == run.point_params(pt)["filter.q"] for pt in points)
+
+
 def _per_point(run: RunData) -> str:
-    """"n runs per point" of a time figure, with "truth q = filter q" when the truth's q is
-    swept and every panel's filter q equals it (:func:`_point_title` then gives only the
-    manoeuvring index)."""
-    params = [run.point_params(pt) for pt in _time_points(run)]
-    matched = "target.q" in swept_keys(run.config) and all(
-        p["target.q"] == p["filter.q"] for p in params)
+    """"n runs per point" of a time figure, with "truth q = filter q" when
+    :func:`_q_matched` (:func:`_point_title` then gives only the manoeuvring index)."""
+    matched = _q_matched(run, _time_points(run))
     return f"{_runs(run.trials)} runs per point" + ("; truth q = filter q" if matched else "")
 
 
@@ -770,14 +773,20 @@ def _manoeuvring_index(params: dict[str, Any]) -> float:
 
 def _index_figure(run: RunData) -> Figure | str:
     """Tracks lost (angle and gate rules) against the manoeuvring index of the truth, for
-    the points with clutter; clutter-free points as grey crosses (worst algorithm)."""
+    the points with clutter; clutter-free points as grey crosses (worst algorithm); a reason
+    unless the filter's q equals the truth's at every point (:func:`_q_matched`)."""
     last = _last(run.trials).copy()
     index = np.array([_manoeuvring_index(p) for p in run.points])
     last["index"] = index[last["point"].to_numpy()]
+    clutter = np.array([float(p["clutter.mean"]) for p in run.points])  # swept or not
+    last["clutter.mean"] = clutter[last["point"].to_numpy()]
     with_clutter = last[last["clutter.mean"] > 0]
     if with_clutter["clutter.mean"].nunique() != 1 or with_clutter["index"].nunique() < 3:
         return ("needs one non-zero clutter level and at least 3 manoeuvring indices "
                 "(target.q values)")
+    if not _q_matched(run, range(len(run.points))):
+        return ("needs filter.q equal to target.q at every point (the title says truth q = "
+                "filter q; points of another filter q would be pooled at one index)")
     names = _emphasis_last(run.params["algorithms"])
     level = _value_text("clutter.mean", with_clutter["clutter.mean"].iloc[0])
     title = [f"Tracks lost against the manoeuvring index, {level} ({_runs(last)} runs per "
@@ -871,7 +880,9 @@ def _time_figure(run: RunData, draw: PanelDraw, title: Sequence[str], y_label: s
     swept = swept_keys(run.config)
     per_row = 3 if len(points) % 3 == 0 or len(points) > 4 else len(points)
     panel = _printable(TIME_PANEL, per_row)
-    titles = _wrapped([_point_title(run.point_params(pt), swept) for pt in points], panel[0])
+    matched = _q_matched(run, points)
+    titles = _wrapped([_point_title(run.point_params(pt), swept, matched) for pt in points],
+                      panel[0])
     fig, axes, cols = _figure(len(points), per_row, panel, title, legend_entries,
                               _lines(titles))
     trials = run.trials
