@@ -10,6 +10,8 @@ from figure_checks import smallest_printed_text, text_overlaps
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import to_hex
 from matplotlib.container import ErrorbarContainer
+from matplotlib.lines import Line2D
+from matplotlib.offsetbox import OffsetBox, TextArea
 
 from trackfuse import harness
 from trackfuse.experiments.twin_sensor import EXPERIMENT, report
@@ -522,6 +524,50 @@ def test_a_point_a_few_flagged_runs_carry_is_not_joined_and_says_so(run_50):
     assert any(np.any(np.abs(x - 8.0) < 0.5) for x in _joined_x(plain.axes[0],
                                                                   "mspda_parallel/mgekf"))
     assert not plain.axes[0].texts and report.FEW_LABEL not in _legend(plain)
+
+
+def _legend_markers(fig, label: str) -> list[tuple]:
+    """``(marker, face colour, edge colour)`` of every line the figure legend draws in the
+    handle of the entry ``label``."""
+    def boxes(box):
+        yield box
+        for child in box.get_children():
+            if isinstance(child, OffsetBox):
+                yield from boxes(child)
+
+    for box in boxes(fig.legends[0].get_children()[0]):
+        handle, text = (box.get_children() + [None, None])[:2]
+        if isinstance(text, TextArea) and text.get_text() == label:
+            return [_marker_look(a) for a in handle.get_children() if isinstance(a, Line2D)]
+    raise AssertionError(f"no legend entry {label!r}")
+
+
+def _marker_look(line) -> tuple:
+    return (line.get_marker(), to_hex(line.get_markerfacecolor(), keep_alpha=True)
+            if line.get_markerfacecolor() != "none" else "none",
+            to_hex(line.get_markeredgecolor()))
+
+
+@pytest.mark.parametrize("algorithms", [["mspda_parallel/mgekf"],
+                                        ["mspda_parallel/mgekf", "paper_approx/ekf"]])
+def test_the_not_joined_legend_entry_shows_the_markers_drawn(run_50, algorithms):
+    """twin_sensor_baseline's 40 km points were drawn with the algorithms' markers (MGEKF
+    filled, EKF open) while the legend's "point not joined" showed an open grey circle:
+    the entry now shows each not-joined marker as it is drawn, side by side."""
+    run = _run_off(run_50, 2, flag=True)
+    for name in algorithms[1:]:
+        trials = run.trials.copy()
+        off = ((trials["scan"] == trials["scan"].max()) & (trials["trial"] < 2)
+               & (trials["algorithm"] == name) & (trials["clutter.mean"] == 8.0))
+        trials.loc[off, ["range_sq_err_m2", "inconsistent_nees"]] = [3e5**2, 1]
+        run.trials = trials
+    fig = report.figures(run, ["final_range_rmse_vs_sweep"])["final_range_rmse_vs_sweep"]
+    FigureCanvasAgg(fig).draw()
+    drawn = [_marker_look(c.lines[0]) for c in fig.axes[0].containers
+             if isinstance(c, ErrorbarContainer) and c.get_label() == "_few"]
+    assert len(drawn) == len(algorithms)
+    assert _legend_markers(fig, report.FEW_LABEL) == drawn
+    assert text_overlaps(fig) == []
 
 
 def test_many_flagged_runs_are_not_a_few():

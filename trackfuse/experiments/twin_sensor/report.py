@@ -73,6 +73,9 @@ import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.legend import Legend
+from matplotlib.legend_handler import HandlerTuple
+from matplotlib.lines import Line2D
 from matplotlib.scale import SymmetricalLogTransform
 from matplotlib.ticker import FixedLocator, FuncFormatter, MaxNLocator, NullLocator
 from matplotlib.transforms import IdentityTransform, Transform
@@ -441,15 +444,18 @@ def _per_point(run: RunData) -> str:
 
 
 def _finish(fig: Figure, axes: Sequence[Axes], legend_cols: int,
-            everywhere: Collection[str] = (), reserved: int = 0) -> Figure:
-    """``fig`` with one legend of the entries of ``axes`` and of the entries labelled one of
-    ``everywhere`` in any panel of ``fig`` (each label once); the legend rows of the
-    ``reserved`` entries :func:`_frame` made room for that stay empty are cut off."""
+            everywhere: Collection[str] = (), reserved: int = 0,
+            extra: dict[str, Any] | None = None) -> Figure:
+    """``fig`` with one legend of the entries of ``axes``, of the entries labelled one of
+    ``everywhere`` in any panel of ``fig`` (each label once) and of ``extra`` (label ->
+    handle, last); the legend rows of the ``reserved`` entries :func:`_frame` made room for
+    that stay empty are cut off."""
     entries: dict[str, Any] = {}
     for ax in fig.axes:
         for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
             if ax in axes or label in everywhere:
                 entries.setdefault(label, handle)
+    entries.update(extra or {})
     unused = -(-reserved // legend_cols) - -(-len(entries) // legend_cols)
     if unused > 0:
         trim_bottom(fig, LEGEND_ROW_IN * unused)
@@ -1193,7 +1199,7 @@ def _final_figure(run: RunData) -> Figure | str:
         if label not in shown:  # a bound only another facet draws: its legend entry
             axes[0].plot([], [], color="k", ls=style, lw=1.0, label=label)
             shown.add(label)
-    return _finish(fig, axes[:1], cols, everywhere=(PAST_TOP_LABEL, FEW_LABEL))
+    return _finish(fig, axes[:1], cols, everywhere=(PAST_TOP_LABEL,), extra=_few_key(few))
 
 
 def _final_bounds(run: RunData, frame: pd.DataFrame, x_key: str, threshold: float | None
@@ -1228,6 +1234,24 @@ FEW_LABEL = ("point not joined: flagged runs (lost or inconsistent, <= 10 % of i
 FewRuns = dict[str, dict[float, tuple[int, int, float]]]
 """Per algorithm, the swept values whose RMSE a few runs carry: ``(flagged runs, runs,
 their share of the squared error)``, from :func:`_few_runs_carry`."""
+
+
+class MarkerSet(tuple):
+    """A legend handle of several markers side by side (matplotlib Line2D handles)."""
+
+
+Legend.update_default_handler_map({MarkerSet: HandlerTuple(ndivide=None)})
+
+
+def _few_key(few: Sequence[FewRuns]) -> dict[str, MarkerSet]:
+    """The legend entry :data:`FEW_LABEL` of the points a few runs carry (``few``, one
+    :data:`FewRuns` per panel): the marker of each algorithm drawn so, as it is drawn
+    (colour, shape and fill, no line); empty when there is none."""
+    names = list(dict.fromkeys(name for facet in few for name in facet))
+    looks = [{k: v for k, v in line_kwargs(name).items()
+              if k in ("color", "marker", "markerfacecolor")} for name in names]
+    return {FEW_LABEL: MarkerSet(Line2D([], [], linestyle="none", **kw) for kw in looks)
+            } if names else {}
 
 
 def _few_runs_carry(frame: pd.DataFrame, x_key: str, names: Sequence[str]) -> FewRuns:
@@ -1276,8 +1300,8 @@ def _draw_final(ax: Axes, points: FinalPoints, x_key: str,
 
 def _annotate_few(ax: Axes, points: FinalPoints, few: FewRuns, scale: float) -> None:
     """Beside each swept value where a few runs carry an algorithm's RMSE (``few``), how
-    many and what share ("2/50 flagged runs: 95 % of the MSE"), once per value; the
-    legend entry :data:`FEW_LABEL` when there is one."""
+    many and what share ("2/50 flagged runs: 95 % of the MSE"), once per value (the legend
+    entry is :func:`_few_key`'s)."""
     notes: dict[float, dict[str, float]] = {}
     for name, at in few.items():
         x, rmse, *_ = points[name]
@@ -1291,9 +1315,6 @@ def _annotate_few(ax: Axes, points: FinalPoints, few: FewRuns, scale: float) -> 
                     fontsize=NOTE_PT, zorder=7, bbox={"facecolor": "white",
                                                       "edgecolor": "none", "alpha": 0.8,
                                                       "pad": 1.0})
-    if notes:
-        ax.plot([], [], ls="none", marker="o", markerfacecolor="none", color=GREYS[0],
-                label=FEW_LABEL)
 
 
 # --------------------------------------------------------------------------------------------
