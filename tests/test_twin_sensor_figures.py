@@ -635,6 +635,28 @@ def test_a_curve_under_an_equal_one_shows_around_it(run_50):
         line_kwargs("mspda_parallel/mgekf")["linewidth"]
 
 
+def test_the_legend_look_of_a_covered_curve_holds_in_every_panel(run_50):
+    """The look of a curve lying on another (wider, larger open markers) was decided per
+    panel while the legend came from the first: with every gate-rule curve at 0 % but the
+    paper's MGEKF flagged inconsistent at 8, the legend showed that curve wide while the
+    NEES panel drew it plain. A curve now has one look in every panel of the figure."""
+    name = "loss_gate_and_nees_vs_clutter"
+    fig = report.figures(_flagged(run_50, {("paper_approx/mgekf", 8.0,
+                                            "inconsistent_nees"): 3}), [name])[name]
+    panels = [ax for ax in fig.axes if ax.get_visible()]
+    assert len(panels) == 2
+    for algorithm in ALGORITHMS:
+        label = look(algorithm).label
+        handle = _legend_handle(fig, label)
+        for ax in panels:
+            line = _curve(ax, algorithm)
+            assert (line.get_linewidth(), line.get_markersize(), line.get_markerfacecolor()) \
+                == (handle.get_linewidth(), handle.get_markersize(),
+                    handle.get_markerfacecolor()), (algorithm, ax.get_title())
+    assert _curve(panels[0], "paper_approx/mgekf").get_linewidth() > \
+        line_kwargs("paper_approx/mgekf")["linewidth"]  # it lies on the EKF in the gate panel
+
+
 def test_anees_panels_share_one_log_axis_with_the_band_inside(run_50):
     """twin_sensor_close and _hard's ANEES panels each had their own linear y range (0-7 to
     0-60): they now share one log axis that holds every curve and chi-square band, even

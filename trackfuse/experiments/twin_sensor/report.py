@@ -571,31 +571,35 @@ def _with_bars(points: pd.DataFrame, every_bar: bool) -> pd.DataFrame:
     return points.assign(bar=True if every_bar else points["k"] > 0)
 
 
-def _curve_kwargs(points: pd.DataFrame) -> dict[str, dict[str, Any]]:
-    """Line keyword arguments of each curve of :func:`_rate_points`, in drawing order; a
-    curve equal at every swept value to curves drawn after it (fig1_claim: both at 0 %
-    everywhere) is wider than the widest of them and has larger open markers, so that it
-    shows around them (nested when several coincide)."""
-    curves = [(str(name), r["pct"].to_numpy()) for name, r in points.groupby("name",
-                                                                             sort=False)]
+def _curve_kwargs(panels: Sequence[pd.DataFrame]) -> dict[str, dict[str, Any]]:
+    """Line keyword arguments of each curve of the :func:`_rate_points` ``panels`` of one
+    figure, in drawing order; a curve equal at every swept value to curves drawn after it
+    in some panel (fig1_claim: both at 0 % everywhere) is wider than the widest of them and
+    has larger open markers, so that it shows around them (nested when several coincide).
+    A curve has that look in every panel of the figure, so that its one legend entry is
+    true for each."""
+    order = list(dict.fromkeys(str(n) for points in panels for n in points["name"]))
+    over: dict[str, set[str]] = {name: set() for name in order}
+    for points in panels:
+        curves = [(str(n), r["pct"].to_numpy()) for n, r in points.groupby("name", sort=False)]
+        for i, (name, pct) in enumerate(curves):
+            over[name] |= {later for later, p in curves[i + 1:]
+                           if len(p) == len(pct) and np.array_equal(p, pct)}
     kwargs: dict[str, dict[str, Any]] = {}
-    for i in reversed(range(len(curves))):
-        name, pct = curves[i]
+    for name in reversed(order):
         kw = line_kwargs(name)
-        over = [kwargs[later] for later, p in curves[i + 1:]
-                if len(p) == len(pct) and np.array_equal(p, pct)]
-        if over:
-            kw.update(linewidth=max(k["linewidth"] for k in over) + 2.2,
-                      markersize=max(k.get("markersize", 4.0) for k in over) + 3.5,
+        under = [kwargs.get(later, line_kwargs(later)) for later in over[name]]
+        if under:
+            kw.update(linewidth=max(k["linewidth"] for k in under) + 2.2,
+                      markersize=max(k.get("markersize", 4.0) for k in under) + 3.5,
                       markerfacecolor="none", markeredgewidth=1.3)
         kwargs[name] = kw
-    return {name: kwargs[name] for name, _ in curves}
+    return {name: kwargs[name] for name in order}
 
 
-def _draw_rates(ax: Axes, points: pd.DataFrame) -> None:
-    """The curves of :func:`_rate_points` (with :func:`_with_bars`; looks of
+def _draw_rates(ax: Axes, points: pd.DataFrame, looks: dict[str, dict[str, Any]]) -> None:
+    """The curves of :func:`_rate_points` (with :func:`_with_bars`; ``looks`` of
     :func:`_curve_kwargs`), each with its 95 % Wilson error bars where ``bar``."""
-    looks = _curve_kwargs(points)
     for name, r in points.groupby("name", sort=False):
         kw = looks[str(name)]
         ax.plot(r["x"], r["pct"], **kw)
@@ -755,11 +759,12 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
         for facet_title, _ in facets for col_title, _, rule in columns], panel[0])
     fig, axes, cols = _figure(n_panels, ncols, panel, title, entries,
                               _lines(titles))
+    looks = _curve_kwargs([points for _, _, points in panels])
     for ax, (_, rule, points), top, z, panel_title in zip(axes, panels, tops, zero, titles,
                                                           strict=False):
         if claim and rule != "inconsistent_nees":
             _draw_claim(ax)
-        _draw_rates(ax, points)
+        _draw_rates(ax, points, looks)
         _fit_loss_axis(ax, top, points, z)
         _set_x_scale(ax, last["clutter.mean"], threshold)
         ax.set_xlabel(_axis_label("clutter.mean", run.params))
@@ -808,8 +813,9 @@ def _index_figure(run: RunData) -> Figure | str:
     past = any(len(_past_top(p, top)) for p in points)
     fig, axes, cols = _figure(2, 2, _printable(PANEL, 2), title,
                               len(names) + 2 + (len(free) > 0) + past, 1)
+    looks = _curve_kwargs(points)
     for ax, rule, drawn in zip(axes, rules, points, strict=True):
-        _draw_rates(ax, drawn)
+        _draw_rates(ax, drawn, looks)
         _fit_loss_axis(ax, top, drawn, zero)
         if len(free):
             worst = free.groupby(["index", "algorithm"])[rule].mean().groupby(level=0).max()
