@@ -475,6 +475,22 @@ def test_a_range_panel_below_the_bound_at_every_scan_says_why(run_50):
         assert note.startswith("corr. of errors, scan 1 vs 20: ")
 
 
+@pytest.mark.parametrize(("corr", "words"), [
+    (0.95, "errors\ncorrelated across scans (0.95);"),
+    (-0.7, "errors\ncorrelated across scans (-0.70);"),
+    (0.12, "errors weakly\ncorrelated across scans (0.12);"),
+    (-0.3, "errors weakly\ncorrelated across scans (-0.30);")])
+def test_the_below_the_bound_note_calls_weak_correlation_weak(corr, words):
+    """The note said "errors correlated across scans (0.12)" whatever the correlation (0.95
+    in twin_sensor_orbit): a weak one is now called weak."""
+    band = pd.DataFrame({"rmse": [9.0] * 20, "lo": [7.0] * 20, "hi": [12.0] * 20})
+    note = report._range_note(band, np.full(20, 10.0), 50, 20, corr)
+    assert note == ("below the bound at all 20 scans:\none sample of 50 runs, "
+                    f"{words}\nthe bound lies inside the 95 % band")
+    assert report._range_note(band, np.full(20, 8.0), 50, 20, corr) == \
+        f"corr. of errors, scan 1 vs 20: {corr:.2f}"
+
+
 def test_a_bound_outside_the_band_gets_no_below_the_bound_note():
     """Below the bound but with the bound above the band (a filter shown better than the
     bound, a bug) is not explained away as sampling."""

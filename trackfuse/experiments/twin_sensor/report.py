@@ -1026,15 +1026,23 @@ def _below_bound_everywhere(band: pd.DataFrame, bound: np.ndarray) -> bool:
                 and np.all((lo <= bound) & (bound <= hi)))
 
 
+CORRELATED = 0.5
+"""A range panel's note calls the errors of its first and last scan correlated when the
+magnitude of their correlation across runs is at least this, else weakly correlated."""
+
+
 def _range_note(band: pd.DataFrame, bound: np.ndarray, runs: int, scans: int,
                 corr: float) -> str:
     """The note of a range panel: the correlation of the errors between the first and the
-    last scan, said as why the RMSE may lie below the bound at every scan where it does
-    while the bound lies inside the band (:func:`_below_bound_everywhere`)."""
-    if _below_bound_everywhere(band, bound):
-        return (f"below the bound at all {scans} scans:\none sample of {runs} runs, errors\n"
-                f"correlated across scans ({corr:.2f});\nthe bound lies inside the 95 % band")
-    return f"corr. of errors, scan 1 vs {scans}: {corr:.2f}"
+    last scan, said (as correlated or weakly so: :data:`CORRELATED`) where the RMSE lies
+    below the bound at every scan while the bound lies inside the band
+    (:func:`_below_bound_everywhere`): one sample of runs."""
+    if not _below_bound_everywhere(band, bound):
+        return f"corr. of errors, scan 1 vs {scans}: {corr:.2f}"
+    errors = (f"errors{'' if abs(corr) >= CORRELATED else ' weakly'}\ncorrelated across "
+              f"scans ({corr:.2f})")
+    return (f"below the bound at all {scans} scans:\none sample of {runs} runs, {errors};\n"
+            "the bound lies inside the 95 % band")
 
 
 def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
