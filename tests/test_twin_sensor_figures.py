@@ -365,6 +365,17 @@ def test_a_point_whose_every_trial_failed_gets_a_panel_that_says_so(run_50, name
                for a in ALGORITHMS)
 
 
+@pytest.mark.parametrize("name", ["range_error_vs_time", "anees_vs_time"])
+def test_a_time_figure_chooses_its_points_once(run_50, monkeypatch, name):
+    """The ANEES figure chose its sweep points three times (title, y range, panels), the
+    range figure three times too: once now, passed on."""
+    calls = []
+    chosen = report._time_points
+    monkeypatch.setattr(report, "_time_points", lambda run: calls.append(1) or chosen(run))
+    assert not isinstance(report.figures(run_50, [name])[name], str)
+    assert len(calls) == 1
+
+
 def test_time_panels_share_one_y_range_when_their_tops_are_alike(run_50):
     """Panels of a time figure whose needed tops differ by at most 2.5x share one range,
     so that they compare at a glance (twin_sensor_baseline's nine panels ended at 30, 40 or

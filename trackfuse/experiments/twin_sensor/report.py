@@ -436,10 +436,11 @@ def _q_matched(run: RunData, points: Sequence[int]) -> bool:
         run.point_params(pt)["target.q"] == run.point_params(pt)["filter.q"] for pt in points)
 
 
-def _per_point(run: RunData) -> str:
-    """"n runs per point" of a time figure, with "truth q = filter q" when
-    :func:`_q_matched` (:func:`_point_title` then gives only the manoeuvring index)."""
-    matched = _q_matched(run, _time_points(run))
+def _per_point(run: RunData, points: Sequence[int]) -> str:
+    """"n runs per point" of a time figure of the sweep ``points``, with "truth q = filter
+    q" when :func:`_q_matched` (:func:`_point_title` then gives only the manoeuvring
+    index)."""
+    matched = _q_matched(run, points)
     return f"{_runs(run.trials)} runs per point" + ("; truth q = filter q" if matched else "")
 
 
@@ -883,12 +884,12 @@ def _shared_tops(needed: dict[int, float], per_row: int) -> dict[int, float]:
     return {i: top for row in rows.values() for i, top in shared(row).items()}
 
 
-def _time_figure(run: RunData, draw: PanelDraw, title: Sequence[str], y_label: str,
-                 legend_entries: int, everywhere: Collection[str] = ()) -> Figure:
-    """One panel per :func:`_time_points` point against time (s), y ranges shared where
-    :data:`SHARED_TOP_RATIO` allows; the legend holds the first panel's entries and those
-    labelled one of ``everywhere`` in any panel."""
-    points = _time_points(run)
+def _time_figure(run: RunData, points: Sequence[int], draw: PanelDraw, title: Sequence[str],
+                 y_label: str, legend_entries: int, everywhere: Collection[str] = ()
+                 ) -> Figure:
+    """One panel per sweep point of ``points`` (:func:`_time_points`) against time (s), y
+    ranges shared where :data:`SHARED_TOP_RATIO` allows; the legend holds the first panel's
+    entries and those labelled one of ``everywhere`` in any panel."""
     swept = swept_keys(run.config)
     per_row = 3 if len(points) % 3 == 0 or len(points) > 4 else len(points)
     panel = _printable(TIME_PANEL, per_row)
@@ -1081,12 +1082,13 @@ def _range_figure(run: RunData) -> Figure:
     algorithms = run.config["params"]["algorithms"]
     names = _headline_pair(algorithms)
     beside = [n for n in _main_algorithms(algorithms) if n not in names]
-    title = [f"{_fig_words(run, 2)}: range RMSE against time ({_per_point(run)})",
+    points = _time_points(run)
+    title = [f"{_fig_words(run, 2)}: range RMSE against time ({_per_point(run, points)})",
              _context(run, "95 % bootstrap-t bands; grey: single runs")]
-    labels = {label for pt in _time_points(run)
-              for _, _, label in _pcrlb_curves(run.point_params(pt))}
-    return _time_figure(run, lambda ax, f, p: _draw_range(ax, f, p, names, beside), title,
-                        "range RMSE (km)", 2 * len(names) + len(beside) + 2 + len(labels),
+    labels = {label for pt in points for _, _, label in _pcrlb_curves(run.point_params(pt))}
+    return _time_figure(run, points, lambda ax, f, p: _draw_range(ax, f, p, names, beside),
+                        title, "range RMSE (km)",
+                        2 * len(names) + len(beside) + 2 + len(labels),
                         {*labels, PAST_TOP_LABEL})
 
 
@@ -1107,11 +1109,12 @@ def _anees(frame: pd.DataFrame, name: str) -> pd.Series:
     return frame[frame["algorithm"] == name].groupby("scan")["nees"].mean()
 
 
-def _anees_range(run: RunData, names: Sequence[str]) -> tuple[float, float]:
+def _anees_range(run: RunData, names: Sequence[str], points: Sequence[int]
+                 ) -> tuple[float, float]:
     """``(low, high)`` of every ANEES curve of ``names`` and every 95 % chi-square band of
-    the panels of :func:`_time_points`: one log y range for all of them."""
+    the panels of the sweep ``points`` (:func:`_time_points`): one log y range for all."""
     values = []
-    for pt in _time_points(run):
+    for pt in points:
         frame = succeeded_rows(run.trials[run.trials["point"] == pt])
         if not frame.empty:
             values += [*nees_band(6, int(frame["trial"].nunique())),
@@ -1135,7 +1138,8 @@ def _nees_figure(run: RunData) -> Figure:
     on one log y axis (:func:`_anees_range`), so that panels compare."""
     algorithms = run.config["params"]["algorithms"]
     names = list(dict.fromkeys(_headline_pair(algorithms) + _main_algorithms(algorithms)))
-    low, high = _anees_range(run, names)
+    points = _time_points(run)
+    low, high = _anees_range(run, names, points)
     ticks = _log_ticks(low / 1.05, high * 1.05)
 
     def draw(ax: Axes, frame: pd.DataFrame, params: dict[str, Any]) -> tuple[float, AxisFit]:
@@ -1148,9 +1152,9 @@ def _nees_figure(run: RunData) -> Figure:
             ax.plot(anees.index * period, anees, **_time_curve_kwargs(name))
         return float(ticks[-1]), lambda _top: _fit_nees_axis(ax, ticks)
 
-    title = [f"Diagnostic: average NEES (6 states) against time ({_per_point(run)})",
+    title = [f"Diagnostic: average NEES (6 states) against time ({_per_point(run, points)})",
              _context(run, "a consistent filter stays inside the band")]
-    return _time_figure(run, draw, title, "ANEES (1)", len(names) + 1)
+    return _time_figure(run, points, draw, title, "ANEES (1)", len(names) + 1)
 
 
 # --------------------------------------------------------------------------------------------
