@@ -6,7 +6,7 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 import pytest
-from figure_checks import smallest_printed_text, text_overlaps
+from figure_checks import inside_canvas, smallest_printed_text, text_overlaps
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import to_hex
 from matplotlib.container import ErrorbarContainer
@@ -708,6 +708,22 @@ def test_anees_panels_share_one_log_axis_with_the_band_inside(run_50):
     assert text_overlaps(fig) == []
 
 
+def test_an_anees_in_the_thousands_keeps_its_axis_label_on_the_figure(run_50):
+    """A diverging filter (ANEES 2000-3000) got ticks "3e+03", wider than the margin: the
+    y label ran off the figure and onto the panel to its left. Ticks now read "3000"."""
+    trials = run_50.trials.copy()
+    trials["nees"] *= 400
+    wild = replace(run_50)
+    wild.trials = trials
+    with context():
+        fig = report.figures(wild, ["anees_vs_time"])["anees_vs_time"]
+        assert text_overlaps(fig) == [] and inside_canvas(fig)
+    labels = [t.get_text() for t in fig.axes[0].get_yticklabels()]
+    assert "3000" in labels or "2000" in labels, labels
+    assert [report._log_tick_text(v) for v in (0.5, 3.0, 3000.0, 1e4)] == \
+        ["0.5", "3", "3000", "1e+04"]
+
+
 def test_a_swept_q_is_titled_by_its_manoeuvring_index():
     """twin_sensor_hard's panels were titled "truth and filter q 160000 m^2/s^4": the study
     is about the manoeuvring index, so the panel says that (q stays in the caption)."""
@@ -768,7 +784,10 @@ def test_a_matched_q_is_said_once_in_the_title(run_hard):
 def test_every_figure_prints_its_smallest_text_at_6_5_pt_without_overlaps(fixture, request):
     """The three-panel figures were 11.25 in wide, their 7-9 pt text 4.5-5.7 pt once printed
     7.16 in wide: every figure is now at most 8.7 in wide, its notes at 8 pt, so its
-    smallest text prints at 6.5 pt or more, and no text overlaps another."""
+    smallest text prints at 6.5 pt or more, and no text overlaps another. Everything drawn
+    lies inside the canvas (the range and final-RMSE figures drew an empty unclipped
+    triangle line per algorithm without a past-the-top mark, whose marker box lay at the
+    figure's corner, 0.035 in outside it)."""
     run = request.getfixturevalue(fixture)
     with context():  # drawn as trackfuse.reports draws them
         drawn = {name: fig for name, fig in report.figures(run, EXPERIMENT.figures).items()
@@ -778,3 +797,4 @@ def test_every_figure_prints_its_smallest_text_at_6_5_pt_without_overlaps(fixtur
             size, text = smallest_printed_text(fig)
             assert size >= 6.5, (name, fig.get_figwidth(), text)
             assert text_overlaps(fig) == [], name
+            assert inside_canvas(fig), name

@@ -704,10 +704,12 @@ def _fit_loss_axis(ax: Axes, top: float, points: pd.DataFrame,
 def _mark_past_top(ax: Axes, marks: Sequence[tuple[str, np.ndarray]], top: float) -> None:
     """An upward triangle at ``top`` in the curve's colour at each x of ``marks``
     (``(algorithm, x values)``): error bars that pass the top of the axis; the legend entry
-    :data:`PAST_TOP_LABEL` when there is one."""
+    :data:`PAST_TOP_LABEL` when there is one. An algorithm without marks draws nothing
+    (an empty unclipped line's marker box lay at the figure's corner, outside the canvas)."""
     for name, x in marks:
-        ax.plot(x, np.full(len(x), top), ls="none", marker="^", markersize=5,
-                color=line_kwargs(name)["color"], clip_on=False, zorder=6)
+        if len(x):
+            ax.plot(x, np.full(len(x), top), ls="none", marker="^", markersize=5,
+                    color=line_kwargs(name)["color"], clip_on=False, zorder=6)
     if any(len(x) for _, x in marks):
         ax.plot([], [], ls="none", marker="^", markersize=5, color=GREYS[0],
                 label=PAST_TOP_LABEL)
@@ -1123,13 +1125,19 @@ def _anees_range(run: RunData, names: Sequence[str], points: Sequence[int]
     return float(finite.min()), float(finite.max())
 
 
+def _log_tick_text(value: float) -> str:
+    """A log axis's tick label: "0.5", "3000"; "1e+04" from ten thousand on ("3e+03" was
+    wider than the y-axis margin and pushed the axis label off the figure)."""
+    return f"{value:.3g}" if value < 1 else f"{value:.0f}" if value < 1e4 else f"{value:.0e}"
+
+
 def _fit_nees_axis(ax: Axes, ticks: np.ndarray) -> None:
     """A log y axis from the first to the last of ``ticks`` (:func:`_log_ticks`), labelled
     at each of them."""
     ax.set_yscale("log")
     ax.set_ylim(float(ticks[0]), float(ticks[-1]))
     ax.yaxis.set_major_locator(FixedLocator(ticks))
-    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:.3g}"))
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: _log_tick_text(v)))
     ax.yaxis.set_minor_locator(NullLocator())
 
 
