@@ -6,10 +6,12 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 import pytest
-from figure_checks import smallest_printed_text, text_overlaps
+from figure_checks import inside_canvas, smallest_printed_text, text_overlaps
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import to_hex
 from matplotlib.container import ErrorbarContainer
+from matplotlib.lines import Line2D
+from matplotlib.offsetbox import OffsetBox, TextArea
 
 from trackfuse import harness
 from trackfuse.experiments.twin_sensor import EXPERIMENT, report
@@ -363,6 +365,17 @@ def test_a_point_whose_every_trial_failed_gets_a_panel_that_says_so(run_50, name
                for a in ALGORITHMS)
 
 
+@pytest.mark.parametrize("name", ["range_error_vs_time", "anees_vs_time"])
+def test_a_time_figure_chooses_its_points_once(run_50, monkeypatch, name):
+    """The ANEES figure chose its sweep points three times (title, y range, panels), the
+    range figure three times too: once now, passed on."""
+    calls = []
+    chosen = report._time_points
+    monkeypatch.setattr(report, "_time_points", lambda run: calls.append(1) or chosen(run))
+    assert not isinstance(report.figures(run_50, [name])[name], str)
+    assert len(calls) == 1
+
+
 def test_time_panels_share_one_y_range_when_their_tops_are_alike(run_50):
     """Panels of a time figure whose needed tops differ by at most 2.5x share one range,
     so that they compare at a glance (twin_sensor_baseline's nine panels ended at 30, 40 or
@@ -473,6 +486,22 @@ def test_a_range_panel_below_the_bound_at_every_scan_says_why(run_50):
         assert note.startswith("corr. of errors, scan 1 vs 20: ")
 
 
+@pytest.mark.parametrize(("corr", "words"), [
+    (0.95, "errors\ncorrelated across scans (0.95);"),
+    (-0.7, "errors\ncorrelated across scans (-0.70);"),
+    (0.12, "errors weakly\ncorrelated across scans (0.12);"),
+    (-0.3, "errors weakly\ncorrelated across scans (-0.30);")])
+def test_the_below_the_bound_note_calls_weak_correlation_weak(corr, words):
+    """The note said "errors correlated across scans (0.12)" whatever the correlation (0.95
+    in twin_sensor_orbit): a weak one is now called weak."""
+    band = pd.DataFrame({"rmse": [9.0] * 20, "lo": [7.0] * 20, "hi": [12.0] * 20})
+    note = report._range_note(band, np.full(20, 10.0), 50, 20, corr)
+    assert note == ("below the bound at all 20 scans:\none sample of 50 runs, "
+                    f"{words}\nthe bound lies inside the 95 % band")
+    assert report._range_note(band, np.full(20, 8.0), 50, 20, corr) == \
+        f"corr. of errors, scan 1 vs 20: {corr:.2f}"
+
+
 def test_a_bound_outside_the_band_gets_no_below_the_bound_note():
     """Below the bound but with the bound above the band (a filter shown better than the
     bound, a bug) is not explained away as sampling."""
@@ -522,6 +551,50 @@ def test_a_point_a_few_flagged_runs_carry_is_not_joined_and_says_so(run_50):
     assert any(np.any(np.abs(x - 8.0) < 0.5) for x in _joined_x(plain.axes[0],
                                                                   "mspda_parallel/mgekf"))
     assert not plain.axes[0].texts and report.FEW_LABEL not in _legend(plain)
+
+
+def _legend_markers(fig, label: str) -> list[tuple]:
+    """``(marker, face colour, edge colour)`` of every line the figure legend draws in the
+    handle of the entry ``label``."""
+    def boxes(box):
+        yield box
+        for child in box.get_children():
+            if isinstance(child, OffsetBox):
+                yield from boxes(child)
+
+    for box in boxes(fig.legends[0].get_children()[0]):
+        handle, text = (box.get_children() + [None, None])[:2]
+        if isinstance(text, TextArea) and text.get_text() == label:
+            return [_marker_look(a) for a in handle.get_children() if isinstance(a, Line2D)]
+    raise AssertionError(f"no legend entry {label!r}")
+
+
+def _marker_look(line) -> tuple:
+    return (line.get_marker(), to_hex(line.get_markerfacecolor(), keep_alpha=True)
+            if line.get_markerfacecolor() != "none" else "none",
+            to_hex(line.get_markeredgecolor()))
+
+
+@pytest.mark.parametrize("algorithms", [["mspda_parallel/mgekf"],
+                                        ["mspda_parallel/mgekf", "paper_approx/ekf"]])
+def test_the_not_joined_legend_entry_shows_the_markers_drawn(run_50, algorithms):
+    """twin_sensor_baseline's 40 km points were drawn with the algorithms' markers (MGEKF
+    filled, EKF open) while the legend's "point not joined" showed an open grey circle:
+    the entry now shows each not-joined marker as it is drawn, side by side."""
+    run = _run_off(run_50, 2, flag=True)
+    for name in algorithms[1:]:
+        trials = run.trials.copy()
+        off = ((trials["scan"] == trials["scan"].max()) & (trials["trial"] < 2)
+               & (trials["algorithm"] == name) & (trials["clutter.mean"] == 8.0))
+        trials.loc[off, ["range_sq_err_m2", "inconsistent_nees"]] = [3e5**2, 1]
+        run.trials = trials
+    fig = report.figures(run, ["final_range_rmse_vs_sweep"])["final_range_rmse_vs_sweep"]
+    FigureCanvasAgg(fig).draw()
+    drawn = [_marker_look(c.lines[0]) for c in fig.axes[0].containers
+             if isinstance(c, ErrorbarContainer) and c.get_label() == "_few"]
+    assert len(drawn) == len(algorithms)
+    assert _legend_markers(fig, report.FEW_LABEL) == drawn
+    assert text_overlaps(fig) == []
 
 
 def test_many_flagged_runs_are_not_a_few():
@@ -589,6 +662,28 @@ def test_a_curve_under_an_equal_one_shows_around_it(run_50):
         line_kwargs("mspda_parallel/mgekf")["linewidth"]
 
 
+def test_the_legend_look_of_a_covered_curve_holds_in_every_panel(run_50):
+    """The look of a curve lying on another (wider, larger open markers) was decided per
+    panel while the legend came from the first: with every gate-rule curve at 0 % but the
+    paper's MGEKF flagged inconsistent at 8, the legend showed that curve wide while the
+    NEES panel drew it plain. A curve now has one look in every panel of the figure."""
+    name = "loss_gate_and_nees_vs_clutter"
+    fig = report.figures(_flagged(run_50, {("paper_approx/mgekf", 8.0,
+                                            "inconsistent_nees"): 3}), [name])[name]
+    panels = [ax for ax in fig.axes if ax.get_visible()]
+    assert len(panels) == 2
+    for algorithm in ALGORITHMS:
+        label = look(algorithm).label
+        handle = _legend_handle(fig, label)
+        for ax in panels:
+            line = _curve(ax, algorithm)
+            assert (line.get_linewidth(), line.get_markersize(), line.get_markerfacecolor()) \
+                == (handle.get_linewidth(), handle.get_markersize(),
+                    handle.get_markerfacecolor()), (algorithm, ax.get_title())
+    assert _curve(panels[0], "paper_approx/mgekf").get_linewidth() > \
+        line_kwargs("paper_approx/mgekf")["linewidth"]  # it lies on the EKF in the gate panel
+
+
 def test_anees_panels_share_one_log_axis_with_the_band_inside(run_50):
     """twin_sensor_close and _hard's ANEES panels each had their own linear y range (0-7 to
     0-60): they now share one log axis that holds every curve and chi-square band, even
@@ -613,18 +708,55 @@ def test_anees_panels_share_one_log_axis_with_the_band_inside(run_50):
     assert text_overlaps(fig) == []
 
 
+def test_an_anees_in_the_thousands_keeps_its_axis_label_on_the_figure(run_50):
+    """A diverging filter (ANEES 2000-3000) got ticks "3e+03", wider than the margin: the
+    y label ran off the figure and onto the panel to its left. Ticks now read "3000"."""
+    trials = run_50.trials.copy()
+    trials["nees"] *= 400
+    wild = replace(run_50)
+    wild.trials = trials
+    with context():
+        fig = report.figures(wild, ["anees_vs_time"])["anees_vs_time"]
+        assert text_overlaps(fig) == [] and inside_canvas(fig)
+    labels = [t.get_text() for t in fig.axes[0].get_yticklabels()]
+    assert "3000" in labels or "2000" in labels, labels
+    assert [report._log_tick_text(v) for v in (0.5, 3.0, 3000.0, 1e4)] == \
+        ["0.5", "3", "3000", "1e+04"]
+
+
 def test_a_swept_q_is_titled_by_its_manoeuvring_index():
     """twin_sensor_hard's panels were titled "truth and filter q 160000 m^2/s^4": the study
     is about the manoeuvring index, so the panel says that (q stays in the caption)."""
     params = {**EXPERIMENT.defaults(), "target.q": 160000.0, "filter.q": 160000.0,
               "clutter.mean": 40.0}
     swept = ["target.q", "filter.q", "clutter.mean"]
-    assert report._point_title(params, swept) == \
+    assert report._point_title(params, swept, matched=True) == \
         "manoeuvring index 0.2, mean 40 false returns per scan"
-    assert report._point_title({**params, "target.q": 900.0, "filter.q": 900.0}, swept) \
-        .startswith("manoeuvring index 0.015,")
-    assert report._point_title({**params, "filter.q": 900.0}, swept) == \
+    assert report._point_title({**params, "target.q": 900.0, "filter.q": 900.0}, swept,
+                               matched=True).startswith("manoeuvring index 0.015,")
+    assert report._point_title({**params, "filter.q": 900.0}, swept, matched=False) == \
         "manoeuvring index 0.2, filter q 900 m^2/s^4, mean 40 false returns per scan"
+
+
+def test_a_panel_whose_filter_q_equals_the_truths_says_it_unless_the_title_does(tmp_path):
+    """A target.q x filter.q grid: the panels where the two were equal left the filter's q
+    out while the figure's title said nothing of it (a reader could not tell which filter q
+    they used). Every panel now gives it; only when every panel's filter q is the truth's
+    does the title say "truth q = filter q" once (twin_sensor_hard, test below). The
+    manoeuvring-index figure, whose title says truth q = filter q, is not drawn from
+    such a grid (it would pool two filter qs at one index)."""
+    base = {**EXPERIMENT.defaults(), "algorithms": ALGORITHMS[1:3], "scan.count": 5,
+            "clutter.model": "window", "clutter.window": 0.1, "clutter.mean": 40.0}
+    run = harness.run_data(tmp_path, EXPERIMENT, base,
+                           {"target.q": [0.0, 900.0, 10000.0], "filter.q": [0.0, 900.0]},
+                           trials=4, seed=3)
+    figs = report.figures(run, EXPERIMENT.figures)
+    for name in ("range_error_vs_time", "anees_vs_time"):
+        titles = [ax.get_title().replace("\n", " ") for ax in figs[name].axes
+                  if ax.get_visible()]
+        assert len(titles) == 6 and all("filter q " in t for t in titles), titles
+        assert "truth q = filter q" not in figs[name].get_suptitle()
+    assert figs["loss_vs_manoeuvring_index"].startswith("needs filter.q equal to target.q")
 
 
 @pytest.fixture(scope="module")
@@ -639,11 +771,23 @@ def run_hard(tmp_path_factory) -> RunData:
                             trials=10, seed=3, sweep_mode="zip")
 
 
+def test_a_matched_q_is_said_once_in_the_title(run_hard):
+    """twin_sensor_hard: the filter's q is the truth's at every point, said once in the
+    figure's title; the panels give the manoeuvring index alone."""
+    for name, fig in report.figures(run_hard, ["range_error_vs_time", "anees_vs_time"]).items():
+        assert "truth q = filter q" in fig.get_suptitle(), name
+        titles = [ax.get_title() for ax in fig.axes if ax.get_visible()]
+        assert all(t.startswith("manoeuvring index") and "filter q" not in t for t in titles)
+
+
 @pytest.mark.parametrize("fixture", ["run_50", "run_wide", "run_hard"])
 def test_every_figure_prints_its_smallest_text_at_6_5_pt_without_overlaps(fixture, request):
     """The three-panel figures were 11.25 in wide, their 7-9 pt text 4.5-5.7 pt once printed
     7.16 in wide: every figure is now at most 8.7 in wide, its notes at 8 pt, so its
-    smallest text prints at 6.5 pt or more, and no text overlaps another."""
+    smallest text prints at 6.5 pt or more, and no text overlaps another. Everything drawn
+    lies inside the canvas (the range and final-RMSE figures drew an empty unclipped
+    triangle line per algorithm without a past-the-top mark, whose marker box lay at the
+    figure's corner, 0.035 in outside it)."""
     run = request.getfixturevalue(fixture)
     with context():  # drawn as trackfuse.reports draws them
         drawn = {name: fig for name, fig in report.figures(run, EXPERIMENT.figures).items()
@@ -653,3 +797,4 @@ def test_every_figure_prints_its_smallest_text_at_6_5_pt_without_overlaps(fixtur
             size, text = smallest_printed_text(fig)
             assert size >= 6.5, (name, fig.get_figwidth(), text)
             assert text_overlaps(fig) == [], name
+            assert inside_canvas(fig), name

@@ -73,6 +73,9 @@ import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.legend import Legend
+from matplotlib.legend_handler import HandlerTuple
+from matplotlib.lines import Line2D
 from matplotlib.scale import SymmetricalLogTransform
 from matplotlib.ticker import FixedLocator, FuncFormatter, MaxNLocator, NullLocator
 from matplotlib.transforms import IdentityTransform, Transform
@@ -414,39 +417,46 @@ def _lines(titles: Sequence[str]) -> int:
     return max((t.count("\n") + 1 for t in titles if t), default=0)
 
 
-def _point_title(params: dict[str, Any], swept: Sequence[str]) -> str:
+def _point_title(params: dict[str, Any], swept: Sequence[str], matched: bool) -> str:
     """A sweep point's swept values in words; a swept truth q as its manoeuvring index
-    (:func:`_manoeuvring_index`), the filter's q left out when equal to it
-    (:func:`_per_point` says so in the figure's title)."""
+    (:func:`_manoeuvring_index`), the filter's q left out only when ``matched`` (the
+    figure's title then says "truth q = filter q" for every panel: :func:`_q_matched`)."""
     keys = list(swept)
     parts = []
     if "target.q" in keys:
-        equal = params["target.q"] == params.get("filter.q")
-        keys = [k for k in keys if k != "target.q" and not (equal and k == "filter.q")]
+        keys = [k for k in keys if k != "target.q" and not (matched and k == "filter.q")]
         parts.append(f"manoeuvring index {_manoeuvring_index(params):.2g}")
     return ", ".join(parts + [_value_text(k, params[k]) for k in keys]) or "all runs"
 
 
-def _per_point(run: RunData) -> str:
-    """"n runs per point" of a time figure, with "truth q = filter q" when the truth's q is
-    swept and every panel's filter q equals it (:func:`_point_title` then gives only the
-    manoeuvring index)."""
-    params = [run.point_params(pt) for pt in _time_points(run)]
-    matched = "target.q" in swept_keys(run.config) and all(
-        p["target.q"] == p["filter.q"] for p in params)
+def _q_matched(run: RunData, points: Sequence[int]) -> bool:
+    """Whether the truth's q is swept and the filter's q equals it at every one of the
+    sweep ``points`` (twin_sensor_hard): said once in the figure's title, not per panel."""
+    return "target.q" in swept_keys(run.config) and all(
+        run.point_params(pt)["target.q"] == run.point_params(pt)["filter.q"] for pt in points)
+
+
+def _per_point(run: RunData, points: Sequence[int]) -> str:
+    """"n runs per point" of a time figure of the sweep ``points``, with "truth q = filter
+    q" when :func:`_q_matched` (:func:`_point_title` then gives only the manoeuvring
+    index)."""
+    matched = _q_matched(run, points)
     return f"{_runs(run.trials)} runs per point" + ("; truth q = filter q" if matched else "")
 
 
 def _finish(fig: Figure, axes: Sequence[Axes], legend_cols: int,
-            everywhere: Collection[str] = (), reserved: int = 0) -> Figure:
-    """``fig`` with one legend of the entries of ``axes`` and of the entries labelled one of
-    ``everywhere`` in any panel of ``fig`` (each label once); the legend rows of the
-    ``reserved`` entries :func:`_frame` made room for that stay empty are cut off."""
+            everywhere: Collection[str] = (), reserved: int = 0,
+            extra: dict[str, Any] | None = None) -> Figure:
+    """``fig`` with one legend of the entries of ``axes``, of the entries labelled one of
+    ``everywhere`` in any panel of ``fig`` (each label once) and of ``extra`` (label ->
+    handle, last); the legend rows of the ``reserved`` entries :func:`_frame` made room for
+    that stay empty are cut off."""
     entries: dict[str, Any] = {}
     for ax in fig.axes:
         for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
             if ax in axes or label in everywhere:
                 entries.setdefault(label, handle)
+    entries.update(extra or {})
     unused = -(-reserved // legend_cols) - -(-len(entries) // legend_cols)
     if unused > 0:
         trim_bottom(fig, LEGEND_ROW_IN * unused)
@@ -562,31 +572,35 @@ def _with_bars(points: pd.DataFrame, every_bar: bool) -> pd.DataFrame:
     return points.assign(bar=True if every_bar else points["k"] > 0)
 
 
-def _curve_kwargs(points: pd.DataFrame) -> dict[str, dict[str, Any]]:
-    """Line keyword arguments of each curve of :func:`_rate_points`, in drawing order; a
-    curve equal at every swept value to curves drawn after it (fig1_claim: both at 0 %
-    everywhere) is wider than the widest of them and has larger open markers, so that it
-    shows around them (nested when several coincide)."""
-    curves = [(str(name), r["pct"].to_numpy()) for name, r in points.groupby("name",
-                                                                             sort=False)]
+def _curve_kwargs(panels: Sequence[pd.DataFrame]) -> dict[str, dict[str, Any]]:
+    """Line keyword arguments of each curve of the :func:`_rate_points` ``panels`` of one
+    figure, in drawing order; a curve equal at every swept value to curves drawn after it
+    in some panel (fig1_claim: both at 0 % everywhere) is wider than the widest of them and
+    has larger open markers, so that it shows around them (nested when several coincide).
+    A curve has that look in every panel of the figure, so that its one legend entry is
+    true for each."""
+    order = list(dict.fromkeys(str(n) for points in panels for n in points["name"]))
+    over: dict[str, set[str]] = {name: set() for name in order}
+    for points in panels:
+        curves = [(str(n), r["pct"].to_numpy()) for n, r in points.groupby("name", sort=False)]
+        for i, (name, pct) in enumerate(curves):
+            over[name] |= {later for later, p in curves[i + 1:]
+                           if len(p) == len(pct) and np.array_equal(p, pct)}
     kwargs: dict[str, dict[str, Any]] = {}
-    for i in reversed(range(len(curves))):
-        name, pct = curves[i]
+    for name in reversed(order):
         kw = line_kwargs(name)
-        over = [kwargs[later] for later, p in curves[i + 1:]
-                if len(p) == len(pct) and np.array_equal(p, pct)]
-        if over:
-            kw.update(linewidth=max(k["linewidth"] for k in over) + 2.2,
-                      markersize=max(k.get("markersize", 4.0) for k in over) + 3.5,
+        under = [kwargs.get(later, line_kwargs(later)) for later in over[name]]
+        if under:
+            kw.update(linewidth=max(k["linewidth"] for k in under) + 2.2,
+                      markersize=max(k.get("markersize", 4.0) for k in under) + 3.5,
                       markerfacecolor="none", markeredgewidth=1.3)
         kwargs[name] = kw
-    return {name: kwargs[name] for name, _ in curves}
+    return {name: kwargs[name] for name in order}
 
 
-def _draw_rates(ax: Axes, points: pd.DataFrame) -> None:
-    """The curves of :func:`_rate_points` (with :func:`_with_bars`; looks of
+def _draw_rates(ax: Axes, points: pd.DataFrame, looks: dict[str, dict[str, Any]]) -> None:
+    """The curves of :func:`_rate_points` (with :func:`_with_bars`; ``looks`` of
     :func:`_curve_kwargs`), each with its 95 % Wilson error bars where ``bar``."""
-    looks = _curve_kwargs(points)
     for name, r in points.groupby("name", sort=False):
         kw = looks[str(name)]
         ax.plot(r["x"], r["pct"], **kw)
@@ -690,10 +704,12 @@ def _fit_loss_axis(ax: Axes, top: float, points: pd.DataFrame,
 def _mark_past_top(ax: Axes, marks: Sequence[tuple[str, np.ndarray]], top: float) -> None:
     """An upward triangle at ``top`` in the curve's colour at each x of ``marks``
     (``(algorithm, x values)``): error bars that pass the top of the axis; the legend entry
-    :data:`PAST_TOP_LABEL` when there is one."""
+    :data:`PAST_TOP_LABEL` when there is one. An algorithm without marks draws nothing
+    (an empty unclipped line's marker box lay at the figure's corner, outside the canvas)."""
     for name, x in marks:
-        ax.plot(x, np.full(len(x), top), ls="none", marker="^", markersize=5,
-                color=line_kwargs(name)["color"], clip_on=False, zorder=6)
+        if len(x):
+            ax.plot(x, np.full(len(x), top), ls="none", marker="^", markersize=5,
+                    color=line_kwargs(name)["color"], clip_on=False, zorder=6)
     if any(len(x) for _, x in marks):
         ax.plot([], [], ls="none", marker="^", markersize=5, color=GREYS[0],
                 label=PAST_TOP_LABEL)
@@ -746,11 +762,12 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
         for facet_title, _ in facets for col_title, _, rule in columns], panel[0])
     fig, axes, cols = _figure(n_panels, ncols, panel, title, entries,
                               _lines(titles))
+    looks = _curve_kwargs([points for _, _, points in panels])
     for ax, (_, rule, points), top, z, panel_title in zip(axes, panels, tops, zero, titles,
                                                           strict=False):
         if claim and rule != "inconsistent_nees":
             _draw_claim(ax)
-        _draw_rates(ax, points)
+        _draw_rates(ax, points, looks)
         _fit_loss_axis(ax, top, points, z)
         _set_x_scale(ax, last["clutter.mean"], threshold)
         ax.set_xlabel(_axis_label("clutter.mean", run.params))
@@ -770,14 +787,20 @@ def _manoeuvring_index(params: dict[str, Any]) -> float:
 
 def _index_figure(run: RunData) -> Figure | str:
     """Tracks lost (angle and gate rules) against the manoeuvring index of the truth, for
-    the points with clutter; clutter-free points as grey crosses (worst algorithm)."""
+    the points with clutter; clutter-free points as grey crosses (worst algorithm); a reason
+    unless the filter's q equals the truth's at every point (:func:`_q_matched`)."""
     last = _last(run.trials).copy()
     index = np.array([_manoeuvring_index(p) for p in run.points])
     last["index"] = index[last["point"].to_numpy()]
+    clutter = np.array([float(p["clutter.mean"]) for p in run.points])  # swept or not
+    last["clutter.mean"] = clutter[last["point"].to_numpy()]
     with_clutter = last[last["clutter.mean"] > 0]
     if with_clutter["clutter.mean"].nunique() != 1 or with_clutter["index"].nunique() < 3:
         return ("needs one non-zero clutter level and at least 3 manoeuvring indices "
                 "(target.q values)")
+    if not _q_matched(run, range(len(run.points))):
+        return ("needs filter.q equal to target.q at every point (the title says truth q = "
+                "filter q; points of another filter q would be pooled at one index)")
     names = _emphasis_last(run.params["algorithms"])
     level = _value_text("clutter.mean", with_clutter["clutter.mean"].iloc[0])
     title = [f"Tracks lost against the manoeuvring index, {level} ({_runs(last)} runs per "
@@ -793,8 +816,9 @@ def _index_figure(run: RunData) -> Figure | str:
     past = any(len(_past_top(p, top)) for p in points)
     fig, axes, cols = _figure(2, 2, _printable(PANEL, 2), title,
                               len(names) + 2 + (len(free) > 0) + past, 1)
+    looks = _curve_kwargs(points)
     for ax, rule, drawn in zip(axes, rules, points, strict=True):
-        _draw_rates(ax, drawn)
+        _draw_rates(ax, drawn, looks)
         _fit_loss_axis(ax, top, drawn, zero)
         if len(free):
             worst = free.groupby(["index", "algorithm"])[rule].mean().groupby(level=0).max()
@@ -862,16 +886,18 @@ def _shared_tops(needed: dict[int, float], per_row: int) -> dict[int, float]:
     return {i: top for row in rows.values() for i, top in shared(row).items()}
 
 
-def _time_figure(run: RunData, draw: PanelDraw, title: Sequence[str], y_label: str,
-                 legend_entries: int, everywhere: Collection[str] = ()) -> Figure:
-    """One panel per :func:`_time_points` point against time (s), y ranges shared where
-    :data:`SHARED_TOP_RATIO` allows; the legend holds the first panel's entries and those
-    labelled one of ``everywhere`` in any panel."""
-    points = _time_points(run)
+def _time_figure(run: RunData, points: Sequence[int], draw: PanelDraw, title: Sequence[str],
+                 y_label: str, legend_entries: int, everywhere: Collection[str] = ()
+                 ) -> Figure:
+    """One panel per sweep point of ``points`` (:func:`_time_points`) against time (s), y
+    ranges shared where :data:`SHARED_TOP_RATIO` allows; the legend holds the first panel's
+    entries and those labelled one of ``everywhere`` in any panel."""
     swept = swept_keys(run.config)
     per_row = 3 if len(points) % 3 == 0 or len(points) > 4 else len(points)
     panel = _printable(TIME_PANEL, per_row)
-    titles = _wrapped([_point_title(run.point_params(pt), swept) for pt in points], panel[0])
+    matched = _q_matched(run, points)
+    titles = _wrapped([_point_title(run.point_params(pt), swept, matched) for pt in points],
+                      panel[0])
     fig, axes, cols = _figure(len(points), per_row, panel, title, legend_entries,
                               _lines(titles))
     trials = run.trials
@@ -1003,15 +1029,23 @@ def _below_bound_everywhere(band: pd.DataFrame, bound: np.ndarray) -> bool:
                 and np.all((lo <= bound) & (bound <= hi)))
 
 
+CORRELATED = 0.5
+"""A range panel's note calls the errors of its first and last scan correlated when the
+magnitude of their correlation across runs is at least this, else weakly correlated."""
+
+
 def _range_note(band: pd.DataFrame, bound: np.ndarray, runs: int, scans: int,
                 corr: float) -> str:
     """The note of a range panel: the correlation of the errors between the first and the
-    last scan, said as why the RMSE may lie below the bound at every scan where it does
-    while the bound lies inside the band (:func:`_below_bound_everywhere`)."""
-    if _below_bound_everywhere(band, bound):
-        return (f"below the bound at all {scans} scans:\none sample of {runs} runs, errors\n"
-                f"correlated across scans ({corr:.2f});\nthe bound lies inside the 95 % band")
-    return f"corr. of errors, scan 1 vs {scans}: {corr:.2f}"
+    last scan, said (as correlated or weakly so: :data:`CORRELATED`) where the RMSE lies
+    below the bound at every scan while the bound lies inside the band
+    (:func:`_below_bound_everywhere`): one sample of runs."""
+    if not _below_bound_everywhere(band, bound):
+        return f"corr. of errors, scan 1 vs {scans}: {corr:.2f}"
+    errors = (f"errors{'' if abs(corr) >= CORRELATED else ' weakly'}\ncorrelated across "
+              f"scans ({corr:.2f})")
+    return (f"below the bound at all {scans} scans:\none sample of {runs} runs, {errors};\n"
+            "the bound lies inside the 95 % band")
 
 
 def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
@@ -1050,12 +1084,13 @@ def _range_figure(run: RunData) -> Figure:
     algorithms = run.config["params"]["algorithms"]
     names = _headline_pair(algorithms)
     beside = [n for n in _main_algorithms(algorithms) if n not in names]
-    title = [f"{_fig_words(run, 2)}: range RMSE against time ({_per_point(run)})",
+    points = _time_points(run)
+    title = [f"{_fig_words(run, 2)}: range RMSE against time ({_per_point(run, points)})",
              _context(run, "95 % bootstrap-t bands; grey: single runs")]
-    labels = {label for pt in _time_points(run)
-              for _, _, label in _pcrlb_curves(run.point_params(pt))}
-    return _time_figure(run, lambda ax, f, p: _draw_range(ax, f, p, names, beside), title,
-                        "range RMSE (km)", 2 * len(names) + len(beside) + 2 + len(labels),
+    labels = {label for pt in points for _, _, label in _pcrlb_curves(run.point_params(pt))}
+    return _time_figure(run, points, lambda ax, f, p: _draw_range(ax, f, p, names, beside),
+                        title, "range RMSE (km)",
+                        2 * len(names) + len(beside) + 2 + len(labels),
                         {*labels, PAST_TOP_LABEL})
 
 
@@ -1076,11 +1111,12 @@ def _anees(frame: pd.DataFrame, name: str) -> pd.Series:
     return frame[frame["algorithm"] == name].groupby("scan")["nees"].mean()
 
 
-def _anees_range(run: RunData, names: Sequence[str]) -> tuple[float, float]:
+def _anees_range(run: RunData, names: Sequence[str], points: Sequence[int]
+                 ) -> tuple[float, float]:
     """``(low, high)`` of every ANEES curve of ``names`` and every 95 % chi-square band of
-    the panels of :func:`_time_points`: one log y range for all of them."""
+    the panels of the sweep ``points`` (:func:`_time_points`): one log y range for all."""
     values = []
-    for pt in _time_points(run):
+    for pt in points:
         frame = succeeded_rows(run.trials[run.trials["point"] == pt])
         if not frame.empty:
             values += [*nees_band(6, int(frame["trial"].nunique())),
@@ -1089,13 +1125,19 @@ def _anees_range(run: RunData, names: Sequence[str]) -> tuple[float, float]:
     return float(finite.min()), float(finite.max())
 
 
+def _log_tick_text(value: float) -> str:
+    """A log axis's tick label: "0.5", "3000"; "1e+04" from ten thousand on ("3e+03" was
+    wider than the y-axis margin and pushed the axis label off the figure)."""
+    return f"{value:.3g}" if value < 1 else f"{value:.0f}" if value < 1e4 else f"{value:.0e}"
+
+
 def _fit_nees_axis(ax: Axes, ticks: np.ndarray) -> None:
     """A log y axis from the first to the last of ``ticks`` (:func:`_log_ticks`), labelled
     at each of them."""
     ax.set_yscale("log")
     ax.set_ylim(float(ticks[0]), float(ticks[-1]))
     ax.yaxis.set_major_locator(FixedLocator(ticks))
-    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:.3g}"))
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: _log_tick_text(v)))
     ax.yaxis.set_minor_locator(NullLocator())
 
 
@@ -1104,7 +1146,8 @@ def _nees_figure(run: RunData) -> Figure:
     on one log y axis (:func:`_anees_range`), so that panels compare."""
     algorithms = run.config["params"]["algorithms"]
     names = list(dict.fromkeys(_headline_pair(algorithms) + _main_algorithms(algorithms)))
-    low, high = _anees_range(run, names)
+    points = _time_points(run)
+    low, high = _anees_range(run, names, points)
     ticks = _log_ticks(low / 1.05, high * 1.05)
 
     def draw(ax: Axes, frame: pd.DataFrame, params: dict[str, Any]) -> tuple[float, AxisFit]:
@@ -1117,9 +1160,9 @@ def _nees_figure(run: RunData) -> Figure:
             ax.plot(anees.index * period, anees, **_time_curve_kwargs(name))
         return float(ticks[-1]), lambda _top: _fit_nees_axis(ax, ticks)
 
-    title = [f"Diagnostic: average NEES (6 states) against time ({_per_point(run)})",
+    title = [f"Diagnostic: average NEES (6 states) against time ({_per_point(run, points)})",
              _context(run, "a consistent filter stays inside the band")]
-    return _time_figure(run, draw, title, "ANEES (1)", len(names) + 1)
+    return _time_figure(run, points, draw, title, "ANEES (1)", len(names) + 1)
 
 
 # --------------------------------------------------------------------------------------------
@@ -1182,7 +1225,7 @@ def _final_figure(run: RunData) -> Figure | str:
         if label not in shown:  # a bound only another facet draws: its legend entry
             axes[0].plot([], [], color="k", ls=style, lw=1.0, label=label)
             shown.add(label)
-    return _finish(fig, axes[:1], cols, everywhere=(PAST_TOP_LABEL, FEW_LABEL))
+    return _finish(fig, axes[:1], cols, everywhere=(PAST_TOP_LABEL,), extra=_few_key(few))
 
 
 def _final_bounds(run: RunData, frame: pd.DataFrame, x_key: str, threshold: float | None
@@ -1217,6 +1260,24 @@ FEW_LABEL = ("point not joined: flagged runs (lost or inconsistent, <= 10 % of i
 FewRuns = dict[str, dict[float, tuple[int, int, float]]]
 """Per algorithm, the swept values whose RMSE a few runs carry: ``(flagged runs, runs,
 their share of the squared error)``, from :func:`_few_runs_carry`."""
+
+
+class MarkerSet(tuple):
+    """A legend handle of several markers side by side (matplotlib Line2D handles)."""
+
+
+Legend.update_default_handler_map({MarkerSet: HandlerTuple(ndivide=None)})
+
+
+def _few_key(few: Sequence[FewRuns]) -> dict[str, MarkerSet]:
+    """The legend entry :data:`FEW_LABEL` of the points a few runs carry (``few``, one
+    :data:`FewRuns` per panel): the marker of each algorithm drawn so, as it is drawn
+    (colour, shape and fill, no line); empty when there is none."""
+    names = list(dict.fromkeys(name for facet in few for name in facet))
+    looks = [{k: v for k, v in line_kwargs(name).items()
+              if k in ("color", "marker", "markerfacecolor")} for name in names]
+    return {FEW_LABEL: MarkerSet(Line2D([], [], linestyle="none", **kw) for kw in looks)
+            } if names else {}
 
 
 def _few_runs_carry(frame: pd.DataFrame, x_key: str, names: Sequence[str]) -> FewRuns:
@@ -1265,8 +1326,8 @@ def _draw_final(ax: Axes, points: FinalPoints, x_key: str,
 
 def _annotate_few(ax: Axes, points: FinalPoints, few: FewRuns, scale: float) -> None:
     """Beside each swept value where a few runs carry an algorithm's RMSE (``few``), how
-    many and what share ("2/50 flagged runs: 95 % of the MSE"), once per value; the
-    legend entry :data:`FEW_LABEL` when there is one."""
+    many and what share ("2/50 flagged runs: 95 % of the MSE"), once per value (the legend
+    entry is :func:`_few_key`'s)."""
     notes: dict[float, dict[str, float]] = {}
     for name, at in few.items():
         x, rmse, *_ = points[name]
@@ -1280,9 +1341,6 @@ def _annotate_few(ax: Axes, points: FinalPoints, few: FewRuns, scale: float) -> 
                     fontsize=NOTE_PT, zorder=7, bbox={"facecolor": "white",
                                                       "edgecolor": "none", "alpha": 0.8,
                                                       "pad": 1.0})
-    if notes:
-        ax.plot([], [], ls="none", marker="o", markerfacecolor="none", color=GREYS[0],
-                label=FEW_LABEL)
 
 
 # --------------------------------------------------------------------------------------------
