@@ -46,6 +46,7 @@ from trackfuse_cli.options import (
     out_folder,
     print_error,
     warn,
+    whole_number,
 )
 
 if TYPE_CHECKING:
@@ -100,7 +101,7 @@ def _overrides(sets: list[str], positional: list[str] | None) -> dict[str, Any]:
 
 
 def _load(cfg: Path, sets: dict[str, Any], sweeps: list[str], **top) -> Config:
-    from trackfuse.config import ConfigError, load
+    from trackfuse.config import SET, ConfigError, load
     from trackfuse.shipped import config_path
     from trackfuse.sweep import SweepError, parse_sweeps
     try:
@@ -120,6 +121,8 @@ def _load(cfg: Path, sets: dict[str, Any], sweeps: list[str], **top) -> Config:
     try:
         return load(path, overrides, axes)
     except ConfigError as err:
+        if err.source == SET and err.key in given:  # --trials, --seed: not a --set
+            fail(f"--{err.key}: {err.message}")
         fail(str(err))
 
 
@@ -230,10 +233,11 @@ def _print_plan(runner: Runner) -> None:
 def run(
     cfg: Cfg,
     overrides: Overrides = None,
-    trials: Annotated[int | None, typer.Option(metavar="N", min=1,
+    trials: Annotated[int | None, typer.Option(metavar="N", parser=whole_number(1),
                                                help="Trials per sweep point.")] = None,
     workers: Workers = 0,
-    seed: Annotated[int | None, typer.Option(metavar="N", min=0, help="Root seed.")] = None,
+    seed: Annotated[int | None, typer.Option(metavar="N", parser=whole_number(0),
+                                             help="Root seed.")] = None,
     out_dir: OutDir = "results",
     sets: Sets = [],  # noqa: B006 - typer reads the default
     sweeps: Sweeps = [],  # noqa: B006

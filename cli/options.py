@@ -11,8 +11,10 @@ from __future__ import annotations
 import gc
 import io
 import os
+import re
 import signal
 import sys
+from collections.abc import Callable
 from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
@@ -188,7 +190,21 @@ Sweeps = Annotated[list[str], typer.Option(
     "--sweep", metavar="KEY=V1,V2", show_default=False,
     help="Sweep an axis: clutter.mean=0,5,10 or 'clutter.mean=range(0,21,2)'; lists in "
          "brackets: 'algorithms=\\[a,b],\\[c]' (repeatable).")]
-Workers = Annotated[int, typer.Option(metavar="N", min=0, show_default="all cores",
+def whole_number(low: int) -> Callable[[str | int], int]:
+    """The parser of an integer option of at least ``low``: digits with an optional sign,
+    so ``--trials 2.0`` is refused as a config's ``trials: 10.0`` is (typer read it as 2)."""
+    def parse(text: str | int) -> int:
+        if isinstance(text, int):  # the option's default
+            return text
+        if not re.fullmatch(r"[+-]?[0-9]+", text.strip()) or int(text) < low:
+            raise typer.BadParameter(f"got {_printable(text)[:80]}; allowed: an integer "
+                                     f">= {low}")
+        return int(text)
+    return parse
+
+
+Workers = Annotated[int, typer.Option(metavar="N", parser=whole_number(0),
+                                      show_default="all cores",
                                       help="Parallel workers (0 = all cores).")]
 OutDir = Annotated[str, typer.Option("--out", metavar="FOLDER", help="Output root folder.")]
 

@@ -25,7 +25,12 @@ from trackfuse_cli.options import Executor
     (["run", "cfg.yaml", "--executor", "threads"], "'--executor'"),
     (["validate", "cfg.yaml", "--no-such-option"], "No such option: --no-such-option"),
     (["run", "cfg.yaml", "--trials", "0"], "'--trials': got 0; "),
-    (["run", "cfg.yaml", "--trials", "-3"], "'--trials': got -3; input should be greater"),
+    (["run", "cfg.yaml", "--trials", "-3"], "'--trials': got -3; allowed: an integer >= 1"),
+    # typer read 2.0 as 2 where a config's trials: 10.0 is refused
+    (["run", "cfg.yaml", "--trials", "2.0"], "'--trials': got 2.0; allowed: an integer >= 1"),
+    (["run", "cfg.yaml", "--workers", "1e3"], "'--workers': got 1e3; allowed: an integer"),
+    (["run", "cfg.yaml", "--seed", "0.5"], "'--seed': got 0.5; allowed: an integer >= 0"),
+    (["reproduce", "--workers", "2.0"], "'--workers': got 2.0; allowed: an integer >= 0"),
     (["run", "cfg.yaml", "--seed", "x1"], "'--seed': got x1; "),
     (["frobnicate"], "No such command 'frobnicate'"),
 ])
@@ -35,6 +40,16 @@ def test_usage_errors_are_one_line_with_exit_2(args, expected):
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ") and expected in lines[0], lines
     assert "╭" not in result.stderr and "Traceback" not in result.stderr
+
+
+def test_an_option_out_of_the_configs_range_is_blamed_on_the_option(write_config):
+    """A huge --trials was blamed on --set, which the command line did not use."""
+    cfg = write_config("experiment: toy_gaussian\ntrials: 4\nseed: 1\n")
+    result = CliRunner().invoke(app, ["run", str(cfg), "--trials", "99999999999999",
+                                      "--dry-run"])
+    assert result.exit_code == 2
+    assert result.stderr.strip() == ("error: --trials: got 99999999999999; allowed: an integer "
+                                     "in [1, 1000000000]")
 
 
 def test_version():

@@ -44,7 +44,7 @@ class ConfigError(ValueError):
     """A config problem; ``str(err)`` is the one-line message shown to the user."""
 
     def __init__(self, source: str, key: str, message: str):
-        self.source, self.key = source, key
+        self.source, self.key, self.message = source, key, message
         text = f"{source}: {key}: {message}" if key else f"{source}: {message}"
         super().__init__("".join(c if c.isprintable() else repr(c)[1:-1] for c in text))
 
