@@ -2,11 +2,17 @@
 
 from __future__ import annotations
 
+import json
+import os
+import platform
 import signal
+import subprocess
+import time
 
 import pytest
 
-from trackfuse.child_processes import ctrl_c_held
+from trackfuse.child_processes import ctrl_c_held, process_alive
+from trackfuse.runlock import HOLDER_FILE, held_by_a_live_process
 
 
 def _raise_keyboard_interrupt(signum: int, frame: object) -> None:
@@ -27,3 +33,31 @@ def test_a_stop_inside_the_block_is_raised_once_the_block_ends(stop):
         assert signal.getsignal(stop) is _raise_keyboard_interrupt
     finally:
         signal.signal(stop, previous)
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self"), reason="reads /proc")
+def test_a_killed_process_not_yet_reaped_is_not_alive(tmp_path):
+    """A run killed by kill -9 stays a zombie until its parent reaps it: `trackfuse runs`
+    listed it as running until then (its holder file names the pid)."""
+    child = subprocess.Popen(["sleep", "30"])
+    try:
+        assert process_alive(child.pid)
+        (tmp_path / HOLDER_FILE).write_text(json.dumps({"pid": child.pid,
+                                                        "host": platform.node()}))
+        assert held_by_a_live_process(tmp_path)
+        os.kill(child.pid, signal.SIGKILL)
+        deadline = time.monotonic() + 10
+        while _state(child.pid) != "Z" and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert _state(child.pid) == "Z"  # killed, not reaped: the pid still exists
+        assert not process_alive(child.pid)
+        assert not held_by_a_live_process(tmp_path)
+    finally:
+        child.kill()
+        child.wait()
+    assert not process_alive(child.pid)
+
+
+def _state(pid: int) -> str:
+    with open(f"/proc/{pid}/stat") as fh:
+        return fh.read().rsplit(")", 1)[1].split()[0]

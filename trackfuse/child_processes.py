@@ -50,14 +50,23 @@ def _exit_with(pid: int) -> None:
 
 
 def process_alive(pid: int) -> bool:
-    """Whether process ``pid`` exists on this host."""
+    """Whether process ``pid`` runs on this host: it exists and, where ``/proc`` tells, has
+    not ended (a killed process stays a zombie until its parent reaps it; ``trackfuse runs``
+    listed a run killed by ``kill -9`` as running until then)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
     except PermissionError:  # alive, under another user
         return True
-    return True
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as fh:
+            state = fh.read().rsplit(b")", 1)[1].split()[0]
+    except FileNotFoundError:  # gone meanwhile, or no /proc (not Linux)
+        return not os.path.exists("/proc/self")
+    except (OSError, IndexError):
+        return True
+    return state not in (b"Z", b"X")
 
 
 #: The signals that stop a command (Ctrl-C, and SIGTERM, which the command line maps to it).
