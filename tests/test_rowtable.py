@@ -3,13 +3,17 @@ pandas' text), byte for byte."""
 
 from __future__ import annotations
 
+import io
+
 import numpy as np
 import pandas as pd
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from trackfuse.results import rows_to_csv
+from trackfuse.batch import BatchTask, execute_batch
+from trackfuse.experiments.base import Experiment, Metric
+from trackfuse.results import BatchSpan, rows_to_csv
 from trackfuse.rowtable import Constant, RowTable, columns_csv, frame_csv
 from trackfuse.summary import summarize
 
@@ -134,3 +138,18 @@ def test_frame_csv_of_a_run_summary_is_what_pandas_writes(tmp_path, monkeypatch)
 def test_frame_csv_of_any_column_labels_is_what_pandas_writes(columns):
     frame = pd.DataFrame([[1.0, 2.0]], columns=columns)
     assert frame_csv(frame) == frame.to_csv(index=False)
+
+
+def test_a_batch_table_without_a_declared_metric_fails_its_trials():
+    """A column table lacking a declared metric was written and summarised without it."""
+    def table(params, streams):
+        return RowTable(np.arange(len(streams)), {"algorithm": np.array(["a"] * len(streams)),
+                                                  "valeu": np.zeros(len(streams))})
+
+    experiment = Experiment("tabled", "a table", (), lambda p, s: [{"algorithm": "a"}],
+                            metrics=(Metric("value", "1", "a value"),), run_batch=table)
+    result = execute_batch(BatchTask(experiment, {}, {}, 1, BatchSpan(0, 0, 0, 3), 0))
+    trials = pd.read_csv(io.StringIO(result.trials_csv))
+    assert list(trials["status"]) == ["failed"] * 3
+    assert (trials["error"] == "TypeError: run_trial returned rows without the declared "
+                               "metric value; the rows have algorithm").all()

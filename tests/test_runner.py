@@ -298,11 +298,13 @@ def test_reproduce_runs_every_config_of_a_folder_and_resumes(tmp_path):
     assert bad.returncode == 2 and "c.yaml: params.sigma" in bad.stderr
 
 
-@pytest.mark.parametrize("how", ["exit", "interrupt", "none", "empty", "not_rows", "raise"])
+@pytest.mark.parametrize("how", ["exit", "interrupt", "none", "empty", "not_rows", "raise",
+                                 "no_metric"])
 def test_a_trial_that_exits_or_returns_garbage_becomes_a_failed_row(how, write_config,
                                                                     tmp_path):
-    """sys.exit(0), KeyboardInterrupt raised by the trial itself, None, [] or non-dict rows:
-    each becomes one failed row with its error text; the run completes."""
+    """sys.exit(0), KeyboardInterrupt raised by the trial itself, None, [], non-dict rows or
+    rows without the declared metric (they were kept, and the metric left out of the summary
+    unsaid): each becomes one failed row with its error text; the run completes."""
     path = write_config(f"experiment: toy_experiments:UNRULY\ntrials: 40\nseed: 3\n"
                         f"params: {{how: {how}}}\n")
     serial = run(path, tmp_path / "s", executor="serial")
@@ -312,7 +314,9 @@ def test_a_trial_that_exits_or_returns_garbage_becomes_a_failed_row(how, write_c
     assert 0 < len(failed) < 40 and sorted(trials["trial"]) == list(range(40))
     expected = {"exit": "SystemExit: 0", "interrupt": "KeyboardInterrupt",
                 "none": "run_trial returned NoneType", "empty": "run_trial returned an empty",
-                "not_rows": "run_trial returned list", "raise": "RuntimeError: synthetic"}[how]
+                "not_rows": "run_trial returned list", "raise": "RuntimeError: synthetic",
+                "no_metric": "run_trial returned rows without the declared metric value; the "
+                             "rows have algorithm, valeu"}[how]
     assert failed["error"].str.contains(expected, regex=False).all(), failed["error"].iloc[0]
     assert serial.failed_trials == len(failed)
     assert (serial.folder / "trials.csv").read_bytes() == (pooled.folder /

@@ -159,12 +159,13 @@ DOOMED = register(Experiment(
 ))
 
 
-UNRULY_WAYS = ("exit", "interrupt", "none", "empty", "not_rows", "raise")
+UNRULY_WAYS = ("exit", "interrupt", "none", "empty", "not_rows", "raise", "no_metric")
 
 
 def unruly_trial(params, streams: TrialStreams) -> list[dict]:
     """About one trial in ``every`` misbehaves the way ``how`` names: ``sys.exit(0)``, raise
-    ``KeyboardInterrupt``, return ``None``, ``[]`` or a list of non-dicts, or raise an error.
+    ``KeyboardInterrupt``, return ``None``, ``[]``, a list of non-dicts or rows that lack the
+    declared metric (a misspelt key), or raise an error.
     Which trials misbehave depends on the point stream only (the same on every executor)."""
     import sys
 
@@ -177,7 +178,8 @@ def unruly_trial(params, streams: TrialStreams) -> list[dict]:
             raise KeyboardInterrupt
         if how == "raise":
             raise RuntimeError("synthetic failure")
-        return {"none": None, "empty": [], "not_rows": ["a", "b"]}[how]
+        return {"none": None, "empty": [], "not_rows": ["a", "b"],
+                "no_metric": [{"algorithm": "a", "valeu": value}]}[how]
     return [{"algorithm": "a", "value": value}]
 
 
@@ -188,6 +190,7 @@ UNRULY = register(Experiment(
                   choices=UNRULY_WAYS),
             Param("every", 4, "about one trial in this many misbehaves", "", kind=int, low=1)),
     run_trial=unruly_trial,
+    metrics=(Metric("value", "1", "the trial's normal draw"),),
     batch_size=5,
 ))
 

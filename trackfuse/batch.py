@@ -100,18 +100,31 @@ def _failure(prefix: dict[str, Any], err: BaseException) -> dict[str, Any]:
             "error": one_line(err, ERROR_CHARS)}
 
 
-def _rows(result: Any, producer: str) -> list[dict[str, Any]]:
-    """``result`` if it is a non-empty list of dicts, else a ``TypeError`` saying what it is."""
+def _rows(result: Any, producer: str, experiment: Experiment) -> list[dict[str, Any]]:
+    """``result`` if it is a non-empty list of dicts carrying every declared metric, else a
+    ``TypeError`` saying what it is."""
     if isinstance(result, list) and result and all(isinstance(r, dict) for r in result):
+        _check_metrics(experiment, set().union(*result), producer)
         return result
     got = f"an empty {type(result).__name__}" if result == [] else type(result).__name__
     raise TypeError(f"{producer} returned {got}; expected a non-empty list of row dicts")
 
 
+def _check_metrics(experiment: Experiment, columns: set[str], producer: str) -> None:
+    """A ``TypeError`` naming the declared metrics missing from ``columns`` (a misspelt key
+    left the metric out of the summary and the report, unsaid)."""
+    missing = experiment.missing_metrics(columns)
+    if missing:
+        raise TypeError(f"{producer} returned rows without the declared metric"
+                        f"{'s' if len(missing) > 1 else ''} {', '.join(missing)}; the rows "
+                        f"have {', '.join(sorted(map(str, columns)))}")
+
+
 def _one_trial(task: BatchTask, trial: int) -> list[dict[str, Any]] | BaseException:
     try:
         streams = trial_streams(task.seed, task.draw_point, trial)
-        return _rows(task.experiment.run_trial(task.params, streams), "run_trial")
+        return _rows(task.experiment.run_trial(task.params, streams), "run_trial",
+                     task.experiment)
     except BaseException as err:  # noqa: BLE001 - recorded in the CSV, the run goes on
         if _is_user_interrupt(err):
             raise
@@ -128,10 +141,11 @@ def execute_batch(task: BatchTask) -> BatchResult:
                                            batch_streams(task.seed, task.draw_point, trials))
         if isinstance(batch, RowTable):
             batch.check(len(trials))
+            _check_metrics(task.experiment, {*batch.columns, *batch.timings}, "run_batch")
             return _table_result(task, batch, t0)
         if not isinstance(batch, list) or len(batch) != len(trials):
             raise TypeError("run_batch returned the wrong number of trials")
-        per_trial: list[Any] = [_rows(r, "run_batch") for r in batch]
+        per_trial: list[Any] = [_rows(r, "run_batch", task.experiment) for r in batch]
     except BaseException as err:  # noqa: BLE001 - isolate the failing trial(s) one by one
         if _is_user_interrupt(err):
             raise

@@ -21,8 +21,9 @@ An experiment module is the only place that knows its science. It exposes one mo
   ``[run_trial(params, s) for s in streams]`` up to floating-point reassociation inside
   vectorized algebra.
 * ``metrics``: every metric column a trial returns (:class:`Metric`: unit, whether it is
-  0/1, and whether lower or higher is better). 0/1 metrics get Wilson intervals in the
-  summary; ``trackfuse.compare`` gates regressions in the declared direction.
+  0/1, and whether lower or higher is better); a trial whose rows lack one fails. 0/1
+  metrics get Wilson intervals in the summary; ``trackfuse.compare`` gates regressions in
+  the declared direction.
 * ``report``: the module path of the experiment's report module, which provides
   ``figures(run, wanted) -> dict[str, Figure]``, ``tables(run) -> dict[str, DataFrame]``
   and optionally ``prepare(run)`` (:mod:`trackfuse.reports`), and reads saved results only
@@ -46,7 +47,7 @@ must be byte-identical for any worker count) and writes them to ``timings.csv`` 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -191,6 +192,11 @@ class Experiment:
         (``()`` when the experiment has none)."""
         param = self.schema.get(ALGORITHMS_PARAM)
         return tuple(str(c) for c in param.choices) if param and param.choices else ()
+
+    def missing_metrics(self, columns: Collection[str]) -> list[str]:
+        """The declared metrics not among ``columns``, the keys of a trial's (or a batch's)
+        rows: they carry every declared metric, NaN where one does not apply."""
+        return [m.name for m in self.metrics if m.name not in columns]
 
     def defaults(self) -> dict[str, Any]:
         """Every parameter at its default value, keyed by dotted name."""
