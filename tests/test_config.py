@@ -62,6 +62,13 @@ BAD = {
     "nan": ("experiment: toy_gaussian\nparams: {mu: .nan}", "params.mu: got nan"),
     "bad_format": ("experiment: toy_gaussian\noutputs: {formats: [gif]}", "outputs.formats"),
     "params_not_mapping": ("experiment: toy_gaussian\nparams: [1, 2]", "params: got [1, 2]"),
+    # a null key read as the unknown parameter 'params.None'
+    "null_param_key": ("experiment: toy_gaussian\nparams: {~: 1}",
+                       "params: got a null key (~); allowed: parameter names of 'toy_gaussian'"),
+    "null_nested_key": ("experiment: toy_gaussian\nparams: {a: {~: 1}}",
+                        "params.a: got a null key (~); allowed: parameter names"),
+    "number_sweep_key": ("experiment: toy_gaussian\nsweep: {1: [1, 2]}",
+                         "sweep: got the key 1; allowed: parameter names of 'toy_gaussian'"),
 }
 
 

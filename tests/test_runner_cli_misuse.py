@@ -367,3 +367,10 @@ def test_ctrl_c_while_a_worker_starts_leaves_no_worker_behind(write_config, tmp_
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     assert result.returncode == 130, (result.returncode, result.stderr)
     assert result.stderr.startswith("interrupted:") and "Traceback" not in result.stderr
+
+
+def test_list_suggests_the_closest_experiment():
+    """`list twin_sensr` named the allowed experiments but, unlike a config, no close one."""
+    result = trackfuse("list", "twin_sensr")
+    assert result.returncode == 2
+    assert "unknown experiment 'twin_sensr'; did you mean 'twin_sensor'?" in result.stderr

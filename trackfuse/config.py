@@ -297,6 +297,7 @@ def _params(source: str, exp: Experiment, params_raw: Any) -> dict[str, Any]:
         raise ConfigError(source, "params", f"got {_describe(params_raw)}; allowed: a mapping "
                                             "of parameter names to values")
     params = exp.defaults()
+    _check_key_names(source, "params", exp, params_raw)
     try:
         given = flatten(params_raw)
     except KeyError as err:
@@ -307,6 +308,20 @@ def _params(source: str, exp: Experiment, params_raw: Any) -> dict[str, Any]:
     return params
 
 
+def _check_key_names(source: str, section: str, exp: Experiment, mapping: Mapping,
+                     prefix: str = "") -> None:
+    """Refuse a key that is not a string (YAML's ``~:`` or ``1:``) at any depth of
+    ``mapping``: it was reported as the unknown parameter ``params.None``."""
+    for key, value in mapping.items():
+        if not isinstance(key, str):
+            got = "a null key (~)" if key is None else f"the key {_describe(key)}"
+            raise ConfigError(source, section + (f".{prefix[:-1]}" if prefix else ""),
+                              f"got {got}; allowed: parameter names of '{exp.name}' (see "
+                              f"`trackfuse list {exp.name}`)")
+        if isinstance(value, Mapping):
+            _check_key_names(source, section, exp, value, f"{prefix}{key}.")
+
+
 def _sweep(source: str, exp: Experiment, sweep_raw: Any, sweeps: dict[str, Any],
            dropped: set[str]) -> dict[str, list[Any]]:
     """Every sweep axis (the config's, then ``--sweep`` ones replacing them, without the
@@ -314,6 +329,7 @@ def _sweep(source: str, exp: Experiment, sweep_raw: Any, sweeps: dict[str, Any],
     if not isinstance(sweep_raw, Mapping):
         raise ConfigError(source, "sweep", f"got {_describe(sweep_raw)}; allowed: a mapping of "
                                            "parameter names to value lists or 'range(a, b, s)'")
+    _check_key_names(source, "sweep", exp, sweep_raw)
     axes = {str(k): (source, "sweep", v) for k, v in sweep_raw.items()}
     axes.update({str(k): (SWEEP, "", v) for k, v in sweeps.items()})
     sweep: dict[str, list[Any]] = {}

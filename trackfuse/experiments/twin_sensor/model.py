@@ -25,10 +25,10 @@ Each trial spawns independent generators for truth, initialization and sensor no
 common stream (the same at every sweep point) and draws clutter from its point stream (shared
 by sweep points that differ only in parameters marked ``draws=False``: the filter, its
 initialization, gating and scoring, and the sensors' noise and detection probabilities,
-which scale or threshold common-stream draws), so adding an algorithm never changes the simulated data
-and sweep points compare on the same targets and noise. Every algorithm (association variant
-x covariance form, see :mod:`trackfuse.tracking.pda`) starts from the same
-``x0 ~ N(x_true(0), P0)``. The range standard deviation of ``P0`` (the radar cue) is
+which scale or threshold common-stream draws), so adding an algorithm never changes the
+simulated data and sweep points compare on the same targets and noise. Every algorithm
+(association variant x covariance form, see :mod:`trackfuse.tracking.pda`) starts from the
+same ``x0 ~ N(x_true(0), P0)``. The range standard deviation of ``P0`` (the radar cue) is
 ``init.sigma_range`` metres (``init.range_cue = "absolute"``, the paper's 20 km at 200 km)
 or ``init.sigma_range_fraction`` times the true initial range (``"relative"``); the PCRLB
 starts from the same ``P0``.
