@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import shutil
 
+import pytest
 from typer.testing import CliRunner
 
 from trackfuse.catalog import find_runs
@@ -52,3 +53,21 @@ def test_a_run_whose_report_files_were_removed_has_no_report_until_redrawn(write
     assert find_runs(tmp_path)[0].status == "complete, no report"
     assert _cli("plot", folder).exit_code == 0
     assert find_runs(tmp_path)[0].status == "complete"
+
+
+@pytest.mark.parametrize("status", [None, "", "finished"])
+def test_a_manifest_without_a_known_status_is_damaged(status, write_config, tmp_path):
+    """A manifest without a status was listed with an empty status (and `plot` said "run is
+    , not complete"): it is damaged, and the same run command rebuilds it."""
+    cfg = write_config(CFG)
+    folder = Runner(load(cfg), tmp_path, progress=False, plots=False).run().folder
+    manifest = json.loads((folder / "manifest.json").read_text())
+    manifest.pop("status")
+    (folder / "manifest.json").write_text(json.dumps(
+        manifest if status is None else {**manifest, "status": status}))
+    assert find_runs(tmp_path)[0].status == "damaged"
+    plotted = _cli("plot", folder)
+    assert plotted.exit_code == 2
+    assert plotted.stderr.startswith(f"error: {folder / 'manifest.json'}: status ")
+    again = Runner(load(cfg), tmp_path, progress=False, plots=False).run()
+    assert again.folder == folder and find_runs(tmp_path)[0].status == "complete, no report"

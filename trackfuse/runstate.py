@@ -66,6 +66,9 @@ def run_state(path: Path, manifest: dict[str, Any], checksums: bool = False) -> 
     """The state of run folder ``path`` with the manifest ``manifest``; ``checksums``
     compares the final files' checksums too, not only their sizes."""
     status = str(manifest.get("status", ""))
+    if status not in (RunStatus.RUNNING, RunStatus.INTERRUPTED, RunStatus.COMPLETE):
+        return RunState(DAMAGED, problem=f"{path / 'manifest.json'}: status {status[:40]!r}; "
+                                         "allowed: running, interrupted, complete")
     if status == RunStatus.RUNNING and not held_by_a_live_process(path):
         return RunState(STOPPED)
     if status != RunStatus.COMPLETE:
