@@ -263,6 +263,20 @@ def test_the_narrowing_verdict_agrees_exactly_when_its_interval_lies_above_zero(
     assert row["verdict"] == "agrees"
 
 
+def test_the_narrowing_verdict_differs_when_its_interval_lies_below_zero():
+    """The mirror case: over 9 separations the gap widens from 0 at the closest to +0.1 at
+    the widest, too little for Holm over the 36 pairs, and the row showed an interval below
+    0 beside 'inconclusive'."""
+    xs = [50, 100, 150, 200, 300, 500, 800, 1200, 2000]
+    imp = {x: 0.5 if x == 50 else 0.6 if x == 2000 else 0.55 for x in xs}
+    for n in (40, 60, 100):
+        row = _gap_verdicts(dict.fromkeys(xs, 0.5), imp, n)["narrows"]
+        assert row["reproduced"] == pytest.approx(-0.1)
+        assert (row["verdict"] == "differs") == (row["ci_high"] < 0), n
+        assert row["verdict"] in ("differs", "inconclusive")
+    assert row["verdict"] == "differs" and "widens from +0.000 at 50 m" in row["reason"]
+
+
 def test_curve_verdicts_with_too_few_trials_never_say_differs():
     """30 trials and a small widening (+0.03 to +0.10): no verdict can be reached."""
     rows = _gap_verdicts({50: 0.5, 300: 0.5, 2000: 1.0}, {50: 0.53, 300: 0.6, 2000: 1.0}, 30)

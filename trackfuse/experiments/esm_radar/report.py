@@ -386,12 +386,12 @@ def _narrowing_row(item: str, anchor: str, x: str, where: str, imp: pd.DataFrame
 
     Per trial, the gap is improved's 0/1 outcome minus traditional's; for every pair of
     separations ``a < b`` the mean of gap(a) - gap(b) over the same trials (paired t test,
-    Holm's adjustment over all pairs). ``differs`` when some pair shows the gap *widening*
-    as separation grows; ``agrees`` when none does and the pre-specified comparison, the
-    closest separation against the widest, shows it narrowing: its 95 % paired t interval,
-    the row's ``reproduced`` interval, lies above 0 (one comparison fixed in advance needs no
-    adjustment, so the verdict and the interval shown never disagree); else
-    ``inconclusive``."""
+    Holm's adjustment over all pairs). The pre-specified comparison, the closest separation
+    against the widest, is judged on its 95 % paired t interval, the row's ``reproduced``
+    interval (one comparison fixed in advance needs no adjustment, so the verdict and the
+    interval shown never disagree): ``differs`` when it lies below 0 (the gap widens) or
+    some pair shows the gap *widening* after Holm; else ``agrees`` when it lies above 0;
+    else ``inconclusive``."""
     gap = {xv: imp[p].to_numpy() - trad[p].to_numpy() for xv, p in xs}
     tests = []
     for i, (xa, _) in enumerate(xs):
@@ -417,6 +417,11 @@ def _narrowing_row(item: str, anchor: str, x: str, where: str, imp: pd.DataFrame
         reason = (f"the gap widens from {means[xa]:+.3f} at {_fmt_x(x, xa)} to "
                   f"{means[xb]:+.3f} at {_fmt_x(x, xb)} ({-d:+.3f} [{-hi:+.3f}, {-lo:+.3f}], "
                   f"Holm p = {q:.2g} over the {len(tests)} pairs of separations)")
+    elif hi_end < 0:
+        word = DIFFERS
+        reason = (f"the gap widens from {means[x0]:+.3f} at {_fmt_x(x, x0)} to "
+                  f"{means[x1]:+.3f} at {_fmt_x(x, x1)} (paired t p = {p_end:.2g}, fixed in "
+                  "advance)")
     else:
         word = AGREES if lo_end > 0 else INCONCLUSIVE
         reason = (f"gap {means[x0]:+.3f} at {_fmt_x(x, x0)}, {means[x1]:+.3f} at "
