@@ -6,7 +6,12 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 import pytest
-from figure_checks import inside_canvas, smallest_printed_text, text_overlaps
+from figure_checks import (
+    alike_legend_entries,
+    inside_canvas,
+    smallest_printed_text,
+    text_overlaps,
+)
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import to_hex
 from matplotlib.container import ErrorbarContainer
@@ -641,6 +646,33 @@ def test_clutter_with_a_wide_gap_is_drawn_on_a_symlog_axis(run_wide, name):
     assert text_overlaps(ax.figure) == []
 
 
+def _legend_look(line, at_legend_scale: bool = False) -> tuple:
+    """A line's width, marker size and marker fill, as its legend entry draws them when
+    ``at_legend_scale`` (:data:`report.LEGEND_LINE_PT`)."""
+    width, marker = report.LEGEND_LINE_PT if at_legend_scale else (np.inf, np.inf)
+    return (min(line.get_linewidth(), width), min(line.get_markersize(), marker),
+            line.get_markerfacecolor())
+
+
+def test_a_wide_covered_curve_has_a_legend_entry_of_legend_size(run_50):
+    """Curves nested around two or three others (up to 6.4 pt wide with 11 pt markers)
+    drew legend entries as blocks over their neighbours' (review of the orbit's loss
+    figures): an entry is at most 3 pt wide with 7 pt markers, still wider than a plain
+    curve's, with the same colour, dashes and open marker."""
+    name = "loss_vs_clutter_ablation"
+    with context():
+        fig = report.figures(run_50, [name])[name]
+        assert text_overlaps(fig) == [] and alike_legend_entries(fig) == []
+    wide = [line for line in fig.axes[0].get_lines()
+            if line.get_linewidth() > report.LEGEND_LINE_PT[0]]
+    assert wide  # run_50's PDA variants coincide at 0 %
+    for line in wide:
+        handle = _legend_handle(fig, line.get_label())
+        assert _legend_look(handle) == _legend_look(line, at_legend_scale=True)
+        assert (handle.get_color(), handle.get_linestyle(), handle.get_marker()) == \
+            (line.get_color(), line.get_linestyle(), line.get_marker())
+
+
 def test_a_curve_under_an_equal_one_shows_around_it(run_50):
     """fig1_claim's parallel PDA lay at 0 % under the paper's curve, its legend entry
     matching nothing visible: a covered curve is now wider with larger open markers (in
@@ -655,7 +687,8 @@ def test_a_curve_under_an_equal_one_shows_around_it(run_50):
     assert ours.get_markersize() > paper.get_markersize() and \
         ours.get_markerfacecolor() == "none"
     handle = _legend_handle(fig, look("mspda_parallel/mgekf").label)
-    assert handle.get_linewidth() == ours.get_linewidth()
+    assert _legend_look(handle) == _legend_look(ours, at_legend_scale=True)
+    assert handle.get_linewidth() > paper.get_linewidth()  # the legend shows it wide too
     apart = report.figures(_flagged(run_50, {("paper_approx/mgekf", 8.0, "lost_angle"): 3}),
                            [name])[name]
     assert _curve(apart.axes[0], "mspda_parallel/mgekf").get_linewidth() == \
@@ -677,9 +710,8 @@ def test_the_legend_look_of_a_covered_curve_holds_in_every_panel(run_50):
         handle = _legend_handle(fig, label)
         for ax in panels:
             line = _curve(ax, algorithm)
-            assert (line.get_linewidth(), line.get_markersize(), line.get_markerfacecolor()) \
-                == (handle.get_linewidth(), handle.get_markersize(),
-                    handle.get_markerfacecolor()), (algorithm, ax.get_title())
+            assert _legend_look(line, at_legend_scale=True) == _legend_look(handle), \
+                (algorithm, ax.get_title())
     assert _curve(panels[0], "paper_approx/mgekf").get_linewidth() > \
         line_kwargs("paper_approx/mgekf")["linewidth"]  # it lies on the EKF in the gate panel
 
@@ -720,8 +752,26 @@ def test_an_anees_in_the_thousands_keeps_its_axis_label_on_the_figure(run_50):
         assert text_overlaps(fig) == [] and inside_canvas(fig)
     labels = [t.get_text() for t in fig.axes[0].get_yticklabels()]
     assert "3000" in labels or "2000" in labels, labels
-    assert [report._log_tick_text(v) for v in (0.5, 3.0, 3000.0, 1e4)] == \
-        ["0.5", "3", "3000", "1e+04"]
+    assert [report._log_tick_text(v) for v in (0.5, 3.0, 3000.0, 1e4, 1e5)] == \
+        ["0.5", "3", "3000", "$10^{4}$", "$10^{5}$"]
+
+
+@pytest.mark.parametrize("scale", [1000, 4000])
+def test_an_anees_in_the_tens_of_thousands_is_labelled_by_decades(run_50, scale):
+    """ANEES 5000-30000 drew 1-2-3-5 ticks over four decades: "1e+04" and "2e+04" pushed the
+    y label off the figure again and "20"/"30", "200"/"300" overlapped (review). Over more
+    than three decades the axis is labelled at the powers of ten alone."""
+    trials = run_50.trials.copy()
+    trials["nees"] *= scale
+    wild = replace(run_50)
+    wild.trials = trials
+    with context():
+        fig = report.figures(wild, ["anees_vs_time"])["anees_vs_time"]
+        assert text_overlaps(fig) == [] and inside_canvas(fig)
+    ticks = fig.axes[0].get_yticks()
+    assert np.allclose(np.log10(ticks), np.round(np.log10(ticks))) and ticks[-1] >= 1e4
+    assert report._log_ticks(3.0, 3000.0).tolist() == [3, 5, 10, 20, 30, 50, 100, 200, 300,
+                                                       500, 1000, 2000, 3000]
 
 
 def test_a_swept_q_is_titled_by_its_manoeuvring_index():
@@ -736,6 +786,9 @@ def test_a_swept_q_is_titled_by_its_manoeuvring_index():
                                matched=True).startswith("manoeuvring index 0.015,")
     assert report._point_title({**params, "filter.q": 900.0}, swept, matched=False) == \
         "manoeuvring index 0.2, filter q 900 m^2/s^4, mean 40 false returns per scan"
+    # the truth's q swept alone: the index said nothing of the filter's q, nor the title
+    assert report._point_title({**params, "filter.q": 900.0}, ["target.q"], matched=False) \
+        == "manoeuvring index 0.2, filter q 900 m^2/s^4"
 
 
 def test_a_panel_whose_filter_q_equals_the_truths_says_it_unless_the_title_does(tmp_path):

@@ -76,6 +76,7 @@ from matplotlib.figure import Figure
 from matplotlib.legend import Legend
 from matplotlib.legend_handler import HandlerTuple
 from matplotlib.lines import Line2D
+from matplotlib.patheffects import withStroke
 from matplotlib.scale import SymmetricalLogTransform
 from matplotlib.ticker import FixedLocator, FuncFormatter, MaxNLocator, NullLocator
 from matplotlib.transforms import IdentityTransform, Transform
@@ -419,12 +420,15 @@ def _lines(titles: Sequence[str]) -> int:
 
 def _point_title(params: dict[str, Any], swept: Sequence[str], matched: bool) -> str:
     """A sweep point's swept values in words; a swept truth q as its manoeuvring index
-    (:func:`_manoeuvring_index`), the filter's q left out only when ``matched`` (the
-    figure's title then says "truth q = filter q" for every panel: :func:`_q_matched`)."""
+    (:func:`_manoeuvring_index`) beside the filter's q (swept or not), which is left out
+    only when ``matched`` (the figure's title then says "truth q = filter q" for every
+    panel: :func:`_q_matched`)."""
     keys = list(swept)
     parts = []
     if "target.q" in keys:
         keys = [k for k in keys if k != "target.q" and not (matched and k == "filter.q")]
+        if not matched and "filter.q" not in keys:  # the index alone hides the filter's q
+            keys.append("filter.q")
         parts.append(f"manoeuvring index {_manoeuvring_index(params):.2g}")
     return ", ".join(parts + [_value_text(k, params[k]) for k in keys]) or "all runs"
 
@@ -456,12 +460,33 @@ def _finish(fig: Figure, axes: Sequence[Axes], legend_cols: int,
         for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
             if ax in axes or label in everywhere:
                 entries.setdefault(label, handle)
+    entries = {label: _legend_scale(handle) for label, handle in entries.items()}
     entries.update(extra or {})
     unused = -(-reserved // legend_cols) - -(-len(entries) // legend_cols)
     if unused > 0:
         trim_bottom(fig, LEGEND_ROW_IN * unused)
     legend_in_strip(fig, list(entries.values()), list(entries), legend_cols)
     return fig
+
+
+LEGEND_LINE_PT = (3.0, 7.0)
+"""The widest line and the largest marker (pt) a legend entry draws: a curve drawn wide
+around the curves it lies on (:func:`_curve_kwargs`: up to 6.4 pt, 11 pt markers) showed as
+a block over its neighbours in the legend; its entry keeps its look at this size."""
+
+
+def _legend_scale(handle: Any) -> Any:
+    """``handle``, or for a line wider or with larger markers than :data:`LEGEND_LINE_PT` a
+    copy of it at that size."""
+    width, marker = LEGEND_LINE_PT
+    if not isinstance(handle, Line2D) or (handle.get_linewidth() <= width
+                                          and handle.get_markersize() <= marker):
+        return handle
+    proxy = Line2D([], [])
+    proxy.update_from(handle)
+    proxy.set_linewidth(min(handle.get_linewidth(), width))
+    proxy.set_markersize(min(handle.get_markersize(), marker))
+    return proxy
 
 
 def _context(run: RunData, *extra: str) -> str:
@@ -913,7 +938,8 @@ def _time_figure(run: RunData, points: Sequence[int], draw: PanelDraw, title: Se
             fits[i] = draw(ax, frame, run.point_params(pt))
             drawn.append(ax)
         ax.set_xlabel("time t (s)")
-        ax.set_ylabel(y_label)
+        if i % per_row == 0:  # once per row: a wide tick label put it on the panel to its left
+            ax.set_ylabel(y_label)
         ax.set_title(panel_title)
     tops = _shared_tops({i: top for i, (top, _) in fits.items()}, per_row)
     for i, (_, fit) in fits.items():
@@ -1029,6 +1055,9 @@ def _below_bound_everywhere(band: pd.DataFrame, bound: np.ndarray) -> bool:
                 and np.all((lo <= bound) & (bound <= hi)))
 
 
+NOTE_HALO = [withStroke(linewidth=2.0, foreground="white")]
+"""A note over curves: a white outline around its letters keeps it readable over the grey
+single runs and hides no more of the curves beneath (a white box hid the sqrt PCRLB)."""
 CORRELATED = 0.5
 """A range panel's note calls the errors of its first and last scan correlated when the
 magnitude of their correlation across runs is at least this, else weakly correlated."""
@@ -1073,8 +1102,7 @@ def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
     note = _range_note(first, bounds(params)[0] / 1e3, len(errors), int(errors.columns[-1]),
                        corr)
     ax.text(0.03, 0.04, note, transform=ax.transAxes, fontsize=NOTE_PT, va="bottom",
-            zorder=7, linespacing=1.1,
-            bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.8, "pad": 1.0})
+            zorder=7, linespacing=1.1, path_effects=NOTE_HALO)  # a box hid the bound
     needed = _range_top(max(top, float(np.max(bounds(params)[0])) / 1e3), np.abs(single))
     return needed, lambda top: _fit_range_axis(ax, top, np.abs(single), bands)
 
@@ -1096,14 +1124,21 @@ def _range_figure(run: RunData) -> Figure:
 
 LOG_STEPS = (1.0, 2.0, 3.0, 5.0)
 """Labelled values of a log axis in each decade."""
+LOG_STEP_DECADES = 3
+"""The most decades a log axis labels at every one of :data:`LOG_STEPS`; a wider one is
+labelled at the powers of ten alone (over four decades the 1-2-3-5 labels overlapped)."""
 
 
 def _log_ticks(low: float, high: float) -> np.ndarray:
-    """The values of :data:`LOG_STEPS` times a power of ten from the last at or below
-    ``low`` to the first at or above ``high`` (both > 0)."""
+    """The values of :data:`LOG_STEPS` times a power of ten (the powers of ten alone over
+    more than :data:`LOG_STEP_DECADES` decades) from the last at or below ``low`` to the
+    first at or above ``high`` (both > 0)."""
     decades = np.arange(math.floor(math.log10(low)) - 1, math.ceil(math.log10(high)) + 1)
     ticks = np.sort([step * 10.0**d for d in decades for step in LOG_STEPS])
-    return ticks[(ticks >= ticks[ticks <= low].max()) & (ticks <= ticks[ticks >= high].min())]
+    ticks = ticks[(ticks >= ticks[ticks <= low].max()) & (ticks <= ticks[ticks >= high].min())]
+    if ticks[-1] / ticks[0] <= 10.0**LOG_STEP_DECADES:
+        return ticks
+    return 10.0 ** np.arange(math.floor(math.log10(low)), math.ceil(math.log10(high)) + 1)
 
 
 def _anees(frame: pd.DataFrame, name: str) -> pd.Series:
@@ -1126,9 +1161,13 @@ def _anees_range(run: RunData, names: Sequence[str], points: Sequence[int]
 
 
 def _log_tick_text(value: float) -> str:
-    """A log axis's tick label: "0.5", "3000"; "1e+04" from ten thousand on ("3e+03" was
-    wider than the y-axis margin and pushed the axis label off the figure)."""
-    return f"{value:.3g}" if value < 1 else f"{value:.0f}" if value < 1e4 else f"{value:.0e}"
+    """A log axis's tick label: "0.5", "3000"; a power of ten from ten thousand on as
+    10 to that power ("3e+03" and "1e+04" were wider than the y-axis margin and pushed the
+    axis label off the figure; :func:`_log_ticks` labels only powers of ten up there)."""
+    if value < 1:
+        return f"{value:.3g}"
+    power = round(math.log10(value))
+    return f"{value:.0f}" if value < 1e4 or value != 10.0**power else f"$10^{{{power}}}$"
 
 
 def _fit_nees_axis(ax: Axes, ticks: np.ndarray) -> None:
@@ -1214,11 +1253,12 @@ def _final_figure(run: RunData) -> Figure | str:
                for _, x in _past_final_top(p, top))
     fig, axes, cols = _figure(len(facets), per_row, panel, title,
                               len(names) + len(labels) + past + any(few), _lines(titles))
-    for ax, facet_points, bound_curves, top, facet_title, facet_few in zip(
-            axes, points, curves, tops, titles, few, strict=True):
+    for i, (ax, facet_points, bound_curves, top, facet_title, facet_few) in enumerate(zip(
+            axes, points, curves, tops, titles, few, strict=True)):
         _draw_final(ax, facet_points, x_key, bound_curves, top, facet_few, threshold)
         ax.set_xlabel(_axis_label(x_key, run.params))
-        ax.set_ylabel("final range RMSE (km)")
+        if i % per_row == 0:  # once per row, as the time figures
+            ax.set_ylabel("final range RMSE (km)")
         ax.set_title(facet_title)
     shown = {label for *_, label in curves[0]}
     for _, _, style, label in (c for facet in curves[1:] for c in facet):
