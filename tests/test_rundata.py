@@ -253,3 +253,16 @@ def test_fuzzed_run_folders_plot_or_fail_in_one_line(manifest, config, trials, s
             _apply(folder, name, content, forge and (folder / "manifest.json").is_file())
         _apply(folder, "manifest.json", manifest, False)
         check(plot(folder))
+
+
+def test_timings_are_read_through_the_run(finished, tmp_path):
+    """timings.csv is read by the run (one-line errors), empty when the run timed nothing;
+    passive_assoc's scale figure read it with pandas itself."""
+    assert rundata.load(finished).timings.empty
+    (tmp_path / "cfg.yaml").write_text(CFG.replace("GAUSSIAN", "TIMED"))
+    timed = Runner(load(tmp_path / "cfg.yaml"), tmp_path / "out", executor="serial",
+                   progress=False, plots=False).run().folder
+    timings = rundata.load(timed).timings
+    assert len(timings) == 24 and (timings["estimate_time_s"] > 0).all()  # 2 algorithms
+    assert list(timings[["point", "trial"]].drop_duplicates().itertuples(index=False)) == \
+        [(p, t) for p in range(2) for t in range(6)]

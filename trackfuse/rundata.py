@@ -37,6 +37,7 @@ from trackfuse.results import (
     MANIFEST,
     SUMMARY,
     TIMING_SUMMARY,
+    TIMINGS,
     TRIALS,
     RunFolder,
     RunFolderError,
@@ -78,6 +79,14 @@ class RunData:
     def trials(self) -> pd.DataFrame:
         """``trials.csv``: one row per point, trial and row key."""
         return _read_csv(self.path / TRIALS)
+
+    @cached_property
+    def timings(self) -> pd.DataFrame:
+        """``timings.csv``: the ``*_time_s`` measurements (per trial or per batch); empty
+        when the run wrote none."""
+        if not (self.path / TIMINGS).exists():
+            return pd.DataFrame()
+        return _read_csv(self.path / TIMINGS)
 
     @cached_property
     def summary(self) -> pd.DataFrame:

@@ -84,7 +84,6 @@ from trackfuse.reports import (
     claim_verdict,
     headline_row,
 )
-from trackfuse.results import TIMINGS
 from trackfuse.rundata import RunData, succeeded_rows, swept_keys
 from trackfuse.stats import (
     bootstrap_t_mean_intervals,
@@ -464,9 +463,9 @@ def _median_times(run: RunData) -> pd.DataFrame:
     (:func:`median_interval`), in the columns ``mean`` (holding the median), ``ci_low`` and
     ``ci_high`` that :func:`_series` draws; empty when the run wrote no times."""
     columns = ["targets.n", "algorithm", "mean", "ci_low", "ci_high"]
-    if not (run.path / TIMINGS).exists():
+    if "solve_time_s" not in run.timings:
         return pd.DataFrame(columns=columns)
-    times = pd.read_csv(run.path / TIMINGS).dropna(subset=["solve_time_s"])
+    times = run.timings.dropna(subset=["solve_time_s"])
     times = times[times["ops"] == times.groupby("algorithm")["ops"].transform("max")]
     rows = [(n, name, *median_interval(g["solve_time_s"]))
             for (n, name), g in times.groupby(["targets.n", "algorithm"])]
