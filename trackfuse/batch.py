@@ -1,8 +1,9 @@
 """One batch of trials, run in a worker: seeds, the experiment's code, CSV text.
 
 Containment: whatever a trial raises (``SystemExit`` and, inside a worker,
-``KeyboardInterrupt`` included) or returns instead of a non-empty list of row dicts becomes
-one ``failed`` row carrying the error text; the run goes on.
+``KeyboardInterrupt`` included) or returns instead of a non-empty list of row dicts that
+carry every declared metric becomes one ``failed`` row carrying the error text; the run goes
+on. A batch form that raises is run again trial by trial, to isolate the failing trials.
 
 This module is what the process pool's workers load (with the experiment): it imports no
 pandas, no matplotlib and none of the run orchestration (:mod:`trackfuse.runner`).
@@ -100,31 +101,35 @@ def _failure(prefix: dict[str, Any], err: BaseException) -> dict[str, Any]:
             "error": one_line(err, ERROR_CHARS)}
 
 
-def _rows(result: Any, producer: str, experiment: Experiment) -> list[dict[str, Any]]:
-    """``result`` if it is a non-empty list of dicts carrying every declared metric, else a
-    ``TypeError`` saying what it is."""
-    if isinstance(result, list) and result and all(isinstance(r, dict) for r in result):
-        _check_metrics(experiment, set().union(*result), producer)
+def _checked(result: Any, producer: str, experiment: Experiment
+             ) -> list[dict[str, Any]] | BaseException:
+    """``result`` if it is a non-empty list of dicts carrying every declared metric (or the
+    error it is), else a ``TypeError`` saying what it is, returned: the trial's failure."""
+    if isinstance(result, BaseException):
         return result
-    got = f"an empty {type(result).__name__}" if result == [] else type(result).__name__
-    raise TypeError(f"{producer} returned {got}; expected a non-empty list of row dicts")
+    if not (isinstance(result, list) and result and all(isinstance(r, dict) for r in result)):
+        got = f"an empty {type(result).__name__}" if result == [] else type(result).__name__
+        return TypeError(f"{producer} returned {got}; expected a non-empty list of row dicts")
+    return _missing_metrics(experiment, set().union(*result), producer) or result
 
 
-def _check_metrics(experiment: Experiment, columns: set[str], producer: str) -> None:
+def _missing_metrics(experiment: Experiment, columns: set[str], producer: str
+                     ) -> TypeError | None:
     """A ``TypeError`` naming the declared metrics missing from ``columns`` (a misspelt key
-    left the metric out of the summary and the report, unsaid)."""
+    left the metric out of the summary and the report, unsaid), else ``None``."""
     missing = experiment.missing_metrics(columns)
-    if missing:
-        raise TypeError(f"{producer} returned rows without the declared metric"
-                        f"{'s' if len(missing) > 1 else ''} {', '.join(missing)}; the rows "
-                        f"have {', '.join(sorted(map(str, columns)))}")
+    if not missing:
+        return None
+    return TypeError(f"{producer} returned rows without the declared metric"
+                     f"{'s' if len(missing) > 1 else ''} {', '.join(missing)}; the rows have "
+                     f"{', '.join(sorted(map(str, columns)))}")
 
 
-def _one_trial(task: BatchTask, trial: int) -> list[dict[str, Any]] | BaseException:
+def _one_trial(task: BatchTask, trial: int) -> Any:
+    """What ``run_trial`` returns for ``trial``, or what it raised."""
     try:
-        streams = trial_streams(task.seed, task.draw_point, trial)
-        return _rows(task.experiment.run_trial(task.params, streams), "run_trial",
-                     task.experiment)
+        return task.experiment.run_trial(task.params,
+                                         trial_streams(task.seed, task.draw_point, trial))
     except BaseException as err:  # noqa: BLE001 - recorded in the CSV, the run goes on
         if _is_user_interrupt(err):
             raise
@@ -132,24 +137,31 @@ def _one_trial(task: BatchTask, trial: int) -> list[dict[str, Any]] | BaseExcept
 
 
 def execute_batch(task: BatchTask) -> BatchResult:
-    """Run one batch (in a worker). A trial that fails becomes a ``failed`` row."""
+    """Run one batch (in a worker). A trial that fails becomes a ``failed`` row; a batch
+    form that raises is run again trial by trial (to isolate the failing trials), one that
+    returns rows without a declared metric fails all its trials (a retry would hide the
+    bug wherever ``run_trial`` is right)."""
     t0 = time.perf_counter()
     span = task.span
     trials = range(span.first, span.stop)
+    producer = "run_trial" if task.experiment.run_batch is None else "run_batch"
     try:
         batch = task.experiment.run_trials(task.params,
                                            batch_streams(task.seed, task.draw_point, trials))
         if isinstance(batch, RowTable):
             batch.check(len(trials))
-            _check_metrics(task.experiment, {*batch.columns, *batch.timings}, "run_batch")
-            return _table_result(task, batch, t0)
-        if not isinstance(batch, list) or len(batch) != len(trials):
+        elif not isinstance(batch, list) or len(batch) != len(trials):
             raise TypeError("run_batch returned the wrong number of trials")
-        per_trial: list[Any] = [_rows(r, "run_batch", task.experiment) for r in batch]
     except BaseException as err:  # noqa: BLE001 - isolate the failing trial(s) one by one
         if _is_user_interrupt(err):
             raise
-        per_trial = [_one_trial(task, t) for t in trials]
+        batch, producer = [_one_trial(task, t) for t in trials], "run_trial"
+    if isinstance(batch, RowTable):
+        problem = _missing_metrics(task.experiment, {*batch.columns, *batch.timings}, producer)
+        if problem is None:
+            return _table_result(task, batch, t0)
+        batch = [problem] * len(trials)
+    per_trial = [_checked(result, producer, task.experiment) for result in batch]
     rows: list[dict[str, Any]] = []
     for trial, result in zip(trials, per_trial, strict=True):
         prefix = {"point": span.point, "trial": trial, **task.swept}

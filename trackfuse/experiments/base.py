@@ -21,7 +21,8 @@ An experiment module is the only place that knows its science. It exposes one mo
   ``[run_trial(params, s) for s in streams]`` up to floating-point reassociation inside
   vectorized algebra.
 * ``metrics``: every metric column a trial returns (:class:`Metric`: unit, whether it is
-  0/1, and whether lower or higher is better); a trial whose rows lack one fails. 0/1
+  0/1, and whether lower or higher is better); a trial whose rows lack one (but a
+  ``*_time_s`` timing) fails. 0/1
   metrics get Wilson intervals in the summary; ``trackfuse.compare`` gates regressions in
   the declared direction.
 * ``report``: the module path of the experiment's report module, which provides
@@ -51,7 +52,7 @@ from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
 
-from trackfuse.results import RUNNER_COLUMNS
+from trackfuse.results import RUNNER_COLUMNS, TIME_SUFFIX
 
 if TYPE_CHECKING:  # only for annotations: declaring an experiment loads no numpy
     from trackfuse.seeding import TrialStreams
@@ -195,8 +196,10 @@ class Experiment:
 
     def missing_metrics(self, columns: Collection[str]) -> list[str]:
         """The declared metrics not among ``columns``, the keys of a trial's (or a batch's)
-        rows: they carry every declared metric, NaN where one does not apply."""
-        return [m.name for m in self.metrics if m.name not in columns]
+        rows: they carry every declared metric, NaN where one does not apply, but for
+        timings (``*_time_s``), which a batch may measure for all its trials at once."""
+        return [m.name for m in self.metrics
+                if m.name not in columns and not m.name.endswith(TIME_SUFFIX)]
 
     def defaults(self) -> dict[str, Any]:
         """Every parameter at its default value, keyed by dotted name."""
