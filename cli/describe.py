@@ -49,8 +49,8 @@ def print_experiment(exp: Experiment, width: int | None = None) -> None:
                 "command line)")
     for p in exp.params:
         unit = f" {p.unit}" if p.unit and p.unit != "1" else ""
-        quiet = "" if p.draws else (" Changes no simulated data: sweep points that differ "
-                                    "only in it share their clutter.")
+        quiet = "" if p.draws else (" Takes no random draws of its own: sweep points that "
+                                    "differ only in it share their clutter.")
         out.entry(f"{p.key} = {_flow(p.default)}{unit}",
                   f"{p.doc.rstrip('.')}. Allowed: {allowed_text(p)}.{quiet}")
     out.heading("metrics (columns of trials.csv; rows of summary.csv)")

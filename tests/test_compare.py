@@ -119,7 +119,8 @@ def test_compare_runs_takes_binary_metrics_and_directions_from_the_experiment(tm
     other = harness.run_data(tmp_path / "c", "toy_gaussian", {"n": 5}, sweep, trials=30,
                              seed=4)
     assert not compare_runs(base, other).paired
-    with pytest.raises(ValueError, match="different swept keys"):
+    with pytest.raises(ValueError, match="BASE sweeps .*, NEW sweeps .*; allowed: two runs "
+                                         "sweeping the same keys"):
         compare_runs(base, harness.run_data(tmp_path / "d", "toy_gaussian", {"n": 5},
                                             {"sigma": [1.0, 2.0]}, trials=5, seed=3))
 

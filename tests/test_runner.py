@@ -404,3 +404,18 @@ def test_a_trials_own_interrupt_is_contained_when_ctrl_c_is_ignored(write_config
     finally:
         signal.signal(signal.SIGINT, previous)
     assert 0 < outcome.failed_trials < 12
+
+
+def test_a_runs_own_config_runs_again_into_that_run(write_config, tmp_path):
+    """Running a run folder's config.yaml (the natural "re-run this result") computed the
+    same run id anew under <out>/config/; with --force the manifest then named the run's
+    own config.yaml, and the next run went to config/ too."""
+    first = run(write_config(CFG, "study"), tmp_path, executor="serial", plots=False)
+    own = first.folder / "config.yaml"
+    assert run(own, tmp_path, executor="serial").status == "already complete"
+    for _ in range(2):
+        again = run(own, tmp_path, executor="serial", plots=False, force=True)
+        assert again.folder == first.folder and again.computed_trials == 92
+    manifest = json.loads((first.folder / "manifest.json").read_text())
+    assert manifest["config_file"] == str(tmp_path / "study.yaml")
+    assert sorted(p.name for p in tmp_path.iterdir() if p.is_dir()) == ["study"]

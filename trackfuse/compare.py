@@ -259,7 +259,12 @@ def compare_runs(base: RunData, new: RunData, tolerance: Mapping[str, float] | N
         raise ValueError(f"different experiments: {base.config['experiment']!r} and "
                          f"{new.config['experiment']!r}")
     if list(base.sweep) != list(new.sweep):
-        raise ValueError(f"different swept keys: {list(base.sweep)} and {list(new.sweep)}")
+        def swept(run: RunData) -> str:
+            return ", ".join(run.sweep) or "no key"
+        raise ValueError(f"BASE sweeps {swept(base)}, NEW sweeps {swept(new)}; allowed: two "
+                         "runs sweeping the same keys in the same order (to run fewer values, "
+                         "narrow the axis with --sweep KEY=V1,V2: --set or KEY=VALUE fixes "
+                         "the key and drops its axis)")
     if base.path.resolve() == new.path.resolve():
         raise ValueError(f"{base.path}: BASE and NEW are the same run; compare needs two runs")
     for run in (base, new):

@@ -148,10 +148,26 @@ def _print_warning(message: str) -> None:
     print(f"warning: {message}", file=sys.stderr, flush=True)
 
 
+def config_origin(source: str) -> str:
+    """The config file a run is made from: ``source``, or for a run folder's own
+    ``config.yaml`` the config that run was made from (its manifest's ``config_file``): run
+    again, it finds that run instead of computing it anew under ``<out>/config/``. The
+    manifest records it as ``config_file`` (its ``command``, the file given)."""
+    path = Path(source)
+    if path.name != CONFIG:
+        return source
+    try:
+        recorded = (RunFolder(path.parent).read_manifest() or {}).get("config_file")
+    except RunFolderError:  # an unreadable manifest: the file's own name
+        return source
+    return recorded if isinstance(recorded, str) and recorded else source
+
+
 def folder_name(source: str) -> str:
-    """The run's folder under the output root: the config file's stem without leading dots,
-    so that a config called ``...yaml`` (stem ``..``) cannot name the root's parent."""
-    return Path(source).stem.lstrip(".") or "config"
+    """The run's folder under the output root: the stem of the config it is made from
+    (:func:`config_origin`) without leading dots, so that a config called ``...yaml`` (stem
+    ``..``) cannot name the root's parent."""
+    return Path(config_origin(source)).stem.lstrip(".") or "config"
 
 
 @dataclass
@@ -183,7 +199,8 @@ class Runner:
                              self.libraries)
         self.cpus = [cpu()]  # of the machines that compute: this one, or the dask workers
         self.out = Path(out)
-        self.folder = RunFolder(self.out / folder_name(config.source) / self.run_id)
+        self.config_file = config_origin(config.source)  # before --force empties the folder
+        self.folder = RunFolder(self.out / folder_name(self.config_file) / self.run_id)
         self.points = expand(config.sweep, config.sweep_mode)
         self.draw_points = draw_points(self.points, config.experiment.drawing)
         self.batches_per_point = math.ceil(config.trials / config.batch_size)
@@ -236,7 +253,7 @@ class Runner:
             "run_id": self.run_id,
             "name": self.name if self.name is not None else previous.get("name"),
             "experiment": self.config.experiment.name,
-            "config_file": self.config.source,
+            "config_file": self.config_file,
             "command": list(self.command),
             "git": self.git,
             "config_sha256": config_hash(self.resolved),
@@ -417,7 +434,7 @@ class Runner:
             self._check_dask_workers(executor, session)
         self.folder.write_manifest(self._manifest(RunStatus.RUNNING, session))
         last = time.monotonic()
-        label = f"{folder_name(self.config.source)} [{self.run_id}]"  # the config, not kind
+        label = f"{folder_name(self.config_file)} [{self.run_id}]"  # the config, not kind
         loading = self._load_finishing_code(executor.kind)
         stopped = True  # by an interrupt or an error, until the loop ends
         try:
