@@ -687,7 +687,7 @@ def list_experiments(
     parameter with its default, unit and allowed values, the metrics, algorithms and figure
     names (what outputs.figures may list)."""
     from trackfuse import experiments
-    from trackfuse.config import did_you_mean
+    from trackfuse.config import unknown_experiment
     from trackfuse_cli import describe
     if name is None:
         if output is Format.yaml:
@@ -701,8 +701,7 @@ def list_experiments(
     try:
         exp = experiments.get(name)
     except experiments.UnknownExperiment:
-        fail(f"unknown experiment {name[:80]!r}{did_you_mean(name, experiments.names())}; "
-             f"allowed: {', '.join(experiments.names())}, or package.module:ATTRIBUTE")
+        fail(unknown_experiment(name))
     except experiments.PluginError as err:
         fail(str(err))
     if output is Format.yaml:

@@ -15,6 +15,8 @@ from pathlib import Path
 import pytest
 from conftest import ROOT, cli_env, trackfuse
 
+from trackfuse.child_processes import process_alive
+
 CI = ROOT / "configs" / "ci"
 PASSIVE = CI / "passive_assoc_ci.yaml"
 SLOW_ARGS = ("--set", "trials=40", "--set", "batch_size=2", "--workers", "2", "--no-progress")
@@ -51,14 +53,6 @@ def _wait_for_fork_server(pid: int, timeout: float = 60) -> int:
                 return child
         time.sleep(0.01)
     pytest.fail("the run started no fork server")
-
-
-def _alive(pid: int) -> bool:
-    try:
-        state = (Path("/proc") / str(pid) / "stat").read_text().rsplit(")", 1)[1].split()[0]
-    except OSError:
-        return False
-    return state != "Z"
 
 
 def _start(out: Path) -> subprocess.Popen:
@@ -130,13 +124,13 @@ def test_kill_9_of_a_run_leaves_no_fork_server_behind(tmp_path):
         proc.kill()
         proc.wait(timeout=30)
         time.sleep(5)
-        alive = [pid for pid in leftovers if _alive(pid)]
+        alive = [pid for pid in leftovers if process_alive(pid)]
         assert not alive, f"still running after the run was killed: {alive}"
         stderr = proc.communicate(timeout=30)[1]
         assert "leaked" not in stderr and "Warning" not in stderr, stderr
     finally:
         for pid in leftovers:
-            if _alive(pid):
+            if process_alive(pid):
                 os.kill(pid, signal.SIGKILL)
 
 

@@ -305,11 +305,14 @@ def test_every_figure_of_a_shipped_config_is_clean(shipped, name):
         assert "runs per point" in fig.get_suptitle(), fig_name
         panels = [ax for ax in fig.axes if ax.get_visible() and ax.has_data()]
         for ax in panels:
-            row = [a for a in panels if a.get_position().y0 == ax.get_position().y0]
-            y_label = ax.get_ylabel() or min(row, key=lambda a: a.get_position().x0).get_ylabel()
+            row = sorted((a for a in panels if a.get_position().y0 == ax.get_position().y0),
+                         key=lambda a: a.get_position().x0)
+            y_label = ax.get_ylabel() or row[0].get_ylabel()
             for label in (ax.get_xlabel(), y_label):
                 assert re.search(r"\(.+\)$", label), (fig_name, label)
             assert "=" not in ax.get_title(), (fig_name, ax.get_title())
+            shown = [a.get_ylabel() for a in row if a.get_ylabel()]  # once per row
+            assert all(b != a for a, b in zip(shown, shown[1:], strict=False)), (fig_name, shown)
 
 
 def _legend_texts(fig) -> list[str]:

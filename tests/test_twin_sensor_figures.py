@@ -772,6 +772,18 @@ def test_an_anees_in_the_tens_of_thousands_is_labelled_by_decades(run_50, scale)
     assert np.allclose(np.log10(ticks), np.round(np.log10(ticks))) and ticks[-1] >= 1e4
     assert report._log_ticks(3.0, 3000.0).tolist() == [3, 5, 10, 20, 30, 50, 100, 200, 300,
                                                        500, 1000, 2000, 3000]
+    assert report._log_ticks(47.6, 21000.0).tolist() == [10, 100, 1000, 1e4, 1e5]  # review
+
+
+def test_a_range_note_hides_no_curve(run_50):
+    """The note's white box hid the sqrt PCRLB under it (twin_sensor_baseline, 50 km): the
+    note is outlined in white, letter by letter, with no box."""
+    fig = report.figures(run_50, ["range_error_vs_time"])["range_error_vs_time"]
+    notes = [t for ax in fig.axes for t in ax.texts if "corr." in t.get_text()
+             or "below the bound" in t.get_text()]
+    assert len(notes) == 3
+    for note in notes:
+        assert note.get_bbox_patch() is None and note.get_path_effects() == report.NOTE_HALO
 
 
 def test_a_swept_q_is_titled_by_its_manoeuvring_index():

@@ -404,9 +404,20 @@ def _check_distinct(source: str, sweep: dict[str, list[Any]], mode: str,
             seen.add(repr(value))
 
 
+def _allowed_experiments() -> str:
+    return ", ".join(experiments.names()) + ", or package.module:ATTRIBUTE"
+
+
+def unknown_experiment(name: str) -> str:
+    """What a config's ``experiment`` and ``trackfuse list`` say of a name that is neither a
+    registered experiment nor a plugin: the closest name, and what is allowed."""
+    return (f"unknown experiment {_describe(name)}{did_you_mean(name, experiments.names())}"
+            f"; allowed: {_allowed_experiments()}")
+
+
 def _experiment(source: str, name: Any) -> Experiment:
     """The experiment a config names (a registered name or ``package.module:ATTR``)."""
-    allowed = ", ".join(experiments.names()) + ", or package.module:ATTRIBUTE"
+    allowed = _allowed_experiments()
     if name is None:
         raise ConfigError(source, "experiment", f"missing; allowed: {allowed}")
     if not isinstance(name, str):
@@ -414,9 +425,7 @@ def _experiment(source: str, name: Any) -> Experiment:
     try:
         return experiments.get(name)
     except experiments.UnknownExperiment:
-        raise ConfigError(source, "experiment", f"unknown experiment {_describe(name)}"
-                          f"{did_you_mean(name, experiments.names())}; allowed: {allowed}"
-                          ) from None
+        raise ConfigError(source, "experiment", unknown_experiment(name)) from None
     except experiments.PluginError as err:
         raise ConfigError(source, "experiment", str(err)) from None
 

@@ -388,9 +388,9 @@ def _narrowing_row(item: str, anchor: str, x: str, where: str, imp: pd.DataFrame
     separations ``a < b`` the mean of gap(a) - gap(b) over the same trials (paired t test,
     Holm's adjustment over all pairs). The pre-specified comparison, the closest separation
     against the widest, is judged on its 95 % paired t interval, the row's ``reproduced``
-    interval (one comparison fixed in advance needs no adjustment, so the verdict and the
-    interval shown never disagree): ``differs`` when it lies below 0 (the gap widens) or
-    some pair shows the gap *widening* after Holm; else ``agrees`` when it lies above 0;
+    interval (one comparison fixed in advance needs no adjustment): ``differs`` when it lies
+    below 0 (the gap widens) or when some pair shows the gap *widening* after Holm (the
+    reason then names that pair and its interval); else ``agrees`` when it lies above 0;
     else ``inconclusive``."""
     gap = {xv: imp[p].to_numpy() - trad[p].to_numpy() for xv, p in xs}
     tests = []

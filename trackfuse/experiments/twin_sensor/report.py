@@ -798,6 +798,7 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
         ax.set_xlabel(_axis_label("clutter.mean", run.params))
         ax.set_ylabel(RULES[rule][0])
         ax.set_title(panel_title)
+    _y_labels_once_per_row(axes, ncols)
     _wilson_key(axes[0])
     return _finish(fig, axes[:len(columns)], cols, everywhere=(PAST_TOP_LABEL, *zero_labels))
 
@@ -853,6 +854,7 @@ def _index_figure(run: RunData) -> Figure | str:
         ax.set_xlabel("manoeuvring index sqrt(q) T^2 / (r sigma) (1)")
         ax.set_ylabel(RULES[rule][0])
         ax.set_title(_rule_text(rule, run.params, swept_keys(run.config)))
+    _y_labels_once_per_row(axes, 2)
     _wilson_key(axes[0])
     return _finish(fig, axes[:1], cols, everywhere=(PAST_TOP_LABEL,))
 
@@ -938,13 +940,23 @@ def _time_figure(run: RunData, points: Sequence[int], draw: PanelDraw, title: Se
             fits[i] = draw(ax, frame, run.point_params(pt))
             drawn.append(ax)
         ax.set_xlabel("time t (s)")
-        if i % per_row == 0:  # once per row: a wide tick label put it on the panel to its left
-            ax.set_ylabel(y_label)
+        ax.set_ylabel(y_label)
         ax.set_title(panel_title)
+    _y_labels_once_per_row(axes, per_row)
     tops = _shared_tops({i: top for i, (top, _) in fits.items()}, per_row)
     for i, (_, fit) in fits.items():
         fit(tops[i])
     return _finish(fig, drawn[:1], cols, everywhere, reserved=legend_entries)
+
+
+def _y_labels_once_per_row(axes: Sequence[Axes], per_row: int) -> None:
+    """Leave a panel's y label out where the panel to its left in the row (of ``per_row``
+    panels) has the same: beside a wide tick label of the next panel, a repeated label ran
+    onto the panel to its left."""
+    labels = [ax.get_ylabel() for ax in axes]
+    for i, ax in enumerate(axes):
+        if i % per_row and labels[i] == labels[i - 1]:
+            ax.set_ylabel("")
 
 
 def _time_curve_kwargs(name: str) -> dict[str, Any]:
@@ -1131,12 +1143,13 @@ labelled at the powers of ten alone (over four decades the 1-2-3-5 labels overla
 
 def _log_ticks(low: float, high: float) -> np.ndarray:
     """The values of :data:`LOG_STEPS` times a power of ten (the powers of ten alone over
-    more than :data:`LOG_STEP_DECADES` decades) from the last at or below ``low`` to the
-    first at or above ``high`` (both > 0)."""
+    more than :data:`LOG_STEP_DECADES` decades or past ten thousand, where the labels of
+    :func:`_log_tick_text` would be five digits wide) from the last at or below ``low`` to
+    the first at or above ``high`` (both > 0)."""
     decades = np.arange(math.floor(math.log10(low)) - 1, math.ceil(math.log10(high)) + 1)
     ticks = np.sort([step * 10.0**d for d in decades for step in LOG_STEPS])
     ticks = ticks[(ticks >= ticks[ticks <= low].max()) & (ticks <= ticks[ticks >= high].min())]
-    if ticks[-1] / ticks[0] <= 10.0**LOG_STEP_DECADES:
+    if ticks[-1] / ticks[0] <= 10.0**LOG_STEP_DECADES and ticks[-1] <= 1e4:
         return ticks
     return 10.0 ** np.arange(math.floor(math.log10(low)), math.ceil(math.log10(high)) + 1)
 
@@ -1253,13 +1266,13 @@ def _final_figure(run: RunData) -> Figure | str:
                for _, x in _past_final_top(p, top))
     fig, axes, cols = _figure(len(facets), per_row, panel, title,
                               len(names) + len(labels) + past + any(few), _lines(titles))
-    for i, (ax, facet_points, bound_curves, top, facet_title, facet_few) in enumerate(zip(
-            axes, points, curves, tops, titles, few, strict=True)):
+    for ax, facet_points, bound_curves, top, facet_title, facet_few in zip(
+            axes, points, curves, tops, titles, few, strict=True):
         _draw_final(ax, facet_points, x_key, bound_curves, top, facet_few, threshold)
         ax.set_xlabel(_axis_label(x_key, run.params))
-        if i % per_row == 0:  # once per row, as the time figures
-            ax.set_ylabel("final range RMSE (km)")
+        ax.set_ylabel("final range RMSE (km)")
         ax.set_title(facet_title)
+    _y_labels_once_per_row(axes, per_row)
     shown = {label for *_, label in curves[0]}
     for _, _, style, label in (c for facet in curves[1:] for c in facet):
         if label not in shown:  # a bound only another facet draws: its legend entry
