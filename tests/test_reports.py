@@ -172,7 +172,8 @@ def test_a_table_without_rows_is_not_written_as_a_result(toy_run, monkeypatch):
 def test_the_headline_table_comes_before_the_figures_and_detail_tables_after(toy_run,
                                                                              monkeypatch):
     """A reader sees the paper comparison, then the figures; long per-point tables come last,
-    and ``index.html`` folds them (a closed ``<details>`` linking the CSV)."""
+    ``index.html`` folds them (a closed ``<details>`` linking the CSV) and ``index.md``
+    links them."""
     tables = toy_report.tables(toy_run)
     long = pd.DataFrame({"point": range(reports.FOLDED_TABLE_ROWS + 1), "x": 1.5})
     short = pd.DataFrame({"point": [0], "x": [2.5]})
@@ -183,6 +184,10 @@ def test_the_headline_table_comes_before_the_figures_and_detail_tables_after(toy
     order = [md.index(h) for h in ("## Table: paper_vs_reproduced", "## Figure: estimate",
                                    "## Table: long_detail", "## Table: short_detail")]
     assert order == sorted(order)
+    # index.md links a long table (the orbit run's 1,346-row paired_loss made it 208 KB)
+    assert "## Table: long_detail\n\n31 rows: [tables/long_detail.md](tables/long_detail.md)" \
+        in md and "| 30 | 1.5 |" not in md and "| 0 | 2.5 |" in md
+    assert (toy_run.path / "tables" / "long_detail.md").exists()
     page = (toy_run.path / "index.html").read_text()
     assert page.index("Table: paper_vs_reproduced") < page.index("<figure>") < page.index(
         "<details><summary><h2 style='display:inline'>Table: long_detail</h2> (31 rows; also "

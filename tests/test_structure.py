@@ -175,6 +175,17 @@ def test_experiments_declare_their_report(name):
 
 
 @pytest.mark.parametrize("name", list(experiments.BUILTIN))
+def test_a_caption_holds_for_every_run_of_its_experiment(name):
+    """Every run's report shows the same captions: the orbit run's read like a manual of
+    other configs (twin_sensor_close's 0-150 axis, twin_sensor_baseline's 40 km point), up
+    to 980 characters; what a config adds is said in its panels and docs/papers/."""
+    configs = {p.stem for p in (ROOT / "configs").rglob("*.yaml")} | {"fig1_claim"}
+    for figure, spec in experiments.get(name).figures.items():
+        assert len(spec.caption) <= 400, (figure, len(spec.caption))
+        assert not [c for c in configs if c in spec.caption], figure
+
+
+@pytest.mark.parametrize("name", list(experiments.BUILTIN))
 def test_schema_spells_units_one_way(name):
     for p in experiments.get(name).params:
         if p.kind in (int, float) and p.choices is None:

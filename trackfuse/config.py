@@ -464,6 +464,9 @@ def read_yaml(path: str | Path) -> Any:
         return read_yaml_file(path)
     except FileNotFoundError:
         raise ConfigError(str(path), "", "no such file") from None
+    except IsADirectoryError:
+        raise ConfigError(str(path), "", "a folder; allowed: a YAML config file (a run "
+                                         "folder keeps its config as config.yaml)") from None
     except OSError as err:
         raise ConfigError(str(path), "", f"cannot read: {err.strerror or type(err).__name__}"
                           ) from None

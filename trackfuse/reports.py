@@ -75,7 +75,8 @@ PNG_COMPRESSION = 1
 #: At most this many processes draw one run's figures (one per core when fewer).
 MAX_DRAWING_PROCESSES = 4
 HEADLINE_TABLE = "paper_vs_reproduced"
-#: A report table longer than this is folded (closed ``<details>``) in ``index.html``.
+#: A report table longer than this is folded (closed ``<details>``) in ``index.html`` and
+#: linked, not written out, in ``index.md``.
 FOLDED_TABLE_ROWS = 30
 #: Columns of every experiment's headline table, one row per paper item compared:
 #: ``paper_item`` the paper's figure or table ("Table 3"); ``quantity`` in words;
@@ -140,6 +141,9 @@ FILES = {
     INDEX_MD: "this report as Markdown",
     INDEX_HTML: "this report as a web page",
 }
+#: A figure file's words in the file list, by its suffix.
+FIGURE_FILES = {".png": "the figure above, image (PNG)", ".pdf": "the figure above, vector (PDF)",
+                ".svg": "the figure above, vector (SVG)"}
 
 
 @dataclass
@@ -511,7 +515,8 @@ def _figure_link(report: Report, name: str) -> tuple[str, bool]:
 
 def index_markdown(run: RunData, tables: dict[str, pd.DataFrame], report: Report) -> str:
     """The run's report as Markdown: what was run, the headline table, the figures, the
-    other tables, then what was not drawn and the files."""
+    other tables (a link to one longer than :data:`FOLDED_TABLE_ROWS` rows), then what was
+    not drawn and the files."""
     lines = [f"# {run.config.get('title') or run.config['experiment']}", ""]
     lines += [f"- **{k}**: {v}" for k, v in _run_facts(run)] + [""]
     headline, others = _split_tables(tables)
@@ -523,7 +528,11 @@ def index_markdown(run: RunData, tables: dict[str, pd.DataFrame], report: Report
         lines += [f"## Figure: {name}", "", f"![{name}]({path})" if shown else
                   f"[{name}]({path})", "", captions.get(name, ""), ""]
     for name in others:
-        lines += [f"## Table: {name}", "", markdown_table(display_table(tables[name]))]
+        rows = len(tables[name])
+        lines += [f"## Table: {name}", "", markdown_table(display_table(tables[name]))
+                  if rows <= FOLDED_TABLE_ROWS else  # Markdown cannot fold it: a link
+                  f"{rows} rows: [tables/{name}.md](tables/{name}.md) (also "
+                  f"[tables/{name}.csv](tables/{name}.csv))", ""]
     for heading, reasons in (("Not drawn", report.not_drawn),
                              ("Not tabulated", report.not_tabulated)):
         if reasons:
@@ -543,10 +552,12 @@ def _split_tables(tables: dict[str, pd.DataFrame]) -> tuple[list[str], list[str]
 
 
 def _file_list(run: RunData, report: Report) -> list[tuple[str, str]]:
-    captions = _captions(run)
+    """The run folder's files with a few words each (a figure's caption is with the figure:
+    each file of it is named by its format)."""
     files = [(f, d) for f, d in FILES.items() if (run.path / f).exists() or f.startswith("index")]
     files += [(f"tables/{p.name}", "report table") for p in report.tables]
-    files += [(f"figures/{p.name}", captions.get(p.stem, "figure")) for p in report.figures]
+    files += [(f"figures/{p.name}", FIGURE_FILES.get(p.suffix, "figure"))
+              for p in report.figures]
     return files
 
 

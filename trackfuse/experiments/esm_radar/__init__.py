@@ -14,12 +14,10 @@ from trackfuse.experiments.esm_radar.model import PARAMS, ROW_METRICS, run_batch
 FIGURES = {
     "correct_rate": FigureSpec(
         "correct-association rate (%) of the paper's method, its baseline and ours (those "
-        "run) with 95 % Wilson intervals: one row per method beside the paper's Table 3 "
-        "values (open stars) when nothing numeric is swept, curves against separation "
-        "(Fig. 3) or radar range error (Fig. 4), or categories for a sweep of two settings "
-        "(weave or not, d/λ), the paper's values drawn just right of their setting; the "
-        "panel titles or the title name the radar-factor model of the rates beside the stars "
-        "(the paper's method scores far higher under 'table' than under 'derived')",
+        "run) with 95 % Wilson intervals, against separation (Fig. 3) or radar range error "
+        "(Fig. 4), as categories for a sweep of two settings, or one row per method, beside "
+        "the paper's values (open stars, just right of their setting); the titles name the "
+        "radar-factor model of the rates beside the stars",
         "Table 3, Figs. 3-4"),
     "correct_rate_ablations": FigureSpec(
         "the same for the ablations of the paper's method that the config runs (each one "
