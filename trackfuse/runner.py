@@ -152,7 +152,7 @@ def config_origin(source: str) -> str:
     """The config file a run is made from: ``source``, or for a run folder's own
     ``config.yaml`` the config that run was made from (its manifest's ``config_file``): run
     again, it finds that run instead of computing it anew under ``<out>/config/``. The
-    manifest records it as ``config_file`` (its ``command``, the file given)."""
+    manifest records it as ``config_file``; its ``command`` keeps the file given."""
     path = Path(source)
     if path.name != CONFIG:
         return source

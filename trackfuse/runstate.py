@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from trackfuse.coerce import int_or
-from trackfuse.results import INDEX_HTML, RunFolder, RunStatus
+from trackfuse.results import INDEX_HTML, MANIFEST, RunFolder, RunStatus
 from trackfuse.runlock import held_by_a_live_process
 
 #: A run whose manifest says running but whose process has ended (killed, or stopped by a
@@ -67,7 +67,7 @@ def run_state(path: Path, manifest: dict[str, Any], checksums: bool = False) -> 
     compares the final files' checksums too, not only their sizes."""
     status = str(manifest.get("status", ""))
     if status not in (RunStatus.RUNNING, RunStatus.INTERRUPTED, RunStatus.COMPLETE):
-        return RunState(DAMAGED, problem=f"{path / 'manifest.json'}: status {status[:40]!r}; "
+        return RunState(DAMAGED, problem=f"{path / MANIFEST}: status {status[:40]!r}; "
                                          "allowed: running, interrupted, complete")
     if status == RunStatus.RUNNING and not held_by_a_live_process(path):
         return RunState(STOPPED)
