@@ -138,10 +138,3 @@ def test_a_parameter_given_dotted_and_nested_is_refused_and_an_override_is_not(w
             result = trackfuse("run", path, "--dry-run", *override)
             assert result.returncode == 0 and "clutter.mean: 6.0" in result.stdout, result.stderr
 
-
-def test_a_folder_given_as_config_says_what_is_allowed(tmp_path):
-    """`trackfuse validate configs` said "cannot read: Is a directory" (new-user audit)."""
-    with pytest.raises(ConfigError) as err:
-        load(tmp_path)
-    assert str(err.value) == (f"{tmp_path}: a folder; allowed: a YAML config file (a run "
-                              "folder keeps its config as config.yaml)")

@@ -81,7 +81,7 @@ def test_validate_dev_zero_reads_a_bounded_amount():
 def test_validate_of_a_directory_is_one_line(tmp_path):
     result = CliRunner().invoke(app, ["validate", str(tmp_path)])
     assert result.exit_code == 2 and result.stderr.count("\n") == 1
-    assert result.stderr.startswith(f"error: {tmp_path}: cannot read")
+    assert result.stderr.startswith(f"error: {tmp_path}: a folder; allowed: a YAML config file")
 
 
 def _plugin(folder, name: str, body: str) -> None:
