@@ -196,10 +196,14 @@ def whole_number(low: int) -> Callable[[str | int], int]:
     def parse(text: str | int) -> int:
         if isinstance(text, int):  # the option's default
             return text
-        if not re.fullmatch(r"[+-]?[0-9]+", text.strip()) or int(text) < low:
+        try:  # int() of more than 4300 digits raises too
+            value = int(text) if re.fullmatch(r"[+-]?[0-9]+", text.strip()) else None
+        except ValueError:
+            value = None
+        if value is None or value < low:
             raise typer.BadParameter(f"got {_printable(text)[:80]}; allowed: an integer "
                                      f">= {low}")
-        return int(text)
+        return value
     return parse
 
 

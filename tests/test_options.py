@@ -31,6 +31,8 @@ from trackfuse_cli.options import Executor
     (["run", "cfg.yaml", "--workers", "1e3"], "'--workers': got 1e3; allowed: an integer"),
     (["run", "cfg.yaml", "--seed", "0.5"], "'--seed': got 0.5; allowed: an integer >= 0"),
     (["reproduce", "--workers", "2.0"], "'--workers': got 2.0; allowed: an integer >= 0"),
+    # Python's own "Exceeds the limit (4300 digits)" message, with a hint at sys
+    (["run", "cfg.yaml", "--trials", "9" * 5000], "'--trials': got 99999"),
     (["run", "cfg.yaml", "--seed", "x1"], "'--seed': got x1; "),
     (["frobnicate"], "No such command 'frobnicate'"),
 ])

@@ -157,7 +157,7 @@ def execute_batch(task: BatchTask) -> BatchResult:
             raise
         batch, producer = [_one_trial(task, t) for t in trials], "run_trial"
     if isinstance(batch, RowTable):
-        problem = _missing_metrics(task.experiment, {*batch.columns, *batch.timings}, producer)
+        problem = _missing_metrics(task.experiment, set(batch.columns), producer)
         if problem is None:
             return _table_result(task, batch, t0)
         batch = [problem] * len(trials)

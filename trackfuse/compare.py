@@ -259,9 +259,8 @@ def compare_runs(base: RunData, new: RunData, tolerance: Mapping[str, float] | N
         raise ValueError(f"different experiments: {base.config['experiment']!r} and "
                          f"{new.config['experiment']!r}")
     if list(base.sweep) != list(new.sweep):
-        def swept(run: RunData) -> str:
-            return ", ".join(run.sweep) or "no key"
-        raise ValueError(f"BASE sweeps {swept(base)}, NEW sweeps {swept(new)}; allowed: two "
+        swept = [", ".join(run.sweep) or "no key" for run in (base, new)]
+        raise ValueError(f"BASE sweeps {swept[0]}, NEW sweeps {swept[1]}; allowed: two "
                          "runs sweeping the same keys in the same order (to run fewer values, "
                          "narrow the axis with --sweep KEY=V1,V2: --set or KEY=VALUE fixes "
                          "the key and drops its axis)")

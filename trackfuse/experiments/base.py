@@ -22,9 +22,8 @@ An experiment module is the only place that knows its science. It exposes one mo
   vectorized algebra.
 * ``metrics``: every metric column a trial returns (:class:`Metric`: unit, whether it is
   0/1, and whether lower or higher is better); a trial whose rows lack one (but a
-  ``*_time_s`` timing) fails. 0/1
-  metrics get Wilson intervals in the summary; ``trackfuse.compare`` gates regressions in
-  the declared direction.
+  ``*_time_s`` timing) fails. 0/1 metrics get Wilson intervals in the summary;
+  ``trackfuse.compare`` gates regressions in the declared direction.
 * ``report``: the module path of the experiment's report module, which provides
   ``figures(run, wanted) -> dict[str, Figure]``, ``tables(run) -> dict[str, DataFrame]``
   and optionally ``prepare(run)`` (:mod:`trackfuse.reports`), and reads saved results only

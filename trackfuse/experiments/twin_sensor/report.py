@@ -1114,7 +1114,7 @@ def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
     note = _range_note(first, bounds(params)[0] / 1e3, len(errors), int(errors.columns[-1]),
                        corr)
     ax.text(0.03, 0.04, note, transform=ax.transAxes, fontsize=NOTE_PT, va="bottom",
-            zorder=7, linespacing=1.1, path_effects=NOTE_HALO)  # a box hid the bound
+            zorder=7, linespacing=1.1, path_effects=NOTE_HALO)
     needed = _range_top(max(top, float(np.max(bounds(params)[0])) / 1e3), np.abs(single))
     return needed, lambda top: _fit_range_axis(ax, top, np.abs(single), bands)
 
