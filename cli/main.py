@@ -219,11 +219,18 @@ def _count(n: int, noun: str) -> str:
     return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
 
 
-def _print_plan(runner: Runner) -> None:
+def _plan_line(runner: Runner) -> str:
+    """The ``--dry-run`` line of one run; exit 2 with the run's own error line if its
+    folder could not be created."""
+    from trackfuse.results import RunFolderError
     config = runner.config
-    print(f"# {config.source}: {_count(len(runner.points), 'point')} x "
-          f"{_count(config.trials, 'trial')} = {_count(runner.total_trials, 'trial')} in "
-          f"batches of {config.batch_size}; output: {runner.folder.path}")
+    try:
+        start = runner.planned_start()
+    except RunFolderError as err:
+        fail(str(err))
+    return (f"# {config.source}: {_count(len(runner.points), 'point')} x "
+            f"{_count(config.trials, 'trial')} = {_count(runner.total_trials, 'trial')} in "
+            f"batches of {config.batch_size}; output: {runner.folder.path} ({start})")
 
 
 # ---------------------------------------------------------------------------- run
@@ -266,8 +273,9 @@ def run(
     runner = options.runner(config)
     if dry_run:
         import yaml
+        plan = _plan_line(runner)
         print(yaml.safe_dump(config.to_dict(), sort_keys=False), end="")
-        _print_plan(runner)
+        print(plan)
         return
     outcome = _execute(runner)
     _closing_lines(outcome, config)
@@ -405,8 +413,8 @@ def reproduce(
                          not no_plots, not no_progress)
     options.check()
     if dry_run:
-        for config in configs:
-            _print_plan(options.runner(config))
+        for plan in [_plan_line(options.runner(config)) for config in configs]:
+            print(plan)
         return
     outcomes = run_configs(configs, options)
     finished = [o.folder for o in outcomes if o.report is not None]

@@ -243,6 +243,41 @@ def test_dry_run_runs_nothing(write_config, tmp_path):
     assert not any(tmp_path.glob("cfg/*"))
 
 
+def test_dry_run_says_what_the_run_would_start_from(write_config, tmp_path):
+    path = write_config(CFG)
+    out = tmp_path / "out"
+
+    def plan(*flags):
+        result = trackfuse("run", path, "--dry-run", "--out", out, *flags)
+        assert result.returncode == 0, result.stderr
+        return result.stdout.splitlines()[-1]
+
+    assert plan().endswith("(new)")
+    runner = Runner(load(path), out, progress=False)
+    runner.folder.prepare(runner.resolved)
+    runner.folder.write_manifest({"status": "interrupted", "trials_done": 46})
+    assert plan().endswith("(interrupted, 46 trials saved; resumes)")
+    run(path, out)
+    assert plan().endswith("(complete; nothing to compute)")
+    assert plan("--force").endswith("(exists; --force recomputes every trial)")
+    (runner.folder.path / "summary.csv").write_text("point\n")
+    assert "summary.csv" in plan() and plan().endswith("rebuilds the final files)")
+
+
+def test_dry_run_refuses_an_output_folder_the_run_could_not_create(write_config, tmp_path):
+    path = write_config(CFG)
+    blocker = tmp_path / "a_file"
+    blocker.write_text("")
+    for out, words in ((blocker, "the output root is not a folder"),
+                       (blocker / "below", f"({blocker} is not a folder)")):
+        result = trackfuse("run", path, "--dry-run", "--out", out)
+        assert result.returncode == 2 and result.stdout == ""
+        assert result.stderr.startswith("error: ") and words in result.stderr
+        assert len(result.stderr.splitlines()) == 1
+        real = trackfuse("run", path, "--out", out, "--no-plots", "--no-progress")
+        assert real.returncode == 2 and str(out) in real.stderr
+
+
 def test_plot_refuses_an_incomplete_run(write_config, tmp_path):
     path = write_config(CFG)
     runner = Runner(load(path), tmp_path, progress=False)

@@ -125,6 +125,19 @@ class RunLock:
         self._lock = None
 
 
+def creation_problem(path: Path) -> str | None:
+    """Why run folder ``path`` could not be created and written (one line, in the words
+    :class:`RunLock` would use), or ``None``; creates nothing (``--dry-run``)."""
+    existing = path
+    while not existing.exists() and existing.parent != existing:
+        existing = existing.parent
+    if not existing.is_dir():
+        return f"{path}: cannot create the run folder ({existing} is not a folder)"
+    if not os.access(existing, os.W_OK | os.X_OK):
+        return f"{path}: cannot create the run folder ({existing}: permission denied)"
+    return None
+
+
 def held_by_a_live_process(path: Path) -> bool:
     """Whether run folder ``path`` looks held, read from its holder file alone (a listing
     must not take the lock, which would get in the way of a run starting): a holder is
