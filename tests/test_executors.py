@@ -186,6 +186,32 @@ def test_pool_workers_fork_with_the_batch_code_loaded_frozen_and_no_pandas():
     assert all(frozen > 10_000 and loaded and not pandas for frozen, loaded, pandas in results)
 
 
+def test_the_pool_says_it_is_loading_until_the_fork_server_has_loaded_the_preload():
+    # the progress bar's "first run compiles" rests on this: a fresh process, with a preload
+    # module that takes 1 s, as a compiling kernel takes ten
+    code = ("import threading, time\n"
+            "from trackfuse.executors import ProcessExecutor\n"
+            "if __name__ == '__main__':\n"
+            "    t0 = time.monotonic()\n"
+            "    pool = ProcessExecutor(2, ['slow_preload'])\n"
+            "    loading, ready_at = pool.loading(), []\n"
+            "    def watch():\n"
+            "        while pool.loading():\n"
+            "            time.sleep(0.01)\n"
+            "        ready_at.append(time.monotonic() - t0)\n"
+            "    watcher = threading.Thread(target=watch)\n"
+            "    watcher.start()\n"
+            "    done = sorted(pool.imap_unordered(abs, [-1, -2]))\n"
+            "    watcher.join()\n"
+            "    pool.close()\n"
+            "    print([done, loading, pool.loading(), ready_at[0]])\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, timeout=120, env=cli_env()).stdout
+    done, loading_at_first, loading_after, ready_s = eval(out)  # noqa: S307 - printed above
+    assert done == [1, 2] and loading_at_first and not loading_after
+    assert ready_s >= 1.0  # not before the preload module had loaded
+
+
 def test_workers_dying_every_time_is_a_one_line_error(write_config, tmp_path):
     path = write_config("experiment: toy_experiments:DOOMED\ntrials: 20\nseed: 1\n")
     result = trackfuse("run", path, "--out", tmp_path / "out", "--workers", "2",

@@ -4,10 +4,18 @@ from __future__ import annotations
 
 import io
 import re
+import time
 
 from rich.console import Console
 
-from trackfuse.progress import PhaseLog, RunProgress, duration_text, fit_label, plain_line
+from trackfuse.progress import (
+    SLOW_START_WORDS,
+    PhaseLog,
+    RunProgress,
+    duration_text,
+    fit_label,
+    plain_line,
+)
 
 
 def test_durations_read_as_seconds_minutes_or_hours():
@@ -41,6 +49,53 @@ def test_bar_at_80_columns_keeps_the_count_and_eta_visible():
     last = [line for line in text.replace("\r", "\n").splitlines() if "/12000" in line][-1]
     assert len(last) <= 80 and last.startswith("twin_sensor "), last
     assert "3000/12000" in last and "25%" in last and "ETA" in last, last
+
+
+def _shown(sink: io.StringIO) -> list[str]:
+    text = re.sub(r"\x1b\[[0-9;?]*[A-Za-z]", "", sink.getvalue())
+    return text.replace("\r", "\n").splitlines()
+
+
+def test_a_slow_start_says_a_first_run_compiles_while_the_workers_load():
+    sink = io.StringIO()
+    console = Console(file=sink, width=80, force_terminal=True, color_system=None)
+    bar = RunProgress(12000, 0, "twin_sensor [seed20051001-0123456789ab]", console=console,
+                      loading=lambda: True, slow_start_s=0.05)
+    with bar:
+        bar._slow_start.join()
+        bar._bar.refresh()
+        slow = [line for line in _shown(sink) if "/12000" in line][-1]
+        bar.advance(3000)
+    last = [line for line in _shown(sink) if "/12000" in line][-1]
+    assert SLOW_START_WORDS in slow and len(slow) <= 80, slow
+    assert SLOW_START_WORDS not in last and "trials/s" in last, last
+
+
+def test_nothing_is_said_of_a_start_that_is_not_slow():
+    for loading, batch_first in ((lambda: True, True), (lambda: False, False), (None, False)):
+        sink = io.StringIO()
+        console = Console(file=sink, width=80, force_terminal=True, color_system=None)
+        with RunProgress(10, 0, "exp", console=console, loading=loading,
+                         slow_start_s=0.2) as bar:
+            if batch_first:
+                bar.advance(5)
+                # no thread left to keep the report from forking its drawing processes
+                assert not bar._slow_start.is_alive()
+            time.sleep(0.3)
+        assert all(SLOW_START_WORDS not in line for line in _shown(sink))
+
+
+def test_a_slow_start_is_one_plain_line_in_a_log(capsys):
+    console = Console(file=io.StringIO(), force_terminal=False)
+    with RunProgress(10, 0, "exp", console=console, loading=lambda: True,
+                     slow_start_s=0.05) as bar:
+        bar._slow_start.join()
+        bar.advance(10)
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[0] == "exp: 0/10 trials (0%)"
+    assert lines[1] == ("exp: the workers are still loading the experiment's code; a first "
+                        "run after installing compiles it first")
+    assert len(lines) == 3 and lines[2].startswith("exp: 10/10 trials (100%)")
 
 
 def test_phase_log_names_each_phase_and_the_time_of_the_previous_one():

@@ -62,6 +62,10 @@ class SerialExecutor:
         for task in tasks:
             yield fn(task)
 
+    def loading(self) -> bool:
+        """Whether the workers are still loading the experiment's code: not known here."""
+        return False
+
     def close(self, abort: bool = False) -> None:
         pass
 
@@ -141,6 +145,13 @@ class ProcessExecutor:
         self._other_children = set(multiprocessing.active_children())
         self._pool = ProcessPoolExecutor(workers, mp_context=self._ctx,
                                          initializer=setup_child, initargs=(os.getpid(),))
+        self._forked = False
+
+    def loading(self) -> bool:
+        """Whether the fork server is still loading (on a first run, compiling) the
+        experiment's code: the pool's first ``submit`` forks the workers, which returns only
+        once the fork server has loaded it."""
+        return not self._forked
 
     def imap_unordered(self, fn: Callable, tasks: Iterable) -> Iterator[Any]:
         tasks = iter(tasks)
@@ -157,6 +168,7 @@ class ProcessExecutor:
                     try:
                         with ctrl_c_held():
                             pending[self._pool.submit(fn, task)] = task
+                        self._forked = True
                     except BrokenProcessPool:
                         retry.append(task)
                         raise
@@ -238,6 +250,10 @@ class DaskExecutor:
             text = " ".join(str(err).split())[:200] or type(err).__name__
             raise ExecutorError(f"cannot connect to {target}: {text}") from None
         self.workers = max(1, sum(w.get("nthreads", 1) for w in info["workers"].values()))
+
+    def loading(self) -> bool:
+        """Whether the workers are still loading the experiment's code: not known here."""
+        return False
 
     def imap_unordered(self, fn: Callable, tasks: Iterable) -> Iterator[Any]:
         from distributed import as_completed

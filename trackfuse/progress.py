@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import sys
+import threading
 import time
 from collections.abc import Callable
 
@@ -24,6 +25,11 @@ PLAIN_EVERY_S = 10.0
 #: Columns the bar needs besides the label: count, percent, rate, "ETA", time left, gaps.
 FIXED_WIDTH = 48
 MIN_BAR_WIDTH = 10
+#: Seconds after which the bar says why the workers are slow to start, if they are still
+#: loading the experiment's code: that takes about one second, or on a first run after
+#: installing, compiling its kernels, ten or more.
+SLOW_START_S = 3.0
+SLOW_START_WORDS = "first run compiles"
 
 
 def duration_text(seconds: float, tenths: bool = False) -> str:
@@ -58,14 +64,20 @@ class RunProgress:
     ``console`` (default: standard error) decides between the bar (a terminal) and plain
     lines; the label is shortened so the count and ETA always fit the console's width.
     The rate is timed from the moment the first finished batch started, so the workers'
-    start-up (loading, or on a first run compiling, the kernels) does not skew the ETA.
+    start-up (loading, or on a first run compiling, the kernels) does not skew the ETA. If
+    ``loading()`` (the executor's) still says so ``slow_start_s`` seconds after the start, the
+    bar (or one plain line) says that a first run compiles.
     """
 
     def __init__(self, total: int, done: int, label: str, enabled: bool = True,
-                 console: Console | None = None):
+                 console: Console | None = None, loading: Callable[[], bool] | None = None,
+                 slow_start_s: float = SLOW_START_S):
         self.total, self.done, self.label = total, done, label
         self.start_done = done
         self._t0: float | None = None  # when the first finished batch started
+        self._loading = loading
+        self._slow_start = threading.Timer(slow_start_s, self._say_slow_start)
+        self._slow_start.daemon = True
         self._last_print, self._printed = time.monotonic(), -1
         console = console or Console(stderr=True)
         self._rich = enabled and console.is_terminal
@@ -86,9 +98,12 @@ class RunProgress:
             self._bar.start()
         elif self._plain:
             self._line()
+        if (self._rich or self._plain) and self._loading is not None:
+            self._slow_start.start()
         return self
 
     def __exit__(self, *exc) -> None:
+        self._stop_slow_start()
         if self._rich:
             self._bar.stop()
         elif self._plain and self.done != self._printed:
@@ -105,11 +120,29 @@ class RunProgress:
         """Count ``trials`` more done, by a batch that computed for ``busy_s`` seconds."""
         if self._t0 is None:
             self._t0 = time.monotonic() - busy_s
+            self._stop_slow_start()
         self.done += trials
         if self._rich:
             self._bar.update(self._task, completed=self.done, rate=f"{self.rate():,.0f} trials/s")
         elif self._plain and time.monotonic() - self._last_print >= PLAIN_EVERY_S:
             self._line()
+
+    def _say_slow_start(self) -> None:
+        """The slow-start words, from the timer's thread, if the workers are still loading."""
+        if self._t0 is not None or self._loading is None or not self._loading():
+            return
+        if self._rich:
+            self._bar.update(self._task, rate=SLOW_START_WORDS)
+        else:
+            print(f"{self.label}: the workers are still loading the experiment's code; a "
+                  "first run after installing compiles it first", file=sys.stderr, flush=True)
+
+    def _stop_slow_start(self) -> None:
+        """Cancel the slow-start timer and wait for its thread (a thread left running would
+        keep the report from forking its drawing processes)."""
+        self._slow_start.cancel()
+        if self._slow_start.is_alive():
+            self._slow_start.join()
 
     def _line(self) -> None:
         self._last_print = time.monotonic()

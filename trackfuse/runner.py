@@ -464,7 +464,8 @@ class Runner:
         loading = self._load_finishing_code(executor.kind)
         stopped = True  # by an interrupt or an error, until the loop ends
         try:
-            with RunProgress(self.total_trials, session.done, label, self.progress) as bar:
+            with RunProgress(self.total_trials, session.done, label, self.progress,
+                             loading=executor.loading) as bar:
                 for res in executor.imap_unordered(execute_batch, self._tasks(todo)):
                     self.folder.write_part(res.span, res.trials_csv, res.trial_rows,
                                            res.timings_csv, res.timing_rows)
