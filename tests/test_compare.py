@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pandas as pd
 import pytest
 
 import trackfuse
 from trackfuse import harness
-from trackfuse.compare import compare_runs, compare_trials
+from trackfuse.compare import _with_fixed_keys, compare_runs, compare_trials
 
 KEYS = ["sigma", "algorithm"]
 
@@ -119,10 +121,29 @@ def test_compare_runs_takes_binary_metrics_and_directions_from_the_experiment(tm
     other = harness.run_data(tmp_path / "c", "toy_gaussian", {"n": 5}, sweep, trials=30,
                              seed=4)
     assert not compare_runs(base, other).paired
-    with pytest.raises(ValueError, match="BASE sweeps .*, NEW sweeps .*; allowed: two runs "
-                                         "sweeping the same keys"):
-        compare_runs(base, harness.run_data(tmp_path / "d", "toy_gaussian", {"n": 5},
-                                            {"sigma": [1.0, 2.0]}, trials=5, seed=3))
+
+
+def test_a_key_one_run_sweeps_and_the_other_fixes_is_compared_at_the_fixed_value(tmp_path):
+    """NEW fixing BASE's swept key (`--set gain=2`) was refused ('BASE sweeps gain, NEW
+    sweeps no key'). gain draws nothing, so NEW's trials are BASE's at gain=2, not gain=1:
+    every compared difference is 0 only if the cells line up at the fixed value."""
+    base = harness.run_data(tmp_path / "a", "toy_cluttered", {}, {"gain": [1.0, 2.0]},
+                            trials=12, seed=3)
+    fixed = harness.run_data(tmp_path / "b", "toy_cluttered", {"gain": 2.0}, trials=12,
+                             seed=3)
+    result = compare_runs(base, fixed)
+    assert len(result.cells) == 3 and set(result.cells["gain"]) == {2.0}
+    assert (result.cells["diff"] == 0).all() and result.paired
+    assert set(result.only_base_cells["gain"]) == {1.0} and result.only_new == 0
+    reverse = compare_runs(fixed, base)
+    assert reverse.only_base == 0 and set(reverse.only_new_cells["gain"]) == {1.0}
+    # the sweep's one difference is its axis (an empty sweep is no value of its own)
+    assert [d[0] for d in reverse.config_differences if d[0].startswith("sweep")] == \
+        ["sweep.gain"]
+    listed = SimpleNamespace(trials=base.trials, sweep={}, params={"gain": [1.0, 2.0]})
+    with pytest.raises(ValueError, match=r"the other run sweeps gain, which NEW fixes to "
+                                         r"\[1.0, 2.0\]; allowed: a key fixed to one"):
+        _with_fixed_keys(listed, ["gain"], "NEW")
 
 
 @pytest.mark.parametrize("paired", [True, False])

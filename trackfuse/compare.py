@@ -250,20 +250,17 @@ def compare_runs(base: RunData, new: RunData, tolerance: Mapping[str, float] | N
                  alpha: float = 0.05, family_wise: bool = True) -> Comparison:
     """Compare two complete runs of the same experiment (see :func:`compare_trials`).
 
-    Cells are keyed by the swept keys of ``base`` and the experiment's row keys; 0/1 metrics
-    and the direction of each metric come from ``Experiment.metrics``. Trials are paired when
-    both runs share the root seed, on the trial indices both have (:func:`_pairing`). Raises
-    ``ValueError`` for runs of different experiments or different swept keys.
+    Cells are keyed by the keys either run sweeps and the experiment's row keys: a key one
+    run sweeps and the other fixes (``--set clutter.mean=5``) is compared at the fixed value
+    (:func:`_with_fixed_keys`). 0/1 metrics and the direction of each metric come from
+    ``Experiment.metrics``. Trials are paired when both runs share the root seed, on the
+    trial indices both have (:func:`_pairing`). Raises ``ValueError`` for runs of different
+    experiments, or a key one run sweeps that the other fixes to a list or a mapping.
     """
     if base.config["experiment"] != new.config["experiment"]:
         raise ValueError(f"different experiments: {base.config['experiment']!r} and "
                          f"{new.config['experiment']!r}")
-    if list(base.sweep) != list(new.sweep):
-        swept = [", ".join(run.sweep) or "no key" for run in (base, new)]
-        raise ValueError(f"BASE sweeps {swept[0]}, NEW sweeps {swept[1]}; allowed: two "
-                         "runs sweeping the same keys in the same order (to run fewer values, "
-                         "narrow the axis with --sweep KEY=V1,V2: --set or KEY=VALUE fixes "
-                         "the key and drops its axis)")
+    keys = [*dict.fromkeys([*base.sweep, *new.sweep])]
     if base.path.resolve() == new.path.resolve():
         raise ValueError(f"{base.path}: BASE and NEW are the same run; compare needs two runs")
     for run in (base, new):
@@ -285,12 +282,29 @@ def compare_runs(base: RunData, new: RunData, tolerance: Mapping[str, float] | N
             raise ValueError(f"--tolerance: got {metric}={value}; allowed: a finite number "
                              ">= 0 (in the metric's unit)")
     paired, pairing = _pairing(base.config, new.config)
-    result = compare_trials(base.trials, new.trials, [*base.sweep, *experiment.row_keys],
+    result = compare_trials(_with_fixed_keys(base, keys, "BASE"),
+                            _with_fixed_keys(new, keys, "NEW"), [*keys, *experiment.row_keys],
                             binary=experiment.binary_metrics, better=experiment.directions,
                             paired=paired, tolerance=tolerance, alpha=alpha,
                             family_wise=family_wise, skip=experiment.categorical_metrics)
     return dataclasses.replace(result, pairing=pairing, config_differences=tuple(
         config_differences(base.config, new.config)))
+
+
+def _with_fixed_keys(run: RunData, keys: Sequence[str], role: str) -> pd.DataFrame:
+    """``run``'s trials with a column for each of ``keys`` it does not sweep, holding the value
+    its config fixes (one sweep point of the other run's axis)."""
+    trials = run.trials
+    for key in keys:
+        if key in run.sweep:
+            continue
+        value = run.params.get(key)
+        if value is None or isinstance(value, (list, dict)):
+            raise ValueError(f"the other run sweeps {key}, which {role} fixes to "
+                             f"{value!r}; allowed: a key fixed to one number or word, or swept "
+                             "by both (narrow an axis with --sweep KEY=V1,V2)")
+        trials = trials.assign(**{key: value})
+    return trials
 
 
 def _pairing(base: Mapping, new: Mapping) -> tuple[bool, str]:
@@ -315,10 +329,11 @@ def _pairing(base: Mapping, new: Mapping) -> tuple[bool, str]:
 
 
 def _flat(config: Mapping, prefix: str = "") -> dict[str, object]:
-    """A resolved config as ``{dotted path: value}`` (``params.clutter.mean``, ``trials``)."""
+    """A resolved config as ``{dotted path: value}`` (``params.clutter.mean``, ``trials``);
+    an empty mapping (``sweep: {}``) has no values."""
     flat: dict[str, object] = {}
     for key, value in config.items():
-        if isinstance(value, Mapping) and value:
+        if isinstance(value, Mapping):
             flat.update(_flat(value, f"{prefix}{key}."))
         else:
             flat[f"{prefix}{key}"] = value
