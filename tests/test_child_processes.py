@@ -58,6 +58,29 @@ def test_a_killed_process_not_yet_reaped_is_not_alive(tmp_path):
     assert not process_alive(child.pid)
 
 
+@pytest.mark.skipif(not os.path.exists("/proc/self"), reason="reads /proc")
+def test_another_users_process_is_alive_until_it_is_a_zombie(monkeypatch):
+    """Signalling another user's process is not permitted: such a zombie read as alive."""
+    def not_permitted(pid, sig):
+        raise PermissionError(1, "Operation not permitted")
+
+    child = subprocess.Popen(["sleep", "30"])
+    try:
+        with monkeypatch.context() as patch:
+            patch.setattr("trackfuse.child_processes.os.kill", not_permitted)
+            assert process_alive(child.pid)
+        os.kill(child.pid, signal.SIGKILL)
+        deadline = time.monotonic() + 10
+        while _state(child.pid) != "Z" and time.monotonic() < deadline:
+            time.sleep(0.01)
+        monkeypatch.setattr("trackfuse.child_processes.os.kill", not_permitted)
+        assert not process_alive(child.pid)
+    finally:
+        monkeypatch.undo()
+        child.kill()
+        child.wait()
+
+
 def _state(pid: int) -> str:
     with open(f"/proc/{pid}/stat") as fh:
         return fh.read().rsplit(")", 1)[1].split()[0]
