@@ -1,5 +1,7 @@
-"""A fork-server preload module that takes a second to load, as a compiling kernel would."""
+"""A fork-server preload module that loads slowly, as a compiling kernel would: it sleeps for
+``TRACKFUSE_TEST_PRELOAD_S`` seconds (default 1)."""
 
+import os
 import time
 
-time.sleep(1.0)
+time.sleep(float(os.environ.get("TRACKFUSE_TEST_PRELOAD_S", "1")))

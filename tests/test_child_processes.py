@@ -69,6 +69,15 @@ def test_another_users_process_is_alive_until_it_is_a_zombie(monkeypatch):
         with monkeypatch.context() as patch:
             patch.setattr("trackfuse.child_processes.os.kill", not_permitted)
             assert process_alive(child.pid)
+            real_open = open
+
+            def hidden(path, *args, **kw):  # /proc mounted with hidepid: not ours, not seen
+                if str(path) == f"/proc/{child.pid}/stat":
+                    raise FileNotFoundError(path)
+                return real_open(path, *args, **kw)
+
+            patch.setattr("builtins.open", hidden)
+            assert process_alive(child.pid)
         os.kill(child.pid, signal.SIGKILL)
         deadline = time.monotonic() + 10
         while _state(child.pid) != "Z" and time.monotonic() < deadline:

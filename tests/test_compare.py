@@ -137,13 +137,17 @@ def test_a_key_one_run_sweeps_and_the_other_fixes_is_compared_at_the_fixed_value
     assert set(result.only_base_cells["gain"]) == {1.0} and result.only_new == 0
     reverse = compare_runs(fixed, base)
     assert reverse.only_base == 0 and set(reverse.only_new_cells["gain"]) == {1.0}
-    # the sweep's one difference is its axis (an empty sweep is no value of its own)
-    assert [d[0] for d in reverse.config_differences if d[0].startswith("sweep")] == \
-        ["sweep.gain"]
+    # the one difference is the axis: not an empty sweep, nor the value of gain BASE never
+    # ran at (its config's gain, 1.0, for gain swept)
+    assert [d[0] for d in reverse.config_differences] == ["sweep.gain"]
     listed = SimpleNamespace(trials=base.trials, sweep={}, params={"gain": [1.0, 2.0]})
     with pytest.raises(ValueError, match=r"the other run sweeps gain, which NEW fixes to "
                                          r"\[1.0, 2.0\]; allowed: a key fixed to one"):
         _with_fixed_keys(listed, ["gain"], "NEW")
+    with pytest.raises(ValueError, match="the other run sweeps gain, a parameter BASE's "
+                                         "experiment does not have"):
+        _with_fixed_keys(SimpleNamespace(trials=base.trials, sweep={}, params={}), ["gain"],
+                         "BASE")
 
 
 @pytest.mark.parametrize("paired", [True, False])

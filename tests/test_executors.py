@@ -14,7 +14,7 @@ import pytest
 from conftest import cli_env, trackfuse
 
 from trackfuse.config import build, load
-from trackfuse.executors import ExecutorError, make_executor
+from trackfuse.executors import STOPPING_WHEN_LOADED, ExecutorError, make_executor
 from trackfuse.results import BatchSpan, read_part
 from trackfuse.runner import Runner
 
@@ -194,7 +194,7 @@ def test_the_pool_says_it_is_loading_until_the_fork_server_has_loaded_the_preloa
             "if __name__ == '__main__':\n"
             "    t0 = time.monotonic()\n"
             "    pool = ProcessExecutor(2, ['slow_preload'])\n"
-            "    loading, ready_at = pool.loading(), []\n"
+            "    ready_at = []\n"
             "    def watch():\n"
             "        while pool.loading():\n"
             "            time.sleep(0.01)\n"
@@ -204,12 +204,33 @@ def test_the_pool_says_it_is_loading_until_the_fork_server_has_loaded_the_preloa
             "    done = sorted(pool.imap_unordered(abs, [-1, -2]))\n"
             "    watcher.join()\n"
             "    pool.close()\n"
-            "    print([done, loading, pool.loading(), ready_at[0]])\n")
+            "    print([done, pool.loading(), ready_at[0]])\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, timeout=120, env=cli_env()).stdout
-    done, loading_at_first, loading_after, ready_s = eval(out)  # noqa: S307 - printed above
-    assert done == [1, 2] and loading_at_first and not loading_after
+    done, loading_after, ready_s = eval(out)  # noqa: S307 - printed above
+    assert done == [1, 2] and not loading_after
     assert ready_s >= 1.0  # not before the preload module had loaded
+
+
+def test_a_ctrl_c_while_the_workers_load_says_the_run_stops_once_they_have(write_config,
+                                                                           tmp_path):
+    """The first batch's submit holds a Ctrl-C until the fork server has loaded the code
+    (ten seconds or more on a first run, which compiles it): the command said nothing."""
+    path = write_config("experiment: toy_experiments:SLOW_LOADING\ntrials: 4\nseed: 1\n")
+    env = {**cli_env(), "TRACKFUSE_TEST_PRELOAD_S": "3"}
+    command = [sys.executable, "-m", "trackfuse", "run", str(path), "--out", str(tmp_path),
+               "--workers", "2", "--no-plots"]
+    with subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                          env=env) as proc:
+        first = proc.stderr.readline()  # the progress line, just before the first submit
+        time.sleep(0.5)
+        proc.send_signal(signal.SIGINT)
+        _, rest = proc.communicate(timeout=60)
+    assert first.rstrip().endswith("0/4 trials (0%)"), first
+    assert proc.returncode == 130, rest
+    lines = rest.splitlines()
+    assert lines[0] == STOPPING_WHEN_LOADED, rest
+    assert lines[-1].startswith("interrupted: 0/4 trials saved"), rest
 
 
 def test_workers_dying_every_time_is_a_one_line_error(write_config, tmp_path):

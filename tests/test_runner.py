@@ -18,6 +18,7 @@ from typer.testing import CliRunner
 
 from trackfuse.config import load
 from trackfuse.results import RunFolder
+from trackfuse.runlock import HOLDER_FILE, RunLock
 from trackfuse.runner import RunInterrupted, Runner
 from trackfuse.seeding import trial_streams
 from trackfuse_cli.main import app
@@ -262,6 +263,14 @@ def test_dry_run_says_what_the_run_would_start_from(write_config, tmp_path):
     assert plan("--force").endswith("(exists; --force recomputes every trial)")
     (runner.folder.path / "summary.csv").write_text("point\n")
     assert "summary.csv" in plan() and plan().endswith("rebuilds the final files)")
+    run(path, out)  # rebuilt
+    for name in ("index.html", "manifest.json"):  # a report to draw; then no manifest
+        (runner.folder.path / name).unlink()
+        assert plan().endswith({"index.html": "(complete; nothing to compute, draws the report)",
+                                "manifest.json": "(no manifest; verifies the saved batches, "
+                                                 "computes the rest)"}[name])
+    (runner.folder.path / "manifest.json").write_text(json.dumps({"status": "running"}))
+    assert plan().endswith("(stopped before it ended; resumes from its saved batches)")
 
 
 def test_dry_run_refuses_an_output_folder_the_run_could_not_create(write_config, tmp_path):
@@ -276,6 +285,28 @@ def test_dry_run_refuses_an_output_folder_the_run_could_not_create(write_config,
         assert len(result.stderr.splitlines()) == 1
         real = trackfuse("run", path, "--out", out, "--no-plots", "--no-progress")
         assert real.returncode == 2 and str(out) in real.stderr
+    (tmp_path / "nowhere").symlink_to(tmp_path / "missing")  # a link to nothing: refused too
+    dangling = trackfuse("run", path, "--dry-run", "--out", tmp_path / "nowhere")
+    assert dangling.returncode == 2 and "is not a folder" in dangling.stderr
+
+
+def test_dry_run_refuses_a_folder_the_run_could_not_use(write_config, tmp_path):
+    """--dry-run promised a resume or a complete run where the run then stopped: a final file
+    that is a folder, a run folder another process holds."""
+    path = write_config(CFG)
+    runner = Runner(load(path), tmp_path, progress=False, plots=False)
+    runner.run()
+    dry = ("run", path, "--dry-run", "--out", tmp_path)
+    with RunLock(runner.folder.path, print):
+        held = trackfuse(*dry)
+    assert held.returncode == 2 and "in use by another trackfuse process" in held.stderr
+    (runner.folder.path / HOLDER_FILE).write_text('{"pid": 1, "host": "elsewhere"}')
+    assert trackfuse(*dry).returncode == 0  # a holder file alone: the run takes over
+    (runner.folder.path / "summary.csv").unlink()
+    (runner.folder.path / "summary.csv").mkdir()
+    for result in (trackfuse(*dry), trackfuse(*dry[:2], "--out", tmp_path, "--no-progress")):
+        assert result.returncode == 2 and "summary.csv: exists but is not a regular file" \
+            in result.stderr
 
 
 def test_plot_refuses_an_incomplete_run(write_config, tmp_path):

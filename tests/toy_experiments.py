@@ -104,6 +104,10 @@ TRIVIAL = register(Experiment(
     batch_size=2000,
 ))
 
+SLOW_LOADING = register(dataclasses.replace(
+    TRIVIAL, name="toy_slow_loading", title="Workers that load slowly (a first run compiling)",
+    preload=("slow_preload",)))
+
 BURN = register(Experiment(
     name="toy_burn",
     title="CPU-bound trials (parallel speed-up)",

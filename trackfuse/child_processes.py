@@ -17,6 +17,7 @@ from __future__ import annotations
 import os
 import select
 import signal
+import sys
 import threading
 import time
 from collections.abc import Iterator
@@ -53,17 +54,18 @@ def process_alive(pid: int) -> bool:
     """Whether process ``pid`` runs on this host: it exists and, where ``/proc`` tells, has
     not ended (a killed process stays a zombie until its parent reaps it; ``trackfuse runs``
     listed a run killed by ``kill -9`` as running until then)."""
+    another_user = False
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
-    except PermissionError:  # it exists, under another user: /proc still tells its state
-        pass
+    except PermissionError:  # it exists, under another user: /proc tells its state
+        another_user = True
     try:
         with open(f"/proc/{pid}/stat", "rb") as fh:
             state = fh.read().rsplit(b")", 1)[1].split()[0]
-    except FileNotFoundError:  # gone meanwhile, or no /proc (not Linux)
-        return not os.path.exists("/proc/self")
+    except FileNotFoundError:  # gone meanwhile, hidden (hidepid), or no /proc (not Linux)
+        return another_user or not os.path.exists("/proc/self")
     except (OSError, IndexError):
         return True
     return state not in (b"Z", b"X")
@@ -74,19 +76,26 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
 @contextmanager
-def ctrl_c_held() -> Iterator[None]:
+def ctrl_c_held(held_words: str | None = None) -> Iterator[None]:
     """Hold a Ctrl-C or SIGTERM that arrives inside the block until the block ends, then
     raise it as the handler in place would. Around what starts a child process (a pool's
     ``submit``, the first submit of a fork pool): one arriving inside ``Process.start`` or
     ``os.fork`` left a worker the pool did not know of, which printed a traceback after the
     command had exited, or was raised inside a fork hook, printed as "Exception ignored" and
-    lost (the run went on and exited 0). Only in the main thread (elsewhere a no-op)."""
+    lost (the run went on and exited 0). ``held_words``, if given, go to standard error as
+    the first signal is held (a block that can last seconds). Only in the main thread
+    (elsewhere a no-op)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     caught: list[tuple[int, object]] = []
-    handlers = {s: signal.signal(s, lambda signum, frame: caught.append((signum, frame)))
-                for s in STOP_SIGNALS}
+
+    def hold(signum: int, frame: object) -> None:
+        if held_words and not caught:
+            print(held_words, file=sys.stderr, flush=True)
+        caught.append((signum, frame))
+
+    handlers = {s: signal.signal(s, hold) for s in STOP_SIGNALS}
     try:
         yield
     finally:

@@ -298,7 +298,10 @@ def _with_fixed_keys(run: RunData, keys: Sequence[str], role: str) -> pd.DataFra
     for key in keys:
         if key in run.sweep:
             continue
-        value = run.params.get(key)
+        if key not in run.params:
+            raise ValueError(f"the other run sweeps {key}, a parameter {role}'s experiment "
+                             "does not have (a run of other code?); allowed: keys of both")
+        value = run.params[key]
         if value is None or isinstance(value, (list, dict)):
             raise ValueError(f"the other run sweeps {key}, which {role} fixes to "
                              f"{value!r}; allowed: a key fixed to one number or word, or swept "
@@ -342,7 +345,10 @@ def _flat(config: Mapping, prefix: str = "") -> dict[str, object]:
 
 def config_differences(base: Mapping, new: Mapping) -> list[tuple[str, object, object]]:
     """``(key, base value, new value)`` for every value of two resolved configs that differs
-    (``None`` where a config lacks the key), in the order of ``base`` then ``new``."""
+    (``None`` where a config lacks the key), in the order of ``base`` then ``new``; not the
+    ``params`` value of a key either run sweeps (no point of the sweeping run has it: the
+    ``sweep`` entries show the difference)."""
     b, n = _flat(base), _flat(new)
+    swept = {f"params.{k}" for config in (base, new) for k in (config.get("sweep") or {})}
     return [(key, b.get(key), n.get(key)) for key in dict.fromkeys([*b, *n])
-            if b.get(key) != n.get(key) or (key in b) != (key in n)]
+            if key not in swept and (b.get(key) != n.get(key) or (key in b) != (key in n))]

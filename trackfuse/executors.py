@@ -76,6 +76,11 @@ BLAS_THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"
 TRACKER_LEAK_WARNING = "ignore:resource_tracker:UserWarning"
 
 
+#: Said on a Ctrl-C while the first batch is handed to the pool, which waits for the fork
+#: server to load the experiment's code (seconds on a first run, which compiles it).
+STOPPING_WHEN_LOADED = "stopping once the worker processes have loaded the experiment's code"
+
+
 def _imported_from_working_directory() -> bool:
     """Whether this process imported trackfuse from the working directory's ``trackfuse``."""
     home = Path(__file__).resolve().parents[1]
@@ -166,7 +171,7 @@ class ProcessExecutor:
                     if task is _END:
                         break
                     try:
-                        with ctrl_c_held():
+                        with ctrl_c_held(None if self._forked else STOPPING_WHEN_LOADED):
                             pending[self._pool.submit(fn, task)] = task
                         self._forked = True
                     except BrokenProcessPool:

@@ -126,16 +126,34 @@ class RunLock:
 
 
 def creation_problem(path: Path) -> str | None:
-    """Why run folder ``path`` could not be created and written (one line, in the words
-    :class:`RunLock` would use), or ``None``; creates nothing (``--dry-run``)."""
+    """Why run folder ``path`` could not be created and written (one line, as
+    :class:`RunLock` would stop), or ``None``; creates nothing (``--dry-run``)."""
     existing = path
-    while not existing.exists() and existing.parent != existing:
+    while not os.path.lexists(existing) and existing.parent != existing:
         existing = existing.parent
-    if not existing.is_dir():
+    if not existing.is_dir():  # a file, or a link to nothing or to a file
         return f"{path}: cannot create the run folder ({existing} is not a folder)"
     if not os.access(existing, os.W_OK | os.X_OK):
         return f"{path}: cannot create the run folder ({existing}: permission denied)"
     return None
+
+
+def lock_taken(path: Path) -> bool:
+    """Whether another process holds run folder ``path``'s lock now, asked of the operating
+    system without taking it (a shared, non-blocking ``flock`` on the lock file, released at
+    once); ``False`` where there is no lock file or ``flock``."""
+    try:
+        import fcntl
+        fd = os.open(path / LOCK_FILE, os.O_RDONLY)
+    except (ImportError, OSError):
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except OSError:
+        return True
+    finally:
+        os.close(fd)  # releases the shared lock, if taken
+    return False
 
 
 def held_by_a_live_process(path: Path) -> bool:

@@ -78,7 +78,7 @@ from trackfuse.results import (
 )
 from trackfuse.rowtable import frame_csv
 from trackfuse.rundata import RunData, load
-from trackfuse.runlock import RunLock, creation_problem, held_by_a_live_process
+from trackfuse.runlock import RunLock, creation_problem, lock_taken
 from trackfuse.runstate import has_report
 from trackfuse.seeding import draw_points
 from trackfuse.summary import CHUNK_ROWS, summarize
@@ -285,28 +285,36 @@ class Runner:
     def planned_start(self) -> str:
         """What :meth:`run` would start from, in a few words (``--dry-run``): a new run, a
         resume, a complete run or, with ``--force``, a recomputation. Raises
-        :class:`~trackfuse.results.RunFolderError` with the line :meth:`run` would stop
-        with when the run folder cannot be created; reads, never writes."""
+        :class:`~trackfuse.results.RunFolderError` with the reason :meth:`run` would stop
+        for when the run folder cannot be created or used; reads, never writes."""
         if self.out.exists() and not self.out.is_dir():
             raise RunFolderError(f"{self.out}: the output root is not a folder")
         if problem := creation_problem(self.folder.path):
             raise RunFolderError(problem)
-        if held_by_a_live_process(self.folder.path):
-            return "in use by another trackfuse process; the run would stop"
+        if lock_taken(self.folder.path):
+            raise RunFolderError(f"{self.folder.path}: in use by another trackfuse process "
+                                 "now; the run would stop")
+        if not self.folder.path.exists():
+            return "new"
+        self.folder.check_layout()
+        if self.force:
+            return "exists; --force recomputes every trial"
         try:
             previous = self.folder.read_manifest()
         except RunFolderError:
             return "unreadable manifest; verifies the saved batches, computes the rest"
         if previous is None:
-            return "new"
-        if self.force:
-            return "exists; --force recomputes every trial"
-        if previous.get("status") == RunStatus.COMPLETE:
-            problem = self.folder.check_final_files(previous)
-            return f"complete, but {problem}; rebuilds the final files" if problem \
-                else "complete; nothing to compute"
-        done = int_or(previous.get("trials_done"), 0)
-        return f"{previous.get('status')}, {done} trials saved; resumes"
+            return "no manifest; verifies the saved batches, computes the rest"
+        status = previous.get("status")
+        if status == RunStatus.COMPLETE:
+            if problem := self.folder.check_final_files(previous):
+                return f"complete, but {problem}; rebuilds the final files"
+            if self.plots and not has_report(self.folder.path, previous):
+                return "complete; nothing to compute, draws the report"
+            return "complete; nothing to compute"
+        if status == RunStatus.INTERRUPTED:
+            return f"interrupted, {int_or(previous.get('trials_done'), 0)} trials saved; resumes"
+        return "stopped before it ended; resumes from its saved batches"
 
     def run(self) -> RunOutcome:
         """Compute the missing batches, then merge, summarize and draw.
