@@ -183,6 +183,7 @@ def test_paper_vs_reproduced_table(tmp_path):
     assert ahp_rows.loc["lambda_max", "reproduced"] == pytest.approx(
         ahp.lambda_max(ahp.PAPER_001_JUDGEMENT))
     assert ahp_rows.loc["CR", "verdict"] == "agrees"
+    assert ahp_rows[["ci_low", "ci_high"]].isna().all().all()  # exact values: no interval
     assert ahp_rows.loc["weight: tdoa", "verdict"] == "differs"  # 0.0636 printed as 0.07
     assert (ahp_rows.loc[["weight: range", "weight: speed", "weight: angle",
                           "weight: phase"], "verdict"] == "agrees").all()

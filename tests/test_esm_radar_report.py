@@ -243,7 +243,12 @@ def test_the_narrowing_verdict_does_not_pick_its_yardstick_from_the_data():
                          {50: (0.50, 0.2), 300: 0.88, 2000: 1.0}, 500)
     assert rows["narrows"]["verdict"] == "differs"
     assert "widens from +0.010 at 50 m to +0.300 at 300 m" in rows["narrows"]["reason"]
-    assert rows["narrows"]["reproduced"] == pytest.approx(0.01)  # pre-specified: 50 vs 2000
+    # the row shows the widening pair it is decided by, with its interval below 0 (it
+    # showed 50 m against 2 km, +0.01, beside "differs"); the pre-specified one in words
+    narrows = rows["narrows"]
+    assert narrows["quantity"].startswith("gap at 50 m minus gap at 300 m")
+    assert narrows["reproduced"] == pytest.approx(-0.29) and narrows["ci_high"] < 0
+    assert "fixed in advance, 50 m against 2000 m: +0.010 [" in narrows["reason"]
     assert rows["closest"]["verdict"] == "inconclusive"  # +0.01: neither shown nor refuted
     monotone = _gap_verdicts({50: 0.5, 300: 0.7, 2000: 1.0}, {50: 0.9, 300: 0.95, 2000: 1.0},
                              500)

@@ -277,6 +277,8 @@ def test_headline_table_schema_verdicts_and_docs_links(shipped_run):
     assert tuple(table.columns) == HEADLINE_COLUMNS
     assert set(table["verdict"]) <= set(VERDICTS)
     assert not table["reason"].str.contains("\n").any()
+    # a row names its point: four p_m blocks of passive_mutation read as one point
+    assert not table.duplicated(["paper_item", "quantity", "algorithm"]).any()
     fig2 = table[table["paper_item"] == "Fig. 2"]
     assert ((fig2["ci_low"] <= fig2["reproduced"] + 1e-9)
             & (fig2["reproduced"] <= fig2["ci_high"] + 1e-9)).all()

@@ -44,6 +44,21 @@ def test_each_interval_pair_becomes_one_column_after_its_estimate():
     assert shown.loc[0, "lost_pct 95 % CI"] == "[0.5, 7.25]"
 
 
+def test_a_headline_row_shows_the_papers_value_as_printed_and_no_interval_of_an_exact_one():
+    """ESM's Table 1 row read 'paper 0.05937, ours 0.05937 [0.05937, 0.05937], differs'
+    (the paper prints 0.059375; ours is 0.0593688, exact) and its trials '<NA>'."""
+    row = headline_row("Table 1", "CI", "", 0.059375, 0.0593688, float("nan"), float("nan"),
+                       "1", None, "differs", "exact 0.0593688 is not 0.059375", "docs")
+    table = pd.DataFrame([row, headline_row("Fig. 2", "rate", "a", 0.8959186, 0.9, 0.8, 0.95,
+                                            "1", 50, "agrees", "", "docs")],
+                         columns=reports.HEADLINE_COLUMNS).astype({"trials": "Int64"})
+    shown = display_table(table)
+    assert shown["paper_value"].tolist() == ["0.059375", "0.8959"]
+    assert shown.loc[0, "95 % CI"] == "" and shown.loc[1, "95 % CI"] == "[0.8, 0.95]"
+    first = reports.markdown_table(shown).splitlines()[2].split(" | ")
+    assert first[3:8] == ["0.059375", "0.05937", "", "1", ""]  # paper, ours, CI, unit, trials
+
+
 def test_a_wanted_figure_the_report_cannot_draw_is_listed_with_its_reason(toy_run):
     report = write_report(toy_run, wanted=["estimate", "not_a_figure_of_this_run"])
     assert [p.name for p in report.figures] == ["estimate.png", "estimate.pdf"]

@@ -638,8 +638,11 @@ def test_clutter_with_a_wide_gap_is_drawn_on_a_symlog_axis(run_wide, name):
     """twin_sensor_close joined 50 to 150 false returns by one long segment with the points
     at 0-20 piled up: the axis is symmetric-log, labelled at the swept values, and the
     points at 10, 15 and 20 lie apart on the page."""
-    ax = report.figures(run_wide, [name])[name].axes[0]
+    fig = report.figures(run_wide, [name])[name]
+    ax = fig.axes[0]
     assert ax.get_xscale() == "symlog"
+    # the axis says it is not linear (audit: the labels did not, unlike passive and esm's)
+    assert "x axis symmetric log, linear up to 10" in fig.get_suptitle().replace("\n", " ")
     assert list(ax.get_xticks()) == [0.0, 10.0, 15.0, 20.0, 150.0]
     drawn = ax.transData.transform([(v, 0.0) for v in (10.0, 15.0, 20.0, 150.0)])[:, 0]
     assert np.min(np.diff(drawn)) / ax.figure.dpi > 0.2  # inches apart

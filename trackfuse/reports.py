@@ -40,6 +40,7 @@ from __future__ import annotations
 import contextlib
 import html
 import importlib
+import math
 import multiprocessing
 import os
 import threading
@@ -177,6 +178,8 @@ def markdown_table(table: pd.DataFrame, digits: int = 4) -> str:
     def cell(v: Any) -> str:
         if isinstance(v, float):
             return "" if pd.isna(v) else f"{v:.{digits}g}"
+        if v is pd.NA:  # a missing integer (a headline row with no trials)
+            return ""
         return str(v).replace("|", "\\|")
 
     lines = ["| " + " | ".join(map(str, table.columns)) + " |",
@@ -186,11 +189,23 @@ def markdown_table(table: pd.DataFrame, digits: int = 4) -> str:
     return "\n".join(lines) + "\n"
 
 
+def as_printed(value: Any) -> Any:
+    """A paper's number as the paper prints it: up to 6 significant digits when that is the
+    exact value (``5.2375``, ``0.059375``), else 4; anything else unchanged."""
+    if not isinstance(value, float) or not math.isfinite(value):
+        return value
+    six = f"{value:.6g}"
+    return six if float(six) == value else f"{value:.4g}"
+
+
 def display_table(table: pd.DataFrame) -> pd.DataFrame:
     """``table`` for reading: each numeric pair ``<q>_ci_low``/``<q>_ci_high`` (or a bare
     ``ci_low``/``ci_high``) becomes one column ``<q> 95 % CI`` holding ``[low, high]`` (4
-    significant digits), placed after ``<q>``. The CSV files keep the numeric columns."""
+    significant digits), placed after ``<q>``; a paper's value is shown as printed
+    (:func:`as_printed`). The CSV files keep the numeric columns."""
     shown = table.copy()
+    if "paper_value" in shown.columns:
+        shown["paper_value"] = [as_printed(v) for v in shown["paper_value"]]
     for low in [c for c in table.columns if str(c) == "ci_low" or str(c).endswith("_ci_low")]:
         stem = str(low)[: -len("ci_low")]
         high = f"{stem}ci_high"

@@ -325,7 +325,7 @@ def _ahp_rows() -> list[dict[str, Any]]:
                   + (": the paper's CI uses its rounded lambda_max" if quantity == "AHP CI"
                      else ": the printed set looks adjusted to sum to 1"))
         out.append(headline_row("Table 1", quantity.removeprefix("AHP "), "", paper, value,
-                                value, value, "1", None, word, reason,
+                                np.nan, np.nan, "1", None, word, reason,  # exact: no interval
                                 f"{DOCS}#table-1-ahp-weights"))
     return out
 
@@ -386,12 +386,13 @@ def _narrowing_row(item: str, anchor: str, x: str, where: str, imp: pd.DataFrame
 
     Per trial, the gap is improved's 0/1 outcome minus traditional's; for every pair of
     separations ``a < b`` the mean of gap(a) - gap(b) over the same trials (paired t test,
-    Holm's adjustment over all pairs). The pre-specified comparison, the closest separation
-    against the widest, is judged on its 95 % paired t interval, the row's ``reproduced``
-    interval (one comparison fixed in advance needs no adjustment): ``differs`` when it lies
-    below 0 (the gap widens) or when some pair shows the gap *widening* after Holm (the
-    reason then names that pair and its interval); else ``agrees`` when it lies above 0;
-    else ``inconclusive``."""
+    Holm's adjustment over all pairs). When some pair shows the gap *widening* after Holm,
+    the row shows the most significant such pair with its 95 % paired t interval (below 0)
+    and ``differs``, the pre-specified comparison in the reason. Else the row shows that
+    comparison, the closest separation against the widest, and its 95 % paired t interval
+    (one comparison fixed in advance needs no adjustment): ``differs`` when it lies below 0
+    (the gap widens), ``agrees`` when above 0, else ``inconclusive``. The verdict always
+    reads the interval shown."""
     gap = {xv: imp[p].to_numpy() - trad[p].to_numpy() for xv, p in xs}
     tests = []
     for i, (xa, _) in enumerate(xs):
@@ -410,13 +411,15 @@ def _narrowing_row(item: str, anchor: str, x: str, where: str, imp: pd.DataFrame
                                                                          strict=True))
                       if t[2] < 0 and q < ALPHA)
     means = {xv: float(np.nanmean(g)) for xv, g in gap.items()}
+    shown = (x0, x1, d_end, lo_end, hi_end)
     if widening:
         q, _, i = widening[0]
         xa, xb, d, lo, hi, _ = tests[i]
-        word = DIFFERS
+        shown, word = (xa, xb, d, lo, hi), DIFFERS
         reason = (f"the gap widens from {means[xa]:+.3f} at {_fmt_x(x, xa)} to "
-                  f"{means[xb]:+.3f} at {_fmt_x(x, xb)} ({-d:+.3f} [{-hi:+.3f}, {-lo:+.3f}], "
-                  f"Holm p = {q:.2g} over the {len(tests)} pairs of separations)")
+                  f"{means[xb]:+.3f} at {_fmt_x(x, xb)} (Holm p = {q:.2g} over the "
+                  f"{len(tests)} pairs of separations); fixed in advance, {_fmt_x(x, x0)} "
+                  f"against {_fmt_x(x, x1)}: {d_end:+.3f} [{lo_end:+.3f}, {hi_end:+.3f}]")
     elif hi_end < 0:
         word = DIFFERS
         reason = (f"the gap widens from {means[x0]:+.3f} at {_fmt_x(x, x0)} to "
@@ -427,10 +430,10 @@ def _narrowing_row(item: str, anchor: str, x: str, where: str, imp: pd.DataFrame
         reason = (f"gap {means[x0]:+.3f} at {_fmt_x(x, x0)}, {means[x1]:+.3f} at "
                   f"{_fmt_x(x, x1)} (paired t p = {p_end:.2g}, fixed in advance); no pair "
                   f"of the {len(tests)} shows it widening (Holm)")
-    return headline_row(item, f"gap at {_fmt_x(x, x0)} minus gap at {_fmt_x(x, x1)}, same "
+    xa, xb, d, lo, hi = shown
+    return headline_row(item, f"gap at {_fmt_x(x, xa)} minus gap at {_fmt_x(x, xb)}, same "
                         f"trials{where}", "improved", "gap narrows as separation grows",
-                        d_end, lo_end, hi_end, "fraction", len(imp), word, reason,
-                        f"{DOCS}#{anchor}")
+                        d, lo, hi, "fraction", len(imp), word, reason, f"{DOCS}#{anchor}")
 
 
 def _always_higher_row(item: str, anchor: str, x: str, where: str, n: int,

@@ -16,7 +16,9 @@ from trackfuse.experiments.passive_assoc.model import PARAMS, ROW_METRICS, run_t
 FIGURES = {
     "convergence": FigureSpec(
         "measurement-level accuracy against the number of genetic operations per PGA "
-        "variant, exact optimum as reference, one panel per sweep point", "Fig. 2"),
+        "variant, exact optimum as reference, one panel per sweep point; each variant starts "
+        "from its own random individual, so at 0 operations the curves differ by chance "
+        "alone", "Fig. 2"),
     "at_optimum": FigureSpec(
         "fraction of runs whose PGA solution reaches the exact optimum against the number "
         "of genetic operations, 95 % Wilson bands", ""),

@@ -132,15 +132,29 @@ def _point_label(values: dict[str, Any], config: dict, noise: bool = True) -> st
     return label + f", P_D = {p.get('sensor.p_d', 0.95)}"
 
 
+#: The keys :func:`_point_label` writes out; any other swept key is added after it.
+POINT_LABEL_KEYS = ("scene.mode", "targets.n", "noise.sigma", "noise.reading", "sensor.p_d")
+
+
+def _swept_words(values: dict[str, Any], skip: Collection[str]) -> list[str]:
+    """``["p_m = 0.01", ...]``: the swept ``values`` whose keys are not in ``skip``."""
+    return [f"{KEY_WORDS.get(k, k)} = {v:g}" if isinstance(v, float) else
+            f"{KEY_WORDS.get(k, k)} = {v}" for k, v in values.items() if k not in skip]
+
+
+def _point_label_with_sweep(values: dict[str, Any], config: dict) -> str:
+    """:func:`_point_label` and every other swept value (``p_m = 0.01``): a headline row of
+    a run sweeping p_m names its p_m."""
+    return ", ".join([_point_label(values, config), *_swept_words(values, POINT_LABEL_KEYS)])
+
+
 def _cell_title(values: dict[str, Any], config: dict) -> str:
     """Short panel title of a grid cell: the target count and the other swept values."""
     p = {**config.get("params", {}), **values}
     n = int(p.get("targets.n", 10))
     title = f"N = {n} " + (f"(M1-M{n})" if p.get("scene.mode", "paper") == "paper"
                            else "(random)")
-    extra = [f"{KEY_WORDS.get(k, k)} = {v:g}" if isinstance(v, float) else
-             f"{KEY_WORDS.get(k, k)} = {v}" for k, v in values.items() if k != "targets.n"]
-    return "; ".join([title, *extra])
+    return "; ".join([title, *_swept_words(values, ("targets.n",))])
 
 
 def _pga_names(summary: pd.DataFrame) -> list[str]:
@@ -852,7 +866,7 @@ def _fig2_headline(values: dict, config: dict, name: str, runs: pd.DataFrame,
     rep = PASSIVE_ASSOC.result("accuracy against genetic operations")
     high_rate, optimum = rep.claim.split("; ")
     ops, n = int(runs["ops"].max()), len(runs)
-    where = _point_label(values, config)
+    where = _point_label_with_sweep(values, config)
     acc = _versus_exact(runs, exact, "accuracy")
     low, high = acc["exact_minus_pga_ci_low"], acc["exact_minus_pga_ci_high"]
     verdict = claim_verdict(high <= AT_LEVEL_MARGIN, low > AT_LEVEL_MARGIN)

@@ -29,11 +29,11 @@ FIGURES = {
         "Extension: tracks lost (angle and gate rules) against the manoeuvring index "
         "sqrt(q) T^2 / (r sigma) of the truth, with clutter; crosses: without clutter"),
     "range_error_vs_time": FigureSpec(
-        "Fig. 2 (redrawn at the paper's scenario with the paper's method, else an "
-        "analogue): range RMSE against time, MGEKF (95 % band) beside EKF (dashed band "
-        "edges), the square-root PCRLB of the truth and filter models, five single runs; "
-        "errors are correlated across scans (quoted per panel), so a curve below the bound "
-        "at every scan is one sample of runs, not a filter that beats the bound", "Fig. 2"),
+        "Fig. 2 (the paper's scenario and method, else an analogue): range RMSE "
+        "against time with 95 % bands (a second filter's as dashed edges; coinciding curves "
+        "show a filled marker in an open one), the square-root PCRLB of the truth and filter "
+        "models, five single runs; errors are correlated across scans, so a curve below the "
+        "bound at every scan is one sample of runs, not a filter beating the bound", "Fig. 2"),
     "anees_vs_time": FigureSpec(
         "Diagnostic: 6-state ANEES against time with its 95 % chi-square band (above it: "
         "overconfident; below it: conservative), every panel on one log axis"),

@@ -199,6 +199,13 @@ def _axis_label(key: str, params: dict[str, Any]) -> str:
     return f"{param.doc.split('(')[0].strip()} ({param.unit or '1'})"
 
 
+def _scale_words(threshold: float | None, scale: float = 1.0) -> str:
+    """The title's words for a symmetric-log x axis of :func:`_set_x_scale` (``x axis
+    symmetric log, linear up to 10``, 3 digits as the tick labels); empty for a linear one."""
+    return "" if threshold is None else \
+        f"x axis symmetric log, linear up to {threshold / scale:.3g}"
+
+
 def _x_scale(key: str) -> float:
     """Divisor of a swept value on its axis (metres shown in km)."""
     return 1e3 if key in ("sensors.baseline", "init.sigma_range") else 1.0
@@ -762,12 +769,13 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
     claim = claim and bool(_at_paper(run).all()) and run.params["clutter.model"] == "in_gate"
     rules = list(dict.fromkeys(rule for _, _, rule in columns))
     words = {r: _rule_text(r, run.params, swept_keys(run.config)) for r in rules}
+    threshold = _symlog_threshold(last["clutter.mean"])
     title = [f"{what} ({_runs(last)} runs per point)",
-             _context(run, words[rules[0]] if len(rules) == 1 else "")]
+             _context(run, words[rules[0]] if len(rules) == 1 else "",
+                      _scale_words(threshold))]
     n_panels = len(facets) * len(columns)
     ncols = len(columns) if len(columns) > 1 else min(len(facets), MAX_FACETS)
     every_bar = max(len(names) for _, names, _ in columns) <= 2
-    threshold = _symlog_threshold(last["clutter.mean"])
     panels = [(frame, rule, _with_bars(_rate_points(frame, "clutter.mean", rule,
                                                     _emphasis_last(names), threshold),
                                        every_bar))
@@ -829,12 +837,12 @@ def _index_figure(run: RunData) -> Figure | str:
                 "filter q; points of another filter q would be pooled at one index)")
     names = _emphasis_last(run.params["algorithms"])
     level = _value_text("clutter.mean", with_clutter["clutter.mean"].iloc[0])
+    threshold = _symlog_threshold(last["index"])
     title = [f"Tracks lost against the manoeuvring index, {level} ({_runs(last)} runs per "
              "point)",
-             _context(run, "truth q = filter q")]
+             _context(run, "truth q = filter q", _scale_words(threshold))]
     free = last[last["clutter.mean"] == 0]
     rules = ("lost_angle", "lost_gate")
-    threshold = _symlog_threshold(last["index"])
     points = [_with_bars(_rate_points(with_clutter, "index", rule, names, threshold), False)
               for rule in rules]
     zero = _zero_bound(with_clutter, "index")
@@ -1248,14 +1256,15 @@ def _final_figure(run: RunData) -> Figure | str:
     names = list(dict.fromkeys(_headline_pair(algorithms) + _main_algorithms(algorithms)
                                + _other_filters(algorithms)))
     quantified = x_key == "clutter.mean" and _fig_words(run, 2).endswith("redrawn")
+    threshold = _symlog_threshold(last[x_key])
     title = [("Paper Fig. 2 quantified: final" if quantified else "Final")
              + f" range RMSE ({_runs(last)} runs per point)",
-             _context(run, "95 % bootstrap-t intervals")]
+             _context(run, "95 % bootstrap-t intervals",
+                      _scale_words(threshold, _x_scale(x_key)))]
     per_row = min(len(facets), 3)
     panel = _printable(SINGLE_PANEL if len(facets) == 1 else PANEL if len(facets) == 2
                        else TIME_PANEL, per_row)
     titles = _wrapped([t if len(facets) > 1 else "" for t, _ in facets], panel[0])
-    threshold = _symlog_threshold(last[x_key])
     curves = [_final_bounds(run, frame, x_key, threshold) for _, frame in facets]
     labels = {label for facet in curves for *_, label in facet}
     points = [_final_points(frame, x_key, names) for _, frame in facets]
