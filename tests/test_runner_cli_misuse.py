@@ -19,7 +19,7 @@ from trackfuse.child_processes import process_alive
 
 CI = ROOT / "configs" / "ci"
 PASSIVE = CI / "passive_assoc_ci.yaml"
-SLOW_ARGS = ("--set", "trials=40", "--set", "batch_size=2", "--workers", "2", "--no-progress")
+SLOW_ARGS = ("--set", "trials=40", "--set", "batch_size=2", "--no-progress")
 
 
 def _children(pid: int) -> list[int]:
@@ -55,15 +55,16 @@ def _wait_for_fork_server(pid: int, timeout: float = 60) -> int:
     pytest.fail("the run started no fork server")
 
 
-def _start(out: Path) -> subprocess.Popen:
+def _start(out: Path, workers: int = 2, ctrl_c: signal.Handlers = signal.SIG_DFL
+           ) -> subprocess.Popen:
     """The run as a terminal starts it: its own process group, Ctrl-C not ignored (a test
-    session started in the background, as `.ci/run &` is, ignores it and would pass that on).
-    """
+    session started in the background, as `.ci/run &` is, ignores it and would pass that on);
+    ``ctrl_c`` SIG_IGN starts it as a shell's background job."""
     return subprocess.Popen([sys.executable, "-m", "trackfuse", "run", str(PASSIVE),
-                             "--out", str(out), *SLOW_ARGS], env=cli_env(),
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True,
-                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+                             "--out", str(out), *SLOW_ARGS, "--workers", str(workers)],
+                            env=cli_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, ctrl_c))
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux /proc")
@@ -216,12 +217,16 @@ def test_more_workers_than_cores_is_said_in_one_line():
     assert result.stderr.startswith("warning: --workers 64: more than the"), result.stderr
 
 
-def test_sigterm_stops_a_run_as_ctrl_c_does(tmp_path):
+@pytest.mark.parametrize(("workers", "ctrl_c"), [(2, signal.SIG_DFL), (1, signal.SIG_DFL),
+                                               (1, signal.SIG_IGN)])
+def test_sigterm_stops_a_run_as_ctrl_c_does(tmp_path, workers, ctrl_c):
     """A batch scheduler's time limit (or ``kill``, ``docker stop``) sends SIGTERM: the run
     died with exit 143, a resource-tracker warning about leaked semaphores and a manifest
-    left 'running' with no trial counted, though its saved batches were resumable."""
+    left 'running' with no trial counted, though its saved batches were resumable. With one
+    worker (batches in this process) the stop was read as the trial's own error: the batch
+    was re-run trial by trial and the run went on to the end, exit 0."""
     out = tmp_path / "out"
-    proc = _start(out)
+    proc = _start(out, workers, ctrl_c)
     try:
         deadline = time.monotonic() + 60
         # two batches' trials parts: the first batch is then counted too (a batch's parts

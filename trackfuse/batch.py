@@ -15,7 +15,7 @@ import multiprocessing
 import signal
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
@@ -66,20 +66,38 @@ def _on_sigint(signum: int, frame: object) -> None:
     raise KeyboardInterrupt
 
 
+def _marking(handler: Callable[[int, object], None]) -> Callable[[int, object], None]:
+    """``handler`` (the command line's SIGTERM, which raises ``KeyboardInterrupt``), first
+    marking the stop as the user's."""
+    def mark_then_stop(signum: int, frame: object) -> None:
+        _user_interrupt.set()
+        handler(signum, frame)
+    return mark_then_stop
+
+
 @contextmanager
 def watch_sigint() -> Iterator[None]:
-    """Mark Ctrl-C as the user's, so a trial's own ``KeyboardInterrupt`` can be contained."""
-    if threading.current_thread() is not threading.main_thread() or \
-            signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+    """Mark Ctrl-C, and a SIGTERM turned into one, as the user's, so a trial's own
+    ``KeyboardInterrupt`` can be contained (a SIGTERM read as the trial's re-ran the batch
+    trial by trial, and a serial run went on to the end)."""
+    if threading.current_thread() is not threading.main_thread():
         yield
         return
     _user_interrupt.clear()
-    _sigint_watched.set()
-    signal.signal(signal.SIGINT, _on_sigint)
+    restore: dict[int, Any] = {}
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        restore[signal.SIGINT] = signal.default_int_handler
+        _sigint_watched.set()
+        signal.signal(signal.SIGINT, _on_sigint)
+    term = signal.getsignal(signal.SIGTERM)
+    if callable(term):
+        restore[signal.SIGTERM] = term
+        signal.signal(signal.SIGTERM, _marking(term))
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+        for signum, handler in restore.items():
+            signal.signal(signum, handler)
         _sigint_watched.clear()
 
 
