@@ -190,9 +190,10 @@ Sweeps = Annotated[list[str], typer.Option(
     "--sweep", metavar="KEY=V1,V2", show_default=False,
     help="Sweep an axis: clutter.mean=0,5,10 or 'clutter.mean=range(0,21,2)'; lists in "
          "brackets: 'algorithms=\\[a,b],\\[c]' (repeatable).")]
-def whole_number(low: int) -> Callable[[str | int], int]:
-    """The parser of an integer option of at least ``low``: digits with an optional sign,
-    so ``--trials 2.0`` is refused as a config's ``trials: 10.0`` is (typer read it as 2)."""
+def whole_number(low: int, high: int | None = None) -> Callable[[str | int], int]:
+    """The parser of an integer option from ``low`` to ``high`` (no limit: ``None``): digits
+    with an optional sign, so ``--trials 2.0`` is refused as a config's ``trials: 10.0`` is
+    (typer read it as 2)."""
     def parse(text: str | int) -> int:
         if isinstance(text, int):  # the option's default
             return text
@@ -200,14 +201,19 @@ def whole_number(low: int) -> Callable[[str | int], int]:
             value = int(text) if re.fullmatch(r"[+-]?[0-9]+", text.strip()) else None
         except ValueError:
             value = None
-        if value is None or value < low:
+        if value is None or value < low or (high is not None and value > high):
+            allowed = f">= {low}" if high is None else f"from {low} to {high}"
             raise typer.BadParameter(f"got {_printable(text)[:80]}; allowed: an integer "
-                                     f">= {low}")
+                                     f"{allowed}")
         return value
     return parse
 
 
-Workers = Annotated[int, typer.Option(metavar="N", parser=whole_number(0),
+#: The most ``--workers`` (a process pool of 2**31 crashed in the standard library).
+MAX_WORKERS = 1024
+
+
+Workers = Annotated[int, typer.Option(metavar="N", parser=whole_number(0, MAX_WORKERS),
                                       show_default="all cores",
                                       help="Parallel workers (0 = all cores).")]
 OutDir = Annotated[str, typer.Option("--out", metavar="FOLDER", help="Output root folder.")]

@@ -30,7 +30,11 @@ from trackfuse_cli.options import Executor
     (["run", "cfg.yaml", "--trials", "2.0"], "'--trials': got 2.0; allowed: an integer >= 1"),
     (["run", "cfg.yaml", "--workers", "1e3"], "'--workers': got 1e3; allowed: an integer"),
     (["run", "cfg.yaml", "--seed", "0.5"], "'--seed': got 0.5; allowed: an integer >= 0"),
-    (["reproduce", "--workers", "2.0"], "'--workers': got 2.0; allowed: an integer >= 0"),
+    (["reproduce", "--workers", "2.0"], "'--workers': got 2.0; allowed: an integer from 0 "
+                                        "to 1024"),
+    # a pool of 2**31 workers crashed in the standard library, with a traceback
+    (["run", "cfg.yaml", "--workers", "2147483647"], "'--workers': got 2147483647; allowed: "
+                                                      "an integer from 0 to 1024"),
     # Python's own "Exceeds the limit (4300 digits)" message, with a hint at sys
     (["run", "cfg.yaml", "--trials", "9" * 5000], "'--trials': got 99999"),
     (["run", "cfg.yaml", "--seed", "x1"], "'--seed': got x1; "),
