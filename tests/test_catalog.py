@@ -137,3 +137,20 @@ def test_a_run_with_failed_trials_is_listed_with_their_count(write_config, tmp_p
     assert (manifest["status"], manifest["trials_failed"]) == ("complete", bare.failed_trials)
     listed = CliRunner().invoke(app, ["runs", str(tmp_path)])
     assert f"complete, {bare.failed_trials} failed, no report" in listed.stdout
+
+
+def test_a_folder_this_user_may_not_read_is_skipped(write_config, tmp_path, monkeypatch):
+    """`trackfuse runs /proc` ended in a PermissionError traceback (/proc/1/cwd); so would
+    another user's folder under a shared results root."""
+    cfg = write_config("experiment: toy_gaussian\ntrials: 4\nseed: 1\n", name="gauss")
+    Runner(load(cfg), tmp_path / "out", progress=False, plots=False).run()
+    (tmp_path / "out" / "locked").mkdir()
+    is_dir = type(tmp_path).is_dir
+
+    def refusing(path):
+        if path.name == "locked":
+            raise PermissionError(13, "Permission denied", str(path))
+        return is_dir(path)
+
+    monkeypatch.setattr(type(tmp_path), "is_dir", refusing)
+    assert [r.stem for r in find_runs(tmp_path / "out")] == ["gauss"]

@@ -90,7 +90,10 @@ def find_runs(root: Path) -> list[RunInfo]:
     candidates = [root] + sorted(root.glob("*")) + sorted(root.glob("*/*"))
     found = []
     for path in candidates:
-        if not path.is_dir() or not is_run_folder(path):
+        try:
+            if not path.is_dir() or not is_run_folder(path):
+                continue
+        except OSError:  # a folder this user may not read (another user's, /proc/1/cwd)
             continue
         try:
             manifest = RunFolder(path).read_manifest()
