@@ -54,6 +54,21 @@ def test_errors_name_the_override_not_the_file(write_config):
     assert in_file.stderr.startswith("error: ") and "bad.yaml: params.n: got 0" in in_file.stderr
 
 
+def test_an_experiments_own_check_blames_the_override_that_set_the_key():
+    """--set targets.n=50 (the paper's scene has 10 targets) was blamed on the config file."""
+    config = ROOT / "configs" / "ci" / "passive_assoc_ci.yaml"
+    for args, blamed in ((["--set", "targets.n=50"], "--set: targets.n: got 50; "),
+                         (["targets.n=50"], "--set: targets.n: got 50; "),
+                         (["--sweep", "targets.n=5,50"], "--sweep: targets.n: got 50 at the "
+                                                         "sweep point targets.n=50; ")):
+        result = trackfuse("validate", config, *args)
+        assert result.returncode == 2, result.stderr
+        assert result.stderr.startswith(f"error: {blamed}allowed with scene.mode: paper: "
+                                        "1..10"), result.stderr
+    in_file = trackfuse("validate", config, "--set", "scene.mode=paper")  # the file's n: fine
+    assert in_file.returncode == 0, in_file.stderr
+
+
 def test_a_typo_in_outputs_figures_is_refused_at_validation(write_config):
     path = write_config(CONFIG + "outputs: {figures: [estimat]}\n")
     for command in (["validate"], ["run", "--no-progress"]):

@@ -284,8 +284,10 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
                                            f" allowed: at most {MAX_POINTS}")
     figures, formats = _outputs(source, exp, raw.get("outputs") or {})
     problem = exp.check(params, sweep, mode) if exp.check is not None else None
-    if problem is not None:
+    if problem is not None:  # blamed where the key's value came from, as a bad value is
         key, message = problem
+        if key in (sweeps or {}) or key in sets:
+            raise ConfigError(SWEEP if key in (sweeps or {}) else SET, key, message)
         raise ConfigError(source, _dotted("sweep" if key in sweep else "params", key), message)
     return Config(source, exp, title, trials, seed, batch_size, params, sweep, mode,
                   figures, formats, name)
