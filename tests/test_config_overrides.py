@@ -108,3 +108,21 @@ def test_a_top_level_key_cannot_be_swept_and_is_not_called_an_unknown_parameter(
         build({**raw, "sweep": {key: [1, 2]}}, "c.yaml")
     assert str(from_file.value).startswith(f"c.yaml: sweep.{key}: a top-level key cannot be")
     assert "allowed: the parameters of 'toy_gaussian'" in str(from_file.value)
+
+
+def test_a_list_of_counts_takes_integers_and_a_list_of_choices_each_once():
+    """pga.checkpoints=[1.5] ran as operation 1, and algorithms [exact, exact] as [exact]:
+    `--sweep 'pga.checkpoints=[1.5],[1]'` gave two sweep points of the same run."""
+    config = ROOT / "configs" / "ci" / "passive_assoc_ci.yaml"
+    cases = ((["--set", "pga.checkpoints=[1.5]"], "error: --set: pga.checkpoints: got 1.5 in "
+              "the list; allowed: a non-empty list of integers in [0, 1e+07]"),
+             (["--sweep", "algorithms=[exact],[exact,exact]"], "error: --sweep: algorithms: "
+              "got ['exact', 'exact']; allowed: a non-empty list drawn from exact, "))
+    for args, expected in cases:
+        result = trackfuse("validate", config, *args)
+        assert result.returncode == 2 and result.stderr.startswith(expected), result.stderr
+    assert "each at most once" in result.stderr
+    resolved = trackfuse("run", config, "--dry-run", "--set", "pga.checkpoints=[0, 10.0]")
+    assert resolved.returncode == 0, resolved.stderr
+    assert yaml.safe_load(resolved.stdout.split("\n# ")[0])["params"]["pga.checkpoints"] == \
+        [0, 10]

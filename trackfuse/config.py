@@ -111,11 +111,12 @@ def allowed_text(p: Param) -> str:
     if p.choices is not None:
         options = ", ".join(str(c) for c in p.choices)
         if p.kind is list:
-            return f"a non-empty list drawn from {options}"
+            return f"a non-empty list drawn from {options}, each at most once"
         return f"one of {options}"
+    numbers = "integers" if p.item_kind is int else "numbers"
     names = {float: "a number", int: "an integer", bool: "true or false", str: "a string",
-             list: "a non-empty list of numbers" if p.length is None
-             else f"a list of {p.length} numbers"}
+             list: f"a non-empty list of {numbers}" if p.length is None
+             else f"a list of {p.length} {numbers}"}
     text = names.get(p.kind, p.kind.__name__)
     if p.low is not None and p.high is not None:
         text += f" in [{p.low:g}, {p.high:g}]"
@@ -156,8 +157,9 @@ def _scalar(p: Param, value: Any, kind: type) -> Any:
 
 
 def _element_kind(p: Param) -> type:
-    """The type of each item of a list parameter: strings when its choices are strings."""
-    return str if p.choices is not None and isinstance(p.choices[0], str) else float
+    """The type of each item of a list parameter: strings when its choices are strings,
+    else its ``item_kind``."""
+    return str if p.choices is not None and isinstance(p.choices[0], str) else p.item_kind
 
 
 def check_value(p: Param, value: Any) -> Any:
@@ -166,7 +168,10 @@ def check_value(p: Param, value: Any) -> Any:
         items = value if isinstance(value, list) else [value]
         if not items or (p.length is not None and len(items) != p.length):
             raise ValueError
-        return [_scalar(p, v, _element_kind(p)) for v in items]
+        coerced = [_scalar(p, v, _element_kind(p)) for v in items]
+        if p.choices is not None and len(set(coerced)) < len(coerced):
+            raise ValueError  # [exact, exact]: a sweep point equal to [exact]
+        return coerced
     return _scalar(p, value, p.kind)
 
 

@@ -68,10 +68,11 @@ class Param:
     Bounds are given by keyword (``low=``, ``high=``); dimensionless quantities have unit
     ``"1"`` (probabilities: unit ``"1"``, ``low=0.0, high=1.0`` or tighter), free text has
     unit ``""``. ``kind`` is one of ``float``, ``int``, ``bool``, ``str`` or ``list`` (a
-    non-empty list of numbers, or of strings when ``choices`` is given); ``low``/``high`` are
-    inclusive bounds for numbers (and for every element of a list); ``choices`` restricts
-    strings (or numbers, or every element of a list) to a fixed set; ``length`` fixes the
-    number of items of a list (a position's 3 coordinates).
+    non-empty list of numbers, of integers when ``item_kind`` is ``int``, or of strings when
+    ``choices`` is given, each choice at most once); ``low``/``high`` are inclusive bounds for
+    numbers (and for every element of a list); ``choices`` restricts strings (or numbers, or
+    every element of a list) to a fixed set; ``length`` fixes the number of items of a list
+    (a position's 3 coordinates).
 
     ``draws``: whether the parameter changes what is simulated (the scene, the sensor
     returns, the clutter) rather than only what is computed from it (an algorithm or its
@@ -89,6 +90,7 @@ class Param:
     high: float | None = None
     choices: tuple[Any, ...] | None = None
     length: int | None = None
+    item_kind: type = float
     draws: bool = True
 
 

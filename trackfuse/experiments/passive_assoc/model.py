@@ -118,7 +118,7 @@ PARAMS = (
           draws=False),
     Param("pga.checkpoints", list(CHECKPOINTS), "operation counts at which the best "
           "solution is scored (values above pga.ops are ignored; pga.ops itself is always "
-          "scored)", "count", kind=list, low=0, high=10**7, draws=False),
+          "scored)", "count", kind=list, item_kind=int, low=0, high=10**7, draws=False),
     Param("pga.p_m", 0.2, "mutation probability per genetic operation", "1", low=0.0, high=1.0,
           draws=False),
     Param("pga.init", "random_B", "initial individual: random injection or identity "
