@@ -18,7 +18,7 @@ import pytest
 from typer.testing import CliRunner
 
 from trackfuse.config import load
-from trackfuse.results import RunFolder
+from trackfuse.results import RunFolder, atomic_write
 from trackfuse.runner import RunInterrupted, Runner
 from trackfuse_cli.main import app
 
@@ -318,3 +318,14 @@ def test_a_complete_run_keeps_no_second_copy_and_still_refuses_to_recompute(tmp_
     assert repaired.computed_trials == repaired.total_trials
     assert (first.folder / "trials.csv").read_bytes() == want
     assert any("rebuilding the final files" in w for w in warnings)
+
+
+def test_a_write_that_fails_leaves_no_temporary_file_and_names_its_target(tmp_path):
+    """`plot` of a run whose index.html was a folder left `.index.html.<pid>.tmp` behind and
+    named that temporary file in its error."""
+    target = tmp_path / "index.html"
+    target.mkdir()
+    with pytest.raises(IsADirectoryError) as caught:
+        atomic_write(target, "<html>")
+    assert caught.value.filename == str(target)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["index.html"]
