@@ -137,9 +137,10 @@ def test_a_key_one_run_sweeps_and_the_other_fixes_is_compared_at_the_fixed_value
     assert set(result.only_base_cells["gain"]) == {1.0} and result.only_new == 0
     reverse = compare_runs(fixed, base)
     assert reverse.only_base == 0 and set(reverse.only_new_cells["gain"]) == {1.0}
-    # the one difference is the axis: not an empty sweep, nor the value of gain BASE never
-    # ran at (its config's gain, 1.0, for gain swept)
-    assert [d[0] for d in reverse.config_differences] == ["sweep.gain"]
+    # the fixed gain against "(swept)", not the config value BASE never ran at (1.0), and
+    # the axis; not an empty sweep
+    assert reverse.config_differences == (("params.gain", 2.0, "(swept)"),
+                                          ("sweep.gain", None, [1.0, 2.0]))
     listed = SimpleNamespace(trials=base.trials, sweep={}, params={"gain": [1.0, 2.0]})
     with pytest.raises(ValueError, match=r"the other run sweeps gain, which NEW fixes to "
                                          r"\[1.0, 2.0\]; allowed: a key fixed to one"):

@@ -388,3 +388,16 @@ def test_the_machine_words_read_every_manifest_form_of_the_cpu(cpu):
     the scale figure fail with an AttributeError."""
     words = report._machine({"workers": 2, "cpu": cpu})
     assert words == ("2 workers, AMD EPYC" if cpu else "2 workers, CPU not recorded")
+
+
+def test_a_variant_is_one_headline_row_per_setting_when_algorithms_are_swept(tmp_path):
+    """Two points of a swept algorithms list run pga_paper on the same draws: its headline
+    rows came twice, alike."""
+    run = harness.run_data(tmp_path, "passive_assoc", {"targets.n": 5, **SMALL},
+                           {"algorithms": [["exact", "pga_paper"],
+                                           ["exact", "pga_paper", "pga_repair"]]},
+                           trials=3, seed=1)
+    table = report.tables(run)["paper_vs_reproduced"]
+    fig2 = table[table["paper_item"] == "Fig. 2"]
+    assert len(fig2) == 2 and set(fig2["algorithm"]) == {"pga_paper"}
+    assert not table.duplicated(["paper_item", "quantity", "algorithm"]).any()

@@ -54,6 +54,8 @@ from trackfuse.stats import (
 )
 
 BETTER = ("lower", "higher")
+#: The value :func:`config_differences` gives a swept key's ``params`` entry.
+SWEPT = "(swept)"
 
 
 @dataclass(frozen=True)
@@ -345,10 +347,10 @@ def _flat(config: Mapping, prefix: str = "") -> dict[str, object]:
 
 def config_differences(base: Mapping, new: Mapping) -> list[tuple[str, object, object]]:
     """``(key, base value, new value)`` for every value of two resolved configs that differs
-    (``None`` where a config lacks the key), in the order of ``base`` then ``new``; not the
-    ``params`` value of a key either run sweeps (no point of the sweeping run has it: the
-    ``sweep`` entries show the difference)."""
-    b, n = _flat(base), _flat(new)
-    swept = {f"params.{k}" for config in (base, new) for k in (config.get("sweep") or {})}
+    (``None`` where a config lacks the key), in the order of ``base`` then ``new``. The
+    ``params`` value of a swept key is no point's value: it reads :data:`SWEPT` (the
+    ``sweep`` entries give the values), so a key both runs sweep is left out."""
+    b, n = (_flat({**config, "params": {**(config.get("params") or {}), **dict.fromkeys(
+        config.get("sweep") or {}, SWEPT)}}) for config in (base, new))
     return [(key, b.get(key), n.get(key)) for key in dict.fromkeys([*b, *n])
-            if key not in swept and (b.get(key) != n.get(key) or (key in b) != (key in n))]
+            if b.get(key) != n.get(key) or (key in b) != (key in n)]

@@ -288,14 +288,22 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
         raise ConfigError(source, "sweep", f"the {mode} has {count_points(sweep, mode)} points;"
                                            f" allowed: at most {MAX_POINTS}")
     figures, formats = _outputs(source, exp, raw.get("outputs") or {})
-    problem = exp.check(params, sweep, mode) if exp.check is not None else None
-    if problem is not None:  # blamed where the key's value came from, as a bad value is
-        key, message = problem
-        if key in (sweeps or {}) or key in sets:
-            raise ConfigError(SWEEP if key in (sweeps or {}) else SET, key, message)
-        raise ConfigError(source, _dotted("sweep" if key in sweep else "params", key), message)
+    _check_experiment(exp, params, sweep, mode, source, set(sets), set(sweeps or {}))
     return Config(source, exp, title, trials, seed, batch_size, params, sweep, mode,
                   figures, formats, name)
+
+
+def _check_experiment(exp: Experiment, params: dict[str, Any], sweep: dict[str, list[Any]],
+                      mode: str, source: str, sets: set[str], sweeps: set[str]) -> None:
+    """The experiment's own last check (``Experiment.check``), its problem blamed where the
+    key's value came from (``--sweep``, ``--set`` or the file), as a bad value is."""
+    problem = exp.check(params, sweep, mode) if exp.check is not None else None
+    if problem is None:
+        return
+    key, message = problem
+    if key in sweeps or key in sets:
+        raise ConfigError(SWEEP if key in sweeps else SET, key, message)
+    raise ConfigError(source, _dotted("sweep" if key in sweep else "params", key), message)
 
 
 def _params(source: str, exp: Experiment, params_raw: Any) -> dict[str, Any]:

@@ -99,7 +99,8 @@ def atomic_write(path: Path, data: str | bytes) -> None:
     except OSError as err:
         with contextlib.suppress(OSError):
             tmp.unlink(missing_ok=True)
-        raise OSError(err.errno, err.strerror, str(path)) from None
+        err.filename, err.filename2 = str(path), None
+        raise
 
 
 def config_hash(resolved: dict[str, Any]) -> str:

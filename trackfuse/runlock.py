@@ -34,6 +34,9 @@ from trackfuse.results import RunFolderError, atomic_write
 LOCK_FILE = ".lock"
 HOLDER_FILE = ".lock.holder.json"
 HOLDER_WAIT_S = 2.0
+#: How long taking the lock waits for it (s): long enough for a --dry-run's glance at it
+#: (:func:`lock_taken`) to pass, short beside a run that holds it.
+LOCK_WAIT_S = 0.5
 
 
 class RunFolderBusy(RunFolderError):
@@ -67,7 +70,7 @@ class RunLock:
                                  f"({err.strerror or type(err).__name__})") from None
         lock = FileLock(str(self.path / LOCK_FILE))
         try:
-            lock.acquire(timeout=0)
+            lock.acquire(timeout=LOCK_WAIT_S)
         except Timeout:
             raise RunFolderBusy(f"{self.path}: in use by {_describe(self._current_holder())}; "
                                 "wait for it to finish (or stop it) and run again") from None

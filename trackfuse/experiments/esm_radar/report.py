@@ -307,7 +307,7 @@ def _table3_rows(run: RunData) -> list[dict[str, Any]]:
 
 def _ahp_rows() -> list[dict[str, Any]]:
     """Paper Table 1 numbers against the exact root-method computation: agrees when equal
-    to the printed precision (no interval: ``ci_low = ci_high`` = the exact value)."""
+    to the printed precision (an exact value has no interval: ``ci_low``, ``ci_high`` NaN)."""
     B = ahp.PAPER_001_JUDGEMENT
     lam = ahp.lambda_max(B)
     ours = {"AHP lambda_max": lam, "AHP CI": ahp.consistency_index(lam, len(FACTORS)),

@@ -822,8 +822,10 @@ FIG2_METRICS = {"accuracy": "measurement-level accuracy", "recall": "pair recall
 def _fig2_points(trials: pd.DataFrame, config: dict) -> list[tuple[int, dict, str, pd.DataFrame,
                                                                    pd.DataFrame]]:
     """``(point, values, variant, its rows at the last checkpoint, exact rows)`` for every
-    point at the paper's setting and every variant of :data:`COMPARED` run there."""
-    out = []
+    point at the paper's setting and every variant of :data:`COMPARED` run there; a variant
+    once per setting (points of a swept ``algorithms`` list that share the rest run it on
+    the same draws: model.py's random streams)."""
+    out, seen = [], set()
     if "exact" not in set(trials["algorithm"]):
         return out
     for point, values in _points(trials, config):
@@ -832,6 +834,9 @@ def _fig2_points(trials: pd.DataFrame, config: dict) -> list[tuple[int, dict, st
         at = trials[trials["point"] == point]
         exact = at[at["algorithm"] == "exact"]
         for name in (c for c in COMPARED if c in set(at["algorithm"])):
+            if (name, *values.items()) in seen:
+                continue
+            seen.add((name, *values.items()))
             runs = at[at["algorithm"] == name]
             out.append((point, values, name, runs[runs["ops"] == runs["ops"].max()], exact))
     return out

@@ -199,11 +199,14 @@ def _axis_label(key: str, params: dict[str, Any]) -> str:
     return f"{param.doc.split('(')[0].strip()} ({param.unit or '1'})"
 
 
-def _scale_words(threshold: float | None, scale: float = 1.0) -> str:
-    """The title's words for a symmetric-log x axis of :func:`_set_x_scale` (``x axis
-    symmetric log, linear up to 10``, 3 digits as the tick labels); empty for a linear one."""
-    return "" if threshold is None else \
-        f"x axis symmetric log, linear up to {threshold / scale:.3g}"
+def _scale_key(threshold: float | None, scale: float = 1.0) -> dict[str, Line2D]:
+    """The last legend entry, without a mark, naming a symmetric-log x axis of
+    :func:`_set_x_scale` (``x axis: symmetric log, linear up to 10``, 3 digits as the tick
+    labels), where the two title lines have no room for it; empty on a linear axis."""
+    if threshold is None:
+        return {}
+    return {f"x axis: symmetric log, linear up to {threshold / scale:.3g}":
+            Line2D([], [], linestyle="none")}
 
 
 def _x_scale(key: str) -> float:
@@ -771,8 +774,7 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
     words = {r: _rule_text(r, run.params, swept_keys(run.config)) for r in rules}
     threshold = _symlog_threshold(last["clutter.mean"])
     title = [f"{what} ({_runs(last)} runs per point)",
-             _context(run, words[rules[0]] if len(rules) == 1 else "",
-                      _scale_words(threshold))]
+             _context(run, words[rules[0]] if len(rules) == 1 else "")]
     n_panels = len(facets) * len(columns)
     ncols = len(columns) if len(columns) > 1 else min(len(facets), MAX_FACETS)
     every_bar = max(len(names) for _, names, _ in columns) <= 2
@@ -787,6 +789,7 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
                                                                            strict=True))
     zero_labels = {_zero_label(z, top) for z, top in zip(zero, tops, strict=True) if z}
     entries = len({n for _, names, _ in columns for n in names}) + claim + past \
+        + (threshold is not None) \
         + len(zero_labels) + 1
     panel = _printable(SINGLE_PANEL if n_panels == 1 else PANEL, ncols)
     titles = _wrapped([", ".join(t for t in (
@@ -808,7 +811,8 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
         ax.set_title(panel_title)
     _y_labels_once_per_row(axes, ncols)
     _wilson_key(axes[0])
-    return _finish(fig, axes[:len(columns)], cols, everywhere=(PAST_TOP_LABEL, *zero_labels))
+    return _finish(fig, axes[:len(columns)], cols, everywhere=(PAST_TOP_LABEL, *zero_labels),
+                   extra=_scale_key(threshold))
 
 
 def _manoeuvring_index(params: dict[str, Any]) -> float:
@@ -840,7 +844,7 @@ def _index_figure(run: RunData) -> Figure | str:
     threshold = _symlog_threshold(last["index"])
     title = [f"Tracks lost against the manoeuvring index, {level} ({_runs(last)} runs per "
              "point)",
-             _context(run, "truth q = filter q", _scale_words(threshold))]
+             _context(run, "truth q = filter q")]
     free = last[last["clutter.mean"] == 0]
     rules = ("lost_angle", "lost_gate")
     points = [_with_bars(_rate_points(with_clutter, "index", rule, names, threshold), False)
@@ -849,7 +853,8 @@ def _index_figure(run: RunData) -> Figure | str:
     top = _loss_top(pd.concat(points), zero[1])  # one y range: the same quantity
     past = any(len(_past_top(p, top)) for p in points)
     fig, axes, cols = _figure(2, 2, _printable(PANEL, 2), title,
-                              len(names) + 2 + (len(free) > 0) + past, 1)
+                              len(names) + 2 + (len(free) > 0) + past + (threshold is not None),
+                              1)
     looks = _curve_kwargs(points)
     for ax, rule, drawn in zip(axes, rules, points, strict=True):
         _draw_rates(ax, drawn, looks)
@@ -864,7 +869,8 @@ def _index_figure(run: RunData) -> Figure | str:
         ax.set_title(_rule_text(rule, run.params, swept_keys(run.config)))
     _y_labels_once_per_row(axes, 2)
     _wilson_key(axes[0])
-    return _finish(fig, axes[:1], cols, everywhere=(PAST_TOP_LABEL,))
+    return _finish(fig, axes[:1], cols, everywhere=(PAST_TOP_LABEL,),
+                   extra=_scale_key(threshold))
 
 
 # --------------------------------------------------------------------------------------------
@@ -1259,8 +1265,7 @@ def _final_figure(run: RunData) -> Figure | str:
     threshold = _symlog_threshold(last[x_key])
     title = [("Paper Fig. 2 quantified: final" if quantified else "Final")
              + f" range RMSE ({_runs(last)} runs per point)",
-             _context(run, "95 % bootstrap-t intervals",
-                      _scale_words(threshold, _x_scale(x_key)))]
+             _context(run, "95 % bootstrap-t intervals")]
     per_row = min(len(facets), 3)
     panel = _printable(SINGLE_PANEL if len(facets) == 1 else PANEL if len(facets) == 2
                        else TIME_PANEL, per_row)
@@ -1274,7 +1279,8 @@ def _final_figure(run: RunData) -> Figure | str:
     past = any(len(x) for p, top in zip(points, tops, strict=True)
                for _, x in _past_final_top(p, top))
     fig, axes, cols = _figure(len(facets), per_row, panel, title,
-                              len(names) + len(labels) + past + any(few), _lines(titles))
+                              len(names) + len(labels) + past + any(few)
+                              + (threshold is not None), _lines(titles))
     for ax, facet_points, bound_curves, top, facet_title, facet_few in zip(
             axes, points, curves, tops, titles, few, strict=True):
         _draw_final(ax, facet_points, x_key, bound_curves, top, facet_few, threshold)
@@ -1287,7 +1293,8 @@ def _final_figure(run: RunData) -> Figure | str:
         if label not in shown:  # a bound only another facet draws: its legend entry
             axes[0].plot([], [], color="k", ls=style, lw=1.0, label=label)
             shown.add(label)
-    return _finish(fig, axes[:1], cols, everywhere=(PAST_TOP_LABEL,), extra=_few_key(few))
+    return _finish(fig, axes[:1], cols, everywhere=(PAST_TOP_LABEL,),
+                   extra={**_few_key(few), **_scale_key(threshold, _x_scale(x_key))})
 
 
 def _final_bounds(run: RunData, frame: pd.DataFrame, x_key: str, threshold: float | None
