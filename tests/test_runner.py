@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -299,7 +300,7 @@ def test_dry_run_refuses_a_folder_the_run_could_not_use(write_config, tmp_path):
     dry = ("run", path, "--dry-run", "--out", tmp_path)
     with RunLock(runner.folder.path, print):
         held = trackfuse(*dry)
-    assert held.returncode == 2 and "in use by another trackfuse process" in held.stderr
+    assert held.returncode == 2 and f"in use by trackfuse pid {os.getpid()}" in held.stderr
     (runner.folder.path / HOLDER_FILE).write_text('{"pid": 1, "host": "elsewhere"}')
     assert trackfuse(*dry).returncode == 0  # a holder file alone: the run takes over
     (runner.folder.path / "summary.csv").unlink()

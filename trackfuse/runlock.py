@@ -35,7 +35,7 @@ LOCK_FILE = ".lock"
 HOLDER_FILE = ".lock.holder.json"
 HOLDER_WAIT_S = 2.0
 #: How long taking the lock waits for it (s): long enough for a --dry-run's glance at it
-#: (:func:`lock_taken`) to pass, short beside a run that holds it.
+#: (:func:`busy_problem`) to pass, short beside a run that holds it.
 LOCK_WAIT_S = 0.5
 
 
@@ -141,22 +141,23 @@ def creation_problem(path: Path) -> str | None:
     return None
 
 
-def lock_taken(path: Path) -> bool:
-    """Whether another process holds run folder ``path``'s lock now, asked of the operating
-    system without taking it (a shared, non-blocking ``flock`` on the lock file, released at
-    once); ``False`` where there is no lock file or ``flock``."""
+def busy_problem(path: Path) -> str | None:
+    """The line :class:`RunLock` would stop with if another process holds run folder
+    ``path``'s lock now, else ``None``; asked of the operating system without taking the
+    lock (a shared, non-blocking ``flock`` on the lock file, released at once; ``None``
+    where there is no lock file or ``flock``)."""
     try:
         import fcntl
         fd = os.open(path / LOCK_FILE, os.O_RDONLY)
     except (ImportError, OSError):
-        return False
+        return None
     try:
         fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
     except OSError:
-        return True
+        return f"{path}: in use by {_describe(RunLock(path, print).holder())}"
     finally:
         os.close(fd)  # releases the shared lock, if taken
-    return False
+    return None
 
 
 def held_by_a_live_process(path: Path) -> bool:

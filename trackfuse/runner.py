@@ -78,7 +78,7 @@ from trackfuse.results import (
 )
 from trackfuse.rowtable import frame_csv
 from trackfuse.rundata import RunData, load
-from trackfuse.runlock import RunLock, creation_problem, lock_taken
+from trackfuse.runlock import RunLock, busy_problem, creation_problem
 from trackfuse.runstate import has_report
 from trackfuse.seeding import draw_points
 from trackfuse.summary import CHUNK_ROWS, summarize
@@ -282,18 +282,18 @@ class Runner:
                                  for k, v in sorted(session.per_point.items())},
         }
 
+    def _check_output_root(self) -> None:
+        if self.out.exists() and not self.out.is_dir():
+            raise RunFolderError(f"{self.out}: the output root is not a folder")
+
     def planned_start(self) -> str:
         """What :meth:`run` would start from, in a few words (``--dry-run``): a new run, a
         resume, a complete run or, with ``--force``, a recomputation. Raises
         :class:`~trackfuse.results.RunFolderError` with the reason :meth:`run` would stop
         for when the run folder cannot be created or used; reads, never writes."""
-        if self.out.exists() and not self.out.is_dir():
-            raise RunFolderError(f"{self.out}: the output root is not a folder")
-        if problem := creation_problem(self.folder.path):
+        self._check_output_root()
+        if problem := creation_problem(self.folder.path) or busy_problem(self.folder.path):
             raise RunFolderError(problem)
-        if lock_taken(self.folder.path):
-            raise RunFolderError(f"{self.folder.path}: in use by another trackfuse process "
-                                 "now; the run would stop")
         if not self.folder.path.exists():
             return "new"
         self.folder.check_layout()
@@ -324,8 +324,7 @@ class Runner:
         process holds it, a file of it is not a file...).
         """
         t0 = time.perf_counter()
-        if self.out.exists() and not self.out.is_dir():
-            raise RunFolderError(f"{self.out}: the output root is not a folder")
+        self._check_output_root()
         with RunLock(self.folder.path, self.warn), watch_sigint():
             outcome = self._run_locked()
         outcome.seconds = time.perf_counter() - t0
