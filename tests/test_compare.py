@@ -220,3 +220,21 @@ def test_compare_refuses_a_run_whose_every_trial_failed_and_a_run_against_itself
             compare_runs(*pair)
     with pytest.raises(ValueError, match="the same run"):
         compare_runs(base, trackfuse.load(base.path))
+
+
+def test_a_difference_without_spread_is_judged_by_an_exact_test_not_a_zero_width_t():
+    """Two runs of two trials, each run's values equal (seeds 7 and 8 of passive_assoc_ci):
+    the Welch interval had zero width and p 0, and the gate called 3 cells regressions."""
+    unpaired = gate(frame([1.0, 1.0]), frame([2.0, 2.0]), paired=False).cells.iloc[0]
+    assert unpaired["verdict"] == "no significant change"
+    assert unpaired["p_value"] == pytest.approx(1 / 3)  # 2 of the 6 splits of 4 values
+    assert (unpaired["ci_low"], unpaired["ci_high"]) == (-np.inf, np.inf)
+    assert unpaired["test"] == "permutation test (no spread)"
+    few = gate(frame(np.arange(4.0)), frame(np.arange(4.0) + 1)).cells.iloc[0]
+    assert few["verdict"] == "no significant change" and few["p_value"] == 2 / 16
+    # six pairs all worse by 1: the sign test's 2/64 is below the gate's 0.10 (one cell)
+    six = gate(frame(np.arange(6.0)), frame(np.arange(6.0) + 1)).cells.iloc[0]
+    assert six["verdict"] == "regression" and six["p_value"] == 2 / 64
+    assert (six["ci_low"], six["ci_high"]) == (1.0, 1.0)
+    many = gate(frame(np.full(30, 5.0)), frame(np.full(30, 4.0)), paired=False).cells.iloc[0]
+    assert many["verdict"] == "improvement" and many["test"] == "permutation test (no spread)"

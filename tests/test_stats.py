@@ -16,6 +16,7 @@ from trackfuse.stats import (
     mcnemar_p,
     median_interval,
     nees_band,
+    no_spread_p,
     paired_binary,
     paired_t_p,
     percentile_mean_intervals,
@@ -266,3 +267,13 @@ def test_median_interval_takes_order_statistics():
     assert median_interval([3.0, 1, 2, 6, 5, 4]) == (3.5, 1.0, 6.0)
     median, low, high = median_interval([1.0, 2, 3, 4, 5])
     assert median == 3.0 and np.isnan(low) and np.isnan(high)
+
+
+def test_no_spread_p_is_the_exact_sign_and_permutation_p():
+    """All n paired differences of one sign: the exact binomial test's p; two samples of one
+    value each: twice the chance, 1 / C(n1 + n2, n1), of the observed, most extreme split."""
+    from scipy.stats import binomtest
+    for n in (1, 2, 6, 10):
+        assert no_spread_p(n) == pytest.approx(binomtest(n, n, 0.5).pvalue)
+    assert no_spread_p(2, 2) == pytest.approx(1 / 3) and no_spread_p(5, 5) == 2 / 252
+    assert no_spread_p(1, 1) == 1.0

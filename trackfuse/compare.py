@@ -46,6 +46,7 @@ from trackfuse.results import RUNNER_COLUMNS
 from trackfuse.rundata import RunData, succeeded_rows
 from trackfuse.stats import (
     PairedBinary,
+    no_spread_p,
     paired_t_p,
     proportion_difference_interval,
     t_interval,
@@ -156,7 +157,8 @@ def _paired_cells(base: pd.DataFrame, new: pd.DataFrame, keys: list[str],
     g["ci_high"] = np.where(is_bin, b.high, t_high)
     g["p_value"] = np.where(is_bin, b.p, t_p)
     g["test"] = np.where(is_bin, "paired Newcombe / exact McNemar", "paired t")
-    return g
+    flat = ~is_bin & (g["sd"] == 0).to_numpy() & (g["diff"] != 0).to_numpy()
+    return _without_spread(g, flat, no_spread_p(g["n"]), level, "sign test")
 
 
 def _unpaired_cells(base: pd.DataFrame, new: pd.DataFrame, keys: list[str],
@@ -181,7 +183,25 @@ def _unpaired_cells(base: pd.DataFrame, new: pd.DataFrame, keys: list[str],
     out["ci_high"] = np.where(is_bin, b_high, w_high)
     out["p_value"] = np.where(is_bin, b_p, w_p)
     out["test"] = np.where(is_bin, "Newcombe / N-1 chi-square", "Welch t")
-    return out
+    flat = ~is_bin & (g["std_b"] == 0).to_numpy() & (g["std_n"] == 0).to_numpy() \
+        & (out["diff"] != 0).to_numpy()
+    return _without_spread(out, flat, no_spread_p(g["size_b"], g["size_n"]), level,
+                           "permutation test")
+
+
+def _without_spread(cells: pd.DataFrame, flat: np.ndarray, p_exact: np.ndarray, level: float,
+                    test: str) -> pd.DataFrame:
+    """``cells`` where the ``flat`` ones (every difference, or every value of each run,
+    equal and the difference not 0: a t interval of zero width and p 0) read the exact test
+    ``test`` instead: its p-value ``p_exact``, and the difference as its interval only if
+    that p reaches ``1 - level``, else no bound at all (two trials of each cannot show a
+    difference at 95 %: the most extreme outcome has p 1/3)."""
+    shown = flat & (p_exact <= 1 - level)
+    for end, unbounded in (("ci_low", -np.inf), ("ci_high", np.inf)):
+        cells[end] = np.where(shown, cells["diff"], np.where(flat, unbounded, cells[end]))
+    cells["p_value"] = np.where(flat, p_exact, cells["p_value"])
+    cells["test"] = np.where(flat, f"{test} (no spread)", cells["test"])
+    return cells
 
 
 def compare_trials(base: pd.DataFrame, new: pd.DataFrame, keys: Sequence[str],

@@ -115,6 +115,19 @@ def _p_value(p_test: ArrayLike, se: ArrayLike, diff: ArrayLike) -> np.ndarray:
     return np.where(se > 0, p_test, np.where(se == 0, np.where(diff == 0, 1.0, 0.0), np.nan))
 
 
+def no_spread_p(n1: ArrayLike, n2: ArrayLike | None = None) -> np.ndarray:
+    """Two-sided exact p-value (shape ``S``), twice the one-sided one, of a difference with
+    no spread at all: ``n1`` paired differences all equal and not 0 (sign test:
+    ``2 * 0.5**n1``), or, given ``n2``, two samples each of one value (permutation test:
+    the observed split is the most extreme of ``C(n1 + n2, n1)``, so ``2 / C``); at most 1.
+    A t test reads 0 there, whatever ``n``: two trials each made a 'regression'."""
+    from scipy.special import comb  # on first use: see the module docstring
+
+    n1 = np.asarray(n1, dtype=float)
+    arrangements = 2.0**n1 if n2 is None else comb(n1 + np.asarray(n2, dtype=float), n1)
+    return np.minimum(1.0, 2.0 / arrangements)
+
+
 def paired_t_p(diff: ArrayLike, sd: ArrayLike, n: ArrayLike) -> np.ndarray:
     """Two-sided p-value (shape ``S``) of the paired t test from the mean ``diff``, standard
     deviation ``sd`` and number ``n`` of the per-trial differences (all broadcast to ``S``); see
