@@ -366,10 +366,9 @@ def test_ctrl_c_while_a_worker_starts_leaves_no_worker_behind(write_config, tmp_
         env=cli_env(), capture_output=True, text=True, timeout=120,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     assert result.returncode == 130, (result.returncode, result.stderr)
-    lines = result.stderr.splitlines()
-    if lines[0] == STOPPING_WHEN_LOADED:  # the first worker's start: the Ctrl-C was held
-        lines = lines[1:]
-    assert len(lines) == 1 and lines[0].startswith("interrupted:"), result.stderr
+    stderr = result.stderr.removeprefix(STOPPING_WHEN_LOADED + "\n")  # held at a start
+    # (the test's own helper shell may add "kill: No such process" after it)
+    assert stderr.startswith("interrupted:") and "Traceback" not in stderr, result.stderr
 
 
 def test_list_suggests_the_closest_experiment():
