@@ -163,13 +163,15 @@ DOOMED = register(Experiment(
 ))
 
 
-UNRULY_WAYS = ("exit", "interrupt", "none", "empty", "not_rows", "raise", "no_metric")
+UNRULY_WAYS = ("exit", "interrupt", "none", "empty", "not_rows", "raise", "no_metric",
+               "no_row_key", "param_column")
 
 
 def unruly_trial(params, streams: TrialStreams) -> list[dict]:
     """About one trial in ``every`` misbehaves the way ``how`` names: ``sys.exit(0)``, raise
-    ``KeyboardInterrupt``, return ``None``, ``[]``, a list of non-dicts or rows that lack the
-    declared metric (a misspelt key), or raise an error.
+    ``KeyboardInterrupt``, return ``None``, ``[]``, a list of non-dicts, rows that lack the
+    declared metric (a misspelt key) or the row key, or carry a parameter's name as a
+    column, or raise an error.
     Which trials misbehave depends on the point stream only (the same on every executor)."""
     import sys
 
@@ -183,7 +185,9 @@ def unruly_trial(params, streams: TrialStreams) -> list[dict]:
         if how == "raise":
             raise RuntimeError("synthetic failure")
         return {"none": None, "empty": [], "not_rows": ["a", "b"],
-                "no_metric": [{"algorithm": "a", "valeu": value}]}[how]
+                "no_metric": [{"algorithm": "a", "valeu": value}],
+                "no_row_key": [{"method": "a", "value": value}],
+                "param_column": [{"algorithm": "a", "value": value, "every": 1.0}]}[how]
     return [{"algorithm": "a", "value": value}]
 
 

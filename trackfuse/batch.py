@@ -128,19 +128,25 @@ def _checked(result: Any, producer: str, experiment: Experiment
     if not (isinstance(result, list) and result and all(isinstance(r, dict) for r in result)):
         got = f"an empty {type(result).__name__}" if result == [] else type(result).__name__
         return TypeError(f"{producer} returned {got}; expected a non-empty list of row dicts")
-    return _missing_metrics(experiment, set().union(*result), producer) or result
+    return _column_problem(experiment, set().union(*result), producer) or result
 
 
-def _missing_metrics(experiment: Experiment, columns: set[str], producer: str
-                     ) -> TypeError | None:
-    """A ``TypeError`` naming the declared metrics missing from ``columns`` (a misspelt key
-    left the metric out of the summary and the report, unsaid), else ``None``."""
-    missing = experiment.missing_metrics(columns)
-    if not missing:
-        return None
-    return TypeError(f"{producer} returned rows without the declared metric"
-                     f"{'s' if len(missing) > 1 else ''} {', '.join(missing)}; the rows have "
-                     f"{', '.join(sorted(map(str, columns)))}")
+def _column_problem(experiment: Experiment, columns: set[str], producer: str
+                    ) -> TypeError | None:
+    """A ``TypeError`` naming what is wrong with the columns of a trial's (or a batch's)
+    rows, else ``None``: a declared metric or a row key missing (a misspelt metric left it
+    out of the summary and the report; rows without ``algorithm`` were pooled into one
+    cell, unsaid), or a column named like a parameter (it overwrote a swept value)."""
+    have = f"; the rows have {', '.join(sorted(map(str, columns)))}"
+    for what, names in (("declared metric", experiment.missing_metrics(columns)),
+                        ("row key", [k for k in experiment.row_keys if k not in columns])):
+        if names:
+            return TypeError(f"{producer} returned rows without the {what}"
+                             f"{'s' if len(names) > 1 else ''} {', '.join(names)}{have}")
+    if clash := sorted(str(c) for c in columns if c in experiment.schema):
+        return TypeError(f"{producer} returned rows with a column named like a parameter: "
+                         f"{', '.join(clash)}; allowed: metric and row key names of their own")
+    return None
 
 
 def _one_trial(task: BatchTask, trial: int) -> Any:
@@ -175,7 +181,7 @@ def execute_batch(task: BatchTask) -> BatchResult:
             raise
         batch, producer = [_one_trial(task, t) for t in trials], "run_trial"
     if isinstance(batch, RowTable):
-        problem = _missing_metrics(task.experiment, set(batch.columns), producer)
+        problem = _column_problem(task.experiment, set(batch.columns), producer)
         if problem is None:
             return _table_result(task, batch, t0)
         batch = [problem] * len(trials)
