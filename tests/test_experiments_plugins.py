@@ -98,3 +98,14 @@ def test_the_readme_plugin_runs_output_is_ignored_by_git():
     check = subprocess.run(["git", "-C", str(ROOT), "check-ignore", "--no-index", *ignored,
                             *kept], capture_output=True, text=True)
     assert check.stdout.split() == ignored
+
+
+def test_a_plugins_hints_name_what_trackfuse_list_takes(tmp_path):
+    """`--set gate.pgg=1` on a plugin said "see `trackfuse list cvtrack`", which lists
+    nothing: a plugin loaded by module:ATTRIBUTE is listed by that reference."""
+    shutil.copy(EXAMPLE / "coin.py", tmp_path / "coin.py")
+    (tmp_path / "c.yaml").write_text("experiment: coin:EXPERIMENT\ntrials: 2\n")
+    result = trackfuse("validate", "c.yaml", "--set", "no_such_key=1", cwd=tmp_path)
+    assert result.returncode == 2 and "(see `trackfuse list coin:EXPERIMENT`)" in result.stderr
+    listed = trackfuse("list", "coin:EXPERIMENT", cwd=tmp_path)
+    assert listed.returncode == 0, listed.stderr

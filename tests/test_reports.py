@@ -288,3 +288,13 @@ def test_text_a_figure_adds_after_its_axes_takes_the_house_sizes(toy_run, monkey
     monkeypatch.setattr(reports, "drawing_processes", lambda figures: 1)
     write_report(toy_run, wanted=["estimate"])
     assert sizes and set(sizes) == {RC["legend.fontsize"]}
+
+
+def test_tables_of_the_wrong_type_are_a_report_error_not_a_traceback(toy_run, monkeypatch):
+    """A plugin's tables() returning a list ended the run in a traceback, listed 'stopped'."""
+    import toy_report
+    monkeypatch.setattr(toy_report, "tables", lambda run: [pd.DataFrame({"a": [1]})])
+    report = write_report(toy_run)
+    assert report.errors == ["tables: returned list; expected a dict of table name to "
+                             "DataFrame (or to a one-line reason it is empty)"]
+    assert report.index is not None and report.figures

@@ -200,7 +200,7 @@ def _validated(source: str, exp: Experiment, where: str, key: str, value: Any) -
     if p is None:
         raise ConfigError(source, _dotted(where, key),
                           f"unknown parameter of '{exp.name}'{did_you_mean(key, exp.schema)}"
-                          f" (see `trackfuse list {exp.name}`)")
+                          f" (see `trackfuse list {experiments.reference(exp)}`)")
     try:
         return check_value(p, value)
     except (ValueError, TypeError, OverflowError):
@@ -332,7 +332,7 @@ def _check_key_names(source: str, section: str, exp: Experiment, mapping: Mappin
             got = "a null key (~)" if key is None else f"the key {_describe(key)}"
             raise ConfigError(source, section + (f".{prefix[:-1]}" if prefix else ""),
                               f"got {got}; allowed: parameter names of '{exp.name}' (see "
-                              f"`trackfuse list {exp.name}`)")
+                              f"`trackfuse list {experiments.reference(exp)}`)")
         if isinstance(value, Mapping):
             _check_key_names(source, section, exp, value, f"{prefix}{key}.")
 
@@ -354,7 +354,8 @@ def _sweep(source: str, exp: Experiment, sweep_raw: Any, sweeps: dict[str, Any],
         if key in TOP_LEVEL and key not in exp.schema:  # not "unknown parameter"
             raise ConfigError(where, _dotted(section, key), "a top-level key cannot be swept "
                               f"(one value per run: set it, or run once per value); allowed: "
-                              f"the parameters of '{exp.name}' (see `trackfuse list {exp.name}`)")
+                              f"the parameters of '{exp.name}' (see "
+                              f"`trackfuse list {experiments.reference(exp)}`)")
         if key not in exp.schema:
             _validated(where, exp, section, key, None)
         try:

@@ -270,6 +270,11 @@ def _write_tables(run: RunData, module: ModuleType, report: Report) -> dict[str,
     except Exception as err:  # noqa: BLE001 - a report bug must not lose the run
         report.errors.append(f"tables: {one_line(err)}")
         return {}
+    if not isinstance(made, dict) or not all(
+            isinstance(t, str | pd.DataFrame) for t in made.values()):
+        report.errors.append(f"tables: returned {type(made).__name__}; expected a dict of "
+                             "table name to DataFrame (or to a one-line reason it is empty)")
+        return {}
     written = {}
     for name, table in made.items():
         if isinstance(table, str) or table.empty:

@@ -31,6 +31,7 @@ import importlib
 import importlib.metadata
 import importlib.util
 import re
+import sys
 from dataclasses import dataclass
 
 from trackfuse.coerce import one_line
@@ -116,6 +117,17 @@ def _docstring_summary(module: str, name: str) -> str:
         return ""
     summary = " ".join(doc.strip().split("\n\n")[0].split()).replace("``", "").rstrip(".")
     return summary.removesuffix(f"({name})").rstrip()
+
+
+def reference(experiment: Experiment) -> str:
+    """What ``trackfuse list`` takes for ``experiment``: its name when that is known
+    (built in, an installed plugin, registered), else the ``module:ATTRIBUTE`` it was
+    loaded from (``cvtrack:EXPERIMENT``: the plugin's own name lists nothing)."""
+    if experiment.name in names():
+        return experiment.name
+    module = sys.modules.get(getattr(experiment.run_trial, "__module__", ""))
+    found = [k for k, v in vars(module).items() if v is experiment] if module else []
+    return f"{module.__name__}:{found[0]}" if found else experiment.name
 
 
 def get(name: str) -> Experiment:

@@ -59,6 +59,8 @@ if TYPE_CHECKING:  # only for annotations: declaring an experiment loads no nump
 Row = dict[str, Any]
 Params = Mapping[str, Any]
 ALGORITHMS_PARAM = "algorithms"
+#: The kinds a :class:`Param` can be.
+KINDS = (float, int, bool, str, list)
 
 
 @dataclass(frozen=True)
@@ -92,6 +94,38 @@ class Param:
     length: int | None = None
     item_kind: type = float
     draws: bool = True
+
+    def __post_init__(self) -> None:
+        if problem := self._declaration_problem():
+            raise ValueError(f"Param {self.key!r}: {problem}")
+
+    def _declaration_problem(self) -> str | None:
+        """What is wrong with this declaration (its default against its own kind, bounds
+        and choices), else ``None``: a plugin's mistake said where it is made."""
+        if self.kind not in KINDS or self.item_kind not in (float, int):
+            return (f"kind={self.kind!r}, item_kind={self.item_kind!r}; allowed: kind one of "
+                    "float, int, bool, str, list and item_kind float or int (the types)")
+        if self.low is not None and self.high is not None and self.low > self.high:
+            return f"low={self.low} is above high={self.high}"
+        if self.kind is list and not (isinstance(self.default, list) and self.default):
+            return f"default {self.default!r}; allowed: a non-empty list for kind=list"
+        for value in self.default if self.kind is list else [self.default]:
+            if problem := self._value_problem(value):
+                return f"default {value!r} {problem}"
+        return None
+
+    def _value_problem(self, value: Any) -> str | None:
+        if self.choices is not None:
+            return None if value in self.choices else "is not one of its choices"
+        wanted = self.item_kind if self.kind is list else self.kind
+        if wanted in (bool, str):
+            return None if isinstance(value, wanted) else f"is not a {wanted.__name__}"
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            return "is not a number (a flag takes kind=bool, a word kind=str)"
+        if (self.low is not None and value < self.low) or \
+                (self.high is not None and value > self.high):
+            return f"is outside [{self.low}, {self.high}]"
+        return None
 
 
 Better = Literal["lower", "higher"]
@@ -158,10 +192,25 @@ class Experiment:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "schema", {p.key: p for p in self.params})
-        taken = [m.name for m in self.metrics if m.name in (*RUNNER_COLUMNS, *self.row_keys)]
+        if problem := self._declaration_problem():
+            raise ValueError(f"experiment {self.name!r}: {problem}")
+
+    def _declaration_problem(self) -> str | None:
+        """What is wrong with the declaration, else ``None``: a parameter declared twice, a
+        metric named like a runner column, a row key or a parameter (its column would
+        overwrite the swept value), or a metric's ``better`` neither lower nor higher."""
+        if len(self.schema) < len(self.params):
+            twice = sorted({p.key for p in self.params if
+                            sum(q.key == p.key for q in self.params) > 1})
+            return f"parameters declared twice: {', '.join(twice)}"
+        taken = [m.name for m in self.metrics
+                 if m.name in (*RUNNER_COLUMNS, *self.row_keys, *self.schema)]
         if taken:
-            raise ValueError(f"experiment {self.name!r}: metric names {taken} are row columns "
-                             f"of the runner {RUNNER_COLUMNS} or row keys {self.row_keys}")
+            return (f"metric names {taken} are row columns of the runner {RUNNER_COLUMNS}, "
+                    f"row keys {self.row_keys} or parameters")
+        if odd := [m.name for m in self.metrics if m.better not in (None, "lower", "higher")]:
+            return f"metrics {odd}: better must be 'lower', 'higher' or None"
+        return None
 
     @property
     def binary_metrics(self) -> tuple[str, ...]:
