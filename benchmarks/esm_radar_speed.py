@@ -20,7 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from trackfuse.config import load
-from trackfuse.experiments.esm_radar import ALGORITHMS, EXPERIMENT
+from trackfuse.experiments.esm_radar import EXPERIMENT
+from trackfuse.experiments.esm_radar.model import ALGORITHMS
 from trackfuse.runner import Runner
 from trackfuse.seeding import trial_streams
 

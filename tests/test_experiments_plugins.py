@@ -35,6 +35,9 @@ def test_each_plugin_failure_names_its_own_cause(tmp_path):
         "'not_installed_dep'" in _validate(tmp_path, "needs_dep:EXPERIMENT")
     assert "typo_plugin does not define EXPERIMNT at its top level; did you mean " \
         "'EXPERIMENT'?" in _validate(tmp_path, "typo_plugin:EXPERIMNT")
+    # it read "ModuleNotFoundError: __path__ attribute not found on 'typo_plugin'"
+    assert "name the module, not its file: typo_plugin:EXPERIMENT" in \
+        _validate(tmp_path, "typo_plugin.py:EXPERIMENT")
 
 
 def test_the_console_script_finds_a_plugin_in_the_current_folder(tmp_path):

@@ -212,3 +212,17 @@ def test_every_test_file_names_the_module_it_tests():
                                                  for n in names):
             strays.append(path.name)
     assert not strays, f"test files that map to no module: {strays}"
+
+
+def test_every_benchmark_script_imports():
+    """benchmarks/esm_radar_speed.py imported a name the experiment no longer exported and
+    stopped before measuring anything; nothing ran it."""
+    import runpy
+    import sys
+    folder = ROOT / "benchmarks"
+    sys.path.insert(0, str(folder))  # a script's siblings, as when it is run
+    try:
+        for script in sorted(folder.glob("*.py")):
+            runpy.run_path(str(script), run_name="imported_by_a_test")
+    finally:
+        sys.path.remove(str(folder))

@@ -164,14 +164,14 @@ DOOMED = register(Experiment(
 
 
 UNRULY_WAYS = ("exit", "interrupt", "none", "empty", "not_rows", "raise", "no_metric",
-               "no_row_key", "param_column")
+               "no_row_key", "param_column", "text_metric")
 
 
 def unruly_trial(params, streams: TrialStreams) -> list[dict]:
     """About one trial in ``every`` misbehaves the way ``how`` names: ``sys.exit(0)``, raise
     ``KeyboardInterrupt``, return ``None``, ``[]``, a list of non-dicts, rows that lack the
-    declared metric (a misspelt key) or the row key, or carry a parameter's name as a
-    column, or raise an error.
+    declared metric (a misspelt key) or the row key, carry a parameter's name as a column
+    or a word as a metric, or raise an error.
     Which trials misbehave depends on the point stream only (the same on every executor)."""
     import sys
 
@@ -187,7 +187,8 @@ def unruly_trial(params, streams: TrialStreams) -> list[dict]:
         return {"none": None, "empty": [], "not_rows": ["a", "b"],
                 "no_metric": [{"algorithm": "a", "valeu": value}],
                 "no_row_key": [{"method": "a", "value": value}],
-                "param_column": [{"algorithm": "a", "value": value, "every": 1.0}]}[how]
+                "param_column": [{"algorithm": "a", "value": value, "every": 1.0}],
+                "text_metric": [{"algorithm": "a", "value": "many"}]}[how]
     return [{"algorithm": "a", "value": value}]
 
 

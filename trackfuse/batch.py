@@ -20,6 +20,8 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from trackfuse.coerce import one_line
 from trackfuse.experiments.base import Experiment
 from trackfuse.results import FAILED_ROW, TIME_SUFFIX, BatchSpan, rows_to_csv, split_timings
@@ -128,7 +130,22 @@ def _checked(result: Any, producer: str, experiment: Experiment
     if not (isinstance(result, list) and result and all(isinstance(r, dict) for r in result)):
         got = f"an empty {type(result).__name__}" if result == [] else type(result).__name__
         return TypeError(f"{producer} returned {got}; expected a non-empty list of row dicts")
-    return _column_problem(experiment, set().union(*result), producer) or result
+    return _column_problem(experiment, set().union(*result), producer) \
+        or _value_problem(experiment, result, producer) or result
+
+
+def _value_problem(experiment: Experiment, rows: list[dict[str, Any]], producer: str
+                   ) -> TypeError | None:
+    """A ``TypeError`` naming the first declared metric whose value in ``rows`` is not a
+    number (``"many"``: the metric dropped out of ``summary.csv`` unsaid), else ``None``."""
+    for row in rows:
+        for metric in experiment.metrics:
+            value = row.get(metric.name)
+            if value is not None and not isinstance(value, int | float | np.number | np.bool_):
+                return TypeError(f"{producer} returned {value!r:.40} for the metric "
+                                 f"{metric.name}; allowed: a number (NaN where it does not "
+                                 "apply)")
+    return None
 
 
 def _column_problem(experiment: Experiment, columns: set[str], producer: str

@@ -155,6 +155,9 @@ def get(name: str) -> Experiment:
 def _plugin(ref: str) -> Experiment:
     module, _, attr = ref.partition(":")
     where = f"cannot use {ref[:80]!r}"
+    if module.endswith(".py"):  # a file name: Python read it as the package 'cvtrack'
+        raise PluginError(f"{where}: name the module, not its file: "
+                          f"{module.removesuffix('.py')}:{attr}")
     if not _MODULE_PATH.match(module) or not attr.isidentifier():
         raise PluginError(f"{where}: expected package.module:ATTRIBUTE with an absolute "
                           "module path and an attribute name")
