@@ -166,6 +166,15 @@ class RunOptions:
             warn(f"--workers {self.workers}: more than the {cores} cores this process may use; "
                  "the extra workers share them and only add memory")
 
+    def check_reports(self, configs: list[Config]) -> None:
+        """Refuse, before the first trial, a run with a report whose report module is not on
+        the Python path (it failed only after the last trial)."""
+        from trackfuse.experiments import report_problem
+        for config in configs if self.plots else []:
+            if problem := report_problem(config.experiment):
+                fail(f"{config.source}: {problem}; allowed: run from the folder that holds "
+                     "it, add that folder to PYTHONPATH, or --no-plots")
+
     def start_workers(self, configs: list[Config]) -> None:
         """Start the process pool's fork server now, if the runs will use one: it loads the
         experiments' code while this process builds the runners (runs that turn out to be
@@ -268,6 +277,7 @@ def run(
     options = RunOptions(out_folder(out_dir), workers, executor.value, scheduler,
                          scheduler_file, not no_plots, not no_progress, force, name)
     options.check()
+    options.check_reports([config])
     if not dry_run:
         options.start_workers([config])
     runner = options.runner(config)
@@ -412,6 +422,7 @@ def reproduce(
     options = RunOptions(out, workers, executor.value, scheduler, scheduler_file,
                          not no_plots, not no_progress)
     options.check()
+    options.check_reports(configs)
     if dry_run:
         for plan in [_plan_line(options.runner(config)) for config in configs]:
             print(plan)
@@ -670,8 +681,11 @@ def validate(
 
     Every key, value, sweep axis and figure name is checked. A config naming a plugin
     (package.module:ATTR) imports that module: a config is trusted like a script."""
+    from trackfuse.experiments import report_problem
     from trackfuse.sweep import count_points
     config = _load(cfg, _overrides(sets, overrides), sweeps)
+    if problem := report_problem(config.experiment):
+        warn(f"{config.source}: {problem}: `run` refuses it unless --no-plots")
     points = count_points(config.sweep, config.sweep_mode)
     print(f"ok: {config.source}: {config.experiment.name}, {_count(points, 'point')} x "
           f"{_count(config.trials, 'trial')}")

@@ -112,3 +112,21 @@ def test_a_plugins_hints_name_what_trackfuse_list_takes(tmp_path):
     assert result.returncode == 2 and "(see `trackfuse list coin:EXPERIMENT`)" in result.stderr
     listed = trackfuse("list", "coin:EXPERIMENT", cwd=tmp_path)
     assert listed.returncode == 0, listed.stderr
+
+
+def test_a_report_module_off_the_path_is_refused_before_the_run(tmp_path):
+    """A plugin whose report module was not on the path ran every trial, then failed to
+    draw (exit 1): now `run` refuses it at once, `--no-plots` runs, `validate` warns."""
+    source = (EXAMPLE / "coin.py").read_text()
+    (tmp_path / "coin.py").write_text(source.replace('"coin_report"', '"coin_report_gone"'))
+    (tmp_path / "c.yaml").write_text("experiment: coin:EXPERIMENT\ntrials: 2\n")
+    refused = trackfuse("run", "c.yaml", "--out", "out", cwd=tmp_path)
+    assert refused.returncode == 2 and not (tmp_path / "out").exists()
+    assert refused.stderr == ("error: c.yaml: the report module 'coin_report_gone' of 'coin' "
+                              "is not on the Python path; allowed: run from the folder that "
+                              "holds it, add that folder to PYTHONPATH, or --no-plots\n")
+    bare = trackfuse("run", "c.yaml", "--out", "out", "--no-plots", "--no-progress",
+                     cwd=tmp_path)
+    assert bare.returncode == 0, bare.stderr
+    checked = trackfuse("validate", "c.yaml", cwd=tmp_path)
+    assert checked.returncode == 0 and checked.stderr.startswith("warning: c.yaml: the report")

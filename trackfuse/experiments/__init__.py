@@ -130,6 +130,20 @@ def reference(experiment: Experiment) -> str:
     return f"{module.__name__}:{found[0]}" if found else experiment.name
 
 
+def report_problem(experiment: Experiment) -> str | None:
+    """Why ``experiment``'s report module cannot be imported, found without importing it
+    (``None`` when it is on the Python path, or the experiment has none): a run would
+    otherwise find out after its last trial."""
+    if not experiment.report:
+        return None
+    try:
+        found = importlib.util.find_spec(experiment.report) is not None
+    except (ImportError, ValueError):  # a parent package that is not there
+        found = False
+    return None if found else (f"the report module {experiment.report!r} of "
+                               f"'{experiment.name}' is not on the Python path")
+
+
 def get(name: str) -> Experiment:
     """Return the experiment called ``name`` (built in, registered, an installed plugin's
     entry-point name, or ``module:ATTRIBUTE``).
