@@ -154,7 +154,7 @@ def busy_problem(path: Path) -> str | None:
     try:
         fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
     except OSError:
-        return f"{path}: in use by {_describe(RunLock(path, print).holder())}"
+        return f"{path}: in use by {_describe(RunLock(path, lambda _: None).holder())}"
     finally:
         os.close(fd)  # releases the shared lock, if taken
     return None

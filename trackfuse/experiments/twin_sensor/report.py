@@ -788,9 +788,9 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
     past = any(len(_past_top(points, top)) for (_, _, points), top in zip(panels, tops,
                                                                            strict=True))
     zero_labels = {_zero_label(z, top) for z, top in zip(zero, tops, strict=True) if z}
+    scale_key = _scale_key(threshold)
     entries = len({n for _, names, _ in columns for n in names}) + claim + past \
-        + (threshold is not None) \
-        + len(zero_labels) + 1
+        + len(scale_key) + len(zero_labels) + 1
     panel = _printable(SINGLE_PANEL if n_panels == 1 else PANEL, ncols)
     titles = _wrapped([", ".join(t for t in (
         col_title if len(rules) == 1 else f"{col_title}, {words[rule]}",
@@ -812,7 +812,7 @@ def _loss_figure(run: RunData, columns: Sequence[Column], what: str,
     _y_labels_once_per_row(axes, ncols)
     _wilson_key(axes[0])
     return _finish(fig, axes[:len(columns)], cols, everywhere=(PAST_TOP_LABEL, *zero_labels),
-                   extra=_scale_key(threshold))
+                   extra=scale_key)
 
 
 def _manoeuvring_index(params: dict[str, Any]) -> float:
@@ -852,9 +852,9 @@ def _index_figure(run: RunData) -> Figure | str:
     zero = _zero_bound(with_clutter, "index")
     top = _loss_top(pd.concat(points), zero[1])  # one y range: the same quantity
     past = any(len(_past_top(p, top)) for p in points)
+    scale_key = _scale_key(threshold)
     fig, axes, cols = _figure(2, 2, _printable(PANEL, 2), title,
-                              len(names) + 2 + (len(free) > 0) + past + (threshold is not None),
-                              1)
+                              len(names) + 2 + (len(free) > 0) + past + len(scale_key), 1)
     looks = _curve_kwargs(points)
     for ax, rule, drawn in zip(axes, rules, points, strict=True):
         _draw_rates(ax, drawn, looks)
@@ -869,8 +869,7 @@ def _index_figure(run: RunData) -> Figure | str:
         ax.set_title(_rule_text(rule, run.params, swept_keys(run.config)))
     _y_labels_once_per_row(axes, 2)
     _wilson_key(axes[0])
-    return _finish(fig, axes[:1], cols, everywhere=(PAST_TOP_LABEL,),
-                   extra=_scale_key(threshold))
+    return _finish(fig, axes[:1], cols, everywhere=(PAST_TOP_LABEL,), extra=scale_key)
 
 
 # --------------------------------------------------------------------------------------------
@@ -1278,9 +1277,9 @@ def _final_figure(run: RunData) -> Figure | str:
     tops = list(_shared_tops(needed, per_row).values())
     past = any(len(x) for p, top in zip(points, tops, strict=True)
                for _, x in _past_final_top(p, top))
+    extra = {**_few_key(few), **_scale_key(threshold, _x_scale(x_key))}
     fig, axes, cols = _figure(len(facets), per_row, panel, title,
-                              len(names) + len(labels) + past + any(few)
-                              + (threshold is not None), _lines(titles))
+                              len(names) + len(labels) + past + len(extra), _lines(titles))
     for ax, facet_points, bound_curves, top, facet_title, facet_few in zip(
             axes, points, curves, tops, titles, few, strict=True):
         _draw_final(ax, facet_points, x_key, bound_curves, top, facet_few, threshold)
@@ -1293,8 +1292,7 @@ def _final_figure(run: RunData) -> Figure | str:
         if label not in shown:  # a bound only another facet draws: its legend entry
             axes[0].plot([], [], color="k", ls=style, lw=1.0, label=label)
             shown.add(label)
-    return _finish(fig, axes[:1], cols, everywhere=(PAST_TOP_LABEL,),
-                   extra={**_few_key(few), **_scale_key(threshold, _x_scale(x_key))})
+    return _finish(fig, axes[:1], cols, everywhere=(PAST_TOP_LABEL,), extra=extra)
 
 
 def _final_bounds(run: RunData, frame: pd.DataFrame, x_key: str, threshold: float | None
