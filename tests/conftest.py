@@ -19,6 +19,13 @@ import toy_experiments  # noqa: E402,F401 - registers the toy experiments
 
 ROOT = TESTS.parent
 
+# No test may depend on the host's terminal, locale or timezone: each test process, and the
+# CLI subprocesses it starts (cli_env copies os.environ), sees the same ones everywhere.
+os.environ.update({"COLUMNS": "80", "LINES": "24", "TZ": "UTC", "LC_ALL": "C.UTF-8",
+                   "LANG": "C.UTF-8"})
+os.environ.pop("NO_COLOR", None)
+os.environ.pop("FORCE_COLOR", None)
+
 from trackfuse.experiments.base import Param  # noqa: E402
 from trackfuse.results import RunFolder  # noqa: E402
 

@@ -26,7 +26,8 @@ FIGURES = {
         "accuracy and whole-solution-correct rate against the angle noise (drawn when "
         "noise.sigma is swept)", ""),
     "scale": FigureSpec(
-        "median solve time (ms, log axis, order-statistic interval), mean objective gap "
+        "median solve time (ms, log axis, order-statistic interval; measured on the machine "
+        "named under CPU in this run's provenance), mean objective gap "
         "(bootstrap-t interval, an open upper end drawn as an arrow) and accuracy against the "
         "number of targets (drawn when targets.n, swept over at least 2 values, is the only "
         "swept key); the paper's scenes as unjoined categories, random scenes as curves",

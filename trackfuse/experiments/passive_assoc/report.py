@@ -65,7 +65,6 @@ import pandas as pd
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 from numpy.typing import ArrayLike
 
-from trackfuse.environment import recorded_cpus
 from trackfuse.plots.algorithms import line_kwargs, look
 from trackfuse.plots.style import (
     PAGE_WIDTH_IN,
@@ -624,12 +623,6 @@ def _accuracy_panel(ax: Axes, axis: NAxis, summary: pd.DataFrame, names: list[st
     ax.set_ylabel("mean accuracy (fraction)")
 
 
-def _machine(manifest: dict) -> str:
-    """The run's workers and CPU as its manifest records them, e.g. "2 workers, AMD EPYC"."""
-    cpus = sorted({str(c.get("model", "?")) for c in recorded_cpus(manifest.get("cpu"))})
-    return f"{manifest.get('workers', '?')} workers, {' / '.join(cpus) or 'CPU not recorded'}"
-
-
 def _gap_notes(gaps: pd.DataFrame) -> list[str]:
     """Caption lines on the gap intervals (``gaps``: rows of :func:`checkpoint_metrics`
     drawn): how they are made, and what an arrow (no upper end: how many runs missed
@@ -684,8 +677,8 @@ def _scale_figure(run: RunData) -> Figure | str:
     fig.suptitle("Paper 002 model, no paper figure: cost and accuracy vs number of targets\n"
                  f"{scenes}, sigma = {p.get('noise.sigma', 0.005)} rad, "
                  f"{config.get('trials', '')} runs per point{budget}", fontsize=9)
-    notes = [f"95 % intervals. Time: median wall time per scan, order-statistic interval; one run, "
-             f"{_machine(run.manifest)}", *_gap_notes(gaps)]
+    notes = ["95 % intervals. Time: median wall time per scan, order-statistic interval",
+             *_gap_notes(gaps)]
     fig.legends[-1].set_title("\n".join(notes), prop={"size": 8})  # said above the entries
     return fig
 
