@@ -365,41 +365,6 @@ def test_reproduce_runs_every_config_of_a_folder_and_resumes(tmp_path):
     assert bad.returncode == 2 and "c.yaml: params.sigma" in bad.stderr
 
 
-@pytest.mark.parametrize("how", ["exit", "interrupt", "none", "empty", "not_rows", "raise",
-                                 "no_metric", "no_row_key", "param_column", "text_metric"])
-def test_a_trial_that_exits_or_returns_garbage_becomes_a_failed_row(how, write_config,
-                                                                    tmp_path):
-    """sys.exit(0), KeyboardInterrupt raised by the trial itself, None, [], non-dict rows,
-    rows without the declared metric (they were kept, and the metric left out of the summary
-    unsaid), without the row key (pooled into one cell), with a parameter's name as a column
-    (it overwrote the swept value) or a word as a metric (dropped from the summary): each
-    becomes one failed row with its error text; the run completes."""
-    path = write_config(f"experiment: toy_experiments:UNRULY\ntrials: 40\nseed: 3\n"
-                        f"params: {{how: {how}}}\n")
-    serial = run(path, tmp_path / "s", executor="serial")
-    pooled = run(path, tmp_path / "p", executor="process", workers=2)
-    trials = pd.read_csv(serial.folder / "trials.csv", keep_default_na=False)
-    failed = trials[trials["status"] == "failed"]
-    assert 0 < len(failed) < 40 and sorted(trials["trial"]) == list(range(40))
-    expected = {"exit": "SystemExit: 0", "interrupt": "KeyboardInterrupt",
-                "none": "run_trial returned NoneType", "empty": "run_trial returned an empty",
-                "not_rows": "run_trial returned list", "raise": "RuntimeError: synthetic",
-                "no_metric": "run_trial returned rows without the declared metric value; the "
-                             "rows have algorithm, valeu",
-                "no_row_key": "run_trial returned rows without the row key algorithm; the rows "
-                              "have method, value",
-                "param_column": "run_trial returned rows with a column named like a parameter: "
-                                "every; allowed: metric and row key names of their own",
-                "text_metric": "run_trial returned 'many' for the metric value; allowed: a "
-                               "number"}[how]
-    assert failed["error"].str.contains(expected, regex=False).all(), failed["error"].iloc[0]
-    assert serial.failed_trials == len(failed)
-    assert (serial.folder / "trials.csv").read_bytes() == (pooled.folder /
-                                                           "trials.csv").read_bytes()
-    manifest = json.loads((serial.folder / "manifest.json").read_text())
-    assert manifest["status"] == "complete" and manifest["trials_failed"] == len(failed)
-
-
 def cli(*args):
     return CliRunner().invoke(app, [str(a) for a in args], catch_exceptions=True)
 

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import dataclasses
+from fractions import Fraction
 
 import numpy as np
 
 from trackfuse.experiments import register
 from trackfuse.experiments.base import Experiment, FigureSpec, Metric, Param
+from trackfuse.rowtable import RowTable
 from trackfuse.seeding import TrialStreams
 
 
@@ -163,32 +165,126 @@ DOOMED = register(Experiment(
 ))
 
 
-UNRULY_WAYS = ("exit", "interrupt", "none", "empty", "not_rows", "raise", "no_metric",
-               "no_row_key", "param_column", "text_metric")
+class _ShownFloat(float):
+    """A float that prints as something else (a plugin's unit-carrying number, say)."""
+
+    def __repr__(self) -> str:
+        return "3 m"
+
+
+class _FalseList(list):
+    """A list whose truth cannot be told."""
+
+    def __bool__(self) -> bool:
+        raise RuntimeError("no truth here")
+
+
+class _Unlisted(list):
+    """A list whose items cannot be listed."""
+
+    def __iter__(self):
+        raise RuntimeError("no items")
+
+    def __len__(self) -> int:
+        raise RuntimeError("no items")
+
+
+class _KeylessDict(dict):
+    """A row dict whose keys cannot be listed by any means."""
+
+    def __iter__(self):
+        raise RuntimeError("no keys")
+
+    def keys(self):
+        raise RuntimeError("no keys")
+
+
+class _Incomparable:
+    """A result that cannot be compared with anything."""
+
+    def __eq__(self, other: object) -> bool:
+        raise RuntimeError("cannot compare")
+
+    __hash__ = object.__hash__
+
+
+class _HiddenDict(dict):
+    """A row dict whose items cannot be listed."""
+
+    def items(self):
+        raise RuntimeError("no items")
+
+    def keys(self):
+        raise RuntimeError("no keys")
+
+
+def _leave_a_thread() -> None:
+    """Start a non-daemon thread that outlives the trial by far (a plugin's watchdog)."""
+    import threading
+    import time
+
+    threading.Thread(target=time.sleep, args=(600,), name="plugin-leftover").start()
+
+
+def _misbehave(how: str, value: float) -> list[dict] | object:
+    """What a trial that misbehaves the way ``how`` names does or returns (UNRULY_WAYS)."""
+    import os
+    import sys
+    import time
+
+    if how == "exit":
+        sys.exit(0)
+    if how == "os_exit":
+        os._exit(0)
+    if how == "interrupt":
+        raise KeyboardInterrupt
+    if how == "raise":
+        raise RuntimeError("synthetic failure")
+    if how == "raise_surrogate":
+        raise ValueError("bad \udcff byte")
+    if how == "hang":
+        time.sleep(600)
+    if how == "thread":
+        _leave_a_thread()
+        return [{"algorithm": "a", "value": value}]
+    return {"none": None, "empty": [], "not_rows": ["a", "b"],
+            "no_metric": [{"algorithm": "a", "valeu": value}],
+            "no_row_key": [{"method": "a", "value": value}],
+            "param_column": [{"algorithm": "a", "value": value, "every": 1.0}],
+            "status_column": [{"algorithm": "a", "value": value, "status": "failed",
+                               "error": "fake"}],
+            "trial_column": [{"algorithm": "a", "value": value, "trial": 99}],
+            "text_metric": [{"algorithm": "a", "value": "many"}],
+            "complex_metric": [{"algorithm": "a", "value": np.complex128(value)}],
+            "float_subclass": [{"algorithm": "a", "value": _ShownFloat(value)}],
+            "object_metric": [{"algorithm": "a", "value": Fraction(1, 3)}],
+            "duplicate_rows": [{"algorithm": "a", "value": value},
+                               {"algorithm": "a", "value": value}],
+            "non_str_key": [{"algorithm": "a", "value": value, 7: 1.0}],
+            "bool_raises": _FalseList([{"algorithm": "a", "value": value}]),
+            "eq_raises": _Incomparable(),
+            "items_raise": [_HiddenDict(algorithm="a", value=value)],
+            "iter_raises": _Unlisted([{"algorithm": "a", "value": value}]),
+            "row_iter_raises": [_KeylessDict(algorithm="a", value=value)],
+            "surrogate": [{"algorithm": "\ud800", "value": value}],
+            }[how]
+
+
+#: Every way an unruly trial can misbehave (its ``how``).
+UNRULY_WAYS = ("exit", "os_exit", "interrupt", "raise", "raise_surrogate", "hang", "thread",
+               "none", "empty", "not_rows", "no_metric", "no_row_key", "param_column",
+               "status_column", "trial_column", "text_metric", "complex_metric",
+               "float_subclass", "object_metric", "duplicate_rows", "non_str_key",
+               "bool_raises", "iter_raises", "eq_raises", "items_raise", "row_iter_raises",
+               "surrogate")
 
 
 def unruly_trial(params, streams: TrialStreams) -> list[dict]:
-    """About one trial in ``every`` misbehaves the way ``how`` names: ``sys.exit(0)``, raise
-    ``KeyboardInterrupt``, return ``None``, ``[]``, a list of non-dicts, rows that lack the
-    declared metric (a misspelt key) or the row key, carry a parameter's name as a column
-    or a word as a metric, or raise an error.
+    """About one trial in ``every`` misbehaves the way ``how`` names (:func:`_misbehave`).
     Which trials misbehave depends on the point stream only (the same on every executor)."""
-    import sys
-
     value = float(streams.common.normal())
     if streams.point.integers(params["every"]) == 0:
-        how = params["how"]
-        if how == "exit":
-            sys.exit(0)
-        if how == "interrupt":
-            raise KeyboardInterrupt
-        if how == "raise":
-            raise RuntimeError("synthetic failure")
-        return {"none": None, "empty": [], "not_rows": ["a", "b"],
-                "no_metric": [{"algorithm": "a", "valeu": value}],
-                "no_row_key": [{"method": "a", "value": value}],
-                "param_column": [{"algorithm": "a", "value": value, "every": 1.0}],
-                "text_metric": [{"algorithm": "a", "value": "many"}]}[how]
+        return _misbehave(params["how"], value)
     return [{"algorithm": "a", "value": value}]
 
 
@@ -199,6 +295,56 @@ UNRULY = register(Experiment(
                   choices=UNRULY_WAYS),
             Param("every", 4, "about one trial in this many misbehaves", "", kind=int, low=1)),
     run_trial=unruly_trial,
+    metrics=(Metric("value", "1", "the trial's normal draw"),),
+    batch_size=5,
+))
+
+TABLE_WAYS = ("complex_metric", "text_metric", "object_metric", "duplicate_rows",
+              "short_timings", "surrogate", "status_column")
+
+
+def unruly_table_batch(params, streams) -> RowTable:
+    """A batch of one row per trial as a RowTable; in the trials where the point stream
+    says so (as in :func:`unruly_trial`), a value misbehaves the way ``how`` names (a
+    column of other values, a second row, timings of two lengths)."""
+    how, n = params["how"], len(streams)
+    bad = np.array([s.point.integers(params["every"]) == 0 for s in streams])
+    value = np.array([s.common.normal() for s in streams])
+    trial = np.arange(n)
+    algorithm = np.array(["a"] * n, dtype=object)
+    columns = {"algorithm": algorithm, "value": value}
+    timings = {"algorithm": np.array(["a"]), "cpu_time_s": np.array([0.5])}
+    if how == "complex_metric":
+        columns["value"] = np.where(bad, value + 1j, value)
+    elif how in ("text_metric", "object_metric"):
+        odd = "many" if how == "text_metric" else Fraction(1, 3)
+        columns["value"] = np.array([odd if b else v for b, v in zip(bad, value, strict=True)],
+                                    dtype=object)
+    elif how == "surrogate":
+        algorithm[bad] = "\ud800"
+    elif how == "status_column":
+        columns["status"] = np.where(bad, "failed", "")
+    elif how == "short_timings":
+        timings["cpu_time_s"] = np.array([0.5, 0.25])
+    elif how == "duplicate_rows":
+        trial = np.repeat(trial, np.where(bad, 2, 1))
+        columns = {k: np.repeat(v, np.where(bad, 2, 1)) for k, v in columns.items()}
+    return RowTable(trial, columns, timings)
+
+
+def unruly_table_trial(params, streams: TrialStreams) -> list[dict]:
+    """One trial of :func:`unruly_table_batch`, as rows."""
+    return unruly_table_batch(params, [streams])[0]
+
+
+UNRULY_TABLE = register(Experiment(
+    name="toy_unruly_table",
+    title="A batch form whose RowTable holds bad values",
+    params=(Param("how", "complex_metric", "what is wrong in the table", "", kind=str,
+                  choices=TABLE_WAYS),
+            Param("every", 4, "about one trial in this many misbehaves", "", kind=int, low=1)),
+    run_trial=unruly_table_trial,
+    run_batch=unruly_table_batch,
     metrics=(Metric("value", "1", "the trial's normal draw"),),
     batch_size=5,
 ))

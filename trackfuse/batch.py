@@ -20,15 +20,13 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
 from trackfuse.coerce import one_line
 from trackfuse.experiments.base import Experiment
 from trackfuse.results import FAILED_ROW, TIME_SUFFIX, BatchSpan, rows_to_csv, split_timings
 from trackfuse.rowtable import Constant, RowTable, columns_csv
 from trackfuse.seeding import batch_streams, trial_streams
+from trackfuse.trial_rows import checked_rows, table_problem, table_suspect
 
-RESERVED_COLUMNS = ("point", "trial")
 #: Longest error text of a failed trial's row (characters): the record in ``trials.csv``
 #: to diagnose the failure from, so longer than an error inside a message.
 ERROR_CHARS = 500
@@ -117,53 +115,29 @@ def _is_user_interrupt(err: BaseException) -> bool:
 
 
 def _failure(prefix: dict[str, Any], err: BaseException) -> dict[str, Any]:
-    return {**prefix, "algorithm": "", "status": FAILED_ROW,
-            "error": one_line(err, ERROR_CHARS)}
+    """The ``failed`` row of a trial that raised (or returned) ``err``; its text escaped
+    where it is not valid Unicode (a lone surrogate cannot be written to the CSV)."""
+    text = one_line(err, ERROR_CHARS).encode("utf-8", "backslashreplace").decode("utf-8")
+    return {**prefix, "algorithm": "", "status": FAILED_ROW, "error": text}
 
 
-def _checked(result: Any, producer: str, experiment: Experiment
-             ) -> list[dict[str, Any]] | BaseException:
-    """``result`` if it is a non-empty list of dicts carrying every declared metric (or the
-    error it is), else a ``TypeError`` saying what it is, returned: the trial's failure."""
-    if isinstance(result, BaseException):
-        return result
-    if not (isinstance(result, list) and result and all(isinstance(r, dict) for r in result)):
-        got = f"an empty {type(result).__name__}" if result == [] else type(result).__name__
-        return TypeError(f"{producer} returned {got}; expected a non-empty list of row dicts")
-    return _column_problem(experiment, set().union(*result), producer) \
-        or _value_problem(experiment, result, producer) or result
-
-
-def _value_problem(experiment: Experiment, rows: list[dict[str, Any]], producer: str
-                   ) -> TypeError | None:
-    """A ``TypeError`` naming the first declared metric whose value in ``rows`` is not a
-    number (``"many"``: the metric dropped out of ``summary.csv`` unsaid), else ``None``."""
-    for row in rows:
-        for metric in experiment.metrics:
-            value = row.get(metric.name)
-            if value is not None and not isinstance(value, int | float | np.number | np.bool_):
-                return TypeError(f"{producer} returned {value!r:.40} for the metric "
-                                 f"{metric.name}; allowed: a number (NaN where it does not "
-                                 "apply)")
-    return None
-
-
-def _column_problem(experiment: Experiment, columns: set[str], producer: str
-                    ) -> TypeError | None:
-    """A ``TypeError`` naming what is wrong with the columns of a trial's (or a batch's)
-    rows, else ``None``: a declared metric or a row key missing (a misspelt metric left it
-    out of the summary and the report; rows without ``algorithm`` were pooled into one
-    cell, unsaid), or a column named like a parameter (it overwrote a swept value)."""
-    have = f"; the rows have {', '.join(sorted(map(str, columns)))}"
-    for what, names in (("declared metric", experiment.missing_metrics(columns)),
-                        ("row key", [k for k in experiment.row_keys if k not in columns])):
-        if names:
-            return TypeError(f"{producer} returned rows without the {what}"
-                             f"{'s' if len(names) > 1 else ''} {', '.join(names)}{have}")
-    if clash := sorted(str(c) for c in columns if c in experiment.schema):
-        return TypeError(f"{producer} returned rows with a column named like a parameter: "
-                         f"{', '.join(clash)}; allowed: metric and row key names of their own")
-    return None
+def _table_trials(experiment: Experiment, table: RowTable, producer: str
+                  ) -> RowTable | list[Any]:
+    """``table`` itself if it passes the column checks of :mod:`trackfuse.trial_rows`, else
+    what each of its trials returned, for the per-trial check to name what is wrong: its
+    rows (values that may be wrong, :func:`~trackfuse.trial_rows.table_suspect`), or the
+    error that fails them all (a problem of the whole table)."""
+    try:
+        if problem := table_problem(experiment, table, producer):
+            return [problem] * table.trials
+        try:
+            suspect = table_suspect(experiment, table)
+        except Exception:  # noqa: BLE001 - a value whose str() raises: found trial by trial
+            suspect = True
+        return list(table) if suspect else table
+    except Exception as err:  # noqa: BLE001 - the plugin's table cannot be read
+        return [TypeError(f"{producer} returned a RowTable that cannot be read: "
+                          f"{one_line(err)}")] * table.trials
 
 
 def _one_trial(task: BatchTask, trial: int) -> Any:
@@ -198,19 +172,17 @@ def execute_batch(task: BatchTask) -> BatchResult:
             raise
         batch, producer = [_one_trial(task, t) for t in trials], "run_trial"
     if isinstance(batch, RowTable):
-        problem = _column_problem(task.experiment, set(batch.columns), producer)
-        if problem is None:
+        batch = _table_trials(task.experiment, batch, producer)
+        if isinstance(batch, RowTable):
             return _table_result(task, batch, t0)
-        batch = [problem] * len(trials)
-    per_trial = [_checked(result, producer, task.experiment) for result in batch]
+    per_trial = [checked_rows(result, producer, task.experiment) for result in batch]
     rows: list[dict[str, Any]] = []
     for trial, result in zip(trials, per_trial, strict=True):
         prefix = {"point": span.point, "trial": trial, **task.swept}
         if isinstance(result, BaseException):
             rows.append(_failure(prefix, result))
         else:
-            rows.extend({**prefix, **{k: v for k, v in row.items()
-                                      if k not in RESERVED_COLUMNS}} for row in result)
+            rows.extend({**prefix, **row} for row in result)
     keys = ["point", "trial", *task.swept, *task.experiment.row_keys]
     trial_rows, timing_rows = split_timings(rows, keys)
     return BatchResult(span, rows_to_csv(trial_rows), len(trial_rows), rows_to_csv(timing_rows),
@@ -224,9 +196,7 @@ def _table_result(task: BatchTask, table: RowTable, t0: float) -> BatchResult:
     ``trials`` its size)."""
     span = task.span
     swept = {k: Constant(v) for k, v in task.swept.items()}
-    metrics = {k: v for k, v in table.columns.items()
-               if k not in RESERVED_COLUMNS and k not in task.swept
-               and not k.endswith(TIME_SUFFIX)}
+    metrics = {k: v for k, v in table.columns.items() if not k.endswith(TIME_SUFFIX)}
     trials_csv = columns_csv({"point": Constant(span.point), "trial": span.first + table.trial,
                               **swept, **metrics}, table.rows)
     timed = len(next(iter(table.timings.values()), ()))

@@ -1,0 +1,143 @@
+"""Fault x executor: every way a trial can misbehave, on every executor (issue 37).
+
+A trial of a toy plugin misbehaves on request (``tests/toy_experiments.py``: ``how`` of
+``toy_unruly`` for row dicts, of ``toy_unruly_table`` for a batch's RowTable). Each fault
+must end as ``failed`` rows whose error says what went wrong, in a complete run whose
+``trials.csv`` is the same on every executor. A new fault is one line of :data:`FAULTS`
+(and, if the toy cannot do it yet, one entry of its ``_misbehave``).
+
+Faults that end the process or outlive the trial (``os._exit``, a hang, a thread left
+running) have tests of their own below: they need a subprocess, or a time limit.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from trackfuse.config import build
+from trackfuse.runner import Runner
+
+#: fault -> (toy experiment, its ``how``, text every failed row's error holds, or ``None``
+#: for rows that are right however odd their container: they are kept)
+FAULTS = {
+    "sys.exit": ("UNRULY", "exit", "SystemExit: 0"),
+    "KeyboardInterrupt": ("UNRULY", "interrupt", "KeyboardInterrupt"),
+    "raise": ("UNRULY", "raise", "RuntimeError: synthetic failure"),
+    "raise lone surrogate": ("UNRULY", "raise_surrogate", "ValueError: bad \\udcff byte"),
+    "None": ("UNRULY", "none", "run_trial returned NoneType"),
+    "[]": ("UNRULY", "empty", "run_trial returned an empty list"),
+    "non-dict rows": ("UNRULY", "not_rows", "run_trial returned list; expected a non-empty"),
+    "no metric": ("UNRULY", "no_metric", "without the declared metric value; the rows have "
+                                         "algorithm, valeu"),
+    "no row key": ("UNRULY", "no_row_key", "without the row key algorithm; the rows have "
+                                           "method, value"),
+    "parameter column": ("UNRULY", "param_column", "named like a parameter or a runner "
+                                                   "column (point, trial, status, error): every"),
+    "status column": ("UNRULY", "status_column", "runner column (point, trial, status, "
+                                                 "error): error, status"),
+    "trial column": ("UNRULY", "trial_column", "runner column (point, trial, status, error): "
+                                               "trial"),
+    "word metric": ("UNRULY", "text_metric", "returned 'many' of type str for the metric value"),
+    "complex metric": ("UNRULY", "complex_metric", "of type complex128 for the metric value"),
+    "float subclass": ("UNRULY", "float_subclass", "3 m of type _ShownFloat for the metric"),
+    "object metric": ("UNRULY", "object_metric", "Fraction(1, 3) of type Fraction for the metric"),
+    "duplicate rows": ("UNRULY", "duplicate_rows", "two rows of one trial with algorithm=a"),
+    "non-str key": ("UNRULY", "non_str_key", "column names that are not strings: 7"),
+    "__bool__ raises": ("UNRULY", "bool_raises", None),
+    "__iter__ raises": ("UNRULY", "iter_raises", "returned a _Unlisted that cannot be read: "
+                                                 "RuntimeError: no items"),
+    "__eq__ raises": ("UNRULY", "eq_raises", "run_trial returned _Incomparable; expected"),
+    "items() raises": ("UNRULY", "items_raise", None),
+    "row __iter__ raises": ("UNRULY", "row_iter_raises", "returned a list that cannot be "
+                                                         "read: RuntimeError: no keys"),
+    "lone surrogate": ("UNRULY", "surrogate", "not valid Unicode: '\\ud800'"),
+    "table complex": ("UNRULY_TABLE", "complex_metric", "of type complex for the metric value"),
+    "table word": ("UNRULY_TABLE", "text_metric", "'many' of type str for the metric value"),
+    "table object": ("UNRULY_TABLE", "object_metric", "of type Fraction for the metric value"),
+    "table duplicate": ("UNRULY_TABLE", "duplicate_rows", "two rows of one trial with "
+                                                          "algorithm=a"),
+    "table timings": ("UNRULY_TABLE", "short_timings", "timing columns differ in length "
+                                                       "('algorithm' 1, 'cpu_time_s' 2)"),
+    "table surrogate": ("UNRULY_TABLE", "surrogate", "not valid Unicode: '\\ud800'"),
+    "table status": ("UNRULY_TABLE", "status_column", "runner column (point, trial, status, "
+                                                      "error): status"),
+}
+TRIALS = 20
+#: Faults also run on dask (each costs seconds there): the ones executors used to differ on.
+ON_DASK = ("sys.exit", "KeyboardInterrupt", "lone surrogate", "table timings")
+
+
+def _config(fault: str, seed: int = 3):
+    experiment, how, _ = FAULTS[fault]
+    return build({"experiment": f"toy_experiments:{experiment}", "trials": TRIALS,
+                  "seed": seed, "params": {"how": how}}, f"{how}.yaml")
+
+
+def _run(fault: str, out: Path, **executor) -> Path:
+    outcome = Runner(_config(fault), out, progress=False, plots=False, **executor).run()
+    return outcome.folder
+
+
+@pytest.fixture(scope="module")
+def serial_runs(tmp_path_factory):
+    """fault -> the run folder of its serial run (computed once, compared with the rest)."""
+    runs: dict[str, Path] = {}
+
+    def get(fault: str) -> Path:
+        if fault not in runs:
+            runs[fault] = _run(fault, tmp_path_factory.mktemp("serial"), executor="serial")
+        return runs[fault]
+    return get
+
+
+def _check_failed_rows(folder: Path, expected: str | None) -> None:
+    trials = pd.read_csv(folder / "trials.csv", keep_default_na=False)
+    if expected is None:
+        assert "status" not in trials and len(trials) == TRIALS
+        return
+    failed = trials[trials["status"] == "failed"]
+    assert len(failed) > 0, "no trial misbehaved: the test tested nothing"
+    assert sorted(set(trials["trial"])) == list(range(TRIALS))
+    assert failed["error"].str.contains(expected, regex=False).all(), failed["error"].iloc[0]
+    manifest = json.loads((folder / "manifest.json").read_text())
+    assert manifest["status"] == "complete" and manifest["trials_failed"] == len(failed)
+    summary = pd.read_csv(folder / "summary.csv")
+    ok = trials[trials["status"] != "failed"]
+    if len(ok):  # the trials that behaved are summarised, and only they
+        assert summary["n"].max() == len(ok)
+
+
+@pytest.mark.parametrize("fault", list(FAULTS))
+def test_a_fault_is_a_failed_row_in_serial(fault, serial_runs):
+    _check_failed_rows(serial_runs(fault), FAULTS[fault][2])
+
+
+@pytest.mark.parametrize("fault", list(FAULTS))
+def test_a_fault_is_the_same_failed_row_in_the_process_pool(fault, serial_runs, tmp_path):
+    folder = _run(fault, tmp_path, executor="process", workers=2)
+    _check_failed_rows(folder, FAULTS[fault][2])
+    assert (folder / "trials.csv").read_bytes() == \
+        (serial_runs(fault) / "trials.csv").read_bytes()
+
+
+@pytest.fixture(scope="module")
+def dask_address():
+    distributed = pytest.importorskip("distributed")
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                       dashboard_address=None)
+    try:
+        yield cluster.scheduler_address
+    finally:
+        cluster.close()
+
+
+@pytest.mark.parametrize("fault", ON_DASK)
+def test_a_fault_is_the_same_failed_row_on_dask(fault, serial_runs, tmp_path, dask_address):
+    folder = _run(fault, tmp_path, executor="dask", scheduler=dask_address)
+    _check_failed_rows(folder, FAULTS[fault][2])
+    assert (folder / "trials.csv").read_bytes() == \
+        (serial_runs(fault) / "trials.csv").read_bytes()
