@@ -238,3 +238,16 @@ def test_a_difference_without_spread_is_judged_by_an_exact_test_not_a_zero_width
     assert (six["ci_low"], six["ci_high"]) == (1.0, 1.0)
     many = gate(frame(np.full(30, 5.0)), frame(np.full(30, 4.0)), paired=False).cells.iloc[0]
     assert many["verdict"] == "improvement" and many["test"] == "permutation test (no spread)"
+
+
+@pytest.mark.parametrize("name", ["value", "metric"])
+def test_a_metric_may_be_called_value_or_metric(name):
+    """pandas' melt refused a metric column called like its own output column ``value``:
+    compare exited 2 for any experiment with such a metric."""
+    rng = np.random.default_rng(1)
+    base = frame(rng.normal(10, 2, 30)).rename(columns={"error_m": name})
+    new = base.assign(**{name: base[name] + 5.0})
+    result = compare_trials(base, new, KEYS, better={name: "lower"})
+    assert list(result.cells["metric"]) == [name]
+    assert result.cells["diff"].iloc[0] == pytest.approx(5.0)
+    assert list(result.regressions["metric"]) == [name]

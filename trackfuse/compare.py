@@ -133,10 +133,14 @@ def metric_columns(frame: pd.DataFrame, keys: Sequence[str]) -> list[str]:
 
 
 def _long(frame: pd.DataFrame, keys: Sequence[str], metrics: Sequence[str]) -> pd.DataFrame:
-    """Rows of finished trials melted to ``[*keys, trial, metric, value]``."""
-    return succeeded_rows(frame).melt(id_vars=[*keys, "trial"], value_vars=list(metrics),
-                                      var_name="metric", value_name="value"
-                                      ).dropna(subset=["value"])
+    """Rows of finished trials melted to ``[*keys, trial, metric, value]``. The metric
+    columns are melted under their positions, so that a metric may be called ``value`` or
+    ``metric`` (pandas refuses a melted column named like a column of the frame)."""
+    rows = succeeded_rows(frame)[[*keys, "trial", *metrics]]
+    rows.columns = [*keys, "trial", *range(len(metrics))]
+    long = rows.melt(id_vars=[*keys, "trial"], var_name="metric", value_name="value")
+    long["metric"] = np.asarray(list(metrics), dtype=object)[long["metric"].to_numpy(int)]
+    return long.dropna(subset=["value"])
 
 
 def _paired_cells(base: pd.DataFrame, new: pd.DataFrame, keys: list[str],
