@@ -58,3 +58,19 @@ def test_an_experiment_declaration_mistake_is_refused_where_it_is_made():
     # 'smaller' was shown as "smaller is better" and left the metric ungated
     with pytest.raises(ValueError, match=r"metrics \['miss'\]: better must be"):
         declare(metrics=(Metric("miss", "1", "d", better="smaller"),))
+
+
+@pytest.mark.parametrize("name", ["", " ", "two\nlines", "tab\there", " padded", 7])
+def test_a_metric_name_that_cannot_head_a_csv_column_is_refused(name):
+    """A metric named "" became 'Unnamed: 4' in the summary and escaped the regression
+    gate; one with a line break left summary.csv empty: both exited 0."""
+    with pytest.raises(ValueError, match="Metric .*: the name"):
+        Metric(name, "1", "odd")
+
+
+def test_a_row_key_or_a_metric_declared_twice_is_refused():
+    with pytest.raises(ValueError, match="row keys"):
+        Experiment(name="bad", title="t", params=(), run_trial=_trial, row_keys=("a\nb",))
+    with pytest.raises(ValueError, match="metrics declared twice: x"):
+        Experiment(name="bad", title="t", params=(), run_trial=_trial,
+                   metrics=(Metric("x", "1", "d"), Metric("x", "m", "d")))

@@ -41,3 +41,14 @@ def test_override_parsing():
     assert parse_sweeps(["a=0,5,10", "b=range(0,3)"]) == {"a": [0, 5, 10], "b": "range(0,3)"}
     with pytest.raises(SweepError):
         parse_sweeps(["a="])
+
+
+@pytest.mark.parametrize(("text", "values"), [
+    ("range(3e-13, 4e-13, 1e-13)", [3e-13]),  # rounded to 12 decimals: 0.0, unsaid
+    ("range(1e-14, 4e-14, 1e-14)", [1e-14, 2e-14, 3e-14]),
+    ("range(0, 3e-12, 1e-12)", [0.0, 1e-12, 2e-12]),
+    ("range(1e20, 3e20, 1e20)", [1e20, 2e20]),
+    ("range(0, 0.4, 0.1)", [0.0, 0.1, 0.2, 0.3]),
+])
+def test_a_float_range_keeps_the_values_written_at_any_magnitude(text, values):
+    assert parse_range(text) == values

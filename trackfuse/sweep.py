@@ -19,6 +19,7 @@ import math
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass
+from decimal import Decimal
 from typing import Any
 
 from trackfuse.safe_yaml import YamlInputError, load_yaml
@@ -47,7 +48,10 @@ def _number(text: str) -> float | int:
 
 
 def parse_range(text: str) -> list[float | int]:
-    """Expand ``"range(a, b, s)"``: integers as Python's ``range``, floats on a fixed grid."""
+    """Expand ``"range(a, b, s)"``: integers as Python's ``range``, floats as the decimals
+    ``a + i * s`` (computed in decimal, so ``range(0, 1, 0.1)`` gives 0.3, not
+    0.30000000000000004, at any magnitude: rounding to 12 decimals made
+    ``range(3e-13, 4e-13, 1e-13)`` 0.0), each the float nearest to it."""
     match = _RANGE.match(text)
     if not match:
         raise SweepError(f"got {text!r}; allowed: a list or 'range(start, stop, step)'")
@@ -67,7 +71,13 @@ def parse_range(text: str) -> list[float | int]:
         raise SweepError(f"got {text!r}; the range is empty")
     if all(isinstance(p, int) for p in (start, stop, step)):
         return list(range(start, stop, step))
-    return [round(start + i * step, 12) for i in range(count)]
+    first, by = _decimal(start), _decimal(step)
+    return [float(first + i * by) for i in range(count)]
+
+
+def _decimal(number: float | int) -> Decimal:
+    """``number`` as the decimal it is written as (a float by its shortest ``repr``)."""
+    return Decimal(repr(number)) if isinstance(number, float) else Decimal(number)
 
 
 def _range_length(start: float, stop: float, step: float) -> int | None:

@@ -153,6 +153,22 @@ class Metric:
     categorical: bool = False
     bounds: tuple[float, float] | None = None
 
+    def __post_init__(self) -> None:
+        if problem := column_name_problem(self.name):
+            raise ValueError(f"Metric {self.name!r}: {problem}")
+
+
+def column_name_problem(name: object) -> str | None:
+    """What is wrong with ``name`` as a column of ``trials.csv`` (a metric's or a row key's),
+    else ``None``: an empty name became 'Unnamed: 4' in the summary and escaped the
+    regression gate; a line break in it left ``summary.csv`` empty."""
+    if not isinstance(name, str) or not name.strip():
+        return "the name is empty or not a string; allowed: a non-empty str"
+    if not name.isprintable() or name != name.strip():
+        return ("the name holds a line break, a control character or leading or trailing "
+                "white space; allowed: printable text")
+    return None
+
 
 #: :attr:`Metric.bounds` of a fraction, and of a quantity that cannot be negative.
 FRACTION, NON_NEGATIVE = (0.0, 1.0), (0.0, math.inf)
@@ -203,6 +219,11 @@ class Experiment:
             twice = sorted({p.key for p in self.params if
                             sum(q.key == p.key for q in self.params) > 1})
             return f"parameters declared twice: {', '.join(twice)}"
+        if odd := [k for k in self.row_keys if column_name_problem(k)]:
+            return f"row keys {odd}: {column_name_problem(odd[0])}"
+        if twice := sorted({m.name for m in self.metrics
+                            if sum(n.name == m.name for n in self.metrics) > 1}):
+            return f"metrics declared twice: {', '.join(twice)}"
         taken = [m.name for m in self.metrics
                  if m.name in (*RUNNER_COLUMNS, *self.row_keys, *self.schema)]
         if taken:
