@@ -5,9 +5,11 @@ from __future__ import annotations
 import importlib.util
 from pathlib import Path
 
+import numpy as np
 import pytest
 
-from trackfuse.config import load
+from trackfuse.config import build, load
+from trackfuse.runner import Runner
 from trackfuse.seeding import draw_points
 from trackfuse.sweep import expand
 
@@ -78,3 +80,22 @@ def test_the_mutation_study_shares_clutter_across_p_m_and_not_across_targets():
     assert _mapped(CONFIGS / "passive_mutation.yaml")[1] == [0, 1, 2] * 4  # p_m x targets.n
     assert _mapped(CONFIGS / "twin_sensor_range.yaml")[1] == [0] * 9  # cue x filter q
     assert _mapped(CONFIGS / "passive_noise.yaml")[1] == [0, 1, 2] * 5  # sigma x targets.n
+
+
+def test_numpy_s_global_generator_gives_each_trial_the_same_numbers_on_every_executor(
+        tmp_path):
+    """A plugin drawing from ``np.random`` directly (the docs forbid it) got numbers that
+    depended on the worker and the batches it had run before: the runner now seeds the
+    global generator per trial, and gives the caller's process its own sequence back."""
+    config = build({"experiment": "toy_experiments:GLOBAL_NUMPY", "trials": 12, "seed": 4},
+                   "global.yaml")
+    np.random.seed(99)
+    expected_next = np.random.random()
+    np.random.seed(99)
+    runs = [Runner(config, tmp_path / kind, executor=kind, workers=2, plots=False,
+                   progress=False).run() for kind in ("serial", "process")]
+    assert np.random.random() == expected_next
+    texts = [(run.folder / "trials.csv").read_text() for run in runs]
+    assert texts[0] == texts[1]
+    values = [line.split(",")[-1] for line in texts[0].splitlines()[1:]]
+    assert len(set(values)) == 12

@@ -428,3 +428,18 @@ SHIFTED = register(Experiment(
     run_trial=shifted_trial,
     metrics=(Metric("miss", "m", "a miss distance, lower is better", better="lower"),),
 ))
+
+
+def global_numpy_trial(params, streams: TrialStreams) -> list[dict]:
+    """Draws from numpy's global generator, which the docs forbid: the runner seeds it per
+    trial, so even this is the same on every executor."""
+    return [{"algorithm": "a", "value": float(np.random.normal())}]
+
+
+GLOBAL_NUMPY = register(Experiment(
+    name="toy_global_numpy",
+    title="A trial that draws from np.random directly",
+    params=(Param("x", 1.0, "a number", ""),),
+    run_trial=global_numpy_trial,
+    batch_size=3,
+))

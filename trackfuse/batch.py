@@ -20,11 +20,13 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from trackfuse.coerce import one_line
 from trackfuse.experiments.base import Experiment
 from trackfuse.results import FAILED_ROW, TIME_SUFFIX, BatchSpan, rows_to_csv, split_timings
 from trackfuse.rowtable import Constant, RowTable, columns_csv
-from trackfuse.seeding import batch_streams, trial_streams
+from trackfuse.seeding import batch_streams, seed_numpy_global, trial_streams
 from trackfuse.trial_rows import checked_rows, table_problem, table_suspect
 
 #: Longest error text of a failed trial's row (characters): the record in ``trials.csv``
@@ -143,12 +145,45 @@ def _table_trials(experiment: Experiment, table: RowTable, producer: str
 def _one_trial(task: BatchTask, trial: int) -> Any:
     """What ``run_trial`` returns for ``trial``, or what it raised."""
     try:
+        seed_numpy_global(task.seed, task.draw_point, trial)
         return task.experiment.run_trial(task.params,
                                          trial_streams(task.seed, task.draw_point, trial))
     except BaseException as err:  # noqa: BLE001 - recorded in the CSV, the run goes on
         if _is_user_interrupt(err):
             raise
         return err
+
+
+@contextmanager
+def _numpy_global_kept() -> Iterator[None]:
+    """Restore numpy's global generator after the trials reseeded it (a serial run's own
+    process, or a notebook's running the harness, keeps its sequence)."""
+    state = np.random.get_state()
+    try:
+        yield
+    finally:
+        np.random.set_state(state)
+
+
+def _run_trials(task: BatchTask, trials: range) -> tuple[Any, str]:
+    """What the batch's trials returned (a list per trial, or a RowTable) and which
+    function returned it. A ``run_batch`` runs with numpy's global generator seeded from
+    its first trial; one that raises or returns the wrong number of trials is run again
+    trial by trial, each seeded from its own (:func:`~trackfuse.seeding.seed_numpy_global`)."""
+    if task.experiment.run_batch is not None:
+        try:
+            seed_numpy_global(task.seed, task.draw_point, trials[0])
+            batch = task.experiment.run_batch(task.params,
+                                              batch_streams(task.seed, task.draw_point, trials))
+            if isinstance(batch, RowTable):
+                batch.check(len(trials))
+            elif not isinstance(batch, list) or len(batch) != len(trials):
+                raise TypeError("run_batch returned the wrong number of trials")
+            return batch, "run_batch"
+        except BaseException as err:  # noqa: BLE001 - isolate the failing trial(s) one by one
+            if _is_user_interrupt(err):
+                raise
+    return [_one_trial(task, t) for t in trials], "run_trial"
 
 
 def execute_batch(task: BatchTask) -> BatchResult:
@@ -159,18 +194,8 @@ def execute_batch(task: BatchTask) -> BatchResult:
     t0 = time.perf_counter()
     span = task.span
     trials = range(span.first, span.stop)
-    producer = "run_trial" if task.experiment.run_batch is None else "run_batch"
-    try:
-        batch = task.experiment.run_trials(task.params,
-                                           batch_streams(task.seed, task.draw_point, trials))
-        if isinstance(batch, RowTable):
-            batch.check(len(trials))
-        elif not isinstance(batch, list) or len(batch) != len(trials):
-            raise TypeError("run_batch returned the wrong number of trials")
-    except BaseException as err:  # noqa: BLE001 - isolate the failing trial(s) one by one
-        if _is_user_interrupt(err):
-            raise
-        batch, producer = [_one_trial(task, t) for t in trials], "run_trial"
+    with _numpy_global_kept():
+        batch, producer = _run_trials(task, trials)
     if isinstance(batch, RowTable):
         batch = _table_trials(task.experiment, batch, producer)
         if isinstance(batch, RowTable):

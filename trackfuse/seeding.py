@@ -17,7 +17,8 @@ Every trial gets two independent generators (``numpy.random.Generator``, PCG64):
 Neither depends on the worker, the executor, the batch or the order of completion, so any
 schedule writes the same numbers. The two are separated by the ``spawn_key`` of a
 :class:`numpy.random.SeedSequence` (domain 0 for common, 1 for point), so no (trial, point)
-can collide with another trial's common stream. See ``docs/runner.md`` (seeding).
+can collide with another trial's common stream. Domain 2 seeds numpy's global generator
+before each trial (:func:`seed_numpy_global`). See ``docs/runner.md`` (seeding).
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ import numpy as np
 if TYPE_CHECKING:  # only for annotations: workers load no sweep parsing
     from trackfuse.sweep import SweepPoint
 
-_COMMON, _POINT = 0, 1
+_COMMON, _POINT, _GLOBAL = 0, 1, 2
 
 
 @dataclass(frozen=True)
@@ -62,6 +63,15 @@ def trial_streams(seed: int, point: int, trial: int) -> TrialStreams:
     common = np.random.SeedSequence(seed, spawn_key=(_COMMON, trial))
     specific = np.random.SeedSequence(seed, spawn_key=(_POINT, trial, point))
     return TrialStreams(np.random.default_rng(common), np.random.default_rng(specific))
+
+
+def seed_numpy_global(seed: int, point: int, trial: int) -> None:
+    """Seed numpy's global generator (``np.random.normal`` and the like, which a plugin
+    must not use) for trial ``trial`` of draw point ``point``: from a third domain of the
+    same seed sequence, so a plugin that uses it anyway draws the same numbers on every
+    executor and worker, and neither trial stream is touched."""
+    state = np.random.SeedSequence(seed, spawn_key=(_GLOBAL, trial, point)).generate_state(1)
+    np.random.seed(int(state[0]))
 
 
 def batch_streams(seed: int, point: int, trials: range) -> list[TrialStreams]:
