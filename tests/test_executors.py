@@ -349,3 +349,35 @@ def test_environment_difference_names_other_code_before_versions():
     older = {**same, "libraries": {**ours, "numpy": "2.2.0"}}
     assert environment_difference("abc", ours, older) == (
         "has other library versions: numpy 2.2.0 (here 2.3.0)")
+
+
+def test_a_lambda_run_trial_is_refused_before_the_pool_in_one_line(tmp_path):
+    """A lambda (or nested) run_trial failed at the first batch with a PicklingError
+    traceback and left the run stopped; serial and dask (cloudpickle) run it."""
+    (tmp_path / "lambdaplug.py").write_text(
+        "from trackfuse.experiments.base import Experiment, Metric\n"
+        "EXPERIMENT = Experiment(name='lambdaplug', title='t', params=(),\n"
+        "    run_trial=lambda params, streams: [{'algorithm': 'a', 'v': 1.0}],\n"
+        "    metrics=(Metric('v', '1', 'one'),))\n")
+    (tmp_path / "cfg.yaml").write_text("experiment: lambdaplug:EXPERIMENT\ntrials: 4\n")
+    pooled = trackfuse("run", "cfg.yaml", "--workers", "2", "--no-plots", "--no-progress",
+                       "--out", "out", cwd=tmp_path)
+    assert pooled.returncode == 2, pooled.stderr
+    assert pooled.stderr.startswith("error: cfg.yaml: experiment lambdaplug: its run_trial "
+                                    "cannot be sent to the worker processes")
+    assert pooled.stderr.count("\n") == 1 and not (tmp_path / "out").exists()
+    serial = trackfuse("run", "cfg.yaml", "--executor", "serial", "--no-plots",
+                       "--no-progress", "--out", "out", cwd=tmp_path)
+    assert serial.returncode == 0, serial.stderr
+
+
+def test_unpicklable_names_the_function_that_cannot_be_sent():
+    def nested(params, streams):
+        return []
+
+    from trackfuse.executors import unpicklable
+    from trackfuse.experiments.base import Experiment
+    assert unpicklable(Experiment(name="n", title="t", params=(), run_trial=abs)) is None
+    why = unpicklable(Experiment(name="n", title="t", params=(), run_trial=abs,
+                                 run_batch=nested))
+    assert why.startswith("its run_batch cannot be sent")

@@ -21,6 +21,7 @@ from __future__ import annotations
 import json
 import multiprocessing
 import os
+import pickle
 import signal
 import socket
 import threading
@@ -316,6 +317,32 @@ def scheduler_address(path: str) -> str:
             or "://" not in info["address"]:
         raise ExecutorError(f"{where}: not a dask scheduler file (no scheduler address)")
     return info["address"]
+
+
+def unpicklable(experiment: Any) -> str | None:
+    """Why the process pool's workers cannot be sent ``experiment`` (an
+    :class:`~trackfuse.experiments.base.Experiment`), else ``None``: a ``lambda`` or a
+    function defined inside another is pickled by name, which its module does not have
+    (serial and dask, whose cloudpickle sends code by value, run it)."""
+    try:
+        pickle.dumps(experiment)
+    except Exception as err:  # noqa: BLE001 - pickle raises many kinds; which field says it
+        bad = [name for name in ("run_trial", "run_batch", "check")
+               if not _pickles(getattr(experiment, name, None))]
+        what = f"its {bad[0]}" if bad else "its declaration"
+        return (f"{what} cannot be sent to the worker processes ({type(err).__name__}: a "
+                "lambda or a function defined inside another function cannot be pickled); "
+                "allowed: a function defined at the top level of its module, or "
+                "--executor serial or dask")
+    return None
+
+
+def _pickles(value: Any) -> bool:
+    try:
+        pickle.dumps(value)
+    except Exception:  # noqa: BLE001 - any failure to pickle
+        return False
+    return True
 
 
 def make_executor(kind: str, workers: int, address: str | None = None,

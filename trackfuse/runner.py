@@ -50,7 +50,7 @@ from trackfuse.environment import (
     version,
     worker_environment,
 )
-from trackfuse.executors import ExecutorError, make_executor
+from trackfuse.executors import ExecutorError, make_executor, unpicklable
 from trackfuse.experiments.base import NON_NEGATIVE
 from trackfuse.failures import first_failure
 from trackfuse.fingerprint import code_fingerprint
@@ -325,10 +325,19 @@ class Runner:
         """
         t0 = time.perf_counter()
         self._check_output_root()
+        self._check_picklable()
         with RunLock(self.folder.path, self.warn), watch_sigint():
             outcome = self._run_locked()
         outcome.seconds = time.perf_counter() - t0
         return outcome
+
+    def _check_picklable(self) -> None:
+        """Refuse, before anything is written, an experiment the process pool cannot send
+        to its workers (it failed at the first batch with a PicklingError traceback)."""
+        pooled = self.executor_kind == "process" and self.workers > 1 and not self._on_dask
+        if pooled and (why := unpicklable(self.config.experiment)):
+            raise ExecutorError(f"{self.config.source}: experiment {self.config.experiment.name}:"
+                                f" {why}")
 
     def _run_locked(self) -> RunOutcome:
         self.folder.check_layout()
