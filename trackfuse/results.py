@@ -43,9 +43,11 @@ from dataclasses import dataclass
 from enum import StrEnum
 from operator import itemgetter
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import yaml
+
+from trackfuse.regular_files import NotARegularFile, open_regular
 
 TRIALS, TIMINGS, SUMMARY, MANIFEST, CONFIG = (
     "trials.csv", "timings.csv", "summary.csv", "manifest.json", "config.yaml")
@@ -196,6 +198,16 @@ def part_names(folder: Path) -> Iterator[tuple[int, int, str]]:
             yield parsed
 
 
+def _open_part(path: Path) -> BinaryIO:
+    """A part opened for reading; a part that is not a regular file (a FIFO, a device) was
+    not written by trackfuse, so it is neither read nor deleted: :class:`RunFolderError`."""
+    try:
+        return open_regular(path)
+    except NotARegularFile as err:
+        raise RunFolderError(f"{path}: {err.strerror}; trackfuse writes only regular files "
+                             "there: move it away and run again") from None
+
+
 class PartDamaged(Exception):
     """A part that does not hold what its batch must hold; it is recomputed, never merged."""
 
@@ -207,7 +219,7 @@ class PartDamaged(Exception):
 def sha256_file(path: Path) -> str:
     """SHA-256 of a file's bytes, read in 1 MiB blocks."""
     digest = hashlib.sha256()
-    with open(path, "rb") as fh:
+    with open_regular(path) as fh:
         for block in iter(lambda: fh.read(1 << 20), b""):
             digest.update(block)
     return digest.hexdigest()
@@ -279,7 +291,7 @@ def read_part(path: Path, span: BatchSpan, kind: str) -> PartText:
     the batch (for a trials part: every trial of the batch is present).
     """
     try:
-        with open(path, "rb") as fh:
+        with _open_part(path) as fh:
             rows, size, digest = _part_header(fh.readline(512), span, kind)
             body = fh.read(size + 1)
     except OSError as err:
@@ -498,7 +510,7 @@ class RunFolder:
     def _check_part_size(self, span: BatchSpan, kind: str) -> None:
         path = self.part_path(span, kind)
         try:
-            with open(path, "rb") as fh:
+            with _open_part(path) as fh:
                 line = fh.readline(512)
                 size = os.fstat(fh.fileno()).st_size
         except OSError as err:
@@ -529,7 +541,7 @@ class RunFolder:
         """The manifest, or ``None`` if there is none; :class:`RunFolderError` if unreadable."""
         path = self.path / MANIFEST
         try:
-            with open(path, "rb") as fh:
+            with open_regular(path) as fh:
                 data = fh.read(MAX_MANIFEST_BYTES + 1)
         except FileNotFoundError:
             return None
@@ -601,7 +613,7 @@ class RunFolder:
     def _part_columns(self, span: BatchSpan, kind: str) -> list[str]:
         """The CSV header of a part, from its first two lines (the part is checked later)."""
         try:
-            with open(self.part_path(span, kind), "rb") as fh:
+            with _open_part(self.part_path(span, kind)) as fh:
                 _part_header(fh.readline(512), span, kind)
                 line = fh.readline(1 << 20).decode("utf-8")
         except OSError as err:

@@ -351,7 +351,7 @@ class Runner:
             self.warn(f"{problem}; rebuilding the final files (from parts/ where they are "
                       "still there, else by recomputing)")
         session = _Session(previous, _now(), self.folder.prepare(self.resolved),
-                           _per_point(previous))
+                           _per_point(previous), done=self._saved_before(previous))
         try:
             for _ in range(MAX_REPAIRS):
                 self._compute_missing(session)
@@ -369,6 +369,11 @@ class Runner:
             with contextlib.suppress(OSError):
                 self.folder.write_manifest(self._manifest(RunStatus.INTERRUPTED, session))
             raise
+
+    def _saved_before(self, previous: dict[str, Any] | None) -> int:
+        """The trials an earlier session recorded as saved: what an interrupt says before
+        the parts are verified (never 0 for a run whose parts are all there)."""
+        return min(max(int_or((previous or {}).get("trials_done"), 0), 0), self.total_trials)
 
     def _already_complete(self, previous: dict[str, Any]) -> RunOutcome:
         """The outcome of a run found complete; its report drawn if it has none (it finished
