@@ -59,6 +59,7 @@ from trackfuse.reports import NothingToDraw, figure_formats, load_drawing, write
 from trackfuse.results import (
     CONFIG,
     INDEX_HTML,
+    REPORT_FILES,
     SUMMARY,
     TIME_SUFFIX,
     TIMING_SUMMARY,
@@ -72,6 +73,7 @@ from trackfuse.results import (
     RunStatus,
     atomic_write,
     config_hash,
+    removed_words,
     run_id,
     sha256_file,
     sibling_manifests,
@@ -280,6 +282,7 @@ class Runner:
             "sessions": int_or(previous.get("sessions"), 0) + 1,
             "per_point_wall_s": {str(k): round(v, 6)
                                  for k, v in sorted(session.per_point.items())},
+            REPORT_FILES: previous.get(REPORT_FILES, []),  # until drawn anew: ours to delete
         }
 
     def _check_output_root(self) -> None:
@@ -332,8 +335,8 @@ class Runner:
 
     def _run_locked(self) -> RunOutcome:
         self.folder.check_layout()
-        if self.force:
-            self.folder.clear()
+        if self.force and (removed := self.folder.clear()):
+            self.warn(f"{self.folder.path}: --force removed {removed_words(removed)}")
         previous = self._previous_manifest()
         if previous is None:
             self._note_other_code()
@@ -400,6 +403,8 @@ class Runner:
         except NothingToDraw as err:
             outcome.figure_errors = [str(err)]
             return {"figure_errors": outcome.figure_errors}
+        if report.removed:
+            self.warn(f"{run.path}: removed {removed_words(report.removed, run.path)}")
         outcome.figures, outcome.figure_errors = report.figures, report.errors
         outcome.not_drawn = report.not_drawn
         outcome.report = report.index
