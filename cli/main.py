@@ -264,7 +264,8 @@ def run(
     no_plots: NoPlots = False,
     no_progress: NoProgress = False,
     force: Annotated[bool, typer.Option("--force", metavar="", help="Recompute from scratch "
-                                        "into the same folder (drops its old results).")]
+                                        "into the same folder: deletes the files trackfuse "
+                                        "wrote there (named on stderr), never others.")]
     = False,
     name: Annotated[str | None, typer.Option(metavar="TEXT", help="A label for the run, kept "
                                              "in its manifest and shown by `trackfuse runs` "
@@ -443,13 +444,14 @@ def plot(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR",
                                                  help="A finished run folder.")]) -> None:
     """Redraw every figure and table of RUN_DIR from its CSVs (nothing is recomputed).
 
-    The final files are checked against the checksums in the run's manifest first. The
+    The final files are checked against the checksums in the run's manifest first. Only
+    files an earlier draw wrote (the manifest lists them) are replaced or deleted. The
     figures show the successful trials; a run with none (or whose trials.csv lacks a column
     the runner writes) is refused and its earlier report removed. Plotting a run of a plugin
     experiment imports the plugin's module (a config is code)."""
     from trackfuse.failures import first_failure
     from trackfuse.reports import write_report
-    from trackfuse.results import CONFIG, RunFolder, RunFolderError
+    from trackfuse.results import CONFIG, RunFolder, RunFolderError, removed_words
     from trackfuse.rundata import swept_keys
     from trackfuse.runlock import RunLock
     run = _load_run(run_dir)
@@ -465,6 +467,8 @@ def plot(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR",
     except KeyboardInterrupt:
         print("interrupted: run `trackfuse plot` again to redraw", file=sys.stderr)
         raise typer.Exit(130) from None
+    if report.removed:
+        print(f"removed {removed_words(report.removed, run.path)} (an earlier draw's)")
     print(f"drew {_count(len(report.figures), 'figure file')} in {run_dir / 'figures'}")
     failed, total = run.manifest.get("trials_failed"), run.manifest.get("trials_total")
     if isinstance(failed, int) and isinstance(total, int) and failed > 0:

@@ -171,6 +171,7 @@ def test_a_table_without_rows_is_not_written_as_a_result(toy_run, monkeypatch):
     folder = toy_run.path / "tables"
     folder.mkdir(exist_ok=True)
     (folder / "empty.csv").write_text("stale result\n")  # left by an earlier drawing
+    monkeypatch.setitem(toy_run.manifest, "report_files", ["tables/empty.csv"])
     monkeypatch.setattr(toy_report, "tables", lambda run: {
         **tables, "empty": pd.DataFrame(columns=["a", "b"]), "why": "nothing at the setting"})
     report = write_report(toy_run)

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import os
 import reprlib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -30,6 +31,8 @@ from typing import Any
 
 from trackfuse import experiments
 from trackfuse.experiments.base import Experiment, Param
+from trackfuse.regular_files import NotARegularFile
+from trackfuse.results import MANIFEST
 from trackfuse.safe_yaml import YamlInputError, read_yaml_file
 from trackfuse.sweep import MAX_POINTS, SweepError, count_points, parse_axis_values
 
@@ -475,9 +478,15 @@ def _outputs(source: str, exp: Experiment, outputs: Any) -> tuple[list[str] | st
 
 def read_yaml(path: str | Path) -> Any:
     """Parse a YAML config file (:func:`~trackfuse.safe_yaml.read_yaml_file`), turning every
-    problem into :class:`ConfigError`."""
+    problem into :class:`ConfigError`. A FIFO named on the command line is read
+    (``trackfuse run <(generate)``); a run folder's ``config.yaml`` (a folder holding a
+    ``manifest.json``) must be a regular file: one found there is no one's pipe."""
+    in_run_folder = os.path.lexists(Path(path).parent / MANIFEST)
     try:
-        return read_yaml_file(path)
+        return read_yaml_file(path, regular_only=in_run_folder)
+    except NotARegularFile as err:
+        raise ConfigError(str(path), "", f"{err.strerror}, in a run folder; allowed: a YAML "
+                                         "config file") from None
     except FileNotFoundError:
         raise ConfigError(str(path), "", "no such file") from None
     except IsADirectoryError:

@@ -11,7 +11,8 @@ A figure or table that the run's config cannot give is returned as a one-line re
 (``str``) and listed under "Not drawn" or "Not tabulated"; a table without rows is never
 written as if it were a result (it is listed too). Each figure is drawn on its own, so a
 figure that raises costs only itself (one line naming it). A redraw removes the figures
-and tables of an earlier draw that it did not write again, so the folder never shows an
+and tables of an earlier draw that it did not write again (those the manifest's
+``report_files`` lists: never a file of the user's), so the folder never shows an
 old result beside the new index. The failed trials' rows are left to the report modules
 (they carry no metrics); a run the report cannot be drawn from at all (no rows, every trial
 failed, a column the runner writes missing) is refused with :class:`NothingToDraw` and its
@@ -62,13 +63,15 @@ from trackfuse.results import (
     INDEX_FILES,
     INDEX_HTML,
     INDEX_MD,
+    REPORT_FILES,
     TRIALS,
+    RunFolder,
     RunFolderError,
     atomic_write,
+    removed_words,
 )
 from trackfuse.rowtable import frame_csv
 from trackfuse.rundata import RunData, load, swept_keys
-from trackfuse.runstate import REPORT_FILES
 
 PNG_DPI = 200
 #: zlib level of PNG files: 1 halves the encoding time of level 6 for files ~1.3x larger.
@@ -150,9 +153,9 @@ FIGURE_FILES = {".png": "the figure above, image (PNG)", ".pdf": "the figure abo
 @dataclass
 class Report:
     """What :func:`write_report` wrote: figure and table files, the index, and one message
-    per figure or table that failed (the data stay complete), and the reason for each wanted
+    per figure or table that failed (the data stay complete), the reason for each wanted
     figure this run's config cannot draw (``not_drawn``) and each table it cannot fill
-    (``not_tabulated``)."""
+    (``not_tabulated``), and the files of an earlier draw it deleted (``removed``)."""
 
     figures: list[Path] = field(default_factory=list)
     tables: list[Path] = field(default_factory=list)
@@ -160,6 +163,7 @@ class Report:
     errors: list[str] = field(default_factory=list)
     not_drawn: dict[str, str] = field(default_factory=dict)
     not_tabulated: dict[str, str] = field(default_factory=dict)
+    removed: list[Path] = field(default_factory=list)
 
     def manifest_entries(self, run_path: Path) -> dict[str, Any]:
         """What the run's manifest records of this report: its problems and its files,
@@ -428,14 +432,13 @@ def undrawable(run: RunData) -> str | None:
     return None
 
 
-def _report_files(run: RunData, keep: Collection[Path]) -> list[Path]:
-    """The files of ``figures/`` and ``tables/`` a report of ``run`` may have written,
-    other than ``keep``: figures named after the experiment's figures (or the config's), and
-    tables' ``.csv`` and ``.md`` files."""
-    names = {*run.experiment.figures, *wanted_figures(run)}
-    found = [p for p in (run.path / "figures").glob("*") if p.stem in names]
-    found += [p for p in (run.path / "tables").glob("*") if p.suffix in (".csv", ".md")]
-    return [p for p in found if p.is_file() and p not in keep]
+def _remove_earlier(run: RunData, keep: Collection[Path], report: Report) -> None:
+    """Delete the files an earlier draw wrote (the manifest's ``report_files``: never a
+    file of the user's) other than ``keep``, naming them in ``report.removed``."""
+    for path in RunFolder(run.path).report_files(run.manifest):
+        if path not in keep:
+            path.unlink()
+            report.removed.append(path)
 
 
 def write_report(run: RunData, wanted: Collection[str] | None = None,
@@ -444,17 +447,20 @@ def write_report(run: RunData, wanted: Collection[str] | None = None,
     write, and write ``index.md`` and ``index.html``.
 
     ``wanted``: figure names (default: :func:`wanted_figures`); ``formats``: default the
-    config's. Raises :class:`NothingToDraw` (having removed any earlier report) for a run
-    :func:`undrawable` names a reason for.
+    config's. ``run.manifest`` then lists the files written (the caller saves it), so a
+    redraw removes only what this draw wrote. Raises
+    :class:`~trackfuse.results.RunFolderError` for a ``figures/`` or ``tables/`` that is a
+    link or not a folder, :class:`NothingToDraw` (having removed any earlier report) for a
+    run :func:`undrawable` names a reason for.
     """
+    RunFolder(run.path).check_layout()  # never write or delete through a link
     why = undrawable(run)
     if why is not None:
-        stale = _report_files(run, ()) + [run.path / n for n in INDEX_FILES
-                                          if (run.path / n).is_file()]
-        for path in stale:
-            path.unlink()
-        raise NothingToDraw(f"{why}: nothing to draw"
-                            + ("; the earlier report was removed" if stale else ""))
+        earlier = Report()
+        _remove_earlier(run, (), earlier)
+        raise NothingToDraw(f"{why}: nothing to draw" + (
+            f"; the earlier report was removed ({removed_words(earlier.removed, run.path)})"
+            if earlier.removed else ""))
     if wanted is None:
         wanted = wanted_figures(run)
     formats = list(formats or figure_formats(run.config))
@@ -464,12 +470,13 @@ def write_report(run: RunData, wanted: Collection[str] | None = None,
     if module is not None:
         _write_figures(run, module, list(wanted), formats, report,
                        meanwhile=lambda: tables.update(_write_tables(run, module, report)))
-    for path in _report_files(run, {*report.figures, *report.tables}):
-        path.unlink()  # an earlier draw's: it would look like a result of this one
+    written = {*report.figures, *report.tables, *(run.path / n for n in INDEX_FILES)}
+    _remove_earlier(run, written, report)  # it would look like a result of this one
     md = index_markdown(run, tables, report)
     atomic_write(run.path / INDEX_MD, md)
     atomic_write(run.path / INDEX_HTML, index_html(run, tables, report))
     report.index = run.path / INDEX_HTML
+    run.manifest[REPORT_FILES] = report.manifest_entries(run.path)[REPORT_FILES]  # a redraw's
     return report
 
 

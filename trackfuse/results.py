@@ -37,15 +37,16 @@ import json
 import math
 import os
 import re
-import shutil
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
 from operator import itemgetter
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import yaml
+
+from trackfuse.regular_files import NotARegularFile, open_regular
 
 TRIALS, TIMINGS, SUMMARY, MANIFEST, CONFIG = (
     "trials.csv", "timings.csv", "summary.csv", "manifest.json", "config.yaml")
@@ -54,6 +55,9 @@ FINAL_FILES = (CONFIG, TRIALS, TIMINGS, SUMMARY, TIMING_SUMMARY)
 REPORT_DIRS = ("figures", "tables")
 INDEX_MD, INDEX_HTML = "index.md", "index.html"
 INDEX_FILES = (INDEX_MD, INDEX_HTML)
+#: Manifest key: the report's files, relative to the run folder (written with the report);
+#: the only files of ``figures/`` and ``tables/`` trackfuse ever deletes.
+REPORT_FILES = "report_files"
 TIME_SUFFIX = "_time_s"
 PART_KINDS = ("trials", "timings")
 PART_MAGIC = "#trackfuse-part 1"
@@ -196,6 +200,16 @@ def part_names(folder: Path) -> Iterator[tuple[int, int, str]]:
             yield parsed
 
 
+def _open_part(path: Path) -> BinaryIO:
+    """A part opened for reading; a part that is not a regular file (a FIFO, a device) was
+    not written by trackfuse, so it is neither read nor deleted: :class:`RunFolderError`."""
+    try:
+        return open_regular(path)
+    except NotARegularFile as err:
+        raise RunFolderError(f"{path}: {err.strerror}; trackfuse writes only regular files "
+                             "there: move it away and run again") from None
+
+
 class PartDamaged(Exception):
     """A part that does not hold what its batch must hold; it is recomputed, never merged."""
 
@@ -207,7 +221,7 @@ class PartDamaged(Exception):
 def sha256_file(path: Path) -> str:
     """SHA-256 of a file's bytes, read in 1 MiB blocks."""
     digest = hashlib.sha256()
-    with open(path, "rb") as fh:
+    with open_regular(path) as fh:
         for block in iter(lambda: fh.read(1 << 20), b""):
             digest.update(block)
     return digest.hexdigest()
@@ -279,7 +293,7 @@ def read_part(path: Path, span: BatchSpan, kind: str) -> PartText:
     the batch (for a trials part: every trial of the batch is present).
     """
     try:
-        with open(path, "rb") as fh:
+        with _open_part(path) as fh:
             rows, size, digest = _part_header(fh.readline(512), span, kind)
             body = fh.read(size + 1)
     except OSError as err:
@@ -409,6 +423,10 @@ class RunFolder:
         """Raise :class:`RunFolderError` if a file of the run is not a regular file or a
         folder of it is not a folder (nothing this class would overwrite or delete)."""
         for folder in (self.parts, *(self.path / d for d in REPORT_DIRS)):
+            if folder.is_symlink():
+                raise RunFolderError(f"{folder}: a link (to {os.readlink(folder)}); trackfuse "
+                                     "writes and deletes only inside the run folder, never "
+                                     "through a link: replace it with a folder and run again")
             if folder.exists() and not folder.is_dir():
                 raise RunFolderError(f"{folder}: exists but is not a folder; move it away and "
                                      "run again")
@@ -434,24 +452,66 @@ class RunFolder:
         atomic_write(self.path / CONFIG, data)
         return {"bytes": len(data), "sha256": hashlib.sha256(data).hexdigest()}
 
-    def clear(self) -> None:
-        """Delete the run's state, final files and reports, for a fresh start in the same
-        folder (``--force``; call only with the lock held, after :meth:`check_layout`).
-        Other files are left alone."""
-        for folder in (self.parts, *(self.path / d for d in REPORT_DIRS)):
-            shutil.rmtree(folder, ignore_errors=True)
-        for name in (MANIFEST, *FINAL_FILES, *INDEX_FILES):
-            (self.path / name).unlink(missing_ok=True)
+    def report_files(self, manifest: dict[str, Any]) -> list[Path]:
+        """The files the manifest's :data:`REPORT_FILES` records the report wrote that are
+        still there (not folders): ``index.md``, ``index.html`` and plain names directly in
+        ``figures/`` or ``tables/``; any other entry (``../x``, ``trials.csv``) is ignored."""
+        recorded = manifest.get(REPORT_FILES)
+        found = []
+        for entry in recorded if isinstance(recorded, list) else []:
+            parts = str(entry).split("/")
+            if not (parts in ([n] for n in INDEX_FILES) or len(parts) == 2
+                    and parts[0] in REPORT_DIRS and parts[1] not in ("", ".", "..")):
+                continue
+            path = self.path.joinpath(*parts)
+            if os.path.lexists(path) and not path.is_dir():
+                found.append(path)
+        return list(dict.fromkeys(found))
+
+    def clear(self) -> list[str]:
+        """Delete what trackfuse wrote of an earlier run, for a fresh start in the same
+        folder (``--force``; call only with the lock held, after :meth:`check_layout`): its
+        parts, final files, index, the report files its manifest lists, then the manifest.
+        Other files stay, and so do the folders that hold them. Returns what it removed,
+        relative to the folder."""
+        try:
+            manifest = self.read_manifest() or {}
+        except RunFolderError:  # unreadable: no report file is known to be ours
+            manifest = {}
+        owned = [*self.report_files(manifest),
+                 *(self.path / n for n in (*FINAL_FILES, *INDEX_FILES, MANIFEST))]
+        removed = self._remove_parts()
+        for path in dict.fromkeys(owned):
+            if os.path.lexists(path):
+                path.unlink()
+                removed.append(path.relative_to(self.path).as_posix())
+        for folder in REPORT_DIRS:
+            with contextlib.suppress(OSError):  # not empty: it holds files of the user's
+                (self.path / folder).rmdir()
+        return removed
 
     def drop_resume_state(self) -> None:
         """Delete ``parts/`` once the final files are written, verified and recorded in a
         ``complete`` manifest: they hold every row, so the parts would be a second copy.
+        Only parts and temporaries are deleted (a file of the user's keeps the folder)."""
+        self._remove_parts()
+
+    def _remove_parts(self) -> list[str]:
+        """Delete the parts and temporaries in ``parts/`` (regular files by those names),
+        then the folder if that empties it; return their paths relative to the run folder.
         Trials parts go first, so a kill midway still leaves no trials part without its
         timings part (the order :meth:`write_part` keeps)."""
-        if self.parts.is_dir():
-            for part in self.parts.glob("*.trials.csv"):
-                part.unlink(missing_ok=True)
-        shutil.rmtree(self.parts, ignore_errors=True)
+        try:
+            entries = [e for e in os.scandir(self.parts) if e.is_file(follow_symlinks=False)]
+        except OSError:  # no parts/ (or not a folder: check_layout says so)
+            return []
+        ours = [e for e in entries if _TEMPORARY.match(e.name) or parse_part_name(e.name)]
+        ours.sort(key=lambda e: not e.name.endswith(".trials.csv"))
+        for entry in ours:
+            Path(entry.path).unlink(missing_ok=True)
+        with contextlib.suppress(OSError):  # not empty: it holds files of the user's
+            self.parts.rmdir()
+        return [f"parts/{e.name}" for e in ours]
 
     def remove_temporaries(self) -> None:
         """Delete temporary files left by killed runs (call only with the lock held)."""
@@ -498,7 +558,7 @@ class RunFolder:
     def _check_part_size(self, span: BatchSpan, kind: str) -> None:
         path = self.part_path(span, kind)
         try:
-            with open(path, "rb") as fh:
+            with _open_part(path) as fh:
                 line = fh.readline(512)
                 size = os.fstat(fh.fileno()).st_size
         except OSError as err:
@@ -529,7 +589,7 @@ class RunFolder:
         """The manifest, or ``None`` if there is none; :class:`RunFolderError` if unreadable."""
         path = self.path / MANIFEST
         try:
-            with open(path, "rb") as fh:
+            with open_regular(path) as fh:
                 data = fh.read(MAX_MANIFEST_BYTES + 1)
         except FileNotFoundError:
             return None
@@ -601,7 +661,7 @@ class RunFolder:
     def _part_columns(self, span: BatchSpan, kind: str) -> list[str]:
         """The CSV header of a part, from its first two lines (the part is checked later)."""
         try:
-            with open(self.part_path(span, kind), "rb") as fh:
+            with _open_part(self.part_path(span, kind)) as fh:
                 _part_header(fh.readline(512), span, kind)
                 line = fh.readline(1 << 20).decode("utf-8")
         except OSError as err:
@@ -628,6 +688,16 @@ class RunFolder:
             header = ""
         if header:
             yield header.encode(), 0
+
+
+def removed_words(removed: Sequence[str | Path], folder: Path | None = None,
+                  shown: int = 4) -> str:
+    """``3 files trackfuse wrote: trials.csv, ...`` for a one-line message saying what was
+    deleted; paths relative to ``folder`` when given."""
+    names = [Path(p).relative_to(folder).as_posix() if folder else str(p) for p in removed]
+    more = f" and {len(names) - shown} more" if len(names) > shown else ""
+    noun = "file" if len(names) == 1 else "files"
+    return f"{len(names)} {noun} trackfuse wrote: {', '.join(names[:shown])}{more}"
 
 
 def split_timings(rows: list[dict[str, Any]], keys: Sequence[str]) -> tuple[list[dict], list[dict]]:

@@ -31,6 +31,7 @@ import pandas as pd
 
 from trackfuse import experiments
 from trackfuse.experiments.base import Experiment
+from trackfuse.regular_files import open_regular
 from trackfuse.results import (
     CONFIG,
     FAILED_ROW,
@@ -144,9 +145,13 @@ def swept_keys(config: dict[str, Any]) -> list[str]:
 
 def _read_csv(path: Path) -> pd.DataFrame:
     try:
-        return pd.read_csv(path, low_memory=False)
+        with open_regular(path) as fh:  # a FIFO in its place must not hang the reader
+            return pd.read_csv(fh, low_memory=False)
     except FileNotFoundError:
         raise RunFolderError(f"{path}: missing") from None
+    except OSError as err:
+        raise RunFolderError(f"{path}: unreadable ({err.strerror or type(err).__name__})") \
+            from None
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as err:
         raise RunFolderError(f"{path}: unreadable ({type(err).__name__})") from None
 
@@ -213,7 +218,7 @@ def _outputs_readable(config: dict[str, Any]) -> bool:
 
 def _read_config(path: Path) -> Any:
     try:
-        return read_yaml_file(path)
+        return read_yaml_file(path, regular_only=True)
     except FileNotFoundError:
         raise RunFolderError(f"{path}: missing") from None
     except OSError as err:

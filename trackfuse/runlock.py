@@ -29,6 +29,7 @@ from typing import Any
 from filelock import FileLock, Timeout
 
 from trackfuse.child_processes import process_alive
+from trackfuse.regular_files import open_regular
 from trackfuse.results import RunFolderError, atomic_write
 
 LOCK_FILE = ".lock"
@@ -108,7 +109,7 @@ class RunLock:
         """Who holds (or last held without releasing) the lock, if recorded."""
         path = self.path / HOLDER_FILE
         try:
-            with open(path, "rb") as fh:
+            with open_regular(path) as fh:  # a FIFO put there must not hang a listing
                 holder = json.loads(fh.read(100_000).decode("utf-8"))
         except FileNotFoundError:
             return None
@@ -148,7 +149,7 @@ def busy_problem(path: Path) -> str | None:
     where there is no lock file or ``flock``)."""
     try:
         import fcntl
-        fd = os.open(path / LOCK_FILE, os.O_RDONLY)
+        fd = os.open(path / LOCK_FILE, os.O_RDONLY | os.O_NONBLOCK)  # a FIFO: no wait
     except (ImportError, OSError):
         return None
     try:

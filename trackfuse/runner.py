@@ -59,6 +59,7 @@ from trackfuse.reports import NothingToDraw, figure_formats, load_drawing, write
 from trackfuse.results import (
     CONFIG,
     INDEX_HTML,
+    REPORT_FILES,
     SUMMARY,
     TIME_SUFFIX,
     TIMING_SUMMARY,
@@ -72,6 +73,7 @@ from trackfuse.results import (
     RunStatus,
     atomic_write,
     config_hash,
+    removed_words,
     run_id,
     sha256_file,
     sibling_manifests,
@@ -280,6 +282,7 @@ class Runner:
             "sessions": int_or(previous.get("sessions"), 0) + 1,
             "per_point_wall_s": {str(k): round(v, 6)
                                  for k, v in sorted(session.per_point.items())},
+            REPORT_FILES: previous.get(REPORT_FILES, []),  # until drawn anew: ours to delete
         }
 
     def _check_output_root(self) -> None:
@@ -341,8 +344,8 @@ class Runner:
 
     def _run_locked(self) -> RunOutcome:
         self.folder.check_layout()
-        if self.force:
-            self.folder.clear()
+        if self.force and (removed := self.folder.clear()):
+            self.warn(f"{self.folder.path}: --force removed {removed_words(removed)}")
         previous = self._previous_manifest()
         if previous is None:
             self._note_other_code()
@@ -360,7 +363,7 @@ class Runner:
             self.warn(f"{problem}; rebuilding the final files (from parts/ where they are "
                       "still there, else by recomputing)")
         session = _Session(previous, _now(), self.folder.prepare(self.resolved),
-                           _per_point(previous))
+                           _per_point(previous), done=self._saved_before(previous))
         try:
             for _ in range(MAX_REPAIRS):
                 self._compute_missing(session)
@@ -378,6 +381,11 @@ class Runner:
             with contextlib.suppress(OSError):
                 self.folder.write_manifest(self._manifest(RunStatus.INTERRUPTED, session))
             raise
+
+    def _saved_before(self, previous: dict[str, Any] | None) -> int:
+        """The trials an earlier session recorded as saved: what an interrupt says before
+        the parts are verified (never 0 for a run whose parts are all there)."""
+        return min(max(int_or((previous or {}).get("trials_done"), 0), 0), self.total_trials)
 
     def _already_complete(self, previous: dict[str, Any]) -> RunOutcome:
         """The outcome of a run found complete; its report drawn if it has none (it finished
@@ -404,6 +412,8 @@ class Runner:
         except NothingToDraw as err:
             outcome.figure_errors = [str(err)]
             return {"figure_errors": outcome.figure_errors}
+        if report.removed:
+            self.warn(f"{run.path}: removed {removed_words(report.removed, run.path)}")
         outcome.figures, outcome.figure_errors = report.figures, report.errors
         outcome.not_drawn = report.not_drawn
         outcome.report = report.index

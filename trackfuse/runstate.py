@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from trackfuse.coerce import int_or
-from trackfuse.results import INDEX_HTML, MANIFEST, RunFolder, RunStatus
+from trackfuse.results import INDEX_HTML, MANIFEST, REPORT_FILES, RunFolder, RunStatus
 from trackfuse.runlock import held_by_a_live_process
 
 #: A run whose manifest says running but whose process has ended (killed, or stopped by a
@@ -26,8 +26,6 @@ STOPPED = "stopped"
 #: A folder whose manifest cannot be read, or a complete run whose final files do not match
 #: what its manifest records.
 DAMAGED = "damaged"
-#: Manifest key: the report's files, relative to the run folder (written with the report).
-REPORT_FILES = "report_files"
 
 
 @dataclass(frozen=True)

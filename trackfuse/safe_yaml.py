@@ -16,6 +16,8 @@ from typing import Any
 
 import yaml
 
+from trackfuse.regular_files import open_regular
+
 MAX_BYTES = 1_000_000
 MAX_NODES = 100_000
 _MERGE_TAG = "tag:yaml.org,2002:merge"
@@ -111,14 +113,16 @@ def load_yaml(text: str) -> Any:
         loader.dispose()
 
 
-def read_yaml_file(path: str | Path) -> Any:
+def read_yaml_file(path: str | Path, regular_only: bool = False) -> Any:
     """Parse the YAML file at ``path``: at most :data:`MAX_BYTES` bytes of UTF-8 text, with
-    the bounds of :func:`load_yaml`.
+    the bounds of :func:`load_yaml`. ``regular_only``: a file found in a run folder, refused
+    (:class:`~trackfuse.regular_files.NotARegularFile`) unless it is a regular file, where a
+    FIFO the user names (``<(generate)``) is read like a file.
 
     Raises :class:`YamlInputError` (one line, without the file name) for a file too large,
     not UTF-8 or refused by :func:`load_yaml`, and ``OSError`` when it cannot be read.
     """
-    with open(path, "rb") as fh:
+    with (open_regular(path) if regular_only else open(path, "rb")) as fh:
         data = fh.read(MAX_BYTES + 1)
     if len(data) > MAX_BYTES:
         raise YamlInputError(f"larger than {MAX_BYTES} bytes; a config is a short text file")
