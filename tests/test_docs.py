@@ -126,7 +126,7 @@ def test_the_esm_radar_cv_nis_example_runs_on_a_run_folder(tmp_path):
 
 
 def test_the_interval_coverage_example_runs_on_a_run_folder(tmp_path):
-    """examples/interval_coverage.py (docs/runner.md, Statistics) on 100 trials of the orbit
+    """examples/interval_coverage.py (docs/statistics.md) on 100 trials of the orbit
     config's nearest neighbour: all three measurements, one null comparison."""
     lines = _example_on_a_small_run(
         tmp_path, "twin_sensor_orbit.yaml", "interval_coverage.py", trials=100,
@@ -188,7 +188,7 @@ def test_the_first_update_example_prints_shift_and_formula():
 
 
 def test_the_first_update_example_pairs_a_runs_own_trials(tmp_path, monkeypatch):
-    """``--run`` (the number README quotes): the shift is the run's scan-1 mean minus the
+    """``--run`` (the number docs/results.md quotes): the shift is the run's scan-1 mean minus the
     prior mean on the same trials, its paired interval far narrower than the scan-1 mean's
     (which carries the prior's spread); a run whose scan-1 errors are not the code's own
     is refused rather than paired with the wrong priors."""
