@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import re
 import reprlib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -41,12 +42,25 @@ MAX_TRIALS = 10**9
 
 
 class ConfigError(ValueError):
-    """A config problem; ``str(err)`` is the one-line message shown to the user."""
+    """A config problem; ``str(err)`` is the one-line message shown to the user,
+    ``source: key: message``, where the message reads ``got X; allowed: Y`` when it can."""
 
     def __init__(self, source: str, key: str, message: str):
         self.source, self.key, self.message = source, key, message
         text = f"{source}: {key}: {message}" if key else f"{source}: {message}"
         super().__init__("".join(c if c.isprintable() else repr(c)[1:-1] for c in text))
+
+    @property
+    def allowed(self) -> str:
+        """What the key accepts, as the message states it after ``allowed:`` ('' if none)."""
+        _, said, allowed = self.message.rpartition("; allowed: ")
+        return allowed if said else ""
+
+    @property
+    def suggestion(self) -> str:
+        """The closest valid name the message offers (``did you mean 'x'?``), or ''."""
+        found = re.search(r"did you mean '([^']*)'\?", self.message)
+        return found.group(1) if found else ""
 
 
 @dataclass
