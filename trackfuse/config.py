@@ -1,21 +1,11 @@
 """Load a YAML scenario config, apply command-line overrides, and validate it.
 
-Every problem raises :class:`ConfigError`, whose message is one line naming the file, the
-dotted key, what was given and what is allowed, e.g.::
+Every problem raises :class:`ConfigError`: one line naming the file (or ``--set``/``--sweep``),
+the dotted key, what was given and what is allowed::
 
     configs/x.yaml: params.clutter.mean: got -1; allowed: a number >= 0
 
-Config layout (all keys but ``experiment`` optional)::
-
-    experiment: twin_sensor       # registered name, or "package.module:ATTR"
-    title: "..."
-    trials: 50                    # Monte Carlo trials per sweep point
-    seed: 1                       # root seed (non-negative integer)
-    batch_size: 25                # trials per task; default from the experiment
-    params: {clutter.mean: 5}     # flat dotted keys or nested mappings
-    sweep: {clutter.mean: "range(0, 16, 1)", assoc: [nn, mspda_parallel]}
-    sweep_mode: grid              # or zip
-    outputs: {figures: all, formats: [png, pdf]}
+The config layout and the override syntax are in docs/configs.md.
 """
 
 from __future__ import annotations
