@@ -32,12 +32,10 @@ def _stop(signum: int, frame: object) -> None:
 def _forget_caught_ctrl_c() -> None:
     """Let the exit status a command chose stand after a Ctrl-C it caught.
 
-    CPython 3.11 to 3.13 (changed by python/cpython#128130) marks the process as ended by
-    Ctrl-C when a ``KeyboardInterrupt`` leaves code run by ``exec`` or ``eval`` of a string,
-    as each dataclass of a module being imported is built, even if the command then catches
-    it: ``python -m trackfuse`` killed itself with SIGINT after its ``interrupted:`` line
-    instead of exiting 130. Running such code clears the mark.
-    """
+    CPython 3.11-3.13 (python/cpython#128130) marks the process as ended by Ctrl-C when a
+    ``KeyboardInterrupt`` leaves code run by ``exec`` of a string (a dataclass being built
+    during an import), even if caught; running such code clears the mark, so the command
+    exits 130 instead of killing itself by SIGINT."""
     exec("")
 
 

@@ -30,7 +30,7 @@ experiment's code, run in full, gives the run's scan-1 errors for the first tria
 prints the paired shift (scan-1 error minus prior error, same trials) with its 95 % t
 interval beside the unpaired mean of each: the scan-1 mean alone carries the prior's
 sampling spread. On ``twin_sensor_rmse_vs_bound.yaml`` (seed 20051006, 1000 trials) this is
-the number README and docs/papers/twin_sensor.md quote.
+the number docs/results.md and docs/papers/twin_sensor.md quote.
 """
 
 from __future__ import annotations

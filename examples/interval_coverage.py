@@ -1,5 +1,5 @@
 """What the report's 95 % means, measured on a large population of ``twin_sensor_orbit``
-runs of nearest neighbour (docs/runner.md, "Statistics"; trackfuse/stats.py).
+runs of nearest neighbour (docs/statistics.md; trackfuse/stats.py).
 
 Usage, on a run of the shipped orbit config with more trials and the two nearest-neighbour
 algorithms only (removing algorithms changes no other algorithm's numbers, so trials 0-49

@@ -30,6 +30,32 @@ from trackfuse.experiments.base import Param  # noqa: E402
 from trackfuse.results import RunFolder  # noqa: E402
 
 
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption("--all", action="store_true",
+                     help="run the slow tests too (by default only the fast suite runs)")
+
+
+_SLOW_LEFT_OUT = pytest.StashKey[int]()
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Leave the ``slow`` tests out of a plain ``pytest`` (the fast suite); ``-m EXPR`` or
+    ``--all`` chooses otherwise."""
+    if config.getoption("--all") or config.option.markexpr:
+        return
+    slow = [item for item in items if item.get_closest_marker("slow")]
+    if slow:
+        items[:] = [item for item in items if not item.get_closest_marker("slow")]
+        config.hook.pytest_deselected(items=slow)
+        config.stash[_SLOW_LEFT_OUT] = len(slow)
+
+
+def pytest_terminal_summary(terminalreporter, config: pytest.Config) -> None:
+    if left_out := config.stash.get(_SLOW_LEFT_OUT, 0):
+        terminalreporter.write_line(f"{left_out} slow tests left out: `pytest -m slow` runs "
+                                    "them, `pytest --all` everything")
+
+
 def cli_env() -> dict[str, str]:
     """Environment for a ``trackfuse`` subprocess that can import the toy experiments."""
     env = dict(os.environ)

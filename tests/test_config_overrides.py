@@ -7,7 +7,7 @@ import pytest
 import yaml
 from conftest import ROOT, trackfuse
 
-from trackfuse.config import build, load
+from trackfuse.config import ConfigError, build, load
 from trackfuse.sweep import SweepError, parse_sets, parse_sweeps
 
 CONFIG = "experiment: toy_experiments:GAUSSIAN\ntrials: 3\nsweep: {mu: [0, 1]}\n"
@@ -38,44 +38,55 @@ def test_sweep_list_values_keep_their_commas():
 
 def test_errors_name_the_override_not_the_file(write_config):
     path = write_config(CONFIG)
-    cases = [(["--set", "n=0"], "error: --set: n: got 0; allowed: an integer >= 1"),
-             (["n=0"], "error: --set: n: got 0"),
-             (["--set", "trials=-2"], "error: --set: trials: got -2"),
-             (["--set", "sigam=1"], "error: --set: sigam: unknown parameter of 'toy_gaussian';"
-                                    " did you mean 'sigma'?"),
-             (["--sweep", "label=a,c"], "error: --sweep: label: got 'c'; allowed: one of a, b"),
-             (["--sweep", "mu=range(0,1,0)"], "error: --sweep: mu: got 'range(0,1,0)'")]
-    for args, expected in cases:
-        result = trackfuse("validate", path, *args)
-        assert result.returncode == 2 and result.stderr.startswith(expected), (args,
-                                                                                result.stderr)
-        assert str(path) not in result.stderr
-    in_file = trackfuse("validate", write_config(CONFIG + "params: {n: 0}\n", "bad"))
-    assert in_file.stderr.startswith("error: ") and "bad.yaml: params.n: got 0" in in_file.stderr
+    # (--set items, --sweep items, source, key, allowed, did-you-mean, what it says otherwise)
+    cases = [(["n=0"], [], "--set", "n", "an integer >= 1", "", "got 0"),
+             (["trials=-2"], [], "--set", "trials", "an integer in [1, 1000000000]", "",
+              "got -2"),
+             (["sigam=1"], [], "--set", "sigam", "", "sigma", "unknown parameter"),
+             ([], ["label=a,c"], "--sweep", "label", "one of a, b", "", "got 'c'"),
+             ([], ["mu=range(0,1,0)"], "--sweep", "mu", "", "", "step must not be 0")]
+    for sets, sweeps, source, key, allowed, suggestion, says in cases:
+        with pytest.raises(ConfigError) as err:
+            load(path, parse_sets(sets), parse_sweeps(sweeps))
+        error = err.value
+        assert (error.source, error.key, error.allowed, error.suggestion) == \
+            (source, key, allowed, suggestion), str(error)
+        assert says in error.message and str(path) not in str(error)
+    with pytest.raises(ConfigError) as in_file:
+        load(write_config(CONFIG + "params: {n: 0}\n", "bad"))
+    assert (in_file.value.source, in_file.value.key) == (str(path.parent / "bad.yaml"),
+                                                         "params.n")
+    for override in (["--set", "n=0"], ["n=0"]):  # the command line blames the override
+        result = trackfuse("validate", path, *override)
+        assert result.returncode == 2
+        assert result.stderr == "error: --set: n: got 0; allowed: an integer >= 1\n"
 
 
 def test_an_experiments_own_check_blames_the_override_that_set_the_key():
     """--set targets.n=50 (the paper's scene has 10 targets) was blamed on the config file."""
     config = ROOT / "configs" / "ci" / "passive_assoc_ci.yaml"
-    for args, blamed in ((["--set", "targets.n=50"], "--set: targets.n: got 50; "),
-                         (["targets.n=50"], "--set: targets.n: got 50; "),
-                         (["--sweep", "targets.n=5,50"], "--sweep: targets.n: got 50 at the "
-                                                         "sweep point targets.n=50; ")):
-        result = trackfuse("validate", config, *args)
-        assert result.returncode == 2, result.stderr
-        assert result.stderr.startswith(f"error: {blamed}allowed with scene.mode: paper: "
-                                        "1..10"), result.stderr
-    in_file = trackfuse("validate", config, "--set", "scene.mode=paper")  # the file's n: fine
-    assert in_file.returncode == 0, in_file.stderr
+    for sets, sweeps, source, says in (
+            (["targets.n=50"], [], "--set", "got 50; allowed with scene.mode: paper: 1..10"),
+            ([], ["targets.n=5,50"], "--sweep", "got 50 at the sweep point targets.n=50; "
+                                                "allowed with scene.mode: paper: 1..10")):
+        with pytest.raises(ConfigError) as err:
+            load(config, parse_sets(sets), parse_sweeps(sweeps))
+        assert (err.value.source, err.value.key) == (source, "targets.n")
+        assert err.value.message.startswith(says), str(err.value)
+    result = trackfuse("validate", config, "targets.n=50")  # a positional override too
+    assert result.returncode == 2 and result.stderr.startswith("error: --set: targets.n: ")
+    assert load(config, {"scene.mode": "paper"}).params["targets.n"] <= 10  # the file's n
 
 
 def test_a_typo_in_outputs_figures_is_refused_at_validation(write_config):
     path = write_config(CONFIG + "outputs: {figures: [estimat]}\n")
-    for command in (["validate"], ["run", "--no-progress"]):
-        result = trackfuse(*command, path)
-        assert result.returncode == 2
-        assert "outputs.figures: unknown figure 'estimat'; did you mean 'estimate'?" in \
-            result.stderr
+    with pytest.raises(ConfigError) as err:
+        load(path)
+    assert (err.value.key, err.value.suggestion, err.value.allowed) == \
+        ("outputs.figures", "estimate", "estimate")
+    result = trackfuse("run", "--no-progress", path)  # refused before anything runs
+    assert result.returncode == 2
+    assert result.stderr.startswith(f"error: {path}: outputs.figures: unknown figure")
     listed = trackfuse("list", "toy_experiments:GAUSSIAN")
     assert "\n  estimate (paper Fig. 1)\n" in listed.stdout  # every figure name is listed
 
@@ -100,28 +111,32 @@ def test_a_key_given_twice_on_the_command_line_is_refused(items, parse):
 def test_a_top_level_key_cannot_be_swept_and_is_not_called_an_unknown_parameter(key):
     """`--sweep trials=1,2` said "unknown parameter of 'toy_gaussian'"."""
     raw = yaml.safe_load(CONFIG)
-    with pytest.raises(ValueError) as from_option:
+    with pytest.raises(ConfigError) as from_option:
         build(raw, "c.yaml", sweeps={key: [1, 2]})
-    assert str(from_option.value).startswith(f"--sweep: {key}: a top-level key cannot be "
-                                             "swept")
-    with pytest.raises(ValueError) as from_file:
+    with pytest.raises(ConfigError) as from_file:
         build({**raw, "sweep": {key: [1, 2]}}, "c.yaml")
-    assert str(from_file.value).startswith(f"c.yaml: sweep.{key}: a top-level key cannot be")
-    assert "allowed: the parameters of 'toy_gaussian'" in str(from_file.value)
+    for error, source, blamed in ((from_option.value, "--sweep", key),
+                                  (from_file.value, "c.yaml", f"sweep.{key}")):
+        assert (error.source, error.key) == (source, blamed)
+        assert error.message.startswith("a top-level key cannot be swept")
+        assert error.allowed.startswith("the parameters of 'toy_gaussian'")
 
 
 def test_a_list_of_counts_takes_integers_and_a_list_of_choices_each_once():
     """pga.checkpoints=[1.5] ran as operation 1, and algorithms [exact, exact] as [exact]:
     `--sweep 'pga.checkpoints=[1.5],[1]'` gave two sweep points of the same run."""
     config = ROOT / "configs" / "ci" / "passive_assoc_ci.yaml"
-    cases = ((["--set", "pga.checkpoints=[1.5]"], "error: --set: pga.checkpoints: got 1.5 in "
-              "the list; allowed: a non-empty list of integers in [0, 1e+07]"),
-             (["--sweep", "algorithms=[exact],[exact,exact]"], "error: --sweep: algorithms: "
-              "got ['exact', 'exact']; allowed: a non-empty list drawn from exact, "))
-    for args, expected in cases:
-        result = trackfuse("validate", config, *args)
-        assert result.returncode == 2 and result.stderr.startswith(expected), result.stderr
-    assert "each at most once" in result.stderr
+    with pytest.raises(ConfigError) as counts:
+        load(config, parse_sets(["pga.checkpoints=[1.5]"]))
+    assert (counts.value.source, counts.value.key, counts.value.allowed) == \
+        ("--set", "pga.checkpoints", "a non-empty list of integers in [0, 1e+07]")
+    assert counts.value.message.startswith("got 1.5 in the list")
+    with pytest.raises(ConfigError) as choices:
+        load(config, {}, parse_sweeps(["algorithms=[exact],[exact,exact]"]))
+    assert (choices.value.source, choices.value.key) == ("--sweep", "algorithms")
+    assert choices.value.message.startswith("got ['exact', 'exact']")
+    assert choices.value.allowed.startswith("a non-empty list drawn from exact, ")
+    assert choices.value.allowed.endswith(", each at most once")
     resolved = trackfuse("run", config, "--dry-run", "--set", "pga.checkpoints=[0, 10.0]")
     assert resolved.returncode == 0, resolved.stderr
     assert yaml.safe_load(resolved.stdout.split("\n# ")[0])["params"]["pga.checkpoints"] == \

@@ -1,5 +1,7 @@
-"""Docs that resolve: every weakness code and docs/ path cited in the code exists, the docs'
-own links resolve, and the plugin example of docs/plugins.md runs through the CLI."""
+"""Docs that resolve: every weakness code and docs/ path cited in the code exists, the
+README's and the docs' links resolve on GitHub and on the mkdocs site alike, every docs page
+is in the site, the commands and configs the docs name exist, and the examples the docs
+describe run."""
 
 from __future__ import annotations
 
@@ -12,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+import yaml
 from conftest import cli_env
 
 from trackfuse import harness
@@ -55,11 +58,23 @@ def test_nothing_cites_the_private_spec():
     assert not [str(p) for p in CODE if spec.search(p.read_text(encoding="utf-8"))]
 
 
-def _anchor(heading: str) -> str:
-    return re.sub(r"[^\w\- ]", "", heading.strip().lower()).replace(" ", "-")
+def _anchors(path: Path) -> set[str]:
+    """The anchors of ``path``'s headings that GitHub and the docs site (mkdocs, Python-
+    Markdown's toc) both give: a link must work in the repository and on the site alike."""
+    found = set()
+    for heading in re.findall(r"^#+ (.+)$", path.read_text(), flags=re.M):
+        text = heading.strip().lower().replace("`", "")
+        github = re.sub(r"[^\w\- ]", "", text).replace(" ", "-")
+        site = re.sub(r"[-\s]+", "-", re.sub(r"[^\w\s-]", "", text).strip())
+        if github == site:
+            found.add(github)
+    return found
 
 
-@pytest.mark.parametrize("page", sorted(DOCS.rglob("*.md")), ids=lambda p: p.name)
+LINKED = [ROOT / "README.md", *sorted(DOCS.rglob("*.md"))]
+
+
+@pytest.mark.parametrize("page", LINKED, ids=lambda p: str(p.relative_to(ROOT)))
 def test_links_between_docs_resolve(page):
     for target in re.findall(r"\]\(([^)]+)\)", page.read_text()):
         if target.startswith(("http://", "https://")):
@@ -67,9 +82,92 @@ def test_links_between_docs_resolve(page):
         file, _, anchor = target.partition("#")
         path = (page.parent / file).resolve() if file else page
         assert path.exists(), f"{page.name}: {target}"
+        if page.parent == DOCS or DOCS in page.parents:
+            assert DOCS in path.parents, f"{page.name}: {target} is outside the docs site"
         if anchor and path.suffix == ".md":
-            headings = re.findall(r"^#+ (.+)$", path.read_text(), flags=re.M)
-            assert anchor in {_anchor(h) for h in headings}, f"{page.name}: {target}"
+            assert anchor in _anchors(path), f"{page.name}: {target}"
+
+
+def test_every_docs_page_is_in_the_site_and_every_site_page_exists():
+    site = yaml.safe_load((ROOT / "mkdocs.yml").read_text())
+    assert site["docs_dir"] == "docs"
+
+    def leaves(nav) -> list[str]:
+        if isinstance(nav, str):
+            return [nav]
+        items = nav.values() if isinstance(nav, dict) else nav
+        return [page for item in items for page in leaves(item)]
+
+    in_nav = leaves(site["nav"])
+    assert len(in_nav) == len(set(in_nav))
+    assert set(in_nav) == {str(p.relative_to(DOCS)) for p in DOCS.rglob("*.md")}
+
+
+def test_the_readme_fits_and_ci_runs_its_commands_verbatim():
+    """The README is one short page whose first code block holds the two set-up commands;
+    .ci/run runs the test command exactly as written there, and builds the site strictly."""
+    readme = (ROOT / "README.md").read_text()
+    assert len(readme.splitlines()) <= 200
+    setup = re.search(r"```bash\n(.+?)\n```", readme, flags=re.S).group(1).splitlines()
+    assert setup[0].startswith("pip install . && trackfuse run configs/")
+    assert (ROOT / setup[0].split()[-1]).exists()
+    ci = (ROOT / ".ci" / "run").read_text().splitlines()
+    assert setup[1] == "pip install '.[test]' && pytest" and setup[1] in ci
+    assert any(line.startswith("pytest -m slow") for line in ci)
+    assert any("mkdocs build --strict" in line for line in ci)
+
+
+def _code_lines() -> list[tuple[str, str]]:
+    """(page, line) of every line inside a fenced code block of the README and the docs."""
+    lines = []
+    for page in LINKED:
+        for block in re.findall(r"^```[\w]*\n(.*?)^```", page.read_text(), flags=re.M | re.S):
+            lines += [(page.name, line) for line in block.splitlines()]
+    return lines
+
+
+def test_the_commands_in_the_docs_are_real_commands_and_options():
+    """Every ``trackfuse SUBCOMMAND --option`` written in a code block of the README or the
+    docs names a subcommand and options the command line has (a renamed option fails here)."""
+    import typer.main
+
+    from trackfuse_cli.main import app
+    cli = typer.main.get_command(app)
+    options = {name: {o for p in cmd.params for o in p.opts} for name, cmd in
+               cli.commands.items()}
+    options[""] = {o for p in cli.params for o in p.opts}
+    checked, command = 0, None
+    for page, line in _code_lines():
+        words = line.split()
+        if words[:1] == ["trackfuse"]:
+            command = "" if len(words) < 2 or words[1].startswith("-") else words[1]
+            assert command in options, f"{page}: {line}"
+        elif not (line.startswith(" ") and words and words[0].startswith("[")):
+            command = None  # not a continuation of a command's synopsis
+        if command is None:
+            continue
+        for option in re.findall(r"(?<![\w-])--[a-z][\w-]*", line.split("#")[0]):
+            assert option in options[command], f"{page}: trackfuse {command} {option}: {line}"
+            checked += 1
+    assert checked > 40
+
+
+def test_every_config_the_docs_name_is_shipped():
+    named = {m for page in LINKED for m in re.findall(r"\bconfigs/[\w/]+\.yaml", page.read_text())}
+    assert len(named) > 20
+    hypothetical = {"configs/x.yaml", "configs/my.yaml"}
+    assert not [p for p in named - hypothetical if not (ROOT / p).exists()]
+
+
+def test_the_docs_site_builds_strictly(tmp_path):
+    """mkdocs (the ``docs`` extra) builds the site with no warning: a link or anchor between
+    pages that does not resolve fails the build."""
+    pytest.importorskip("mkdocs")
+    proc = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir",
+                           str(tmp_path / "site")], cwd=ROOT, capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "site" / "statistics" / "index.html").exists()
 
 
 def test_the_plugin_example_runs_through_the_cli(tmp_path):
@@ -126,7 +224,7 @@ def test_the_esm_radar_cv_nis_example_runs_on_a_run_folder(tmp_path):
 
 
 def test_the_interval_coverage_example_runs_on_a_run_folder(tmp_path):
-    """examples/interval_coverage.py (docs/runner.md, Statistics) on 100 trials of the orbit
+    """examples/interval_coverage.py (docs/statistics.md) on 100 trials of the orbit
     config's nearest neighbour: all three measurements, one null comparison."""
     lines = _example_on_a_small_run(
         tmp_path, "twin_sensor_orbit.yaml", "interval_coverage.py", trials=100,
@@ -188,7 +286,7 @@ def test_the_first_update_example_prints_shift_and_formula():
 
 
 def test_the_first_update_example_pairs_a_runs_own_trials(tmp_path, monkeypatch):
-    """``--run`` (the number README quotes): the shift is the run's scan-1 mean minus the
+    """``--run`` (the number docs/results.md quotes): the shift is the run's scan-1 mean minus the
     prior mean on the same trials, its paired interval far narrower than the scan-1 mean's
     (which carries the prior's spread); a run whose scan-1 errors are not the code's own
     is refused rather than paired with the wrong priors."""

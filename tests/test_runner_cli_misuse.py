@@ -16,7 +16,9 @@ import pytest
 from conftest import ROOT, cli_env, trackfuse
 
 from trackfuse.child_processes import process_alive
-from trackfuse.executors import STOPPING_WHEN_LOADED
+from trackfuse.config import ConfigError, load
+from trackfuse.executors import STOPPING_WHEN_LOADED, default_workers
+from trackfuse.sweep import parse_sets
 
 CI = ROOT / "configs" / "ci"
 PASSIVE = CI / "passive_assoc_ci.yaml"
@@ -153,9 +155,10 @@ def test_unknown_algorithm_is_named_even_when_it_is_not_among_the_first_four(wri
     """A typo in the fifth algorithm was cut from the message: `got ['exact', ..., ...]`."""
     text = PASSIVE.read_text().replace("pga_anneal]", "pga_aneal]")
     assert "pga_aneal" in text
-    result = trackfuse("validate", write_config(text))
-    assert result.returncode == 2
-    assert "pga_aneal" in result.stderr, result.stderr
+    with pytest.raises(ConfigError) as err:
+        load(write_config(text))
+    assert (err.value.key, err.value.suggestion) == ("params.algorithms", "pga_anneal")
+    assert "'pga_aneal'" in err.value.message, str(err.value)
 
 
 def test_a_value_repeated_in_a_grid_sweep_axis_is_refused(write_config):
@@ -163,9 +166,9 @@ def test_a_value_repeated_in_a_grid_sweep_axis_is_refused(write_config):
     (the point stream differs), and the figures joined them by a vertical line at N = 5
     that reads as an interval."""
     text = PASSIVE.read_text().replace("targets.n: [5, 10]", "targets.n: [5, 5]")
-    result = trackfuse("validate", write_config(text))
-    assert result.returncode == 2, result.stdout
-    assert "targets.n" in result.stderr and len(result.stderr.strip().splitlines()) == 1
+    with pytest.raises(ConfigError) as err:
+        load(write_config(text))
+    assert (err.value.key, err.value.allowed) == ("sweep.targets.n", "distinct values")
 
 
 def test_empty_out_is_refused_instead_of_writing_into_the_current_folder(tmp_path):
@@ -210,12 +213,13 @@ def test_compare_says_which_cells_only_one_run_has(tmp_path):
     assert f"{report['only_base']} cells only in BASE" in text.stdout
 
 
-@pytest.mark.skipif(len(os.sched_getaffinity(0)) >= 64, reason="needs fewer than 64 cores")
 def test_more_workers_than_cores_is_said_in_one_line():
     """`--workers 1000` started 1000 processes without a word."""
-    result = trackfuse("run", PASSIVE, "--workers", "64", "--dry-run")
+    workers = default_workers() + 1  # one more than this host's usable cores, on any host
+    result = trackfuse("run", PASSIVE, "--workers", str(workers), "--dry-run")
     assert result.returncode == 0, result.stderr
-    assert result.stderr.startswith("warning: --workers 64: more than the"), result.stderr
+    warnings = [line for line in result.stderr.splitlines() if line.startswith("warning:")]
+    assert len(warnings) == 1 and warnings[0].startswith(f"warning: --workers {workers}: ")
 
 
 @pytest.mark.parametrize(("workers", "ctrl_c"), [(2, signal.SIG_DFL), (1, signal.SIG_DFL),
@@ -250,11 +254,10 @@ def test_sigterm_stops_a_run_as_ctrl_c_does(tmp_path, workers, ctrl_c):
 def test_a_position_without_three_coordinates_is_refused_before_the_run(value):
     """`validate` accepted `target.position: [1, 2]`; `run` then failed every trial and
     wrote a 'complete' manifest of failed trials."""
-    result = trackfuse("validate", ROOT / "configs" / "twin_sensor_orbit.yaml", "--set",
-                       f"target.position={value}")
-    assert result.returncode == 2, result.stdout
-    assert result.stderr.count("\n") == 1, result.stderr
-    assert "target.position" in result.stderr and "a list of 3 numbers" in result.stderr
+    with pytest.raises(ConfigError) as err:
+        load(ROOT / "configs" / "twin_sensor_orbit.yaml", parse_sets([f"target.position={value}"]))
+    assert (err.value.source, err.value.key) == ("--set", "target.position")
+    assert err.value.allowed.startswith("a list of 3 numbers"), str(err.value)
 
 
 def test_running_a_no_plots_run_again_draws_its_report(tmp_path):
@@ -288,15 +291,17 @@ def test_a_parameter_set_and_swept_in_one_file_is_refused(write_config):
     the sweep won and the resolved config still showed 3 under params."""
     cfg = write_config("experiment: twin_sensor\nparams:\n  clutter:\n    mean: 3\n"
                        "sweep:\n  clutter.mean: [0, 1]\n")
-    result = trackfuse("validate", cfg)
-    assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr
-    assert f"{cfg}: params.clutter.mean: also swept (sweep.clutter.mean)" in result.stderr
-    assert trackfuse("validate", cfg, "--set", "clutter.mean=2").returncode == 0  # settled
+    with pytest.raises(ConfigError) as err:
+        load(cfg)
+    assert (err.value.source, err.value.key) == (str(cfg), "params.clutter.mean")
+    assert err.value.message.startswith("also swept (sweep.clutter.mean)")
+    assert err.value.allowed == "the key under params or under sweep, not both"
+    assert load(cfg, parse_sets(["clutter.mean=2"])).params["clutter.mean"] == 2  # settled
     template = trackfuse("list", "twin_sensor", "--format", "yaml").stdout  # every default
     swept = write_config(template.replace("sweep: {}", "sweep: {clutter.mean: [0, 1]}"),
                          name="template")
     assert "sweep: {clutter.mean" in swept.read_text()
-    assert trackfuse("validate", swept).returncode == 0  # a default left in place is no clash
+    assert load(swept).sweep == {"clutter.mean": [0, 1]}  # a default left in place: no clash
 
 
 def test_an_option_and_a_set_of_the_same_key_are_refused():
@@ -311,8 +316,8 @@ def test_a_bad_set_fails_reproduce_in_one_line_and_a_bad_choice_reads_plainly():
     "Invalid value for '--executor': Value error, 'foo' is not one of ..."."""
     result = trackfuse("reproduce", CI, "--set", "clutter.mean=-1", "--dry-run")
     assert result.returncode == 2
-    assert result.stderr == "error: --set: clutter.mean: got -1; allowed: a number in " \
-                            "[0, 200]\n"
+    assert len(result.stderr.splitlines()) == 1, result.stderr
+    assert result.stderr.startswith("error: --set: clutter.mean: got -1; allowed: ")
     choice = trackfuse("run", PASSIVE, "--executor", "foo", "--dry-run")
     assert choice.returncode == 2 and "'--executor': 'foo' is not one of" in choice.stderr
 

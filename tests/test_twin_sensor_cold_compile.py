@@ -87,9 +87,7 @@ def test_a_failing_helper_does_not_fail_the_load(monkeypatch, owner, name, value
     assert got["n_valid"].mean() > 1.0  # the clutter was gated: the PDA path ran
 
 
-@pytest.mark.skipif(not os.environ.get("TRACKFUSE_COLD_COMPILE"),
-                    reason="compiles the kernel from an empty cache (25-40 s on two cores); "
-                           "set TRACKFUSE_COLD_COMPILE=1")
+@pytest.mark.slow  # compiles the kernel from an empty cache (25-40 s on two cores)
 def test_a_cold_two_core_compile_loads_the_pair_update_and_equals_the_reference(tmp_path):
     """From an empty cache: the fork server's load takes ``_pair_update`` from the helper's
     cache entry (never compiles it), and the kernel so compiled passes the kernel tests
@@ -99,5 +97,5 @@ def test_a_cold_two_core_compile_loads_the_pair_update_and_equals_the_reference(
              "from trackfuse.experiments.twin_sensor import kernel as k; "
              "s = k._pair_update.stats; assert s.cache_hits and not s.cache_misses, s")
     subprocess.run([sys.executable, "-c", probe], env=env, check=True)
-    subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
+    subprocess.run([sys.executable, "-m", "pytest", "-q", "--all", "-p", "no:cacheprovider",
                     str(ROOT / "tests" / "test_twin_sensor_kernel.py")], env=env, check=True)

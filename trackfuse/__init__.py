@@ -6,7 +6,7 @@ Load a finished run's frames and config::
     run = trackfuse.load("results/twin_sensor_orbit/seed20051001-...")
     run.trials, run.summary, run.config, run.manifest
 
-:func:`load` is :func:`trackfuse.rundata.load` (see ``docs/runner.md#loading-results``). It is
+:func:`load` is :func:`trackfuse.rundata.load` (see ``docs/outputs.md#loading-results``). It is
 bound on first use (PEP 562), so importing ``trackfuse.config`` or running ``trackfuse list``
 loads no pandas.
 """

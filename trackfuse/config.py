@@ -1,21 +1,11 @@
 """Load a YAML scenario config, apply command-line overrides, and validate it.
 
-Every problem raises :class:`ConfigError`, whose message is one line naming the file, the
-dotted key, what was given and what is allowed, e.g.::
+Every problem raises :class:`ConfigError`: one line naming the file (or ``--set``/``--sweep``),
+the dotted key, what was given and what is allowed::
 
     configs/x.yaml: params.clutter.mean: got -1; allowed: a number >= 0
 
-Config layout (all keys but ``experiment`` optional)::
-
-    experiment: twin_sensor       # registered name, or "package.module:ATTR"
-    title: "..."
-    trials: 50                    # Monte Carlo trials per sweep point
-    seed: 1                       # root seed (non-negative integer)
-    batch_size: 25                # trials per task; default from the experiment
-    params: {clutter.mean: 5}     # flat dotted keys or nested mappings
-    sweep: {clutter.mean: "range(0, 16, 1)", assoc: [nn, mspda_parallel]}
-    sweep_mode: grid              # or zip
-    outputs: {figures: all, formats: [png, pdf]}
+The config layout and the override syntax are in docs/configs.md.
 """
 
 from __future__ import annotations
@@ -23,6 +13,7 @@ from __future__ import annotations
 import difflib
 import math
 import os
+import re
 import reprlib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -44,12 +35,25 @@ MAX_TRIALS = 10**9
 
 
 class ConfigError(ValueError):
-    """A config problem; ``str(err)`` is the one-line message shown to the user."""
+    """A config problem; ``str(err)`` is the one-line message shown to the user,
+    ``source: key: message``, where the message reads ``got X; allowed: Y`` when it can."""
 
     def __init__(self, source: str, key: str, message: str):
         self.source, self.key, self.message = source, key, message
         text = f"{source}: {key}: {message}" if key else f"{source}: {message}"
         super().__init__("".join(c if c.isprintable() else repr(c)[1:-1] for c in text))
+
+    @property
+    def allowed(self) -> str:
+        """What the key accepts, as the message states it after ``allowed:`` ('' if none)."""
+        _, said, allowed = self.message.rpartition("; allowed: ")
+        return allowed if said else ""
+
+    @property
+    def suggestion(self) -> str:
+        """The closest valid name the message offers (``did you mean 'x'?``), or ''."""
+        found = re.search(r"did you mean '([^']*)'\?", self.message)
+        return found.group(1) if found else ""
 
 
 @dataclass

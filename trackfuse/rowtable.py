@@ -13,7 +13,7 @@ dicts of Python scalars), so code written for ``run_batch -> list[list[dict]]`` 
 
 Timing measurements belong to the batch, not to a row (a vectorized batch measures one CPU
 time per algorithm for all its trials), so they are a separate small table, ``timings``: the
-runner writes one row per entry of it and batch to ``timings.csv`` (docs/runner.md).
+runner writes one row per entry of it and batch to ``timings.csv`` (docs/outputs.md).
 """
 
 from __future__ import annotations

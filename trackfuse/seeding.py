@@ -1,24 +1,16 @@
 """The one seeding rule: which random numbers a Monte Carlo trial sees.
 
-Every trial gets two independent generators (``numpy.random.Generator``, PCG64):
+Each trial gets two PCG64 generators, told apart by the ``spawn_key`` of a
+:class:`numpy.random.SeedSequence` (domain 0 or 1), so no stream can equal another:
 
-* ``common``: a function of (root seed, trial) only. It is the *same* for every point of a
-  sweep, so points compare on the same targets and the same measurement noise (common
-  random numbers). Experiments draw from it everything the swept parameters do not change
-  the distribution of: truth, initial estimate, measurement noise as standard normals to be
-  scaled, algorithm randomness.
-* ``point``: a function of (root seed, trial, draw point). Experiments draw from it what a
-  swept parameter changes, such as the number and positions of clutter returns. A sweep
-  point's *draw point* (:func:`draw_points`) is the first point with the same values of
-  every swept parameter that changes what is simulated (``Param.draws``): points that
-  differ only in what is computed from the data (an algorithm setting, a filter's model)
-  share their clutter too.
+* ``common``, of (root seed, trial): the same at every sweep point (common random numbers),
+  for truth, initial estimate, measurement noise and algorithm randomness;
+* ``point``, of (root seed, trial, draw point): what a swept parameter changes, such as the
+  clutter. Points that differ only in ``Param(draws=False)`` keys share a draw point.
 
-Neither depends on the worker, the executor, the batch or the order of completion, so any
-schedule writes the same numbers. The two are separated by the ``spawn_key`` of a
-:class:`numpy.random.SeedSequence` (domain 0 for common, 1 for point), so no (trial, point)
-can collide with another trial's common stream. Domain 2 seeds numpy's global generator
-before each trial (:func:`seed_numpy_global`). See ``docs/runner.md`` (seeding).
+Nothing else (worker, executor, batch, order) enters, so every schedule writes the same
+numbers. Domain 2 seeds numpy's global generator before each trial
+(:func:`seed_numpy_global`). See ``docs/runner.md`` (seeding).
 """
 
 from __future__ import annotations

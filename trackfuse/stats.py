@@ -323,8 +323,8 @@ def bootstrap_t_mean_intervals(groups: Sequence[ArrayLike], level: float = 0.95,
     final-scan range errors of nearest neighbour with MGEKF and EKF at clutter 0 and 9 as
     the population, 1000 samples each, Monte Carlo s.e. 0.005-0.013) of the RMSE interval
     :func:`rmse_intervals` built on it: 0.961-0.975 at n = 8 and 0.951-0.954 at n = 50,
-    where the percentile bootstrap covers 0.782-0.809 and 0.906-0.924 (``docs/runner.md``,
-    Statistics, gives the command).
+    where the percentile bootstrap covers 0.782-0.809 and 0.906-0.924 (``docs/statistics.md``
+    gives the command).
     """
     from scipy.special import ndtr, stdtrit  # on first use: see the module docstring
 
