@@ -48,9 +48,10 @@ def test_a_headline_row_shows_the_papers_value_as_printed_and_no_interval_of_an_
     """ESM's Table 1 row read 'paper 0.05937, ours 0.05937 [0.05937, 0.05937], differs'
     (the paper prints 0.059375; ours is 0.0593688, exact) and its trials '<NA>'."""
     row = headline_row("Table 1", "CI", "", 0.059375, 0.0593688, float("nan"), float("nan"),
-                       "1", None, "differs", "exact 0.0593688 is not 0.059375", "docs")
+                       "1", None, "differs", "exact 0.0593688 is not 0.059375", "docs",
+                       claim="AHP CI")
     table = pd.DataFrame([row, headline_row("Fig. 2", "rate", "a", 0.8959186, 0.9, 0.8, 0.95,
-                                            "1", 50, "agrees", "", "docs")],
+                                            "1", 50, "agrees", "", "docs", claim="rate")],
                          columns=reports.HEADLINE_COLUMNS).astype({"trials": "Int64"})
     shown = display_table(table)
     assert shown["paper_value"].tolist() == ["0.059375", "0.8959"]
@@ -249,10 +250,11 @@ def test_a_redraw_removes_what_it_no_longer_draws_and_names_the_failing_figure(
 
 
 def test_a_headline_row_refuses_a_verdict_that_is_not_one_of_the_four():
-    row = headline_row("Fig. 1", "q", "a", "0.9", 1, 0, 2, "m", 3, "inconclusive", "r", "d")
+    row = headline_row("Fig. 1", "q", "a", "0.9", 1, 0, 2, "m", 3, "inconclusive", "r", "d",
+                       claim="c")
     assert list(row) == list(reports.HEADLINE_COLUMNS) and row["reproduced"] == 1.0
     with pytest.raises(ValueError, match="verdict 'agree' is not one of"):
-        headline_row("Fig. 1", "q", "a", "0.9", 1, 0, 2, "m", 3, "agree", "r", "d")
+        headline_row("Fig. 1", "q", "a", "0.9", 1, 0, 2, "m", 3, "agree", "r", "d", claim="c")
 
 
 def test_no_report_module_spells_a_verdict_out():

@@ -8,7 +8,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from trackfuse.plots.style import band, new_figure
-from trackfuse.reports import AGREES, DIFFERS
+from trackfuse.reportkit.verdicts import AGREES, DIFFERS
 from trackfuse.rundata import RunData
 
 

@@ -5,12 +5,28 @@ are for comparison and are never used to tune a model. ``docs/papers/*.md`` disc
 we agree and where we differ.
 
 Each :class:`Reported` item names the paper's figure or table, the quantity, the paper's
-value (a number, or ``None`` when the paper gives only words) and the paper's words.
+value (a number, or ``None`` when the paper gives only words) and the paper's words; an item
+that a report judges also declares, before any run, the smallest effect that counts as its
+claim (``margin``) and the config that answers it (``answer``): the shared verdict rules
+(:mod:`trackfuse.reportkit.verdicts`) read them from here, never from report code.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+
+@dataclass(frozen=True)
+class Answer:
+    """Which headline row answers a paper item: the rows of the shipped config ``config``
+    (file stem) for ``algorithm`` (every algorithm when empty) at the swept ``setting``
+    (param key -> value; every setting when empty). Several such rows (one per target
+    count, say) combine into one verdict (:func:`trackfuse.reportkit.verdicts.combined`)."""
+
+    config: str
+    algorithm: str = ""
+    setting: Mapping[str, object] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -20,7 +36,11 @@ class Reported:
     ``where``: the paper's figure or table (e.g. ``"Table 3"``). ``quantity``: what is
     measured, in our words. ``value``: the paper's number (``None`` if it gives only text).
     ``unit``: unit of ``value``. ``runs``: Monte Carlo runs behind it, when stated.
-    ``claim``: the paper's statement, paraphrased.
+    ``claim``: the paper's statement, paraphrased. ``margin``: the smallest effect that
+    counts as the claim, in the unit the report compares it in (a fraction for rates;
+    negative for a claimed decline), declared in advance, with ``margin_why`` saying why
+    that size. ``answer``: the config whose rows give the item's one verdict (``None``: an
+    item the report does not judge, such as the counts behind a rate).
     """
 
     where: str
@@ -29,6 +49,9 @@ class Reported:
     unit: str
     runs: int | None
     claim: str
+    margin: float | None = None
+    margin_why: str = ""
+    answer: Answer | None = None
 
 
 @dataclass(frozen=True)
@@ -46,6 +69,13 @@ class Paper:
         return next(r for r in self.results if r.quantity == quantity)
 
 
+#: Why 2 percentage points is the smallest rise of paper 000's Fig. 1 that counts: one run of
+#: its 50 per level; a smaller rise cannot show in the paper's curve.
+ONE_RUN_OF_50 = "one run of the paper's 50 per level: a smaller rise cannot show in its curve"
+#: Why 5 percentage points is the smallest change in paper 001's Figs. 3-4 that counts.
+VISIBLE_ON_RATE_AXIS = ("the smallest change that reads as a change on the paper's "
+                        "correct-rate axis (its Table 3 methods differ by 18.8 points)")
+
 TWIN_SENSOR = Paper(
     key="twin_sensor",
     citation=("Wang Yongcheng, Wang Hongfei, Yang Chengwu, \"Fusion algorithm for airborne "
@@ -55,12 +85,21 @@ TWIN_SENSOR = Paper(
     results=(
         Reported("Fig. 1", "loss rate up to 9 false returns", 0.05, "fraction", 50,
                  "fused-gate PDAF: with a mean number of false returns within 9 the "
-                 "percentage of lost tracks is generally below 5 %; the curve rises with "
-                 "clutter density"),
+                 "percentage of lost tracks is generally below 5 %",
+                 answer=Answer("twin_sensor_fig1_claim", "paper_approx/mgekf")),
+        Reported("Fig. 1", "loss rises with clutter", None, "fraction", 50,
+                 "the curve of lost tracks rises with clutter density", margin=0.02,
+                 margin_why=ONE_RUN_OF_50,
+                 answer=Answer("twin_sensor_fig1_claim", "paper_approx/mgekf")),
         Reported("Fig. 2", "range error against time", None, "m", None,
-                 "the MGEKF tracks well with false returns present (no numbers given)"),
+                 "the MGEKF tracks well with false returns present (no numbers given)",
+                 answer=Answer("twin_sensor_orbit", "paper_approx/mgekf")),
     ),
 )
+
+#: Paper 001's Table 3 setting of the radar's own factors, declared before any run: its
+#: Table 2 as written (the radar's TDOA and phase with their own noise).
+AS_WRITTEN = {"radar.factor_model": "table"}
 
 ESM_RADAR = Paper(
     key="esm_radar",
@@ -71,25 +110,49 @@ ESM_RADAR = Paper(
     results=(
         Reported("Table 3", "improved: correct rate", 0.740, "fraction", 500,
                  "improved fuzzy comprehensive evaluation, 200 m separation: 130 / 370 / 0 "
-                 "runs to radar tracks 1 / 2 / 3"),
+                 "runs to radar tracks 1 / 2 / 3",
+                 answer=Answer("esm_radar_snake_cross", "improved", AS_WRITTEN)),
         Reported("Table 3", "traditional: correct rate", 0.552, "fraction", 500,
                  "traditional multi-factor fuzzy decision, 200 m separation: 224 / 276 / 0 "
-                 "runs to radar tracks 1 / 2 / 3"),
+                 "runs to radar tracks 1 / 2 / 3",
+                 answer=Answer("esm_radar_snake_cross", "traditional", AS_WRITTEN)),
         Reported("Table 3", "improved: runs to radar track 1", 130, "runs", 500, ""),
         Reported("Table 3", "improved: runs to radar track 2", 370, "runs", 500, ""),
         Reported("Table 3", "improved: runs to radar track 3", 0, "runs", 500, ""),
         Reported("Table 3", "traditional: runs to radar track 1", 224, "runs", 500, ""),
         Reported("Table 3", "traditional: runs to radar track 2", 276, "runs", 500, ""),
         Reported("Table 3", "traditional: runs to radar track 3", 0, "runs", 500, ""),
-        Reported("Table 1", "AHP lambda_max", 5.2375, "", None, "largest eigenvalue"),
-        Reported("Table 1", "AHP CI", 0.059375, "", None, "consistency index"),
-        Reported("Table 1", "AHP CR", 0.053, "", None, "consistency ratio (RI = 1.12)"),
-        Reported("Fig. 3", "correct rate against separation", None, "fraction", None,
-                 "both methods degrade when the targets are close; the improved one is "
-                 "clearly higher at close separation; the gap narrows as separation grows"),
-        Reported("Fig. 4", "correct rate against radar range error", None, "fraction", None,
-                 "both decline as the radar range error grows; the improved one stays "
-                 "higher throughout"),
+        Reported("Table 1", "AHP lambda_max", 5.2375, "", None, "largest eigenvalue 5.2375",
+                 answer=Answer("esm_radar_snake_cross")),
+        Reported("Table 1", "AHP CI", 0.059375, "", None, "consistency index 0.059375",
+                 answer=Answer("esm_radar_snake_cross")),
+        Reported("Table 1", "AHP CR", 0.053, "", None, "consistency ratio 0.053 (RI = 1.12)",
+                 answer=Answer("esm_radar_snake_cross")),
+        Reported("Table 1", "AHP weights", None, "", None,
+                 "weights 0.51, 0.26, 0.13, 0.07, 0.03 (range, speed, angle, TDOA, phase)",
+                 answer=Answer("esm_radar_snake_cross")),
+        Reported("Fig. 3", "both degrade when close", None, "fraction", None,
+                 "both methods degrade when the targets are close", margin=-0.05,
+                 margin_why=VISIBLE_ON_RATE_AXIS,
+                 answer=Answer("esm_radar_separation", "", AS_WRITTEN)),
+        Reported("Fig. 3", "clearly higher when close", None, "fraction", None,
+                 "the improved one is clearly higher at close separation", margin=0.05,
+                 margin_why=VISIBLE_ON_RATE_AXIS,
+                 answer=Answer("esm_radar_separation", "improved", AS_WRITTEN)),
+        Reported("Fig. 3", "gap narrows", None, "fraction", None,
+                 "the gap narrows as separation grows", margin=0.05,
+                 margin_why=VISIBLE_ON_RATE_AXIS,
+                 answer=Answer("esm_radar_separation", "improved", AS_WRITTEN)),
+        Reported("Abstract", "always higher", None, "fraction", None,
+                 "the improved method is always higher as separation varies",
+                 answer=Answer("esm_radar_separation", "improved", AS_WRITTEN)),
+        Reported("Fig. 4", "both decline with range error", None, "fraction", None,
+                 "both decline as the radar range error grows", margin=-0.05,
+                 margin_why=VISIBLE_ON_RATE_AXIS,
+                 answer=Answer("esm_radar_range_error", "", AS_WRITTEN)),
+        Reported("Fig. 4", "higher throughout", None, "fraction", None,
+                 "the improved one stays higher throughout",
+                 answer=Answer("esm_radar_range_error", "improved", AS_WRITTEN)),
     ),
 )
 
@@ -103,13 +166,18 @@ PASSIVE_ASSOC = Paper(
               "23(4), 2008, 464-467"),
     configs=("passive_association",),
     results=(
-        Reported("Fig. 2", "accuracy against genetic operations", None, "fraction", 50,
-                 "5, 7 and 10 targets all converge to a high correct association rate; a "
-                 "finite number of crossovers and mutations reaches the optimal solution "
-                 "(no numbers or axis ranges given)"),
+        Reported("Fig. 2", "high correct rate", None, "fraction", 50,
+                 "5, 7 and 10 targets all converge to a high correct association rate (no "
+                 "numbers or axis ranges given)", margin=0.05,
+                 margin_why="high read as within 5 points of the exact optimum's accuracy, "
+                            "the ceiling of this objective",
+                 answer=Answer("passive_association", "pga_paper")),
+        Reported("Fig. 2", "optimum reached", None, "fraction", 50,
+                 "a finite number of crossovers and mutations reaches the optimal solution",
+                 answer=Answer("passive_association", "pga_paper")),
         Reported("Sec. 1", "Hungarian method on the dummy formulation", None, "", None,
                  "the Hungarian method cannot handle the formulation with missed "
-                 "detections and false alarms"),
+                 "detections and false alarms", answer=Answer("passive_association")),
     ),
 )
 

@@ -58,6 +58,7 @@ from trackfuse.child_processes import ctrl_c_held, setup_child
 from trackfuse.coerce import one_line
 from trackfuse.environment import cpu_words, recorded_cpus
 from trackfuse.failures import first_failure
+from trackfuse.reportkit.verdicts import VERDICTS
 from trackfuse.results import (
     FAILED_ROW,
     INDEX_FILES,
@@ -87,24 +88,19 @@ FOLDED_TABLE_ROWS = 30
 #: ``algorithm`` our algorithm name; ``paper_value`` what the paper reports (number or words);
 #: ``reproduced`` our estimate (number, in ``unit``) with its 95 % interval
 #: ``ci_low``/``ci_high``; ``trials`` behind it; ``verdict`` one of :data:`VERDICTS`;
-#: ``reason`` one line; ``docs`` a link into ``docs/papers/`` with the longer explanation.
+#: ``reason`` one line; ``docs`` a link into ``docs/papers/`` with the longer explanation;
+#: ``claim`` the :attr:`~trackfuse.reported.Reported.quantity` of the paper item it judges
+#: and ``setting`` its swept setting (:func:`~trackfuse.reportkit.verdicts.setting_text`),
+#: by which the reproduction report finds the row that answers each item.
 HEADLINE_COLUMNS = ("paper_item", "quantity", "algorithm", "paper_value", "reproduced",
-                    "ci_low", "ci_high", "unit", "trials", "verdict", "reason", "docs")
-#: ``agrees``: the paper's number lies inside our interval, or the data show its claim (a
-#: test of the opposite rejects it at 5 %); ``differs``: the paper's number lies outside our
-#: interval, or the data contradict its claim (they show the opposite); ``inconclusive``:
-#: the run answers the claim's question but its data can neither show nor contradict it
-#: (too few runs, or both methods at a ceiling): absence of evidence is never ``differs``;
-#: ``not comparable``: the run's config cannot answer it (the paper gives no number, or the
-#: run is not at the paper's setting).
-VERDICTS = ("agrees", "differs", "inconclusive", "not comparable")
-#: The verdicts by name: report modules use these, never the words, so a typo is an error.
-AGREES, DIFFERS, INCONCLUSIVE, NOT_COMPARABLE = VERDICTS
+                    "ci_low", "ci_high", "unit", "trials", "verdict", "reason", "docs",
+                    "claim", "setting")
 
 
 def headline_row(paper_item: str, quantity: str, algorithm: str, paper_value: Any,
                  reproduced: float, ci_low: float, ci_high: float, unit: str,
-                 trials: int | None, verdict: str, reason: str, docs: str) -> dict[str, Any]:
+                 trials: int | None, verdict: str, reason: str, docs: str, *, claim: str,
+                 setting: str = "") -> dict[str, Any]:
     """One row of a headline table, in :data:`HEADLINE_COLUMNS` order (see there);
     ``reproduced``, ``ci_low`` and ``ci_high`` as floats (NaN for none). Raises
     :class:`ValueError` for a ``verdict`` not in :data:`VERDICTS`."""
@@ -112,23 +108,8 @@ def headline_row(paper_item: str, quantity: str, algorithm: str, paper_value: An
         raise ValueError(f"verdict {verdict!r} is not one of {VERDICTS}")
     return dict(zip(HEADLINE_COLUMNS, (paper_item, quantity, algorithm, paper_value,
                                        float(reproduced), float(ci_low), float(ci_high), unit,
-                                       trials, verdict, reason, docs), strict=True))
-
-
-def interval_verdict(paper: float, low: float, high: float, tolerance: float = 0.0) -> str:
-    """:data:`AGREES` if the paper's value lies in ``[low - tolerance, high + tolerance]``,
-    else :data:`DIFFERS`."""
-    return AGREES if low - tolerance <= paper <= high + tolerance else DIFFERS
-
-
-ALPHA = 0.05
-"""Significance level of the paired tests behind the claim verdicts (two-sided)."""
-
-
-def claim_verdict(shown: bool, opposite_shown: bool) -> str:
-    """:data:`AGREES` when the data show a claim, else :data:`DIFFERS` when they show its
-    opposite, else :data:`INCONCLUSIVE` (absence of evidence is never ``differs``)."""
-    return AGREES if shown else DIFFERS if opposite_shown else INCONCLUSIVE
+                                       trials, verdict, reason, docs, claim, setting),
+                    strict=True))
 
 
 #: Why a table is not written when its report module returns it without rows.

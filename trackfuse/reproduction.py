@@ -36,6 +36,9 @@ from trackfuse.reports import HEADLINE_COLUMNS, HEADLINE_TABLE, VERDICTS, wanted
 from trackfuse.results import atomic_write
 from trackfuse.rundata import RunData, load
 
+#: Headline columns a report module may leave out: without them a row is listed with its
+#: config but answers no paper item of the bottom line.
+OPTIONAL_COLUMNS = ("claim", "setting")
 REPORT_MD = "REPORT.md"
 REPORT_HTML = "report.html"
 
@@ -92,6 +95,9 @@ def _headline(run: RunData) -> pd.DataFrame:
     if not path.exists():
         return pd.DataFrame(columns=["config", *HEADLINE_COLUMNS])
     rows = pd.read_csv(path, keep_default_na=False, na_values=[""])
+    for optional in OPTIONAL_COLUMNS:  # a plugin's table need not name the item it judges
+        if optional not in rows.columns:
+            rows[optional] = ""
     missing = [c for c in HEADLINE_COLUMNS if c not in rows.columns]
     if missing:
         raise ValueError(f"{path}: headline table lacks columns {missing}")

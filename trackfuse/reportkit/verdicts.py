@@ -1,0 +1,240 @@
+"""How a reproduced number, or a claim, becomes a verdict: one set of rules for every paper.
+
+A verdict is one of :data:`VERDICTS`, with the estimate it reads, that estimate's 95 %
+interval and a one-line reason in plain words (:class:`Verdict`). The rules:
+
+1. **A paper's rate is a sample too.** Where the paper states its trial count (its Table 3's
+   370 of 500), ours and the paper's are two independent samples: their difference with
+   Newcombe's hybrid score interval (his method 10; Newcombe 1998, Stat. Med. 17, 873-890)
+   and the 'N-1' chi-square test. "agrees" (consistent) when the interval holds 0, else
+   "differs" by the difference, with its interval (:func:`against_paper_sample`). The
+   paper's own sampling error stays in the interval, so more trials of ours do not turn a
+   match into a difference. A claimed bound from a stated count ("below 5 % in 50 runs")
+   is the largest count under it (2 of 50), and only a rate shown above that differs
+   (:func:`below_paper_bound`), at the one setting fixed in advance.
+2. **Shape claims by effect size, against a margin declared in advance** on the paper's
+   item (:attr:`trackfuse.reported.Reported.margin`, never in report code): "agrees" when
+   the interval shows the effect in the claim's direction and reaches the margin, "differs"
+   when it excludes every effect as large as the margin (a rise of at most 1.9 points
+   excludes a claimed rise of 2), else "inconclusive" (:func:`at_least`); for a claim that
+   a difference stays small, :func:`within`.
+3. **Only the comparison fixed in advance decides.** Callers pass the pre-specified
+   comparison to :func:`at_least`; pairs found by searching are reported with
+   :func:`exploration`, whose words say they decide nothing.
+4. **Printed values compared as printed**: ours rounded to the digits the paper prints
+   before comparing (:func:`as_printed_verdict`).
+5. **One verdict per paper item** (:func:`bottom_line`): the row of the config declared to
+   answer it (:attr:`~trackfuse.reported.Reported.answer`); other rows support it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from decimal import ROUND_HALF_UP, Decimal
+
+import pandas as pd
+
+from trackfuse.reported import Reported
+from trackfuse.stats import proportion_difference_interval, two_proportion_p
+
+#: ``agrees``: the data are consistent with the paper's number (its sample and ours), or show
+#: its claim (at least its declared margin in the interval, the effect's direction shown);
+#: ``differs``: the paper's number lies outside what both samples allow, or the claim's
+#: declared margin is excluded; ``inconclusive``: the run can neither show nor exclude the
+#: claim (too few runs): absence of evidence is never ``differs``; ``not comparable``: the
+#: run's config cannot answer it, or the paper gives no number.
+VERDICTS = ("agrees", "differs", "inconclusive", "not comparable")
+#: The verdicts by name: report modules use these, never the words, so a typo is an error.
+AGREES, DIFFERS, INCONCLUSIVE, NOT_COMPARABLE = VERDICTS
+#: Significance level of every two-sided test behind a verdict (95 % intervals).
+ALPHA = 0.05
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """One verdict: ``word`` of :data:`VERDICTS`; ``estimate`` the number it reads with its
+    95 % interval ``low``/``high`` (NaN for none); ``reason`` one line in plain words."""
+
+    word: str
+    estimate: float
+    low: float
+    high: float
+    reason: str
+
+
+def points(value: float) -> str:
+    """A difference of two rates (fractions) in percentage points, signed, 3 significant
+    figures: ``+1.60``, ``-8.20``, ``0``."""
+    if value == 0 or not math.isfinite(value):
+        return "0" if value == 0 else "n/a"
+    return f"{100 * value:+#.3g}".rstrip(".")
+
+
+def against_paper_sample(k: int, n: int, paper_k: int, paper_n: int) -> Verdict:
+    """Our ``k`` of ``n`` against the paper's ``paper_k`` of ``paper_n`` (rule 1 of the module
+    docstring): the difference ours - paper with Newcombe's independent-samples interval and
+    the two-sided 'N-1' chi-square p; "agrees" when the interval holds 0."""
+    diff = k / n - paper_k / paper_n
+    low, high = (float(v) for v in proportion_difference_interval(paper_k, paper_n, k, n))
+    p = float(two_proportion_p(k, n, paper_k, paper_n))
+    span = f"{points(diff)} points ({points(low)} to {points(high)}), p = {p:.2g}"
+    paper = f"the paper's {paper_k} of {paper_n} ({100 * paper_k / paper_n:.3g} %)"
+    if low <= 0 <= high:
+        return Verdict(AGREES, diff, low, high, f"consistent with {paper}: ours minus "
+                       f"the paper's {span}")
+    return Verdict(DIFFERS, diff, low, high, f"differs from {paper} by {span}")
+
+
+def below_paper_bound(k: int, n: int, bound: float, paper_n: int) -> Verdict:
+    """A claimed bound ("below ``bound`` (fraction) in ``paper_n`` runs") against our ``k``
+    of ``n`` at the setting fixed in advance: the paper's sample holds at most
+    ``ceil(bound * paper_n) - 1`` runs (2 of 50 below 5 %), and ours "differs" only when
+    the Newcombe interval of ours minus that count's rate lies above 0; a rate below it is
+    consistent with the claim however many runs show it."""
+    most = math.ceil(bound * paper_n) - 1
+    diff = k / n - most / paper_n
+    low, high = (float(v) for v in proportion_difference_interval(most, paper_n, k, n))
+    span = f"{points(diff)} points ({points(low)} to {points(high)})"
+    paper = f"the paper's at most {most} of {paper_n} runs ({100 * most / paper_n:.3g} %)"
+    if low > 0:
+        return Verdict(DIFFERS, diff, low, high, f"above {paper} by {span}")
+    return Verdict(AGREES, diff, low, high, f"consistent with {paper}: ours minus that {span}")
+
+
+def at_least(estimate: float, low: float, high: float, margin: float, claim: str) -> Verdict:
+    """A claim that a difference of two rates (fractions) is at least ``margin`` (declared in
+    advance; negative for a claimed decline), judged by ``estimate`` and its 95 % interval
+    (rule 2 of the module docstring); ``claim`` names it in words ("a rise")."""
+    sign = 1.0 if margin > 0 else -1.0
+    near, far = sorted((sign * low, sign * high))
+    shown = f"{points(estimate)} points ({points(low)} to {points(high)})"
+    size = f"{100 * abs(margin):.3g} points"
+    if far < abs(margin):
+        return Verdict(DIFFERS, estimate, low, high, f"{shown}: {claim} of {size} or more, "
+                       "the smallest that counts, is excluded")
+    if near > 0:
+        return Verdict(AGREES, estimate, low, high, f"{shown}: {claim} shown")
+    return Verdict(INCONCLUSIVE, estimate, low, high, f"{shown}: {claim} neither shown nor "
+                   f"excluded ({size} or more counts)")
+
+
+def within(estimate: float, low: float, high: float, margin: float, claim: str) -> Verdict:
+    """A claim that a difference of two rates (fractions) is at most ``margin`` (declared in
+    advance, positive): "agrees" when its 95 % interval lies at or below it, "differs" when
+    above it, else "inconclusive"; ``claim`` names it in words ("within 5 points of the
+    optimum")."""
+    shown = f"{points(estimate)} points ({points(low)} to {points(high)})"
+    if high <= margin:
+        return Verdict(AGREES, estimate, low, high, f"{shown}: {claim}")
+    if low > margin:
+        return Verdict(DIFFERS, estimate, low, high, f"{shown}: not {claim}")
+    return Verdict(INCONCLUSIVE, estimate, low, high,
+                   f"{shown}: neither shown {claim} nor further off")
+
+
+def exploration(pairs: int, found: str) -> str:
+    """Words for a comparison found by searching ``pairs`` pairs (rule 3): reported, never
+    deciding."""
+    return f"exploration only, not the verdict (searched {pairs} pairs): {found}"
+
+
+def printed_decimals(printed: float) -> int:
+    """Decimals the paper prints ``printed`` with, read from its shortest form (0.053 -> 3,
+    5.2375 -> 4, 130 -> 0)."""
+    text = repr(float(printed)).rstrip("0").rstrip(".")
+    return len(text.split(".")[1]) if "." in text else 0
+
+
+def as_printed_verdict(ours: float, printed: float) -> Verdict:
+    """Our exact ``ours`` against the paper's ``printed`` value (rule 4): "agrees" when ours,
+    rounded half up to the printed decimals (as a table is printed), is the printed value."""
+    decimals = printed_decimals(printed)
+    step = Decimal(1).scaleb(-decimals)
+    rounded = float(Decimal(repr(float(ours))).quantize(step, rounding=ROUND_HALF_UP))
+    word = AGREES if math.isclose(rounded, printed, abs_tol=0.1 ** (decimals + 3)) else DIFFERS
+    reason = (f"ours {ours:.6g} prints as {rounded:.{decimals}f} at the paper's "
+              f"{decimals} decimals: " + ("the same" if word == AGREES else "not the same"))
+    return Verdict(word, ours, math.nan, math.nan, reason)
+
+
+def claim_verdict(shown: bool, opposite_shown: bool) -> str:
+    """:data:`AGREES` when the data show a claim, else :data:`DIFFERS` when they show its
+    opposite, else :data:`INCONCLUSIVE` (absence of evidence is never ``differs``)."""
+    return AGREES if shown else DIFFERS if opposite_shown else INCONCLUSIVE
+
+
+#: How several rows of the answering config combine into one verdict for an item that
+#: claims something of each (every target count, say): the first of these present wins.
+COMBINED = (DIFFERS, INCONCLUSIVE, AGREES, NOT_COMPARABLE)
+
+
+def combined(words: Sequence[str]) -> str:
+    """One verdict for a claim about every one of several rows: ``differs`` if any differs,
+    else ``inconclusive`` if any is, else ``agrees`` if any does, else ``not comparable``."""
+    return next((w for w in COMBINED if w in words), NOT_COMPARABLE)
+
+
+def setting_text(values: Mapping[str, object]) -> str:
+    """A row's setting in the machine form :func:`bottom_line` matches on:
+    ``key=value; key=value`` in the given order (numbers in their shortest form)."""
+    return "; ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
+                     for k, v in values.items())
+
+
+def matches(setting: str, wanted: Mapping[str, object]) -> bool:
+    """Whether a row's ``setting`` (:func:`setting_text`) holds every ``key=value`` of
+    ``wanted``."""
+    parts = set(str(setting).split("; ")) if setting else set()
+    return set(setting_text(dict(wanted)).split("; ")) <= parts if wanted else True
+
+
+@dataclass(frozen=True)
+class Line:
+    """One paper item's bottom line: its one ``verdict`` with a one-line ``reason``, from the
+    ``answering`` headline rows (of its declared config, algorithm and setting), and the
+    ``supporting`` rows of every other config or setting that judged it."""
+
+    item: Reported
+    verdict: str
+    reason: str
+    answering: pd.DataFrame
+    supporting: pd.DataFrame
+
+
+def _answers(item: Reported, rows: pd.DataFrame) -> pd.Series:
+    """Which of ``rows`` (headline rows with a ``config`` column, configs joined by ", "
+    where several gave the same row) the item's declared :class:`~trackfuse.reported.Answer`
+    names."""
+    answer = item.answer
+    assert answer is not None
+    config = rows["config"].map(lambda c: answer.config in str(c).split(", "))
+    algorithm = rows["algorithm"].fillna("").astype(str)
+    named = algorithm == answer.algorithm if answer.algorithm else True
+    setting = rows["setting"].fillna("").map(lambda s: matches(s, answer.setting))
+    return config & named & setting
+
+
+def bottom_line(results: Sequence[Reported], rows: pd.DataFrame) -> list[Line]:
+    """One :class:`Line` per item of ``results`` that declares an answer (rule 5 of the module
+    docstring), from ``rows`` (headline rows of every config, with a ``config`` column):
+    the answering rows' verdicts :func:`combined`; "not comparable" when the answering
+    config did not run or gave no row."""
+    out = []
+    for item in (r for r in results if r.answer is not None):
+        about = rows[rows["claim"] == item.quantity] if len(rows) else rows
+        answering = about[_answers(item, about)] if len(about) else about
+        supporting = about.drop(index=answering.index)
+        if answering.empty:
+            out.append(Line(item, NOT_COMPARABLE, f"{item.answer.config} gave no row for it",
+                            answering, supporting))
+            continue
+        word = combined(list(answering["verdict"]))
+        first = answering[answering["verdict"] == word].iloc[0]
+        reason = str(first["reason"])
+        if len(answering) > 1:
+            count = int((answering["verdict"] == word).sum())
+            reason = f"{count} of {len(answering)} {word}; {first['quantity']}: {reason}"
+        out.append(Line(item, word, reason, answering, supporting))
+    return out
