@@ -301,7 +301,9 @@ def compare_runs(base: RunData, new: RunData, tolerance: Mapping[str, float] | N
     Cells are keyed by the keys either run sweeps and the experiment's row keys: a key one
     run sweeps and the other fixes (``--set clutter.mean=5``) is compared at the fixed value
     (:func:`_with_fixed_keys`). 0/1 metrics and the direction of each metric come from
-    ``Experiment.metrics``. Trials are paired when both runs share the root seed, on the
+    ``Experiment.metrics``; a metric summarized as a root mean square is compared on its
+    per-trial squares (``base``, ``new``, ``diff`` in the unit squared: the RMS is worse
+    exactly when the mean square is). Trials are paired when both runs share the root seed, on the
     trial indices both have (:func:`_pairing`). ``metrics``, ``algorithms``: compare only
     these (default all); the gate's family is then the cells kept. Raises ``ValueError`` for
     runs of different experiments, a key one run sweeps that the other fixes to a list or a
@@ -335,11 +337,16 @@ def compare_runs(base: RunData, new: RunData, tolerance: Mapping[str, float] | N
     frames = [_with_fixed_keys(run, keys, role) for run, role in ((base, "BASE"), (new, "NEW"))]
     if algorithms is not None:
         frames = _of_algorithms(frames, algorithms)
+    if rms := [m for m in experiment.rms_metrics if m in names]:  # compared as mean squares
+        frames = [frame.assign(**{m: frame[m] ** 2 for m in rms if m in frame})
+                  for frame in frames]
     paired, pairing = _pairing(base.config, new.config)
     result = compare_trials(*frames, [*keys, *experiment.row_keys],
                             binary=experiment.binary_metrics, better=experiment.directions,
                             paired=paired, tolerance=tolerance, alpha=alpha, metrics=metrics,
                             family_wise=family_wise, skip=experiment.categorical_metrics)
+    squared = result.cells["metric"].isin(rms)
+    result.cells.loc[squared, "test"] = result.cells.loc[squared, "test"] + " on e^2"
     return dataclasses.replace(result, pairing=pairing, config_differences=tuple(
         config_differences(base.config, new.config)))
 
