@@ -39,6 +39,11 @@ def listing_data(listed: list[Listed]) -> list[dict[str, str]]:
              "description": item.description} for item in listed]
 
 
+#: How ``summary.csv`` sums a metric up, by its kind (binary) or its aggregate.
+_SUMMED_UP = {"binary": "0/1, Wilson interval", "mean": "mean, t interval",
+              "rms": "root mean square, bootstrap-t interval"}
+
+
 def print_experiment(exp: Experiment, width: int | None = None) -> None:
     """Parameters, metrics, algorithms and figures of ``exp``: each name on its own line in
     full, its description wrapped below it to ``width`` (default: the terminal's)."""
@@ -49,13 +54,13 @@ def print_experiment(exp: Experiment, width: int | None = None) -> None:
                 "command line)")
     for p in exp.params:
         unit = f" {p.unit}" if p.unit and p.unit != "1" else ""
-        quiet = "" if p.draws else (" Takes no random draws of its own: sweep points that "
-                                    "differ only in it share their clutter.")
+        quiet = "" if p.draws else (" Changes no random draw: sweep points that differ only "
+                                    "in it share their simulated data.")
         out.entry(f"{p.key} = {_flow(p.default)}{unit}",
                   f"{p.doc.rstrip('.')}. Allowed: {allowed_text(p)}.{quiet}")
     out.heading("metrics (columns of trials.csv; rows of summary.csv)")
     for m in exp.metrics:
-        kind = "0/1, Wilson interval" if m.binary else "mean, t interval"
+        kind = _SUMMED_UP["binary" if m.binary else m.aggregate]
         better = f", {m.better} is better" if m.better else ""
         out.entry(f"{m.name} [{m.unit}]", f"{m.doc} ({kind}{better}).")
     if exp.algorithms:
@@ -149,6 +154,7 @@ def as_data(exp: Experiment, reference: str) -> dict[str, Any]:
                     "allowed": allowed_text(p), "draws": p.draws, "doc": p.doc}
                    for p in exp.params],
         "metrics": [{"name": m.name, "unit": m.unit, "binary": m.binary, "better": m.better,
+                     "aggregate": m.aggregate,
                      "doc": m.doc} for m in exp.metrics],
         "algorithms": list(exp.algorithms),
         "figures": [{"name": name, "paper": spec.paper, "caption": spec.caption}

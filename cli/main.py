@@ -504,30 +504,66 @@ def _load_run(path: Path) -> RunData:
 
 
 def _print_runs(runs) -> None:
+    """The runs as a table, each with the parameters in which it differs from the others of
+    its experiment listed (:func:`trackfuse.catalog.differences`)."""
     from rich.console import Console
     from rich.table import Table
-    table = Table("run folder", "experiment", "name", "status", "trials", "started", "wall")
-    for r in runs:
+
+    from trackfuse.catalog import differences
+    table = Table("run folder", "experiment", "name", "status", "trials", "started", "wall",
+                  "differs in")
+    for r, differs in zip(runs, differences(runs), strict=True):
         wall = f"{r.wall_s:.0f} s" if r.wall_s is not None else ""
         table.add_row(str(r.path), r.experiment, r.name, r.status,
                       f"{r.trials_done}/{r.trials_total}", r.started.replace("T", " ")[:19],
-                      wall)
+                      wall, _differs_text(differs))
     Console(width=max(Console().width, 160)).print(table)
+
+
+def _differs_text(differs: dict[str, Any], longest: int = 24) -> str:
+    """``clutter.mean=5 seed=2``: one run's differing values, each cut to ``longest``."""
+    def short(value: Any) -> str:
+        text = value if isinstance(value, str) else json.dumps(value, default=str)
+        return text if len(text) <= longest else text[:longest - 1] + "…"
+
+    return " ".join(f"{key}={short(value)}" for key, value in differs.items())
 
 
 @app.command()
 def runs(
     root: Annotated[Path, typer.Argument(metavar="[ROOT]", help="Output root, a config's "
                                          "folder of runs, or a run folder.")] = Path("results"),
+    name: Annotated[str | None, typer.Option(
+        "--name", metavar="PATTERN", show_default=False,
+        help="Only the runs whose name (run --name) matches PATTERN (shell-style: * ?).")]
+    = None,
+    as_json: Annotated[bool, typer.Option("--json", metavar="", help="Print one JSON list "
+                                          "instead of a table.")] = False,
 ) -> None:
-    """List run folders under ROOT, newest first: experiment, name, status, trials, dates."""
-    from trackfuse.catalog import find_runs
+    """List run folders under ROOT, newest first: experiment, name, status, trials, dates,
+    and the parameters in which each run differs from the others of its experiment listed.
+
+    In Python, trackfuse.runs(ROOT) returns the same runs as a pandas DataFrame."""
+    import fnmatch
+
+    from trackfuse.catalog import differences, find_runs
     if not root.is_dir():
         fail(f"{root}: {'not a folder' if root.exists() else 'no such file or folder'}; "
              "allowed: an output root, a config's folder of runs or a run folder")
-    found = find_runs(root)
+    found = [r for r in find_runs(root)
+             if name is None or fnmatch.fnmatchcase(r.name, name)]
+    if as_json:
+        print(json.dumps([{"path": str(r.path), "experiment": r.experiment, "name": r.name,
+                           "status": r.status, "seed": r.seed,
+                           "trials_per_point": r.trials_per_point,
+                           "trials_done": r.trials_done, "trials_total": r.trials_total,
+                           "started": r.started, "wall_s": r.wall_s, "differs": differs,
+                           "params": r.params}
+                          for r, differs in zip(found, differences(found), strict=True)],
+                         default=str))
+        return
     if not found:
-        print(f"no runs under {root}")
+        print(f"no runs under {root}" + (f" named {name!r}" if name is not None else ""))
         return
     _print_runs(found)
 
@@ -576,13 +612,16 @@ def _config_line(differences, shown: int = 6) -> str:
 
 
 def _print_comparison(result: Comparison, shown: int = 30) -> None:
-    """One summary line, then the cells that differ (most ``shown``)."""
+    """The bottom line, the counts, then the cells that differ (most ``shown``), gated
+    cells first."""
+    import pandas as pd
     from rich.console import Console
     from rich.table import Table
     cells = result.cells
-    if cells.empty:
+    if cells.empty:  # that is the bottom line
         print(f"nothing compared: the runs share no cell; {_left_out_line(result)}")
         return
+    print(result.bottom_line())
     print(f"{'paired' if result.paired else 'unpaired'} comparison of "
           f"{_count(len(cells), 'cell')} {result.pairing}".rstrip())
     print(_config_line(result.config_differences))
@@ -600,6 +639,8 @@ def _print_comparison(result: Comparison, shown: int = 30) -> None:
     if result.only_base or result.only_new:
         print(f"not compared: {_left_out_line(result)}")
     notable = cells[~cells["verdict"].str.startswith("no significant")]
+    first = gated[notable.index]
+    notable = pd.concat([notable[first], notable[~first]])  # the gate's verdicts first
     if notable.empty:
         return
     hidden = ("n_base", "n_new", "better")
@@ -610,6 +651,22 @@ def _print_comparison(result: Comparison, shown: int = 30) -> None:
     Console(width=max(Console().width, 160)).print(table)
     if len(notable) > shown:
         print(f"(+{len(notable) - shown} more cells; --json lists every cell)")
+
+
+def _comparison_data(result: Comparison, failure: str | None) -> dict[str, Any]:
+    """What ``compare --json`` prints: the bottom line, the counts and every cell."""
+    def records(frame) -> list[dict[str, Any]]:
+        return json.loads(frame.to_json(orient="records"))
+
+    return {"bottom_line": result.bottom_line(), "paired": result.paired,
+            "pairing": result.pairing,
+            "config_differences": [{"key": key, "base": b, "new": n}
+                                   for key, b, n in result.config_differences],
+            "alpha": result.alpha, "compared": len(result.cells), "gated": result.gated,
+            "regressions": len(result.regressions), "only_base": result.only_base,
+            "only_new": result.only_new, "gate_failure": failure,
+            "cells": records(result.cells), "only_base_cells": records(result.only_base_cells),
+            "only_new_cells": records(result.only_new_cells)}
 
 
 @app.command()
@@ -629,13 +686,21 @@ def compare(
                                          "the regression gate.")] = 0.05,
     as_json: Annotated[bool, typer.Option("--json", metavar="", help="Print one JSON object "
                                           "instead of a table.")] = False,
+    metric: Annotated[list[str], typer.Option(
+        metavar="METRIC", show_default=False,
+        help="Compare only this metric (repeatable; default every metric).")] = [],  # noqa: B006
+    algorithm: Annotated[list[str], typer.Option(
+        metavar="ALGORITHM", show_default=False,
+        help="Compare only this algorithm's rows (repeatable; default all).")] = [],  # noqa: B006
 ) -> None:
     """Compare two complete runs of one experiment, cell by cell.
 
     A cell is a sweep point x row key x metric: both means, the difference NEW - BASE with
     its 95 % interval. Runs with the same seed are paired on the trials both have (paired t,
     Newcombe and McNemar for 0/1 metrics); otherwise unpaired (Welch, Newcombe hybrid
-    score). The config values that differ between the runs are listed.
+    score). The config values that differ between the runs are listed. A one-line bottom
+    line comes first, the gated cells (metrics with a better direction) before the others;
+    --metric and --algorithm narrow the comparison (and the gate's family) to those cells.
 
     Exit 0; 1 with --fail-on-regression on a regression, a cell of BASE missing from NEW,
     nothing compared or nothing gated (the reason in one line on stderr; cells only NEW has
@@ -646,25 +711,13 @@ def compare(
     tolerances = _tolerances(tolerance)
     runs = _load_run(base), _load_run(new)
     try:
-        result = compare_runs(*runs, tolerances, alpha=alpha)
+        result = compare_runs(*runs, tolerances, alpha=alpha, metrics=metric or None,
+                              algorithms=algorithm or None)
     except ValueError as err:
         fail(str(err))
     failure = result.gate_failure()
     if as_json:
-        def records(frame) -> list[dict[str, Any]]:
-            return json.loads(frame.to_json(orient="records"))
-
-        print(json.dumps({"paired": result.paired, "pairing": result.pairing,
-                          "config_differences": [
-                              {"key": key, "base": b, "new": n}
-                              for key, b, n in result.config_differences],
-                          "alpha": result.alpha,
-                          "compared": len(result.cells), "gated": result.gated,
-                          "regressions": len(result.regressions),
-                          "only_base": result.only_base, "only_new": result.only_new,
-                          "gate_failure": failure, "cells": records(result.cells),
-                          "only_base_cells": records(result.only_base_cells),
-                          "only_new_cells": records(result.only_new_cells)}))
+        print(json.dumps(_comparison_data(result, failure)))
     else:
         _print_comparison(result)
     if fail_on_regression and failure:

@@ -130,7 +130,9 @@ def test_the_summary_says_how_trials_pair_what_config_differs_and_what_is_gated(
     base = run_data(tmp_path / "a", "toy_gaussian", {}, sweep, trials=30, seed=3).path
     more = run_data(tmp_path / "b", "toy_gaussian", {}, sweep, trials=45, seed=3).path
     lines = _compare(base, more).stdout.splitlines()
-    assert lines[:4] == [
+    assert lines[0] == ("bottom line: no significant change in any of the 4 gated cells; "
+                        "0 of 4 cells not gated differ")
+    assert lines[1:5] == [
         "paired comparison of 8 cells on the trial indices both runs have (same seed 3; 30 "
         "trials per point in BASE, 45 in NEW: the others are left out)",
         "config differs: trials (BASE 30, NEW 45)",
@@ -142,6 +144,6 @@ def test_the_summary_says_how_trials_pair_what_config_differs_and_what_is_gated(
         {"key": "trials", "base": 30, "new": 45}]
     assert {c["n_new"] for c in report["cells"]} == {30}
     again = run_data(tmp_path / "c", "toy_gaussian", {}, sweep, trials=30, seed=3).path
-    same = _compare(base, again).stdout.splitlines()
+    same = _compare(base, again).stdout.splitlines()[1:]
     assert same[0].endswith("trial by trial (same seed 3, 30 trials per point)")
     assert same[1] == "config: the same in both runs"

@@ -38,7 +38,7 @@ def test_list_experiment_prints_every_key_whole_when_piped_at_80_columns(twin):
         assert any(line.split(" (paper")[0] == name for line in lines), name
     joined = result.stdout.replace("\n    ", " ")
     assert all(a in joined for a in twin.algorithms)
-    assert joined.count("share their clutter") == sum(not p.draws for p in twin.params) > 0
+    assert joined.count("share their simulated data") == sum(not p.draws for p in twin.params) > 0
     assert "…" not in result.stdout
 
 

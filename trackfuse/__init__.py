@@ -5,8 +5,10 @@ Load a finished run's frames and config::
     import trackfuse
     run = trackfuse.load("results/twin_sensor_orbit/seed20051001-...")
     run.trials, run.summary, run.config, run.manifest
+    table = trackfuse.runs("results")   # every run as one row of a DataFrame
 
-:func:`load` is :func:`trackfuse.rundata.load` (see ``docs/outputs.md#loading-results``). It is
+:func:`load` is :func:`trackfuse.rundata.load` (see ``docs/outputs.md#loading-results``),
+:func:`runs` is :func:`trackfuse.catalog.runs`. They are
 bound on first use (PEP 562), so importing ``trackfuse.config`` or running ``trackfuse list``
 loads no pandas.
 """
@@ -16,7 +18,7 @@ from typing import Any
 
 __version__ = "0.1.0"
 
-_LAZY = {"load": "trackfuse.rundata"}
+_LAZY = {"load": "trackfuse.rundata", "runs": "trackfuse.catalog"}
 
 
 def __getattr__(name: str) -> Any:

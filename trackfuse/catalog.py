@@ -6,17 +6,26 @@ Each run's status is :func:`trackfuse.runstate.run_state` in words, as ``plot`` 
 ``compare`` decide it; a folder whose manifest cannot be read is listed as
 :data:`~trackfuse.runstate.DAMAGED`. :func:`trackfuse.rundata.load` (which also compares
 checksums) says what is wrong.
+
+Each run's parameters come from its ``config.yaml`` (small): :func:`differences` picks, for
+each run, the values in which it differs from the other runs of its experiment listed, and
+:func:`runs` returns every run as one row of a DataFrame (``trackfuse.runs(path)``)::
+
+    import trackfuse
+    table = trackfuse.runs("results")   # experiment, status, name, seed, trials, params.*
+    table[table["params.clutter.mean"] == 5]
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from trackfuse.coerce import int_or
 from trackfuse.results import (
+    CONFIG,
     MANIFEST,
     PART_KINDS,
     RunFolder,
@@ -25,6 +34,10 @@ from trackfuse.results import (
     part_names,
 )
 from trackfuse.runstate import DAMAGED, STOPPED, run_state
+from trackfuse.safe_yaml import YamlInputError, read_yaml_file
+
+if TYPE_CHECKING:  # listing runs on the command line loads no pandas
+    import pandas as pd
 
 
 @dataclass(frozen=True)
@@ -40,6 +53,25 @@ class RunInfo:
     trials_total: int
     started: str
     wall_s: float | None
+    #: The root seed and the trials per sweep point (``None`` where not recorded).
+    seed: int | None = None
+    trials_per_point: int | None = None
+    #: Every parameter of the run's config by dotted key; a swept key holds its list of
+    #: values (empty when ``config.yaml`` cannot be read).
+    params: dict[str, Any] = field(default_factory=dict)
+
+
+def _params(path: Path) -> dict[str, Any]:
+    """The parameters of the run at ``path`` from its ``config.yaml`` (swept keys as their
+    lists of values), or ``{}`` when it is missing or not a run's config."""
+    try:
+        config = read_yaml_file(path / CONFIG)
+    except (OSError, YamlInputError):
+        return {}
+    if not isinstance(config, dict) or not isinstance(config.get("params"), dict):
+        return {}
+    sweep = config.get("sweep") if isinstance(config.get("sweep"), dict) else {}
+    return {**config["params"], **sweep}
 
 
 def _wall_seconds(manifest: dict[str, Any]) -> float | None:
@@ -76,7 +108,12 @@ def _info(path: Path, manifest: dict[str, Any]) -> RunInfo:
                    str(manifest.get("name") or ""), str(state),
                    done, int_or(manifest.get("trials_total")),
                    str(manifest.get("first_started") or manifest.get("started") or ""),
-                   _wall_seconds(manifest))
+                   _wall_seconds(manifest), _int_or_none(manifest.get("root_seed")),
+                   _int_or_none(manifest.get("trials_per_point")), _params(path))
+
+
+def _int_or_none(value: Any) -> int | None:
+    return value if isinstance(value, int) and not isinstance(value, bool) else None
 
 
 def is_run_folder(path: Path) -> bool:
@@ -103,3 +140,45 @@ def find_runs(root: Path) -> list[RunInfo]:
         if manifest is not None:
             found.append(_info(path, manifest))
     return sorted(found, key=lambda r: r.started, reverse=True)
+
+
+def differences(runs: list[RunInfo]) -> list[dict[str, Any]]:
+    """For each of ``runs``, in order, ``{key: value}`` of the parameters (and ``seed``,
+    ``trials``) whose values are not the same in every run of its experiment listed: what
+    tells the runs of one experiment apart. A run alone of its experiment differs in
+    nothing."""
+    def described(run: RunInfo) -> dict[str, Any]:
+        return {"seed": run.seed, "trials": run.trials_per_point, **run.params}
+
+    by_experiment: dict[str, list[dict[str, Any]]] = {}
+    for run in runs:
+        by_experiment.setdefault(run.experiment, []).append(described(run))
+    varying: dict[str, set[str]] = {}
+    for experiment, values in by_experiment.items():
+        keys = dict.fromkeys(k for v in values for k in v)
+        varying[experiment] = {k for k in keys
+                               if len({repr(v.get(k)) for v in values}) > 1}
+    return [{k: v for k, v in described(run).items() if k in varying[run.experiment]}
+            for run in runs]
+
+
+def runs(path: str | Path = "results") -> pd.DataFrame:
+    """Every run under ``path`` (:func:`find_runs`), newest first, one row each: ``path``,
+    ``experiment``, ``status``, ``name``, ``seed``, ``trials`` (per sweep point),
+    ``trials_done``, ``trials_total``, ``start`` (UTC timestamp), ``wall_s`` (seconds from
+    the first start to the finish; NaN unless complete), then ``params.<key>`` for every
+    parameter of any run (a swept key: its list of values; missing where a run's experiment
+    lacks the key). Like MLflow's ``search_runs``: filter and group it with pandas."""
+    import pandas as pd
+    found = find_runs(Path(path))
+    rows = [{"path": str(r.path), "experiment": r.experiment, "status": r.status,
+             "name": r.name, "seed": r.seed, "trials": r.trials_per_point,
+             "trials_done": r.trials_done, "trials_total": r.trials_total,
+             "start": pd.to_datetime(r.started or None, utc=True),
+             "wall_s": r.wall_s, **{f"params.{k}": v for k, v in r.params.items()}}
+            for r in found]
+    columns = ["path", "experiment", "status", "name", "seed", "trials", "trials_done",
+               "trials_total", "start", "wall_s"]
+    frame = pd.DataFrame(rows, columns=[*columns, *dict.fromkeys(
+        k for row in rows for k in row if k not in columns)])
+    return frame.astype({"seed": "Int64", "trials": "Int64", "wall_s": float})

@@ -120,6 +120,30 @@ class Comparison:
                            f"{cell_name(self.only_base_cells.iloc[0], names)}")
         return "; ".join(reasons) or None
 
+    def bottom_line(self) -> str:
+        """The comparison in one line: the gate's verdicts (regressions, improvements) over
+        the gated cells, then how many ungated cells differ at their own 95 %."""
+        if self.cells.empty:
+            return "bottom line: nothing compared (the runs share no cell)"
+        verdicts = self.cells["verdict"].value_counts()
+        regressions, improvements = verdicts.get("regression", 0), verdicts.get("improvement", 0)
+        if not self.gated:
+            gate = "nothing gated (no metric declares a better direction)"
+        elif regressions or improvements:
+            gate = (f"{_count(regressions, 'regression')} and "
+                    f"{_count(improvements, 'improvement')} in {self.gated} gated cells")
+        else:
+            gate = f"no significant change in any of the {self.gated} gated cells"
+        ungated = len(self.cells) - self.gated
+        differ = f"; {verdicts.get('differs', 0)} of {ungated} cells not gated differ" \
+            if ungated else ""
+        missing = f"; {self.only_base} cells of BASE missing from NEW" if self.only_base else ""
+        return f"bottom line: {gate}{differ}{missing}"
+
+
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}" + ("" if n == 1 else "s")
+
 
 def cell_name(row: pd.Series, names: Sequence[str]) -> str:
     """``key=value, ..., metric=name``: a cell named by its ``names`` columns."""
@@ -273,15 +297,21 @@ def _left_out(long: pd.DataFrame, cells: pd.DataFrame, keys: list[str]) -> pd.Da
 
 
 def compare_runs(base: RunData, new: RunData, tolerance: Mapping[str, float] | None = None,
-                 alpha: float = 0.05, family_wise: bool = True) -> Comparison:
+                 alpha: float = 0.05, family_wise: bool = True,
+                 metrics: Sequence[str] | None = None,
+                 algorithms: Sequence[str] | None = None) -> Comparison:
     """Compare two complete runs of the same experiment (see :func:`compare_trials`).
 
     Cells are keyed by the keys either run sweeps and the experiment's row keys: a key one
     run sweeps and the other fixes (``--set clutter.mean=5``) is compared at the fixed value
     (:func:`_with_fixed_keys`). 0/1 metrics and the direction of each metric come from
-    ``Experiment.metrics``. Trials are paired when both runs share the root seed, on the
-    trial indices both have (:func:`_pairing`). Raises ``ValueError`` for runs of different
-    experiments, or a key one run sweeps that the other fixes to a list or a mapping.
+    ``Experiment.metrics``; a metric summarized as a root mean square is compared on its
+    per-trial squares (``base``, ``new``, ``diff`` in the unit squared: the RMS is worse
+    exactly when the mean square is). Trials are paired when both runs share the root seed, on the
+    trial indices both have (:func:`_pairing`). ``metrics``, ``algorithms``: compare only
+    these (default all); the gate's family is then the cells kept. Raises ``ValueError`` for
+    runs of different experiments, a key one run sweeps that the other fixes to a list or a
+    mapping, or a metric or algorithm neither run has.
     """
     if base.config["experiment"] != new.config["experiment"]:
         raise ValueError(f"different experiments: {base.config['experiment']!r} and "
@@ -307,14 +337,42 @@ def compare_runs(base: RunData, new: RunData, tolerance: Mapping[str, float] | N
         if not 0 <= value < math.inf:
             raise ValueError(f"--tolerance: got {metric}={value}; allowed: a finite number "
                              ">= 0 (in the metric's unit)")
+    _check_chosen("--metric", metrics, names)
+    frames = [_with_fixed_keys(run, keys, role) for run, role in ((base, "BASE"), (new, "NEW"))]
+    if algorithms is not None:
+        frames = _of_algorithms(frames, algorithms)
+    if rms := [m for m in experiment.rms_metrics if m in names]:  # compared as mean squares
+        frames = [frame.assign(**{m: frame[m] ** 2 for m in rms if m in frame})
+                  for frame in frames]
     paired, pairing = _pairing(base.config, new.config)
-    result = compare_trials(_with_fixed_keys(base, keys, "BASE"),
-                            _with_fixed_keys(new, keys, "NEW"), [*keys, *experiment.row_keys],
+    result = compare_trials(*frames, [*keys, *experiment.row_keys],
                             binary=experiment.binary_metrics, better=experiment.directions,
-                            paired=paired, tolerance=tolerance, alpha=alpha,
+                            paired=paired, tolerance=tolerance, alpha=alpha, metrics=metrics,
                             family_wise=family_wise, skip=experiment.categorical_metrics)
+    squared = result.cells["metric"].isin(rms)
+    result.cells.loc[squared, "test"] = result.cells.loc[squared, "test"] + " on e^2"
     return dataclasses.replace(result, pairing=pairing, config_differences=tuple(
         config_differences(base.config, new.config)))
+
+
+def _check_chosen(option: str, chosen: Sequence[str] | None, allowed: Sequence[str]) -> None:
+    """Raise ``ValueError`` naming ``option`` for a chosen name not in ``allowed``."""
+    for name in chosen or ():
+        if name not in allowed:
+            raise ValueError(f"{option}: unknown {option[2:]} {name!r}"
+                             f"{did_you_mean(name, allowed)}; allowed: {', '.join(allowed)}")
+
+
+def _of_algorithms(frames: list[pd.DataFrame], algorithms: Sequence[str]
+                   ) -> list[pd.DataFrame]:
+    """The rows of ``frames`` (both runs' trials) whose ``algorithm`` is one of
+    ``algorithms``; ``ValueError`` for an algorithm neither run has."""
+    if any("algorithm" not in frame for frame in frames):
+        raise ValueError("--algorithm: the runs' rows have no algorithm column; allowed: "
+                         "compare without --algorithm")
+    present = sorted({str(a) for frame in frames for a in frame["algorithm"].dropna()})
+    _check_chosen("--algorithm", algorithms, present)
+    return [frame[frame["algorithm"].astype(str).isin(list(algorithms))] for frame in frames]
 
 
 def _with_fixed_keys(run: RunData, keys: Sequence[str], role: str) -> pd.DataFrame:

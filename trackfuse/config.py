@@ -212,7 +212,22 @@ def _validated(source: str, exp: Experiment, where: str, key: str, value: Any) -
         return check_value(p, value)
     except (ValueError, TypeError, OverflowError):
         raise ConfigError(source, _dotted(where, key),
-                          f"got {_bad_part(p, value)}; allowed: {allowed_text(p)}") from None
+                          f"got {_bad_part(p, value)}; allowed: {allowed_text(p)}"
+                          f"{_sweep_hint(source, p, value)}") from None
+
+
+def _sweep_hint(source: str, p: Param, value: Any) -> str:
+    """``"; to run each value, sweep it: --sweep KEY=A,B"`` for several values given to
+    ``--set`` a parameter that takes one (``clutter.mean=0,5,10``), else ``""``."""
+    if source != SET or p.kind is list:
+        return ""
+    if isinstance(value, list) and len(value) > 1:
+        values = ",".join(map(str, value))
+    elif isinstance(value, str) and "," in value:
+        values = value
+    else:
+        return ""
+    return f"; to run each value, sweep it: --sweep {p.key}={values}"
 
 
 def _bad_part(p: Param, value: Any) -> str:

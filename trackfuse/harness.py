@@ -10,6 +10,10 @@ summary and intervals included::
 
 :func:`run_data` keeps the folder and returns it as :class:`~trackfuse.rundata.RunData`,
 which is what report modules read (figure tests draw from it).
+
+A plugin is named as in a config (``"coin:EXPERIMENT"``, found on the Python path) or by
+its file from any folder (``"examples/plugin_example/coin.py:EXPERIMENT"``): the file's
+folder is added to the end of the Python path and the run records ``coin:EXPERIMENT``.
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ from typing import Any
 import pandas as pd
 
 from trackfuse.config import build
+from trackfuse.experiments import add_plugin_folder, file_reference
 from trackfuse.experiments.base import Experiment
 from trackfuse.rundata import RunData, load
 from trackfuse.runner import Runner
@@ -31,6 +36,9 @@ def _config(experiment: str | Experiment, params: Mapping[str, Any] | None,
             sweep: Mapping[str, list[Any]] | None, trials: int, seed: int,
             sweep_mode: str, batch_size: int | None):
     given = experiment if isinstance(experiment, Experiment) else None
+    if given is None and (by_file := file_reference(experiment)) is not None:
+        folder, experiment = by_file
+        add_plugin_folder(folder)
     sweep = dict(sweep or {})
     fixed = {k: v for k, v in (params or {}).items() if k not in sweep}
     raw: dict[str, Any] = {"experiment": experiment if given is None else given.name,
@@ -45,7 +53,8 @@ def run_data(out: str | Path, experiment: str | Experiment,
              params: Mapping[str, Any] | None = None,
              sweep: Mapping[str, list[Any]] | None = None, *, trials: int = 10, seed: int = 0,
              sweep_mode: str = "grid", batch_size: int | None = None) -> RunData:
-    """Run ``experiment`` (a name or an :class:`Experiment`) into ``out`` and return the
+    """Run ``experiment`` (a name, a plugin's ``module:ATTR`` or ``path/module.py:ATTR``, or
+    an :class:`Experiment`) into ``out`` and return the
     complete run. ``params`` override defaults (dotted keys; a swept key's value is
     ignored); ``sweep`` maps a key to its values; ``trials`` per sweep point; ``seed`` the
     root seed; ``batch_size`` default: the experiment's.

@@ -70,11 +70,24 @@ class RunData:
         name = str(self.config["experiment"])
         try:
             return experiments.get(name)
+        except experiments.PluginError as err:
+            return self._plugin_from_its_folder(name, err)
         except experiments.UnknownExperiment:
             raise RunFolderError(f"{self.path}: unknown experiment {name[:80]!r}; allowed: "
                                  + ", ".join(experiments.names())) from None
-        except experiments.PluginError as err:
+
+    def _plugin_from_its_folder(self, name: str, err: Exception) -> Experiment:
+        """Plugin ``name`` imported from the folder the run recorded in its manifest
+        (``plugin_folder``), which the caller's Python path lacks; else ``err``."""
+        folder = self.manifest.get("plugin_folder")
+        if not isinstance(folder, str) or not Path(folder).is_dir():
             raise RunFolderError(f"{self.path}: {err}") from None
+        experiments.add_plugin_folder(folder)
+        try:
+            return experiments.get(name)
+        except experiments.PluginError as again:
+            raise RunFolderError(f"{self.path}: {again} (also looked in {folder}, where "
+                                 "the run found it)") from None
 
     @cached_property
     def trials(self) -> pd.DataFrame:

@@ -51,6 +51,7 @@ from trackfuse.environment import (
     worker_environment,
 )
 from trackfuse.executors import ExecutorError, make_executor, unpicklable
+from trackfuse.experiments import plugin_folder
 from trackfuse.experiments.base import NON_NEGATIVE
 from trackfuse.failures import first_failure
 from trackfuse.fingerprint import code_fingerprint
@@ -255,6 +256,7 @@ class Runner:
             "run_id": self.run_id,
             "name": self.name if self.name is not None else previous.get("name"),
             "experiment": self.config.experiment.name,
+            "plugin_folder": plugin_folder(self.config.experiment_ref),
             "config_file": self.config_file,
             "command": list(self.command),
             "git": self.git,
@@ -569,7 +571,8 @@ class Runner:
         experiment = self.config.experiment
         summary, failed_rows = summarize(source, keys, experiment.binary_metrics,
                                          skip=experiment.categorical_metrics,
-                                         bounds=experiment.metric_bounds)
+                                         bounds=experiment.metric_bounds,
+                                         rms=experiment.rms_metrics)
         files[SUMMARY] = _write_record(path / SUMMARY, frame_csv(summary))
         if timings["rows"]:
             timing_summary, _ = summarize(path / TIMINGS, keys, suffix=TIME_SUFFIX,

@@ -4,6 +4,11 @@ The CSV is read in fixed-size chunks and the per-chunk (n, mean, M2) are combine
 (Chan, Golub & LeVeque 1979), so memory stays flat for any number of trials and the result
 does not depend on how the trials were scheduled. Rows of failed trials (``status ==
 "failed"``) are left out and counted separately.
+
+A metric summarized as a root mean square (:attr:`~trackfuse.experiments.base.Metric.aggregate`
+``"rms"``: a per-trial error ``e``) gets ``mean = sqrt(mean(e^2))`` with the expanded
+bootstrap-t interval of :func:`trackfuse.stats.rmse_intervals`, the built-in reports' RMSE
+interval; its squared values are kept per group (one float per trial) for the resampling.
 """
 
 from __future__ import annotations
@@ -15,7 +20,7 @@ import numpy as np
 import pandas as pd
 
 from trackfuse.results import FAILED_ROW, RUNNER_COLUMNS
-from trackfuse.stats import t_interval, wilson_interval
+from trackfuse.stats import rmse_intervals, t_interval, wilson_interval
 
 CHUNK_ROWS = 200_000
 
@@ -36,8 +41,8 @@ def _clipped(metrics: pd.Series, low: np.ndarray, high: np.ndarray,
 
 def summarize(source: Path | pd.DataFrame, keys: Sequence[str], binary: Sequence[str] = (),
               chunk_rows: int = CHUNK_ROWS, suffix: str = "", skip: Sequence[str] = (),
-              bounds: Mapping[str, tuple[float, float]] | tuple[float, float] | None = None
-              ) -> tuple[pd.DataFrame, int]:
+              bounds: Mapping[str, tuple[float, float]] | tuple[float, float] | None = None,
+              rms: Sequence[str] = ()) -> tuple[pd.DataFrame, int]:
     """Return ``(summary, failed_rows)`` for the CSV at ``source``, or for the CSV already
     read whole (``pd.read_csv(path, low_memory=False)``), taken in the same chunks.
 
@@ -45,19 +50,13 @@ def summarize(source: Path | pd.DataFrame, keys: Sequence[str], binary: Sequence
     every other numeric column whose name ends in ``suffix`` and is not in ``skip`` (labels
     such as a chosen track's index) is a metric. ``binary`` metrics get Wilson intervals, the
     rest Student-t intervals, clipped to a metric's ``bounds`` ``(low, high)`` if given
-    (one pair: every metric's).
+    (one pair: every metric's); ``rms`` metrics their root mean square with a bootstrap-t
+    interval (``std`` NaN, ``interval`` ``"bootstrap-t rms"``).
     """
     partial: list[pd.DataFrame] = []
+    squares: dict[tuple, list[np.ndarray]] = {}
     failed = 0
-    chunks: Iterable[pd.DataFrame]
-    if isinstance(source, pd.DataFrame):
-        chunks = (source.iloc[i:i + chunk_rows] for i in range(0, len(source), chunk_rows))
-    else:
-        try:
-            chunks = pd.read_csv(source, chunksize=chunk_rows, low_memory=False)
-        except pd.errors.EmptyDataError:
-            chunks = []
-    for chunk in chunks:
+    for chunk in _chunks(source, chunk_rows):
         if "status" in chunk:
             bad = chunk["status"].astype(str) == FAILED_ROW
             failed += int(bad.sum())
@@ -68,6 +67,9 @@ def summarize(source: Path | pd.DataFrame, keys: Sequence[str], binary: Sequence
                    and pd.api.types.is_numeric_dtype(chunk[c])]
         if chunk.empty or not metrics:
             continue
+        if mine := [m for m in rms if m in metrics]:
+            chunk = chunk.assign(**{m: chunk[m] ** 2 for m in mine})
+            _keep_squares(chunk, group, mine, squares)
         partial.append(_chunk_stats(chunk, group, metrics))
     if not partial:
         return pd.DataFrame(columns=[*keys, "metric", "n", "mean", "std", "ci_low", "ci_high",
@@ -89,7 +91,49 @@ def summarize(source: Path | pd.DataFrame, keys: Sequence[str], binary: Sequence
     out["ci_low"] = np.where(is_binary, w_low, t_low)
     out["ci_high"] = np.where(is_binary, w_high, t_high)
     out["interval"] = np.where(is_binary, "wilson", "t")
+    if squares:
+        _as_rms(out, group, squares)
     return out, failed
+
+
+def _chunks(source: Path | pd.DataFrame, chunk_rows: int) -> Iterable[pd.DataFrame]:
+    """``source`` (a CSV file, or a frame already read) in chunks of ``chunk_rows`` rows."""
+    if isinstance(source, pd.DataFrame):
+        return (source.iloc[i:i + chunk_rows] for i in range(0, len(source), chunk_rows))
+    try:
+        return pd.read_csv(source, chunksize=chunk_rows, low_memory=False)
+    except pd.errors.EmptyDataError:
+        return []
+
+
+def _keep_squares(chunk: pd.DataFrame, group: list[str], metrics: list[str],
+                  squares: dict[tuple, list[np.ndarray]]) -> None:
+    """Append each group's squared values of each of ``metrics`` (NaN dropped), in row
+    order, to ``squares[(*group values, metric)]``."""
+    for metric in metrics:
+        grouped = chunk.groupby(group, sort=False, dropna=False)[metric] if group \
+            else [((), chunk[metric])]
+        for key, values in grouped:
+            key = key if isinstance(key, tuple) else (key,)
+            kept = values.dropna().to_numpy(float)
+            squares.setdefault((*key, metric), []).append(kept)
+
+
+def _as_rms(out: pd.DataFrame, group: list[str], squares: dict[tuple, list[np.ndarray]]
+            ) -> None:
+    """Turn the rows of ``out`` (grouped by ``group``: the keys, then ``metric``) that have
+    ``squares`` (their mean is a mean of squares) into a root mean square with its
+    bootstrap-t interval, in place."""
+    keys = [tuple(row) for row in out[group].itertuples(index=False)]  # (*keys, metric)
+    rows = [i for i, key in enumerate(keys) if key in squares]
+    if not rows:
+        return
+    bounds = rmse_intervals([np.concatenate(squares[keys[i]]) for i in rows])
+    at = out.index[rows]
+    out.loc[at, "mean"] = np.sqrt(out.loc[at, "mean"].to_numpy(float))
+    out.loc[at, "std"] = np.nan
+    out.loc[at, "ci_low"], out.loc[at, "ci_high"] = bounds[:, 0], bounds[:, 1]
+    out.loc[at, "interval"] = "bootstrap-t rms"
 
 
 def _chunk_stats(chunk: pd.DataFrame, group: list[str], metrics: list[str]) -> pd.DataFrame:

@@ -21,6 +21,12 @@ module's source without running it and refuses the import unless
 
 Locating the module imports its parent packages (``pkg`` for ``pkg.mod``), as Python must.
 Any error while importing is reported in one line (:class:`PluginError`).
+
+Where a plugin is found: on the Python path. A run records the folder its plugin was
+imported from (:func:`plugin_folder`, the manifest's ``plugin_folder``), so ``plot`` and
+``compare`` add that folder to the end of the path (:func:`add_plugin_folder`) when they
+run elsewhere; the harness takes ``path/to/module.py:ATTRIBUTE`` as well
+(:func:`file_reference`).
 """
 
 from __future__ import annotations
@@ -33,6 +39,7 @@ import importlib.util
 import re
 import sys
 from dataclasses import dataclass
+from pathlib import Path
 
 from trackfuse.coerce import one_line
 from trackfuse.experiments.base import Experiment, Param
@@ -164,6 +171,39 @@ def get(name: str) -> Experiment:
         except PluginError as err:
             raise PluginError(f"entry point {name!r} ({ENTRY_POINT_GROUP}): {err}") from None
     raise UnknownExperiment(name)
+
+
+def plugin_folder(ref: str) -> str | None:
+    """The folder on the Python path that plugin ``ref`` (``pkg.mod:ATTR``, already
+    imported) was imported from: the folder holding ``pkg``; ``None`` for a built-in,
+    registered or installed (entry-point) name, or a module with no file."""
+    module = sys.modules.get(ref.partition(":")[0]) if ":" in ref else None
+    file = getattr(module, "__file__", None)
+    if not file:
+        return None
+    folder = Path(file).resolve().parent
+    depth = ref.partition(":")[0].count(".") + (Path(file).name == "__init__.py")
+    return str(folder.parents[depth - 1] if depth else folder)
+
+
+def add_plugin_folder(folder: str | Path) -> None:
+    """Put ``folder`` at the end of the Python path (never in front: it shadows nothing),
+    so a plugin module in it can be imported."""
+    folder = str(folder)
+    if folder not in sys.path:
+        sys.path.append(folder)
+        importlib.invalidate_caches()
+
+
+def file_reference(ref: str) -> tuple[Path, str] | None:
+    """``(folder, "module:ATTR")`` for a reference to a plugin by its file,
+    ``path/to/module.py:ATTR`` naming a file that exists; ``None`` for any other
+    reference."""
+    file, _, attr = ref.rpartition(":")
+    path = Path(file)
+    if path.suffix != ".py" or not path.is_file() or not attr.isidentifier():
+        return None
+    return path.resolve().parent, f"{path.stem}:{attr}"
 
 
 def _plugin(ref: str) -> Experiment:

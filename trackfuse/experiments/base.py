@@ -129,6 +129,9 @@ class Param:
 
 
 Better = Literal["lower", "higher"]
+Aggregate = Literal["mean", "rms"]
+#: The values :attr:`Metric.aggregate` may take.
+AGGREGATES = ("mean", "rms")
 
 
 @dataclass(frozen=True)
@@ -142,7 +145,12 @@ class Metric:
     never averaged: ``summary.csv`` has no row for it and ``compare`` skips it; ``bounds``:
     ``(low, high)`` that every value lies in (:data:`FRACTION`, :data:`NON_NEGATIVE`), to
     which ``summary.csv`` clips the mean's interval (a Student-t interval of a fraction near
-    1 otherwise passes 1).
+    1 otherwise passes 1); ``aggregate``: how ``summary.csv`` sums it up over trials,
+    ``"mean"`` (the mean of the per-trial values, with a t or Wilson interval) or ``"rms"``
+    (each trial's value is an error ``e`` in ``unit``: the root mean square
+    ``sqrt(mean(e^2))`` with the expanded bootstrap-t interval of
+    :func:`trackfuse.stats.rmse_intervals`, the built-in reports' RMSE interval; ``compare``
+    compares its mean square).
     """
 
     name: str
@@ -152,6 +160,15 @@ class Metric:
     better: Better | None = None
     categorical: bool = False
     bounds: tuple[float, float] | None = None
+    aggregate: Aggregate = "mean"
+
+    def __post_init__(self) -> None:
+        if self.aggregate not in AGGREGATES:
+            raise ValueError(f"Metric {self.name!r}: aggregate={self.aggregate!r}; allowed: "
+                             f"{', '.join(AGGREGATES)}")
+        if self.aggregate == "rms" and (self.binary or self.categorical):
+            raise ValueError(f"Metric {self.name!r}: aggregate='rms' is for an error in a "
+                             "unit; allowed: a metric neither binary nor categorical")
 
     def __post_init__(self) -> None:
         if problem := column_name_problem(self.name):
@@ -242,6 +259,11 @@ class Experiment:
     def metric_bounds(self) -> dict[str, tuple[float, float]]:
         """``{name: (low, high)}`` of the metrics with :attr:`Metric.bounds`."""
         return {m.name: m.bounds for m in self.metrics if m.bounds is not None}
+
+    @property
+    def rms_metrics(self) -> tuple[str, ...]:
+        """Names of the metrics summarized as a root mean square (:attr:`Metric.aggregate`)."""
+        return tuple(m.name for m in self.metrics if m.aggregate == "rms")
 
     @property
     def categorical_metrics(self) -> tuple[str, ...]:
