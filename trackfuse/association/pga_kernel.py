@@ -39,6 +39,8 @@ from trackfuse.association.pga import (
 )
 
 JIT = {"cache": True, "nogil": True, "error_model": "numpy"}
+#: Callees run only from compiled code: no Python or C entry point to compile for them.
+INNER = {**JIT, "no_cpython_wrapper": True, "no_cfunc_wrapper": True}
 # Columns of a row of draws (the fields of pga.Draws, in stream order).
 FIRST, SECOND, MUTATE, REPAIR, PICK, PLACE, ACCEPT_CROSSOVER, ACCEPT_MUTATION = range(8)
 # Constant arguments as int64 and bool values: a literal in a call would compile one more
@@ -140,13 +142,13 @@ def _search(draws, w, rank, cur, best, q, state, p_m, roulette_second, repair_mo
     state[J_CUR], state[J_BEST], state[TEMPERATURE] = J, J_best, T
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _accepted(dJ, u, anneal, T):
     """Monotone acceptance, or Metropolis at temperature ``T``."""
     return dJ >= 0.0 or (anneal and u < math.exp(dJ / T))
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _commit(J, J_best, child_paired, cur, child, best, q, rank, touched, n_touched):
     """Accept the offspring (objective ``J``): copy its touched columns into ``cur`` and
     their roulette weights into ``q``, and keep it as ``best`` if it beats ``J_best``.
@@ -162,7 +164,7 @@ def _commit(J, J_best, child_paired, cur, child, best, q, rank, touched, n_touch
     return J, J_best, child_paired, True
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _cumulative_sum(q, out):
     """``out = np.cumsum(q)`` in place, element by element: an array-to-array assignment
     compiles numba's shape-mismatch message (string formatting, about 3 s of the first run
@@ -173,7 +175,7 @@ def _cumulative_sum(q, out):
         out[j] = acc
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _revert(cur, child, touched, n_touched):
     """Reject the offspring: restore its touched columns from ``cur``."""
     for k in range(n_touched):
@@ -181,7 +183,7 @@ def _revert(cur, child, touched, n_touched):
         child[j] = cur[j]
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _bisect_right(cum, x, lo, hi, shift):
     """First index in ``lo..hi-1`` with ``cum[i] - shift > x`` (``hi`` if none), by the
     binary search of :func:`bisect.bisect_right` (``cum`` increasing)."""
@@ -194,7 +196,7 @@ def _bisect_right(cum, x, lo, hi, shift):
     return lo
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _columns(cum, q, u1, u2, roulette_second):
     """The crossover's two columns (``_Search._crossover`` of the reference)."""
     m2 = cum.shape[0]
@@ -212,7 +214,7 @@ def _columns(cum, q, u1, u2, roulette_second):
     return j1, j2
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _mutate(child, w, d, child_paired, repair_moves, evict, scratch, seen):
     """Re-pair (plain or evicting) or unpair in place (``_Search._mutate`` of the
     reference). Returns the gain, the touched column (-1 for none) and the pair count."""
@@ -246,7 +248,7 @@ def _mutate(child, w, d, child_paired, repair_moves, evict, scratch, seen):
     return 0.0, -1, child_paired
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _columns_where(child, paired, out):
     """Write the columns that hold a real row (``paired``) or none into ``out``, in order;
     return their number."""

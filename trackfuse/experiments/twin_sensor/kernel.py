@@ -32,6 +32,8 @@ SEQUENTIAL, NEAREST, PAPER_APPROX = (METHODS.index(m) for m in (
 LOG_2PI = math.log(2.0 * math.pi)
 TWO_PI = 2.0 * math.pi
 JIT = {"cache": True, "nogil": True, "error_model": "numpy"}
+#: Callees run only from compiled code: no Python or C entry point to compile for them.
+INNER = {**JIT, "no_cpython_wrapper": True, "no_cfunc_wrapper": True}
 #: The sensor indices (and each sensor's first row in the moments) as int64
 #: values: a literal 0 or 1 in a call would compile one more copy of the called function
 #: per constant, each about a second of the first run after installing.
@@ -116,7 +118,7 @@ def _filter_batch(x0, P0, F, Q, sensor_pos, R, P_D, los, z_target, detected, clu
             _copy_state(X, P, X_out[n, k], P_out[n, k])
 
 
-@njit(**JIT)
+@njit(**INNER)
 def Linearized(S, M):  # noqa: N802 (builds a record, read as a type)
     """Per-sensor arrays of one scan, reused for every trial and scan.
 
@@ -137,7 +139,7 @@ def Linearized(S, M):  # noqa: N802 (builds a record, read as a type)
 _Lin = namedtuple("_Lin", "geom H PHt Sm Si Kg nu G log_n ok m w B")
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _copy_state(X, P, X_to, P_to):
     """``X_to = X: (6,)``, ``P_to = P: (6, 6)``, element by element: an array-to-array
     assignment compiles numba's shape-mismatch message (string formatting, about 5 s of the
@@ -148,13 +150,13 @@ def _copy_state(X, P, X_to, P_to):
             P_to[i, j] = P[i, j]
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _wrap(a):
     """Angle (rad) mapped to [-pi, pi)."""
     return (a + math.pi) % TWO_PI - math.pi
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _predict(X, P, F, Q, Xp, Pp):
     """``Xp = F X``, ``Pp = F P F' + Q``."""
     FP = np.empty((6, 6))
@@ -175,7 +177,7 @@ def _predict(X, P, F, Q, Xp, Pp):
             Pp[i, j] = acc + Q[i, j]
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _inv2(A, out):
     """Closed-form inverse of a 2x2 matrix into ``out``; returns the determinant."""
     det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
@@ -184,13 +186,13 @@ def _inv2(A, out):
     return det
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _mahalanobis2(n0, n1, Si):
     """``nu' Si nu`` for ``nu = (n0, n1)`` and a 2x2 ``Si``, summed as the reference does."""
     return (n0 * Si[0, 0] + n1 * Si[1, 0]) * n0 + (n0 * Si[0, 1] + n1 * Si[1, 1]) * n1
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _geometry(X, P, pos, R, lin, s):
     """Sensor ``s`` seen from the state ``(X, P)``: relative position ``d = X[:3] - pos``,
     predicted angles, the Jacobian's position columns ``H``, ``PHt = P[:, :3] H'``,
@@ -217,13 +219,13 @@ def _geometry(X, P, pos, R, lin, s):
             Kg[i, j] = PHt[i, 0] * Si[0, j] + PHt[i, 1] * Si[1, j]
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _gate_area(gamma, det):
     """Area (rad^2) of the gate ``nu' S^-1 nu <= gamma`` of a 2x2 ``S`` with determinant ``det``."""
     return math.pi * gamma * math.sqrt(det)
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _in_gate(los, lin, s, gamma):
     """Whether the noise-free target return ``los`` lies in sensor ``s``'s gate (the gate
     rule's input), at the geometry in ``lin``."""
@@ -232,7 +234,7 @@ def _in_gate(los, lin, s, gamma):
     return _mahalanobis2(n0, n1, lin.Si[s]) <= gamma
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _place_returns(z_target, detected, clutter, clutter_ok, gamma, in_gate, clutter_mean,
                    window_density, lin, s, z, valid):
     """Sensor ``s``'s returns at one scan into ``z (M, 2)``, ``valid (M,)``: the target
@@ -259,7 +261,7 @@ def _place_returns(z_target, detected, clutter, clutter_ok, gamma, in_gate, clut
     return clutter_mean / _gate_area(gamma, g[DET])
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _modified_rows(z0, z1, g, G):
     """Song-Speyer modified position rows ``G (2, 3)`` at measured angles ``(z0, z1)`` and
     the relative position in the geometry row ``g``
@@ -273,7 +275,7 @@ def _modified_rows(z0, z1, g, G):
     G[1, 0], G[1, 1], G[1, 2] = -s_ph * c_th * inv_el, -s_ph * s_th * inv_el, c_ph * inv_el
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _linearize(z, valid, lam_true, gamma, mgekf, nonparametric, lin, s):
     """Gate sensor ``s``'s returns ``z (M, 2)`` at the geometry in ``lin``: innovations,
     ``G`` rows (modified rows or ``H``) and log-likelihoods of the validated returns, their
@@ -305,7 +307,7 @@ def _linearize(z, valid, lam_true, gamma, mgekf, nonparametric, lin, s):
     g[LAM] = count / g[AREA] if nonparametric else lam_true
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _log_null(lin, s, P_D, P_G):
     """``log f_s(0)`` of sensor ``s``: zero when it validated nothing."""
     if lin.m[s] == 0:
@@ -313,7 +315,7 @@ def _log_null(lin, s, P_D, P_G):
     return math.log1p(-P_D * P_G) + _log(lin.geom[s, LAM])
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _log(x):
     """``math.log(x)`` as compiled code computes it: ``-inf`` at zero, NaN below zero or at
     NaN. Python's ``math.log`` raises at zero and below, and it runs the kernel under
@@ -323,7 +325,7 @@ def _log(x):
     return -np.inf if x == 0 else np.nan
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _at_combined(lin, s, w):
     """Re-evaluate sensor ``s``'s modified rows of every validated return at the combined
     return ``h(Xp) + sum w_i nu_i / sum w_i`` (``mg_at = "combined"``), weights ``w (M,)``."""
@@ -342,7 +344,7 @@ def _at_combined(lin, s, w):
                 G[ok[a], r, c] = G[ok[0], r, c]
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _nan_max(a, b):
     """``max(a, b)`` that propagates NaN, as ``numpy.max`` does."""
     if math.isnan(a) or math.isnan(b):
@@ -350,7 +352,7 @@ def _nan_max(a, b):
     return a if a >= b else b
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _beats(value, best):
     """``numpy.argmax``'s rule: a later entry wins only if larger, or NaN after no NaN."""
     if math.isnan(best):
@@ -358,7 +360,7 @@ def _beats(value, best):
     return math.isnan(value) or value > best
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _single_update(X, P, R, P_D, P_G, nearest, mg_combined, lin, s, mom):
     """Single-sensor PDA update of ``(X, P)`` in place with sensor ``s``, linearized at them
     (:func:`trackfuse.tracking.pda._single_update`)."""
@@ -400,7 +402,7 @@ def _single_update(X, P, R, P_D, P_G, nearest, mg_combined, lin, s, mom):
 _Mom = namedtuple("_Mom", "nub NN Gbar C dx dP GP KR KA")
 
 
-@njit(**JIT)
+@njit(**INNER)
 def Moments():  # noqa: N802 (builds a record, read as a type)
     """Weighted moments of one hypothesis class (``n = 2`` or ``4`` rows used):
     ``nub = sum b nu (4,)``, ``NN = sum b nu nu' (4, 4)``, ``Gbar = sum b G (4, 3)``,
@@ -411,7 +413,7 @@ def Moments():  # noqa: N802 (builds a record, read as a type)
                 np.zeros((6, 4)))
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _clear(mom):
     """Zero the moments and the update sums."""
     _clear_class(mom)
@@ -419,7 +421,7 @@ def _clear(mom):
     mom.dP[:, :] = 0.0
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _clear_class(mom):
     """Zero the moments only (the next hypothesis class adds to the same update sums)."""
     mom.nub[:] = 0.0
@@ -428,7 +430,7 @@ def _clear_class(mom):
     mom.C[:, :] = 0.0
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _single_moments(lin, s, w, P, mom, off):
     """Add sensor ``s``'s weighted moments with weights ``w (M,)`` to rows and columns
     ``off, off + 1`` of ``mom``; returns ``sum w``
@@ -454,7 +456,7 @@ def _single_moments(lin, s, w, P, mom, off):
     return bsum
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _class_terms(Kg, R, P, bsum, mom):
     """Add one hypothesis class with gain ``Kg (6, n)`` to the update sums: ``dx += K nub``,
     ``dP += bsum (P + K R K') - K Gbar P[:3] - (.)' + K (C + NN) K'``
@@ -483,7 +485,7 @@ def _class_terms(Kg, R, P, bsum, mom):
             dP[i, j] += bsum * (P[i, j] + krk) - kgp_ij - kgp_ji + kak
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _collapse(X, P, b0, mom):
     """``X += dx``, ``P = b0 P + dP - dx dx'`` in place."""
     dx, dP = mom.dx, mom.dP
@@ -494,7 +496,7 @@ def _collapse(X, P, b0, mom):
         X[i] += dx[i]
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _pair_update(Xp, Pp, R, P_D, P_G, method, joint_full, mg_combined, lin, mom, X, P):
     """Two-sensor (parallel, nearest-neighbour or paper-reconstruction) PDA update of the
     prediction ``(Xp, Pp)`` into ``(X, P)``, both sensors linearized at the prediction
@@ -531,7 +533,7 @@ def _pair_update(Xp, Pp, R, P_D, P_G, method, joint_full, mg_combined, lin, mom,
     _collapse(X, P, b00, mom)
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _block_inverse(A, Bx, D_, out):
     """Inverse of ``[[A, Bx], [Bx', D_]]`` (2x2 blocks) into ``out (4, 4)`` by the Schur
     complement; returns the determinant (:func:`trackfuse.tracking.pda._block_inverse`)."""
@@ -557,7 +559,7 @@ def _block_inverse(A, Bx, D_, out):
     return detA * detSc
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _pair_log_weights(lin, S12inv, det12, P_D, P_G, method, joint_full):
     """Log weights of the two-sensor hypotheses into ``lin.w`` (one sensor's return) and
     ``lin.B`` (both); returns the null's and the largest (NaN-propagating)
@@ -615,7 +617,7 @@ def _pair_log_weights(lin, S12inv, det12, P_D, P_G, method, joint_full):
     return log00, top
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _normalize_pair(lin, log00, top, nearest):
     """Turn the log weights in ``lin.w`` and ``lin.B`` into probabilities in place and return
     the null's. When every weight is zero all mass goes to the null; ``nearest`` puts all
@@ -664,7 +666,7 @@ def _normalize_pair(lin, log00, top, nearest):
     return b00 / total
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _pair_at_combined(lin):
     """``mg_at = "combined"`` for both sensors: each sensor's weight of a return is its
     one-sensor hypothesis plus every pair that uses it."""
@@ -687,7 +689,7 @@ def _pair_at_combined(lin):
         _at_combined(lin, _SECOND, w2)
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _pair_moments(lin, P, mom):
     """Weighted moments of the joint hypotheses ``(i, j)`` with weights ``lin.B`` into
     ``mom`` (4 rows); returns ``sum B`` (:func:`trackfuse.tracking.pda._pair_moments`).
@@ -733,7 +735,7 @@ def _pair_moments(lin, P, mom):
     return bsum
 
 
-@njit(**JIT)
+@njit(**INNER)
 def _symmetrize_and_check(X, P):
     """``P = (P + P') / 2`` in place; True when ``X`` or ``P`` is not finite (diverged)."""
     bad = False
