@@ -57,9 +57,10 @@ def subset_chi2(z: Sequence[np.ndarray], sensors: np.ndarray, sigma_a: float,
         return np.zeros(shape)
     grids = np.meshgrid(*[np.arange(n) for n in shape], indexing="ij")
     picked = [zs[g.ravel()] for zs, g in zip(z, grids, strict=True)]
-    p = intersect(picked, sensors)
-    r = los_residuals(p, picked, sensors) / np.tile([sigma_a, sigma_b], len(z))
-    chi2 = np.einsum("ki,ki->k", r, r)
+    with np.errstate(divide="ignore", invalid="ignore"):  # parallel lines: inf below
+        p = intersect(picked, sensors)
+        r = los_residuals(p, picked, sensors) / np.tile([sigma_a, sigma_b], len(z))
+        chi2 = np.einsum("ki,ki->k", r, r)
     return np.where(np.isfinite(chi2), chi2, np.inf).reshape(shape)
 
 
