@@ -1,9 +1,10 @@
 """Plain references for the S-D assignment (trackfuse/association/sd_assignment.py).
 
-:func:`brute_force` enumerates every feasible assignment with dummies (small problems only);
-:func:`lagrangian` is the Lagrangian relaxation of the module written with numpy and scipy
-alone (``numpy.min``/``argmin`` over the tail instead of the compiled kernel, scipy's
-``linear_sum_assignment`` called directly instead of the project's exact solver), step for step the same algorithm with its sums in the same order (equal
+:func:`brute_force` finds the optimum over every feasible assignment with dummies (small
+problems only); :func:`lagrangian` is the Lagrangian relaxation of the module written with
+numpy and scipy alone (``numpy.min``/``argmin`` over the tail instead of the compiled
+kernel, scipy's ``linear_sum_assignment`` called directly instead of the project's exact
+solver), step for step the same algorithm with its sums in the same order (equal
 multipliers make exact ties, which must break alike), so the tests pin the two together.
 """
 
