@@ -63,27 +63,27 @@ def los_angles(p: np.ndarray, s: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class PassiveScan:
-    """One simultaneous scan of both sensors.
+    """One simultaneous scan of every sensor (two in paper 002, S in the S-D assignment).
 
     Attributes
     ----------
     targets : (N, 3) true target positions, m.
-    sensors : (2, 3) sensor positions, m.
-    z : pair of (m_s, 2) arrays of measured ``[azimuth, elevation]``, rad, shuffled.
-    labels : pair of (m_s,) int arrays: the target index of each measurement, -1 for a
-        false alarm (for scoring only).
-    fov : (2, 4) per-sensor box ``[a_low, a_high, b_low, b_high]``, rad.
+    sensors : (S, 3) sensor positions, m.
+    z : one (m_s, 2) array of measured ``[azimuth, elevation]`` per sensor, rad, shuffled.
+    labels : one (m_s,) int array per sensor: the target index of each measurement, -1 for
+        a false alarm (for scoring only).
+    fov : (S, 4) per-sensor box ``[a_low, a_high, b_low, b_high]``, rad.
     """
 
     targets: np.ndarray
     sensors: np.ndarray
-    z: tuple[np.ndarray, np.ndarray]
-    labels: tuple[np.ndarray, np.ndarray]
+    z: tuple[np.ndarray, ...]
+    labels: tuple[np.ndarray, ...]
     fov: np.ndarray
 
     @property
     def psi(self) -> np.ndarray:
-        """(2,) field-of-view areas ``(a_high - a_low)(b_high - b_low)``, rad^2."""
+        """(S,) field-of-view areas ``(a_high - a_low)(b_high - b_low)``, rad^2."""
         return (self.fov[:, 1] - self.fov[:, 0]) * (self.fov[:, 3] - self.fov[:, 2])
 
 
@@ -110,7 +110,8 @@ def simulate_scan(targets: np.ndarray, sigma_a: float, sigma_b: float, p_d: floa
                   rng_clutter: np.random.Generator, rng_shuffle: np.random.Generator,
                   clutter: str = "poisson", margin: float = 0.1,
                   sensors: np.ndarray = SENSORS) -> PassiveScan:
-    """Simulate one scan of both sensors.
+    """Simulate one scan of every sensor (in sensor order, so the first two sensors' data
+    do not depend on the sensors after them).
 
     Parameters
     ----------
@@ -122,11 +123,11 @@ def simulate_scan(targets: np.ndarray, sigma_a: float, sigma_b: float, p_d: floa
         false alarms, and the shuffling of each sensor's list.
     clutter : ``"poisson"`` or ``"binomial"``.
     margin : FOV box margin around the true angles, rad.
-    sensors : (2, 3) sensor positions, m.
+    sensors : (S, 3) sensor positions, m.
     """
     n = len(targets)
     zs, labels, boxes = [], [], []
-    for s in range(2):
+    for s in range(len(sensors)):
         true = los_angles(targets, sensors[s])
         detected = rng_noise.random(n) < p_d
         noise = rng_noise.standard_normal((n, 2)) * (sigma_a, sigma_b)
@@ -145,8 +146,8 @@ def simulate_scan(targets: np.ndarray, sigma_a: float, sigma_b: float, p_d: floa
         zs.append(z[order])
         labels.append(lab[order])
         boxes.append(box)
-    return PassiveScan(targets=targets, sensors=sensors, z=(zs[0], zs[1]),
-                       labels=(labels[0], labels[1]), fov=np.array(boxes))
+    return PassiveScan(targets=targets, sensors=sensors, z=tuple(zs), labels=tuple(labels),
+                       fov=np.array(boxes))
 
 
 def true_partners(labels1: np.ndarray, labels2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -27,7 +27,9 @@ squares, ``p_hat = (A'A)^-1 A'B``. Four forms are offered (``docs/papers/passive
     Gauss-Newton on the four noise-normalised angle residuals, started at the unit-normal
     point (3 iterations by default): the maximum-likelihood point for Gaussian angle noise.
 
-All functions are vectorized over ``K`` candidate pairs.
+All functions are vectorized over ``K`` candidate pairs. :func:`intersect` and
+:func:`los_residuals` take any number ``S' >= 2`` of lines of sight per candidate (the S-D
+assignment, ``docs/papers/sd_assignment.md``): the ``2 S'`` unit-normal rows stacked.
 
 References
 ----------
@@ -39,6 +41,8 @@ midpoint method).
 """
 
 from __future__ import annotations
+
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -103,6 +107,26 @@ def least_squares(z1: np.ndarray, z2: np.ndarray, s1: np.ndarray, s2: np.ndarray
     z1, z2 : (K, 2) rad; s1, s2 : (3,) m; form as in :func:`los_rows`. Returns (K, 3) m.
     """
     return _solve_normal(*_stack(np.atleast_2d(z1), np.atleast_2d(z2), s1, s2, form))
+
+
+def intersect(z: Sequence[np.ndarray], sensors: np.ndarray) -> np.ndarray:
+    """Least-squares intersection of ``S' >= 2`` lines of sight per candidate.
+
+    The unit-normal rows of every LOS are stacked (``2 S'`` x 3) and solved by
+    ``(A'A)^-1 A'B``; with two LOS this is :func:`common_perpendicular_midpoint`.
+    z : S' arrays (K, 2) of azimuth/elevation, rad; sensors : (S', 3) m. Returns (K, 3) m.
+    """
+    rows = [los_rows(np.atleast_2d(zs), s) for zs, s in zip(z, sensors, strict=True)]
+    return _solve_normal(np.concatenate([A for A, _ in rows], 1),
+                         np.concatenate([B for _, B in rows], 1))
+
+
+def los_residuals(p: np.ndarray, z: Sequence[np.ndarray], sensors: np.ndarray) -> np.ndarray:
+    """Measured minus predicted angles of ``S'`` sensors, azimuths wrapped: (K, 2 S') rad,
+    columns ``[a_1, b_1, a_2, b_2, ...]`` for p (K, 3) m and z: S' arrays (K, 2) rad."""
+    r = np.concatenate([zs - los_angles(p, s) for zs, s in zip(z, sensors, strict=True)], 1)
+    r[:, 0::2] = wrap(r[:, 0::2])
+    return r
 
 
 def angle_jacobian(p: np.ndarray, s: np.ndarray) -> np.ndarray:
