@@ -163,16 +163,14 @@ class Metric:
     aggregate: Aggregate = "mean"
 
     def __post_init__(self) -> None:
+        if problem := column_name_problem(self.name):
+            raise ValueError(f"Metric {self.name!r}: {problem}")
         if self.aggregate not in AGGREGATES:
             raise ValueError(f"Metric {self.name!r}: aggregate={self.aggregate!r}; allowed: "
                              f"{', '.join(AGGREGATES)}")
         if self.aggregate == "rms" and (self.binary or self.categorical):
             raise ValueError(f"Metric {self.name!r}: aggregate='rms' is for an error in a "
                              "unit; allowed: a metric neither binary nor categorical")
-
-    def __post_init__(self) -> None:
-        if problem := column_name_problem(self.name):
-            raise ValueError(f"Metric {self.name!r}: {problem}")
 
 
 def column_name_problem(name: object) -> str | None:
