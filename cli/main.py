@@ -45,11 +45,14 @@ from trackfuse_cli.options import (
     fail,
     out_folder,
     print_error,
+    printable,
     warn,
     whole_number,
 )
 
 if TYPE_CHECKING:
+    from rich.text import Text
+
     from trackfuse.compare import Comparison
     from trackfuse.config import Config
     from trackfuse.rundata import RunData
@@ -503,15 +506,22 @@ def _load_run(path: Path) -> RunData:
         fail(f"{err.filename or path}: {err.strerror or type(err).__name__}")
 
 
+def _cell(value: Any) -> Text:
+    """A table cell showing ``value`` as it is: rich markup (``[bold red]``, ``[/]``) is
+    not interpreted and escape sequences are written out (:func:`printable`)."""
+    from rich.text import Text
+    return Text(printable(str(value)))
+
+
 def _print_runs(runs) -> None:
     from rich.console import Console
     from rich.table import Table
     table = Table("run folder", "experiment", "name", "status", "trials", "started", "wall")
     for r in runs:
         wall = f"{r.wall_s:.0f} s" if r.wall_s is not None else ""
-        table.add_row(str(r.path), r.experiment, r.name, r.status,
-                      f"{r.trials_done}/{r.trials_total}", r.started.replace("T", " ")[:19],
-                      wall)
+        table.add_row(*map(_cell, (r.path, r.experiment, r.name, r.status,
+                                   f"{r.trials_done}/{r.trials_total}",
+                                   r.started.replace("T", " ")[:19], wall)))
     Console(width=max(Console().width, 160)).print(table)
 
 
@@ -606,7 +616,7 @@ def _print_comparison(result: Comparison, shown: int = 30) -> None:
     columns = [c for c in notable.columns if c not in hidden]
     table = Table(*columns)
     for row in notable.head(shown)[columns].itertuples(index=False):
-        table.add_row(*(f"{v:.4g}" if isinstance(v, float) else str(v) for v in row))
+        table.add_row(*(_cell(f"{v:.4g}" if isinstance(v, float) else v) for v in row))
     Console(width=max(Console().width, 160)).print(table)
     if len(notable) > shown:
         print(f"(+{len(notable) - shown} more cells; --json lists every cell)")
