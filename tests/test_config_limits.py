@@ -44,6 +44,8 @@ BAD = {
     "alias bomb": (BOMB, "aliases expand to more than 100000 values"),
     "recursive alias": ("experiment: toy_gaussian\nparams: &p {mu: *p}\n",
                         "an alias refers to the value that contains it"),
+    "merge key twice": ("experiment: toy_gaussian\nx: &x {mu: 1}\ny: &y {mu: 2}\n"
+                        "params:\n  <<: *x\n  <<: *y\n", ": line 6: merge key '<<' given twice"),
 }
 
 
