@@ -155,9 +155,15 @@ class RunOptions:
     name: str | None = None
 
     def check(self) -> None:
-        """Refuse a ``--scheduler-file`` without an address in one line; warn about more
-        local workers than cores."""
+        """Refuse an empty ``--scheduler`` or ``--scheduler-file`` (an unset shell variable:
+        it ran here, unsaid) and a scheduler file without an address in one line; warn about
+        more local workers than cores."""
         from trackfuse.executors import ExecutorError, default_workers, scheduler_address
+        for option, value in (("--scheduler", self.scheduler),
+                              ("--scheduler-file", self.scheduler_file)):
+            if value is not None and not value.strip():
+                fail(f"{option}: got an empty value; allowed: a dask scheduler address such "
+                     "as tcp://host:8786, or a scheduler file (leave it out to run here)")
         if self.scheduler_file:
             try:
                 scheduler_address(self.scheduler_file)
@@ -547,13 +553,17 @@ def runs(
 
 def _tolerances(specs: list[str]) -> dict[str, float]:
     """``--tolerance METRIC=NUMBER`` options as a mapping (one-line error otherwise)."""
-    found = {}
+    found: dict[str, float] = {}
     for spec in specs:
         metric, _, value = spec.partition("=")
+        metric = metric.strip()
+        if metric in found:
+            fail(f"--tolerance: {metric} given twice ({found[metric]:g} and {value.strip()}); "
+                 "allowed: one tolerance per metric")
         try:
-            if not metric.strip():
+            if not metric:
                 raise ValueError
-            found[metric.strip()] = float(value)
+            found[metric] = float(value)
         except ValueError:
             fail(f"--tolerance: got {spec!r}; allowed: METRIC=NUMBER (in the metric's unit)")
     return found
