@@ -45,11 +45,14 @@ from trackfuse_cli.options import (
     fail,
     out_folder,
     print_error,
+    printable,
     warn,
     whole_number,
 )
 
 if TYPE_CHECKING:
+    from rich.text import Text
+
     from trackfuse.compare import Comparison
     from trackfuse.config import Config
     from trackfuse.rundata import RunData
@@ -152,9 +155,15 @@ class RunOptions:
     name: str | None = None
 
     def check(self) -> None:
-        """Refuse a ``--scheduler-file`` without an address in one line; warn about more
-        local workers than cores."""
+        """Refuse an empty ``--scheduler`` or ``--scheduler-file`` (an unset shell variable:
+        it ran here, unsaid) and a scheduler file without an address in one line; warn about
+        more local workers than cores."""
         from trackfuse.executors import ExecutorError, default_workers, scheduler_address
+        for option, value in (("--scheduler", self.scheduler),
+                              ("--scheduler-file", self.scheduler_file)):
+            if value is not None and not value.strip():
+                fail(f"{option}: got an empty value; allowed: a dask scheduler address such "
+                     "as tcp://host:8786, or a scheduler file (leave it out to run here)")
         if self.scheduler_file:
             try:
                 scheduler_address(self.scheduler_file)
@@ -503,6 +512,13 @@ def _load_run(path: Path) -> RunData:
         fail(f"{err.filename or path}: {err.strerror or type(err).__name__}")
 
 
+def _cell(value: Any) -> Text:
+    """A table cell showing ``value`` as it is: rich markup (``[bold red]``, ``[/]``) is
+    not interpreted and escape sequences are written out (:func:`printable`)."""
+    from rich.text import Text
+    return Text(printable(str(value)))
+
+
 def _print_runs(runs) -> None:
     """The runs as a table, each with the parameters in which it differs from the others of
     its experiment listed (:func:`trackfuse.catalog.differences`)."""
@@ -514,9 +530,10 @@ def _print_runs(runs) -> None:
                   "differs in")
     for r, differs in zip(runs, differences(runs), strict=True):
         wall = f"{r.wall_s:.0f} s" if r.wall_s is not None else ""
-        table.add_row(str(r.path), r.experiment, r.name, r.status,
-                      f"{r.trials_done}/{r.trials_total}", r.started.replace("T", " ")[:19],
-                      wall, _differs_text(differs))
+        table.add_row(*map(_cell, (r.path, r.experiment, r.name, r.status,
+                                   f"{r.trials_done}/{r.trials_total}",
+                                   r.started.replace("T", " ")[:19], wall,
+                                   _differs_text(differs))))
     Console(width=max(Console().width, 160)).print(table)
 
 
@@ -573,13 +590,17 @@ def runs(
 
 def _tolerances(specs: list[str]) -> dict[str, float]:
     """``--tolerance METRIC=NUMBER`` options as a mapping (one-line error otherwise)."""
-    found = {}
+    found: dict[str, float] = {}
     for spec in specs:
         metric, _, value = spec.partition("=")
+        metric = metric.strip()
+        if metric in found:
+            fail(f"--tolerance: {metric} given twice ({found[metric]:g} and {value.strip()}); "
+                 "allowed: one tolerance per metric")
         try:
-            if not metric.strip():
+            if not metric:
                 raise ValueError
-            found[metric.strip()] = float(value)
+            found[metric] = float(value)
         except ValueError:
             fail(f"--tolerance: got {spec!r}; allowed: METRIC=NUMBER (in the metric's unit)")
     return found
@@ -647,7 +668,7 @@ def _print_comparison(result: Comparison, shown: int = 30) -> None:
     columns = [c for c in notable.columns if c not in hidden]
     table = Table(*columns)
     for row in notable.head(shown)[columns].itertuples(index=False):
-        table.add_row(*(f"{v:.4g}" if isinstance(v, float) else str(v) for v in row))
+        table.add_row(*(_cell(f"{v:.4g}" if isinstance(v, float) else v) for v in row))
     Console(width=max(Console().width, 160)).print(table)
     if len(notable) > shown:
         print(f"(+{len(notable) - shown} more cells; --json lists every cell)")

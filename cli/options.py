@@ -83,7 +83,7 @@ def _value_given(err: Exception) -> str | None:
         first = errors()[0] if callable(errors) else {}
     except (IndexError, TypeError, ValueError):
         return None
-    return _printable(str(first["input"]))[:80] if "input" in first else None
+    return printable(str(first["input"]))[:80] if "input" in first else None
 
 
 #: The commands that save work a second call resumes.
@@ -155,12 +155,14 @@ class Format(StrEnum):
     json = "json"
 
 
-def _printable(message: str) -> str:
+def printable(message: str) -> str:
+    """``message`` with every character a terminal would act on (escape sequences, line
+    breaks, other controls) written as its Python escape (``\\x1b``)."""
     return "".join(c if c.isprintable() else repr(c)[1:-1] for c in message)
 
 
 def print_error(message: str) -> None:
-    print(f"error: {_printable(message)}", file=sys.stderr)
+    print(f"error: {printable(message)}", file=sys.stderr)
 
 
 def fail(message: str, code: int = 2) -> None:
@@ -171,7 +173,7 @@ def fail(message: str, code: int = 2) -> None:
 
 def warn(message: str) -> None:
     """Print a one-line warning to stderr."""
-    print(f"warning: {_printable(message)}", file=sys.stderr, flush=True)
+    print(f"warning: {printable(message)}", file=sys.stderr, flush=True)
 
 
 Cfg = Annotated[Path, typer.Argument(metavar="CONFIG", help="Scenario config (YAML), or a "
@@ -201,7 +203,7 @@ def whole_number(low: int, high: int | None = None) -> Callable[[str | int], int
             value = None
         if value is None or value < low or (high is not None and value > high):
             allowed = f">= {low}" if high is None else f"from {low} to {high}"
-            raise typer.BadParameter(f"got {_printable(text)[:80]}; allowed: an integer "
+            raise typer.BadParameter(f"got {printable(text)[:80]}; allowed: an integer "
                                      f"{allowed}")
         return value
     return parse

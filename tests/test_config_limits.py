@@ -44,6 +44,8 @@ BAD = {
     "alias bomb": (BOMB, "aliases expand to more than 100000 values"),
     "recursive alias": ("experiment: toy_gaussian\nparams: &p {mu: *p}\n",
                         "an alias refers to the value that contains it"),
+    "merge key twice": ("experiment: toy_gaussian\nx: &x {mu: 1}\ny: &y {mu: 2}\n"
+                        "params:\n  <<: *x\n  <<: *y\n", ": line 6: merge key '<<' given twice"),
 }
 
 
@@ -138,3 +140,18 @@ def test_plugins_are_imported_only_for_the_config_that_names_them(write_config, 
     folder = next((tmp_path / "out" / "a").iterdir())
     assert cli("plot", folder).returncode == 0
     assert [p.name for p in plugins.glob("*.imported")] == ["plugin_a.imported"]
+
+
+def test_a_file_that_is_not_a_config_is_never_echoed(write_config):
+    """`validate /etc/shadow` printed its first line as an 'unknown top-level key'."""
+    secret = "root:$6$Zx9secret$hash:19000:0:99999:7:::"
+    path = write_config(f"{secret}\ndaemon:*:19000:0:99999:7:::\n", "shadow")
+    with pytest.raises(ConfigError) as err:
+        load(path)
+    message = str(err.value)
+    assert err.value.key == "" and "Zx9secret" not in message and "19000" not in message
+    assert str(err.value).startswith(f"{path}: not a trackfuse config")
+    mistyped = write_config("experiment: toy_gaussian\ntrails: 3\n", "typo")
+    with pytest.raises(ConfigError) as err:  # a key name is still named, with a did-you-mean
+        load(mistyped)
+    assert err.value.key == "trails" and "did you mean 'trials'" in str(err.value)

@@ -141,3 +141,21 @@ def test_a_list_of_counts_takes_integers_and_a_list_of_choices_each_once():
     assert resolved.returncode == 0, resolved.stderr
     assert yaml.safe_load(resolved.stdout.split("\n# ")[0])["params"]["pga.checkpoints"] == \
         [0, 10]
+
+
+def test_a_quoted_override_stays_a_string_and_a_word_is_read_as_a_config_reads_it():
+    """`--set mode='nan'` and `--set 'mode="nan"'` were refused though nan is an allowed
+    choice (both became the float NaN); the same value in a config file was accepted."""
+    import dataclasses
+
+    from toy_experiments import GAUSSIAN
+
+    from trackfuse.experiments.base import Param
+    assert parse_sets(["a=nan", "b='nan'", 'c="1.5"', "d=1e-3", "e=inf", "f=2"]) == \
+        {"a": "nan", "b": "nan", "c": "1.5", "d": 0.001, "e": "inf", "f": 2}
+    mode = Param("mode", "zero", "what to fill with", "", kind=str, choices=("zero", "nan"))
+    experiment = dataclasses.replace(GAUSSIAN, params=(*GAUSSIAN.params, mode))
+    for given in ("mode=nan", "mode='nan'", 'mode="nan"'):
+        config = build({"experiment": experiment.name, "trials": 2}, "cfg.yaml",
+                       parse_sets([given]), experiment=experiment)
+        assert config.params["mode"] == "nan", given

@@ -301,3 +301,19 @@ def test_tables_of_the_wrong_type_are_a_report_error_not_a_traceback(toy_run, mo
     assert report.errors == ["tables: returned list; expected a dict of table name to "
                              "DataFrame (or to a one-line reason it is empty)"]
     assert report.index is not None and report.figures
+
+
+def test_index_md_shows_raw_html_from_titles_and_names_as_text(toy_run, monkeypatch):
+    """index.html escaped them; index.md kept `<script>` from a title, a figure's reason
+    or a table cell, which a Markdown viewer renders."""
+    monkeypatch.setitem(toy_run.config, "title", "<script>alert(1)</script> & co")
+    report = reports.Report(not_drawn={"<img src=x onerror=alert(2)>": "<b>why</b>"},
+                            errors=["figure <i>x</i>: failed"])
+    table = pd.DataFrame({"algorithm": ["<a href='http://example.com'>a</a>"], "n": [1.0]})
+    md = reports.index_markdown(toy_run, {"<t>": table}, report)
+    assert "<" not in md.replace("&lt;", "")
+    for shown in ("# &lt;script&gt;alert(1)&lt;/script&gt; &amp; co",
+                  "- &lt;img src=x onerror=alert(2)&gt;: &lt;b&gt;why&lt;/b&gt;",
+                  "- figure &lt;i&gt;x&lt;/i&gt;: failed", "## Table: &lt;t&gt;",
+                  "| &lt;a href='http://example.com'&gt;a&lt;/a&gt; | 1 |"):
+        assert shown in md

@@ -66,6 +66,33 @@ def test_check_refuses_a_short_column():
     RowTable(np.arange(3), {"x": np.zeros(3)}).check(3)
 
 
+def test_check_names_a_column_of_more_than_one_value_per_row():
+    """A (R, 2) column passed the length check and was written as '[1.0, 2.0]' cells, whose
+    parts failed verification three times: the run blamed the disk ('is the disk
+    failing?')."""
+    table = RowTable(np.arange(3), {"algorithm": np.array(["a"] * 3), "x": np.zeros((3, 2))})
+    with pytest.raises(TypeError, match=r"column 'x' has shape \(3, 2\); allowed: one value "
+                                        r"per row, shape \(3,\)"):
+        table.check(3)
+
+
+def test_parts_that_keep_failing_verification_are_not_blamed_on_the_disk_alone(
+        tmp_path, monkeypatch):
+    from trackfuse.config import build
+    from trackfuse.results import PartDamaged, RunFolder, RunFolderError
+    from trackfuse.runner import Runner
+
+    def damaged(self, spans, kind, target):
+        raise PartDamaged(next(iter(spans())), kind, "a row has 4 cells for 3 columns")
+
+    monkeypatch.setattr(RunFolder, "merge", damaged)
+    config = build({"experiment": "toy_gaussian", "trials": 2}, "cfg.yaml")
+    with pytest.raises(RunFolderError, match="a bug in its run_trial or run_batch") as caught:
+        Runner(config, tmp_path, executor="serial", progress=False, plots=False,
+               warn=lambda message: None).run()
+    assert "disk is failing" in str(caught.value)  # it may also be the disk
+
+
 def _column(data, kind: str, rows: int) -> pd.Series:
     """A column of ``rows`` values of one ``kind``: the column-wise path's (float, int,
     uint8, str) or pandas' (text needing quotes, bool, nullable integers)."""

@@ -115,3 +115,28 @@ def test_the_lock_in_process_refuses_a_second_holder_and_is_released(tmp_path):
     with RunLock(tmp_path / "run", warnings.append):
         pass
     assert warnings == []
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="needs Linux's /proc")
+def test_dry_run_into_a_file_system_that_stores_no_files_says_why_not_new(write_config):
+    """`--dry-run --out /proc` said '(new)' while the run refused it (no such file)."""
+    from conftest import trackfuse
+    path = write_config("experiment: toy_experiments:GAUSSIAN\ntrials: 2\n")
+    planned = trackfuse("run", path, "--out", "/proc", "--dry-run")
+    ran = trackfuse("run", path, "--out", "/proc", "--no-progress")
+    for result in (planned, ran):
+        assert result.returncode == 2 and "(new)" not in result.stdout
+        assert result.stderr.startswith("error: /proc/cfg/") and \
+            "cannot create the run folder" in result.stderr
+
+
+def test_dry_run_into_a_read_only_file_system_says_why(tmp_path, monkeypatch):
+    from trackfuse import runlock
+
+    class ReadOnly:
+        f_flag, f_blocks, f_files = os.ST_RDONLY, 100, 100
+
+    monkeypatch.setattr(runlock.os, "statvfs", lambda folder: ReadOnly)
+    problem = runlock.creation_problem(tmp_path / "out" / "run")
+    assert problem == f"{tmp_path / 'out' / 'run'}: cannot create the run folder ({tmp_path}: " \
+                      "a read-only file system)"

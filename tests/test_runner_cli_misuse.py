@@ -381,3 +381,27 @@ def test_list_suggests_the_closest_experiment():
     result = trackfuse("list", "twin_sensr")
     assert result.returncode == 2
     assert "unknown experiment 'twin_sensr'; did you mean 'twin_sensor'?" in result.stderr
+
+
+@pytest.mark.parametrize("option", ["--scheduler", "--scheduler-file"])
+def test_an_empty_scheduler_is_refused_not_run_here(write_config, option):
+    """`--scheduler ""` (an unset shell variable) silently ran on this machine."""
+    from typer.testing import CliRunner
+
+    from trackfuse_cli.main import app
+    path = write_config("experiment: toy_experiments:GAUSSIAN\ntrials: 2\n")
+    result = CliRunner().invoke(app, ["run", str(path), option, " ", "--dry-run"])
+    assert result.exit_code == 2 and result.stdout == ""
+    assert result.stderr.startswith(f"error: {option}: got an empty value; allowed: ")
+
+
+def test_a_metric_given_two_tolerances_is_refused():
+    """`--tolerance m=1 --tolerance m=2` was accepted, the last one winning unsaid."""
+    from typer.testing import CliRunner
+
+    from trackfuse_cli.main import app
+    result = CliRunner().invoke(app, ["compare", "base", "new", "--tolerance", "m=1",
+                                      "--tolerance", "m=2"])
+    assert result.exit_code == 2
+    assert result.stderr == "error: --tolerance: m given twice (1 and 2); allowed: one " \
+                            "tolerance per metric\n"

@@ -196,7 +196,7 @@ def test_schema_spells_units_one_way(name):
 
 
 #: Test files about the project as a whole rather than one module.
-CROSS_CUTTING = {"structure", "docs", "packaging", "fault_matrix"}
+CROSS_CUTTING = {"structure", "docs", "packaging", "fault_matrix", "tamper_matrix"}
 
 
 def test_every_test_file_names_the_module_it_tests():

@@ -105,6 +105,11 @@ for _limit, _value in (("maxlevel", 3), ("maxtuple", 4), ("maxlist", 4), ("maxdi
     setattr(_SHORT, _limit, _value)
 
 
+#: What a mistyped config key looks like (echoed in a did-you-mean); anything else is
+#: not echoed.
+_KEY_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_.-]{0,39}$")
+
+
 def _describe(value: Any) -> str:
     """A repr of ``value`` cut to 60 characters, never rendering more than it prints."""
     try:
@@ -276,6 +281,10 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
                                       f"{type(raw).__name__}")
     raw = dict(raw)
     for key in raw:
+        if key not in TOP_LEVEL and not (isinstance(key, str) and _KEY_NAME.match(key)):
+            # not a config (a password file parses as a mapping): never echo its text
+            raise ConfigError(source, "", "not a trackfuse config: a top-level key is not a "
+                              f"key name; allowed: a YAML mapping of {', '.join(TOP_LEVEL)}")
         if key not in TOP_LEVEL:
             raise ConfigError(source, str(key), "unknown top-level key"
                               f"{did_you_mean(key, TOP_LEVEL)}; allowed: {', '.join(TOP_LEVEL)}")

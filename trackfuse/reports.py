@@ -158,16 +158,23 @@ class NothingToDraw(RunFolderError):
     """A run no report can be drawn from (:func:`undrawable`); ``str(err)`` is one line."""
 
 
+def md_text(text: Any) -> str:
+    """``text`` for Markdown: ``<``, ``>`` and ``&`` escaped, so raw HTML in a title, a name
+    or a table cell is shown, never rendered (as ``index.html`` does)."""
+    return html.escape(str(text), quote=False)
+
+
 def markdown_table(table: pd.DataFrame, digits: int = 4) -> str:
-    """A GitHub-style Markdown table; floats with ``digits`` significant digits."""
+    """A GitHub-style Markdown table; floats with ``digits`` significant digits; text as
+    :func:`md_text` writes it."""
     def cell(v: Any) -> str:
         if isinstance(v, float):
             return "" if pd.isna(v) else f"{v:.{digits}g}"
         if v is pd.NA:  # a missing integer (a headline row with no trials)
             return ""
-        return str(v).replace("|", "\\|")
+        return md_text(v).replace("|", "\\|")
 
-    lines = ["| " + " | ".join(map(str, table.columns)) + " |",
+    lines = ["| " + " | ".join(map(cell, table.columns)) + " |",
              "|" + "|".join("---" for _ in table.columns) + "|"]
     lines += ["| " + " | ".join(cell(v) for v in row) + " |"
               for row in table.itertuples(index=False)]
@@ -525,30 +532,32 @@ def index_markdown(run: RunData, tables: dict[str, pd.DataFrame], report: Report
     """The run's report as Markdown: what was run, the headline table, the figures, the
     other tables (a link to one longer than :data:`FOLDED_TABLE_ROWS` rows), then what was
     not drawn and the files."""
-    lines = [f"# {run.config.get('title') or run.config['experiment']}", ""]
-    lines += [f"- **{k}**: {v}" for k, v in _run_facts(run)] + [""]
+    esc = md_text
+    lines = [f"# {esc(run.config.get('title') or run.config['experiment'])}", ""]
+    lines += [f"- **{k}**: {esc(v)}" for k, v in _run_facts(run)] + [""]
     headline, others = _split_tables(tables)
     for name in headline:
-        lines += [f"## Table: {name}", "", markdown_table(display_table(tables[name]))]
+        lines += [f"## Table: {esc(name)}", "", markdown_table(display_table(tables[name]))]
     captions = _captions(run)
     for name in _figure_names(report):
         path, shown = _figure_link(report, name)
-        lines += [f"## Figure: {name}", "", f"![{name}]({path})" if shown else
-                  f"[{name}]({path})", "", captions.get(name, ""), ""]
+        lines += [f"## Figure: {esc(name)}", "", f"![{esc(name)}]({path})" if shown else
+                  f"[{esc(name)}]({path})", "", esc(captions.get(name, "")), ""]
     for name in others:
         rows = len(tables[name])
-        lines += [f"## Table: {name}", "", markdown_table(display_table(tables[name]))
+        lines += [f"## Table: {esc(name)}", "", markdown_table(display_table(tables[name]))
                   if rows <= FOLDED_TABLE_ROWS else  # Markdown cannot fold it: a link
                   f"{rows} rows: [tables/{name}.md](tables/{name}.md) (also "
                   f"[tables/{name}.csv](tables/{name}.csv))", ""]
     for heading, reasons in (("Not drawn", report.not_drawn),
                              ("Not tabulated", report.not_tabulated)):
         if reasons:
-            lines += [f"## {heading}", ""] + [f"- {n}: {why}" for n, why in reasons.items()]
+            lines += [f"## {heading}", ""] + [f"- {esc(n)}: {esc(why)}"
+                                              for n, why in reasons.items()]
             lines += [""]
     if report.errors:
-        lines += ["## Problems", ""] + [f"- {e}" for e in report.errors] + [""]
-    lines += ["## Files", ""] + [f"- `{f}`: {d}" for f, d in _file_list(run, report)]
+        lines += ["## Problems", ""] + [f"- {esc(e)}" for e in report.errors] + [""]
+    lines += ["## Files", ""] + [f"- `{f}`: {esc(d)}" for f, d in _file_list(run, report)]
     return "\n".join(lines) + "\n"
 
 

@@ -142,13 +142,18 @@ class RowTable(Sequence[list[dict[str, Any]]]):
 
     def check(self, trials: int) -> None:
         """Raise ``TypeError`` unless the table holds rows of exactly ``trials`` trials in
-        order and every column has one value per row."""
+        order and every column is one-dimensional with one value per row."""
         counts = np.bincount(np.asarray(self.trial, dtype=int), minlength=trials) \
             if len(self.trial) and int(np.min(self.trial)) >= 0 else np.zeros(0, dtype=int)
         if len(counts) != trials or not (counts > 0).all() or \
                 (np.diff(self.trial) < 0).any():
             raise TypeError(f"run_batch returned a RowTable that does not hold the rows of "
                             f"{trials} trials in order")
+        deep = {k: np.shape(v) for k, v in self.columns.items() if np.ndim(v) != 1}
+        if deep:
+            name, shape = next(iter(deep.items()))
+            raise TypeError(f"run_batch returned a RowTable whose column {name!r} has shape "
+                            f"{shape}; allowed: one value per row, shape ({len(self.trial)},)")
         bad = [k for k, v in self.columns.items() if len(v) != len(self.trial)]
         if bad:
             raise TypeError(f"run_batch returned a RowTable whose columns {bad} do not have "

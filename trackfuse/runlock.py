@@ -139,6 +139,23 @@ def creation_problem(path: Path) -> str | None:
         return f"{path}: cannot create the run folder ({existing} is not a folder)"
     if not os.access(existing, os.W_OK | os.X_OK):
         return f"{path}: cannot create the run folder ({existing}: permission denied)"
+    if existing != path and (why := _stores_no_folders(existing)):
+        return f"{path}: cannot create the run folder ({existing}: {why})"
+    return None
+
+
+def _stores_no_folders(folder: Path) -> str | None:
+    """Why no new folder can be made in ``folder`` whatever the permissions say: a
+    read-only file system, or one that stores no files at all (no blocks and no inodes:
+    ``/proc``, ``/sys``); ``None`` otherwise, or where the system cannot tell."""
+    try:
+        fs = os.statvfs(folder)
+    except (AttributeError, OSError):
+        return None
+    if fs.f_flag & getattr(os, "ST_RDONLY", 1):
+        return "a read-only file system"
+    if fs.f_blocks == 0 and fs.f_files == 0:
+        return "a file system that stores no files, such as /proc"
     return None
 
 

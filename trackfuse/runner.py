@@ -375,7 +375,9 @@ class Runner:
                     self.warn(f"{self.folder.path}/{err}; recomputing its batch")
                     self.folder.drop_part(err.span)
             raise RunFolderError(f"{self.folder.parts}: parts fail verification right after "
-                                 "being written; is the disk failing?")
+                                 "being written: the experiment's rows do not make valid "
+                                 "CSV (a bug in its run_trial or run_batch, the warnings "
+                                 "above say what), or the disk is failing")
         except KeyboardInterrupt:
             self.folder.write_manifest(self._manifest(RunStatus.INTERRUPTED, session))
             raise RunInterrupted(self.folder.path, session.done, self.total_trials) from None

@@ -28,12 +28,19 @@ class YamlInputError(ValueError):
 
 
 class _StrictLoader(yaml.SafeLoader):
-    """A safe loader that refuses a mapping naming one key twice."""
+    """A safe loader that refuses a mapping naming one key, or the merge key ``<<``,
+    twice."""
 
     def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
         seen: set[Any] = set()
+        merges = 0
         for key_node, _ in node.value:
             if key_node.tag == _MERGE_TAG:
+                merges += 1
+                if merges > 1:  # the second would silently give its keys a second time
+                    raise YamlInputError(f"line {key_node.start_mark.line + 1}: merge key "
+                                         "'<<' given twice; allowed: one '<<' with a list "
+                                         "of mappings, <<: [*a, *b]")
                 continue
             key = self.construct_object(key_node, deep=True)
             try:

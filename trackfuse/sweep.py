@@ -25,6 +25,8 @@ from typing import Any
 from trackfuse.safe_yaml import YamlInputError, load_yaml
 
 _RANGE = re.compile(r"^\s*range\s*\((.*)\)\s*$")
+#: A decimal number, exponent allowed (``1e-3``, ``-2.5E+4``, ``.5``): no nan or inf words.
+_DECIMAL = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
 MAX_POINTS = 1_000_000
 
 
@@ -127,17 +129,16 @@ def split_values(text: str) -> list[str]:
 
 
 def parse_scalar(text: str) -> Any:
-    """Parse an override value as a YAML scalar or flow list (``"1e-3"`` becomes a float)."""
+    """Parse an override value as a YAML scalar or flow list, as a config file's value is
+    read, except that an unquoted decimal number in exponent form (``1e-3``, a string to
+    YAML) becomes a float; a quoted value (``'nan'``, ``"1.5"``) stays a string."""
     text = text.strip()
     try:
         value = load_yaml(text) if text else ""
     except YamlInputError:
         return text
-    if isinstance(value, str):
-        try:
-            return float(value)
-        except ValueError:
-            return value
+    if isinstance(value, str) and value == text and _DECIMAL.match(text):
+        return float(text)
     return value
 
 
