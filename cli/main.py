@@ -84,6 +84,22 @@ def _main(
     # appended, so a local file never shadows an installed library.
     if os.getcwd() not in sys.path:
         sys.path.append(os.getcwd())
+    ctx.call_on_close(_exit_past_trial_threads)
+
+
+def _exit_past_trial_threads() -> None:
+    """As the command ends, with the status it ends with: exit without waiting for threads
+    that trials run in this process (serial) left running (Python's exit waits for them,
+    for ever). Called while the command's ``typer.Exit`` is being handled."""
+    guard = sys.modules.get("trackfuse.trial_guard")  # imported only if trials ran here
+    code = getattr(sys.exc_info()[1], "exit_code", None)
+    if guard is None or code is None or not (left := guard.threads_left()):
+        return
+    names = ", ".join(sorted({t.name for t in left}))
+    warn(f"trials left {len(left)} thread(s) running ({names}); exiting without waiting "
+         "for them")
+    sys.stdout.flush()
+    os._exit(code)
 
 
 def _complete_experiment(incomplete: str) -> list[str]:
@@ -116,7 +132,8 @@ def _load(cfg: Path, sets: dict[str, Any], sweeps: list[str], **top) -> Config:
              "varies it)")
     given = {k: v for k, v in top.items() if v is not None}
     for key in given.keys() & sets.keys():
-        fail(f"--{key} {given[key]} and --set {key}={sets[key]}: give {key} once")
+        fail(f"--{key.replace('_', '-')} {given[key]} and --set {key}={sets[key]}: give {key} "
+             "once")
     overrides = {**sets, **given}
     path = config_path(cfg)
     if not path.exists():
@@ -125,7 +142,7 @@ def _load(cfg: Path, sets: dict[str, Any], sweeps: list[str], **top) -> Config:
         return load(path, overrides, axes)
     except ConfigError as err:
         if err.source == SET and err.key in given:  # --trials, --seed: not a --set
-            fail(f"--{err.key}: {err.message}")
+            fail(f"--{err.key.replace('_', '-')}: {err.message}")
         fail(str(err))
 
 
@@ -279,9 +296,13 @@ def run(
     name: Annotated[str | None, typer.Option(metavar="TEXT", help="A label for the run, kept "
                                              "in its manifest and shown by `trackfuse runs` "
                                              "(not part of the run id).")] = None,
+    trial_timeout: Annotated[float | None, typer.Option(
+        metavar="SECONDS", help="Fail a trial that runs longer (default: no limit; config "
+        "key trial_timeout).")] = None,
 ) -> None:
     """Run CONFIG: every sweep point x trial, then trials.csv, summary.csv and the report."""
-    config = _load(cfg, _overrides(sets, overrides), sweeps, trials=trials, seed=seed)
+    config = _load(cfg, _overrides(sets, overrides), sweeps, trials=trials, seed=seed,
+                   trial_timeout=trial_timeout)
     if config.source != str(cfg) and not dry_run:  # a name: say which file it found
         print(f"config: {config.source}")
     options = RunOptions(out_folder(out_dir), workers, executor.value, scheduler,

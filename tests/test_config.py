@@ -170,3 +170,16 @@ def test_a_parameter_given_dotted_and_nested_is_refused_and_an_override_is_not(w
             result = trackfuse("run", path, "--dry-run", *override)
             assert result.returncode == 0 and "clutter.mean: 6.0" in result.stdout, result.stderr
 
+
+
+def test_trial_timeout_is_seconds_left_out_of_the_resolved_config_unless_given():
+    base = {"experiment": "toy_gaussian"}
+    assert build(base, "c.yaml").trial_timeout is None
+    assert "trial_timeout" not in build(base, "c.yaml").to_dict()  # config.yaml as before
+    config = build({**base, "trial_timeout": 30}, "c.yaml")
+    assert config.trial_timeout == 30.0 and config.to_dict()["trial_timeout"] == 30.0
+    assert build(base, "c.yaml", sets={"trial_timeout": 2.5}).trial_timeout == 2.5
+    for bad in (0, -1, True, "soon", float("nan"), 1e9):
+        with pytest.raises(ConfigError) as caught:
+            build({**base, "trial_timeout": bad}, "c.yaml")
+        assert (caught.value.source, caught.value.key) == ("c.yaml", "trial_timeout")

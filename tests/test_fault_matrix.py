@@ -6,8 +6,9 @@ must end as ``failed`` rows whose error says what went wrong, in a complete run 
 ``trials.csv`` is the same on every executor. A new fault is one line of :data:`FAULTS`
 (and, if the toy cannot do it yet, one entry of its ``_misbehave``).
 
-Faults that end the process or outlive the trial (``os._exit``, a hang, a thread left
-running) have tests of their own below: they need a subprocess, or a time limit.
+A trial that calls ``os._exit`` or outlasts the run's time limit is a failed row too
+(:mod:`trackfuse.trial_guard`); a thread left running, and a worker killed outright, have
+tests of their own below: they need a subprocess.
 """
 
 from __future__ import annotations
@@ -17,14 +18,18 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from conftest import trackfuse
 
 from trackfuse.config import build
 from trackfuse.runner import Runner
 
 #: fault -> (toy experiment, its ``how``, text every failed row's error holds, or ``None``
-#: for rows that are right however odd their container: they are kept)
+#: for rows that are right however odd their container: they are kept[, config keys])
 FAULTS = {
     "sys.exit": ("UNRULY", "exit", "SystemExit: 0"),
+    "os._exit": ("UNRULY", "os_exit", "PluginExit: os._exit(0) called; the process was kept"),
+    "hang": ("UNRULY", "hang", "TrialTimeout: the trial ran longer than the limit of 0.3 s",
+             {"trial_timeout": 0.3}),
     "KeyboardInterrupt": ("UNRULY", "interrupt", "KeyboardInterrupt"),
     "raise": ("UNRULY", "raise", "RuntimeError: synthetic failure"),
     "raise lone surrogate": ("UNRULY", "raise_surrogate", "ValueError: bad \\udcff byte"),
@@ -68,13 +73,15 @@ FAULTS = {
 }
 TRIALS = 20
 #: Faults also run on dask (each costs seconds there): the ones executors used to differ on.
-ON_DASK = ("sys.exit", "KeyboardInterrupt", "lone surrogate", "table timings")
+ON_DASK = ("sys.exit", "os._exit", "hang", "KeyboardInterrupt", "lone surrogate",
+           "table timings")
 
 
 def _config(fault: str, seed: int = 3):
-    experiment, how, _ = FAULTS[fault]
+    experiment, how, _, *extra = FAULTS[fault]
     return build({"experiment": f"toy_experiments:{experiment}", "trials": TRIALS,
-                  "seed": seed, "params": {"how": how}}, f"{how}.yaml")
+                  "seed": seed, "params": {"how": how}, **(extra[0] if extra else {})},
+                 f"{how}.yaml")
 
 
 def _run(fault: str, out: Path, **executor) -> Path:
@@ -141,3 +148,31 @@ def test_a_fault_is_the_same_failed_row_on_dask(fault, serial_runs, tmp_path, da
     _check_failed_rows(folder, FAULTS[fault][2])
     assert (folder / "trials.csv").read_bytes() == \
         (serial_runs(fault) / "trials.csv").read_bytes()
+
+
+@pytest.mark.parametrize("executor", [("--executor", "serial"), ("--workers", "2")])
+def test_a_thread_a_trial_leaves_running_does_not_hold_the_run_s_exit(executor, tmp_path):
+    """A non-daemon thread left by a trial: the process pool waited for its worker in the
+    pool's shutdown for ever, before merging; serially the run wrote everything and never
+    exited. Now both end with the run's status (the thread sleeps 10 minutes)."""
+    (tmp_path / "thread.yaml").write_text("experiment: toy_experiments:UNRULY\ntrials: 8\n"
+                                          "seed: 3\nparams: {how: thread}\n")
+    result = trackfuse("run", "thread.yaml", *executor, "--no-plots", "--no-progress",
+                       "--out", "out", cwd=tmp_path, timeout=90)
+    assert result.returncode == 0, result.stderr
+    assert next(tmp_path.glob("out/thread/*/summary.csv")).is_file()
+
+
+def test_trial_timeout_fails_the_hung_trials_and_the_run_goes_on(tmp_path):
+    (tmp_path / "hang.yaml").write_text("experiment: toy_experiments:UNRULY\ntrials: 10\n"
+                                        "seed: 3\nparams: {how: hang}\n")
+    result = trackfuse("run", "hang.yaml", "--workers", "2", "--trial-timeout", "0.5",
+                       "--no-plots", "--no-progress", "--out", "out", cwd=tmp_path)
+    assert result.returncode == 3, result.stderr
+    assert "TrialTimeout: the trial ran longer than the limit of 0.5 s" in result.stderr
+    assert result.stderr.count("\n") == 1
+    for bad in ("0", "-1", "nan", "1e9"):
+        refused = trackfuse("run", "hang.yaml", "--trial-timeout", bad, "--out", "out",
+                            cwd=tmp_path)
+        assert refused.returncode == 2 and refused.stderr.startswith(
+            "error: --trial-timeout: got "), refused.stderr

@@ -121,9 +121,11 @@ BURN = register(Experiment(
 
 def crash_once_trial(params, streams: TrialStreams) -> list[dict]:
     """Like the Gaussian trial, but the first trial run in any worker process kills that
-    worker (``os._exit``) once per marker file: a worker dying mid-batch."""
+    worker (SIGKILL, as the out-of-memory killer does) once per marker file: a worker dying
+    mid-batch."""
     import multiprocessing
     import os
+    import signal
 
     if multiprocessing.parent_process() is not None:
         try:
@@ -131,7 +133,7 @@ def crash_once_trial(params, streams: TrialStreams) -> list[dict]:
         except FileExistsError:
             pass
         else:
-            os._exit(1)
+            os.kill(os.getpid(), signal.SIGKILL)
     return [{"algorithm": "a", "value": float(streams.point.normal())}]
 
 
@@ -146,13 +148,14 @@ CRASH = register(Experiment(
 
 
 def doomed_trial(params, streams: TrialStreams) -> list[dict]:
-    """Kill the worker process (``os._exit``) on every trial run in one: a pool that cannot
+    """Kill the worker process (SIGKILL) on every trial run in one: a pool that cannot
     finish anything."""
     import multiprocessing
     import os
+    import signal
 
     if multiprocessing.parent_process() is not None:
-        os._exit(1)
+        os.kill(os.getpid(), signal.SIGKILL)
     return [{"algorithm": "a", "value": float(streams.point.normal())}]
 
 
@@ -242,8 +245,9 @@ def _misbehave(how: str, value: float) -> list[dict] | object:
         raise RuntimeError("synthetic failure")
     if how == "raise_surrogate":
         raise ValueError("bad \udcff byte")
-    if how == "hang":
-        time.sleep(600)
+    if how == "hang":  # a loop that never ends (a dask worker's thread is cut between sleeps)
+        while True:
+            time.sleep(0.01)
     if how == "thread":
         _leave_a_thread()
         return [{"algorithm": "a", "value": value}]

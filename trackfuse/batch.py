@@ -27,6 +27,7 @@ from trackfuse.experiments.base import Experiment
 from trackfuse.results import FAILED_ROW, TIME_SUFFIX, BatchSpan, rows_to_csv, split_timings
 from trackfuse.rowtable import Constant, RowTable, columns_csv
 from trackfuse.seeding import batch_streams, seed_numpy_global, trial_streams
+from trackfuse.trial_guard import guarded
 from trackfuse.trial_rows import checked_rows, table_problem, table_suspect
 
 #: Longest error text of a failed trial's row (characters): the record in ``trials.csv``
@@ -41,7 +42,8 @@ class BatchTask:
     """Everything a worker needs to run one batch (picklable, self-contained).
 
     ``draw_point`` keys the trials' point streams (:func:`trackfuse.seeding.draw_points`);
-    ``span.point`` names the rows and the stored part."""
+    ``span.point`` names the rows and the stored part; ``trial_timeout``: the time limit of
+    one trial (s; ``None``: none; :mod:`trackfuse.trial_guard`)."""
 
     experiment: Experiment
     params: dict[str, Any]
@@ -49,6 +51,7 @@ class BatchTask:
     seed: int
     span: BatchSpan
     draw_point: int
+    trial_timeout: float | None = None
 
 
 @dataclass(frozen=True)
@@ -145,9 +148,10 @@ def _table_trials(experiment: Experiment, table: RowTable, producer: str
 def _one_trial(task: BatchTask, trial: int) -> Any:
     """What ``run_trial`` returns for ``trial``, or what it raised."""
     try:
-        seed_numpy_global(task.seed, task.draw_point, trial)
-        return task.experiment.run_trial(task.params,
-                                         trial_streams(task.seed, task.draw_point, trial))
+        with guarded(task.trial_timeout):
+            seed_numpy_global(task.seed, task.draw_point, trial)
+            return task.experiment.run_trial(task.params,
+                                             trial_streams(task.seed, task.draw_point, trial))
     except BaseException as err:  # noqa: BLE001 - recorded in the CSV, the run goes on
         if _is_user_interrupt(err):
             raise
@@ -168,13 +172,17 @@ def _numpy_global_kept() -> Iterator[None]:
 def _run_trials(task: BatchTask, trials: range) -> tuple[Any, str]:
     """What the batch's trials returned (a list per trial, or a RowTable) and which
     function returned it. A ``run_batch`` runs with numpy's global generator seeded from
-    its first trial; one that raises or returns the wrong number of trials is run again
-    trial by trial, each seeded from its own (:func:`~trackfuse.seeding.seed_numpy_global`)."""
+    its first trial and the batch's time limit (the trials' limits summed); one that raises
+    (or outlasts it) or returns the wrong number of trials is run again trial by trial, each
+    seeded from its own (:func:`~trackfuse.seeding.seed_numpy_global`) and limited to one
+    trial's time (:func:`~trackfuse.trial_guard.guarded`)."""
     if task.experiment.run_batch is not None:
+        limit = task.trial_timeout and task.trial_timeout * len(trials)
         try:
-            seed_numpy_global(task.seed, task.draw_point, trials[0])
-            batch = task.experiment.run_batch(task.params,
-                                              batch_streams(task.seed, task.draw_point, trials))
+            with guarded(limit):
+                seed_numpy_global(task.seed, task.draw_point, trials[0])
+                batch = task.experiment.run_batch(
+                    task.params, batch_streams(task.seed, task.draw_point, trials))
             if isinstance(batch, RowTable):
                 batch.check(len(trials))
             elif not isinstance(batch, list) or len(batch) != len(trials):

@@ -28,7 +28,7 @@ from trackfuse.safe_yaml import YamlInputError, read_yaml_file
 from trackfuse.sweep import MAX_POINTS, SweepError, count_points, parse_axis_values
 
 TOP_LEVEL = ("experiment", "title", "trials", "seed", "batch_size", "params", "sweep",
-             "sweep_mode", "outputs")
+             "sweep_mode", "outputs", "trial_timeout")
 OUTPUT_KEYS = ("figures", "formats")
 FORMATS = ("png", "pdf", "svg")
 MAX_TRIALS = 10**9
@@ -72,6 +72,9 @@ class Config:
     figures: list[str] | str = "all"
     formats: list[str] = field(default_factory=lambda: ["png", "pdf"])
     reference: str = ""
+    #: Seconds a trial may run before it is failed (``None``: no limit); not part of the
+    #: run id: it decides only whether a hung trial ends the run or fails.
+    trial_timeout: float | None = None
 
     @property
     def experiment_ref(self) -> str:
@@ -90,6 +93,7 @@ class Config:
             "sweep": {k: list(v) for k, v in self.sweep.items()},
             "sweep_mode": self.sweep_mode,
             "outputs": {"figures": self.figures, "formats": list(self.formats)},
+            **({} if self.trial_timeout is None else {"trial_timeout": self.trial_timeout}),
         }
 
 
@@ -259,7 +263,9 @@ def _int(source: str, key: str, value: Any, low: int, high: int = MAX_TRIALS) ->
 
 SET, SWEEP = "--set", "--sweep"
 """The source named by errors in command-line overrides (not the YAML file they override)."""
-OVERRIDABLE_TOP_LEVEL = ("trials", "seed", "batch_size", "title", "sweep_mode")
+OVERRIDABLE_TOP_LEVEL = ("trials", "seed", "batch_size", "title", "sweep_mode", "trial_timeout")
+#: The longest trial time limit (s): a day (``setitimer`` takes any float, a typo does not).
+MAX_TRIAL_TIMEOUT = 86_400.0
 
 
 def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
@@ -320,8 +326,20 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
                                            f" allowed: at most {MAX_POINTS}")
     figures, formats = _outputs(source, exp, raw.get("outputs") or {})
     _check_experiment(exp, params, sweep, mode, source, set(sets), set(sweeps or {}))
+    timeout = _trial_timeout(origin["trial_timeout"], raw.get("trial_timeout"))
     return Config(source, exp, title, trials, seed, batch_size, params, sweep, mode,
-                  figures, formats, name)
+                  figures, formats, name, timeout)
+
+
+def _trial_timeout(source: str, value: Any) -> float | None:
+    """The trial time limit (s) given as ``trial_timeout``, ``None`` when not given."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, int | float) or \
+            not 0 < value <= MAX_TRIAL_TIMEOUT:
+        raise ConfigError(source, "trial_timeout", f"got {_describe(value)}; allowed: seconds, "
+                                                   f"a number in (0, {MAX_TRIAL_TIMEOUT:g}]")
+    return float(value)
 
 
 def _check_experiment(exp: Experiment, params: dict[str, Any], sweep: dict[str, list[Any]],

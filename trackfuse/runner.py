@@ -245,7 +245,7 @@ class Runner:
         for span in todo:
             swept = self.points[span.point].values
             yield BatchTask(cfg.experiment, {**cfg.params, **swept}, swept, cfg.seed, span,
-                            self.draw_points[span.point])
+                            self.draw_points[span.point], cfg.trial_timeout)
 
     def _manifest(self, status: RunStatus, session: _Session, failed: int = 0) -> dict[str, Any]:
         versions = {"trackfuse": trackfuse.__version__, **self.libraries,
