@@ -34,6 +34,8 @@ X_KEYS = ("sensor3.baseline", "targets.n", "noise.sigma", "clutter.p_f", "sensor
 #: Width and height (in) of one panel.
 PANEL = (2.4, 2.1)
 UNITS = {"sensor3.baseline": "km", "noise.sigma": "rad"}
+#: Line styles of the duality-gap curves: one algorithm's colour, one style per group.
+LINE_STYLES = ("-", "--", "-.", (0, (1, 1)), (0, (5, 1, 1, 1, 1, 1)))
 
 
 def _x_key(config: dict[str, Any]) -> str | None:
@@ -56,6 +58,8 @@ def _curve(ax: Axes, rows: pd.DataFrame, name: str, x_key: str) -> None:
     rows = rows.sort_values(x_key)
     x = rows[x_key].to_numpy(float)
     kw = line_kwargs(name)
+    if look(name).role == "reference":  # thin and dashed: on top, so a curve under it shows
+        kw["zorder"] = 4
     if look(name).emphasised:
         band(ax, x, rows["mean"], rows["ci_low"], rows["ci_high"], **kw)
     else:
@@ -83,7 +87,7 @@ def metric_figure(run: RunData, metric: str, ylabel: str) -> Figure | str:
         unit = UNITS.get(x_key)
         ax.set_xlabel(f"{x_key} ({unit})" if unit else x_key)
         ax.set_ylabel(ylabel)
-        ax.set_ylim(-0.02, 1.02)
+        ax.set_ylim(0.0, min(1.0, 1.1 * float(summary["ci_high"].max())) or 1.0)
         ax.set_title(title)
     for ax in axes[len(panels):]:
         ax.set_visible(False)
@@ -100,13 +104,15 @@ def gap_figure(run: RunData) -> Figure | str:
     fig, ax = new_figure(1, 1, 4.2, 2.8)
     x_key = _x_key(run.config)
     keys = [k for k in swept_keys(run.config) if k != x_key] or ["point"]
-    for values, rows in mine.groupby(keys, sort=True):
+    colour = look("sd_lagrangian").colour
+    for k, (values, rows) in enumerate(mine.groupby(keys, sort=True)):
         gap = np.sort(rows["duality_gap"].to_numpy(float)) * 100.0
-        label = ", ".join(f"{k} = {v}" for k, v in zip(keys, values, strict=True))
+        label = ", ".join(f"{key} = {v}" for key, v in zip(keys, values, strict=True))
         ax.step(np.concatenate([[0.0], gap]), np.arange(len(gap) + 1) / len(gap),
-                where="post", label=label, linewidth=1.0)
+                where="post", label=label, color=colour, linewidth=1.2,
+                linestyle=LINE_STYLES[k % len(LINE_STYLES)])
     stop = 100.0 * float(run.config["params"]["sd.max_gap"])
-    ax.axvline(stop, color="k", linestyle="--", linewidth=1.0, label="stopping gap")
+    ax.axvline(stop, color="0.4", linestyle=":", linewidth=1.0, label="stopping gap")
     ax.set_xlabel("relative duality gap per trial (%)")
     ax.set_ylabel("fraction of trials at or below")
     ax.set_ylim(0.0, 1.02)
@@ -118,7 +124,7 @@ def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure | str]:
     """The ``wanted`` figures (module docstring); a one-line reason for one not drawn."""
     drawers: dict[str, Callable[[], Figure | str]] = {
         "ghosts": lambda: metric_figure(run, "ghost_rate", "ghost rate (fraction)"),
-        "found": lambda: metric_figure(run, "found", "targets localised (fraction)"),
+        "found": lambda: metric_figure(run, "found", "targets found (fraction)"),
         "duality_gap": lambda: gap_figure(run),
     }
     return {name: draw() for name, draw in drawers.items() if name in wanted}
