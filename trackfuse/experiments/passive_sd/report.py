@@ -32,7 +32,7 @@ from trackfuse.rundata import RunData, succeeded_rows, swept_keys
 #: Swept keys a figure can take as its x axis, in order of preference.
 X_KEYS = ("sensor3.baseline", "targets.n", "noise.sigma", "clutter.p_f", "sensor.p_d")
 #: Width and height (in) of one panel.
-PANEL = (2.4, 2.1)
+PANEL = (2.4, 2.2)
 UNITS = {"sensor3.baseline": "km", "noise.sigma": "rad"}
 #: Line styles of the duality-gap curves: one algorithm's colour, one style per group.
 LINE_STYLES = ("-", "--", "-.", (0, (1, 1)), (0, (5, 1, 1, 1, 1, 1)))
@@ -123,8 +123,8 @@ def gap_figure(run: RunData) -> Figure | str:
 def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure | str]:
     """The ``wanted`` figures (module docstring); a one-line reason for one not drawn."""
     drawers: dict[str, Callable[[], Figure | str]] = {
-        "ghosts": lambda: metric_figure(run, "ghost_rate", "ghost rate (fraction)"),
-        "found": lambda: metric_figure(run, "found", "targets found (fraction)"),
+        "ghosts": lambda: metric_figure(run, "ghost_rate", "ghost rate"),
+        "found": lambda: metric_figure(run, "found", "targets found"),
         "duality_gap": lambda: gap_figure(run),
     }
     return {name: draw() for name, draw in drawers.items() if name in wanted}
