@@ -48,6 +48,7 @@ BUILTIN: dict[str, str] = {
     "twin_sensor": "trackfuse.experiments.twin_sensor",
     "esm_radar": "trackfuse.experiments.esm_radar",
     "passive_assoc": "trackfuse.experiments.passive_assoc",
+    "passive_sd": "trackfuse.experiments.passive_sd",
 }
 ENTRY_POINT_GROUP = "trackfuse.experiments"
 MAX_SOURCE_BYTES = 5_000_000

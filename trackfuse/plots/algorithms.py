@@ -80,6 +80,10 @@ LOOKS: dict[str, Look] = {
     "pga_repair_joint": Look("PGA + re-pair, joint evaluation", GREYS[1], "<", "variant"),
     "pga_staged": Look("PGA, staged, no re-pair", GREYS[2], ">", "variant"),
     "exact": Look("exact optimum (assignment)", BLACK, "", "reference"),
+    # S passive sensors (passive_sd)
+    "sd_lagrangian": Look("S-D Lagrangian relaxation, all sensors (ours)", GREEN, "o", "ours"),
+    "sd_exact": Look("exact S-D optimum (integer program)", BLACK, "", "reference"),
+    "exact_2d": Look("exact 2-D assignment, sensors 1 and 2", BLUE, "s", "paper_baseline"),
     # Stone Soup's filters in twin_sensor (docs/stonesoup.md): one look per filter
     "stonesoup_pda/ekf": Look("Stone Soup EKF + PDA", SKY, "v", "paper_baseline"),
     "stonesoup_pda/ukf": Look("Stone Soup UKF + PDA", ORANGE, "D", "paper_baseline"),
