@@ -66,9 +66,9 @@ def _function_level_imports(tree: ast.AST) -> list[tuple[int, str]]:
 # PGA loop, which only a running passive_assoc trial needs; the house style
 # imports matplotlib (about 0.4 s), which only drawing needs (the runner imports reports).
 LAZY_IMPORTS = {("trackfuse.experiments.twin_sensor.model",
-                 "trackfuse.experiments.twin_sensor.kernel"),
+                 "trackfuse.tracking.pda"),
                 ("trackfuse.experiments.passive_assoc.model",
-                 "trackfuse.association.pga_kernel"),
+                 "trackfuse.association.pga_search"),
                 ("trackfuse.reports", "trackfuse.plots.style")}
 
 

@@ -8,19 +8,20 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import numba
+import pda_reference as reference
 import pytest
 import twin_sensor_pinned as pinned
 
 from trackfuse.experiments.twin_sensor import cold_compile
-from trackfuse.experiments.twin_sensor import kernel as k
 from trackfuse.experiments.twin_sensor.cold_compile import (
     HELPER,
     callee_args,
     compile_in,
     compile_on_two_cores,
 )
-from trackfuse.experiments.twin_sensor.model import run_filter, score_estimates
+from trackfuse.experiments.twin_sensor.model import score_estimates
 from trackfuse.experiments.twin_sensor.preload import load_kernel
+from trackfuse.tracking import pda as k
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -82,8 +83,8 @@ def test_a_failing_helper_does_not_fail_the_load(monkeypatch, owner, name, value
     algorithm = "mspda_parallel/mgekf"
     p, sc, batch, rules = pinned.setup({}, trials=3)
     options = pinned.options(p, sc, algorithm)
-    got = score_estimates(sc, batch, k.run_filter_compiled(sc, batch, options), rules)
-    pinned.assert_pinned(got, run_filter(sc, batch, options, rules))
+    got = score_estimates(sc, batch, k.run_filter(sc, batch, options), rules)
+    pinned.assert_pinned(got, reference.run_filter(sc, batch, options, rules))
     assert got["n_valid"].mean() > 1.0  # the clutter was gated: the PDA path ran
 
 

@@ -1,12 +1,13 @@
-"""Compile the twin-sensor kernel on two cores when numba's on-disk cache lacks it.
+"""Compile the PDA filter (:mod:`trackfuse.tracking.pda`) on two cores when numba's on-disk
+cache lacks it.
 
 numba compiles one function at a time in a process, so the fork server (:mod:`.preload`)
-compiled the whole kernel on one core on the first run after installing. Here a helper
-process compiles the two-sensor update :func:`.kernel._pair_update` (with its callees, about
-half the work) into numba's cache, while this process compiles the other callees of
-:func:`.kernel._filter_batch`; compiled last, ``_filter_batch`` loads ``_pair_update`` from
-the cache. Whatever the helper does (fails, or loses a race with another run), the result is
-the same: numba compiles here what the cache lacks.
+compiled the whole filter on one core on the first run after installing. Here a helper
+process compiles the two-sensor update ``_pair_update`` (with its callees, about half the
+work) into numba's cache, while this process compiles the other callees of
+``_filter_batch``; compiled last, ``_filter_batch`` loads ``_pair_update`` from the cache.
+Whatever the helper does (fails, or loses a race with another run), the result is the
+same: numba compiles here what the cache lacks.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ import numba
 import numpy as np
 from numba import typeof
 
-from trackfuse.experiments.twin_sensor import kernel as k
+from trackfuse.tracking import pda as k
 
 #: The helper's program: this process's module path (its argument list) first, so that it
 #: imports the same kernel file, whose path names its folder in numba's cache.
