@@ -1,5 +1,6 @@
 """The first-run compile of the twin-sensor kernel on two cores (cold_compile)."""
 
+import hashlib
 import os
 import pickle
 import subprocess
@@ -38,25 +39,29 @@ def test_the_callees_are_compiled_for_the_signatures_filter_batch_asks_for():
     assert {d: list(d.signatures) for d in callee_args()} == before
 
 
-def test_an_index_of_another_numba_version_or_python_is_not_the_kernel_cached(tmp_path,
-                                                                              monkeypatch):
-    """After a numba upgrade numba ignores the old index and compiles: that compile must
-    use both cores, so the old index must not count as cached."""
+def test_only_an_index_of_this_numba_python_and_source_is_the_kernel_cached(tmp_path,
+                                                                             monkeypatch):
+    """After a numba upgrade or an edit of the filter numba ignores the old index and
+    compiles: that compile must use both cores, so the old index must not count as cached.
+    An index written before the source file (a wheel's, unpacked in any order) counts."""
     monkeypatch.setattr(k, "_filter_batch",
                         SimpleNamespace(stats=SimpleNamespace(cache_path=str(tmp_path))))
     name = f"kernel._filter_batch-1.py{sys.version_info.major}{sys.version_info.minor}.nbi"
+    source = Path(k.__file__).read_bytes()
 
-    def index(version, file_name=name) -> bool:
+    def index(version, stamp=hashlib.sha256(source).digest(), file_name=name) -> bool:
         for old in tmp_path.iterdir():
             old.unlink()
         with (tmp_path / file_name).open("wb") as f:
             pickle.dump(version, f, protocol=-1)
-            f.write(b"the rest of numba's index")
+            f.write(pickle.dumps((stamp, {}), protocol=-1))
+        os.utime(tmp_path / file_name, (0, 0))  # older than the source
         return cold_compile.kernel_cached()
 
     assert index(numba.__version__)
     assert not index("0.1.0")  # written by another numba
-    assert not index(numba.__version__, "kernel._filter_batch-1.py27.nbi")  # another Python
+    assert not index(numba.__version__, hashlib.sha256(source + b"#").digest())  # edited
+    assert not index(numba.__version__, file_name=name.replace(".py3", ".py2"))  # Python
     (tmp_path / name).write_bytes(b"not a pickle")
     assert not cold_compile.kernel_cached()
 

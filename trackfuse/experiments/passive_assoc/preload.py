@@ -8,19 +8,6 @@ inherits it in memory instead of loading or compiling it on its own.
 
 from __future__ import annotations
 
-import numpy as np
+from trackfuse.precompile import load_pga
 
-from trackfuse.association.assignment import PairWeights
-from trackfuse.association.pga_search import pga
-
-
-def load_kernel() -> None:
-    """Run the compiled loop once on a small fixed problem (every option is a runtime
-    value, so this one call loads the only compiled version)."""
-    a = np.arange(6.0).reshape(2, 3)
-    weights = PairWeights(a=a, a_i0=np.zeros(2), a_0j=np.zeros(3), chi2=np.zeros((2, 3)))
-    pga(weights, np.random.default_rng(0), ops=10, repair_moves=True, staged=True,
-                 evict=True, accept="anneal")
-
-
-load_kernel()
+load_pga()

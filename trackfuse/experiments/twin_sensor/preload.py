@@ -10,29 +10,14 @@ compiling it (about 25 s each) on its own.
 from __future__ import annotations
 
 from trackfuse.experiments.twin_sensor.cold_compile import compile_on_two_cores, kernel_cached
-from trackfuse.experiments.twin_sensor.model import (
-    ALGORITHMS,
-    FILTERS,
-    PARAMS,
-    build_scenario,
-    simulate,
-    stack,
-)
-from trackfuse.seeding import trial_streams
-from trackfuse.tracking.pda import run_filter
-from trackfuse.tracking.pda_options import PDAOptions
+from trackfuse.precompile import load_pda_filter
 
 
 def load_kernel() -> None:
-    """Run the kernel once on one trial of the default scenario (every option is a runtime
-    value, so this one call loads the only compiled version)."""
-    params = {p.key: p.default for p in PARAMS}
-    sc = build_scenario(params)
-    batch = stack([simulate(sc, trial_streams(0, 0, 0))])
-    assoc, filt = ALGORITHMS[0].split("/")
+    """Load the filter (compiling it on two cores if numba's cache lacks it)."""
     if not kernel_cached():
         compile_on_two_cores()
-    run_filter(sc, batch, PDAOptions(assoc, FILTERS[filt], P_G=sc.P_G))
+    load_pda_filter()
 
 
 load_kernel()
