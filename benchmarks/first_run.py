@@ -1,26 +1,30 @@
-"""Cost of compiling the twin-sensor kernel: the first run after installing, baseline vs now.
+"""The first run after installing beside a warm run, figures included: current vs a baseline.
 
-Both versions are installed side by side as in ``end_to_end.py`` and timed alternately, each
-cold measurement with its own new, empty ``NUMBA_CACHE_DIR`` (as after installing):
+Both versions are installed side by side as in ``end_to_end.py`` (``pip install`` of the
+commit into its own venv) and timed alternately. For each version and repeat:
 
-* ``first run``: ``trackfuse run configs/twin_sensor_orbit.yaml --workers 2 --no-plots``,
-* ``preload cold``: ``python -c "import trackfuse.experiments.twin_sensor.preload"`` (what
-  the process pool's fork server does first: load or compile the kernel),
-* ``preload warm``: the same import with the kernel already in the cache (what every later
-  run pays).
+* ``cold``: ``trackfuse run configs/twin_sensor_orbit.yaml --workers 2`` (the README's main
+  command, figures and report included) with numba's cache as ``pip install`` left it: every
+  ``.nbi``/``.nbc`` file under the venv deleted, then the ones the install wrote put back
+  (the current version's wheel ships its compiled kernels, ``setup.py``; the baseline's none);
+  ``NUMBA_CACHE_DIR`` unset, so numba uses the cache beside the installed modules,
+* ``warm``: the same command again right after (the cache as the cold run left it),
+* ``empty``: the same command with no numba cache at all (every ``.nbi``/``.nbc`` deleted):
+  what a machine pays whose numba version or CPU differs from the one that built the wheel,
+* ``reinstall``: ``pip install --no-deps --force-reinstall`` of the version's source
+  (building its wheel, which compiles the current version's kernels), timed once.
 
-Each line gives wall seconds and the CPU seconds (user + sys) of the process and the
-children it waited for (the command's fork server is not waited for: its CPU is missing
-from the ``first run`` line), as the median and range over the repeats.
+Prints wall seconds, median [min, max] over the repeats, and each version's median cold/warm
+ratio (the goal of issue 43: at most 1.5).
 
-    python benchmarks/first_run.py [--baseline 0c1f4e6] [--repeats 3] [--warm-repeats 5]
+    python benchmarks/first_run.py [--baseline b359dda] [--repeats 3]
 """
 
 from __future__ import annotations
 
 import argparse
 import os
-import resource
+import shutil
 import statistics
 import subprocess
 import sys
@@ -30,58 +34,86 @@ from pathlib import Path
 
 from end_to_end import MAIN_CONFIG, install
 
-PRELOAD = "import trackfuse.experiments.twin_sensor.preload"
+RUN = ["run", MAIN_CONFIG, "--workers", "2", "--no-progress"]
 
 
-def timed(home: Path, cache: str, *cmd: str) -> tuple[float, float]:
-    """Wall and CPU seconds (user + sys, waited-for children) of ``cmd`` run in ``home/src``
-    with that version's venv first on ``PATH`` and numba's cache in ``cache``."""
-    env = dict(os.environ, NUMBA_CACHE_DIR=cache,
-               PATH=f"{home / 'venv' / 'bin'}{os.pathsep}{os.environ['PATH']}")
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+def cache_files(home: Path) -> list[Path]:
+    """numba's cache files under the version's venv."""
+    venv = home / "venv"
+    return [*venv.rglob("*.nbi"), *venv.rglob("*.nbc")]
+
+
+def shipped_cache(home: Path, stash: Path) -> None:
+    """Copy the cache files the install wrote (the venv as installed) into ``stash``."""
+    for path in cache_files(home):
+        target = stash / path.relative_to(home)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy2(path, target)
+
+
+def reset_cache(home: Path, stash: Path | None) -> None:
+    """Delete every cache file under the venv, then restore ``stash`` (if given)."""
+    for path in cache_files(home):
+        path.unlink()
+    if stash is not None:
+        for saved in [*stash.rglob("*.nbi"), *stash.rglob("*.nbc")]:
+            shutil.copy2(saved, home / saved.relative_to(stash))
+
+
+def timed_run(home: Path) -> float:
+    """Wall seconds of the main command in ``home/src`` with that version's venv."""
+    env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}
+    with tempfile.TemporaryDirectory() as out:
+        cmd = [str(home / "venv" / "bin" / "trackfuse"), *RUN, "--out", out]
+        t0 = time.perf_counter()
+        subprocess.run(cmd, cwd=home / "src", env=env, check=True, capture_output=True)
+        return time.perf_counter() - t0
+
+
+def reinstall(home: Path) -> float:
+    """Wall seconds of reinstalling the version from its source (its wheel rebuilt)."""
+    cmd = [str(home / "venv" / "bin" / "pip"), "install", "--quiet", "--no-deps",
+           "--force-reinstall", str(home / "src")]
     t0 = time.perf_counter()
-    subprocess.run(cmd, cwd=home / "src", env=env, check=True, capture_output=True)
-    wall = time.perf_counter() - t0
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    subprocess.run(cmd, check=True, capture_output=True)
+    return time.perf_counter() - t0
 
 
-def cold(home: Path, *cmd: str) -> tuple[float, float]:
-    """:func:`timed` with a new, empty numba cache."""
-    with tempfile.TemporaryDirectory() as cache, tempfile.TemporaryDirectory() as out:
-        return timed(home, cache, *(a.replace("{out}", out) for a in cmd))
+def cell(values: list[float]) -> str:
+    return f"{statistics.median(values):6.2f} [{min(values):.2f}, {max(values):.2f}]"
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--baseline", default="0c1f4e6")
+    parser.add_argument("--baseline", default="b359dda")
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--warm-repeats", type=int, default=5)
     args = parser.parse_args()
     homes = {"baseline": install(args.baseline), "current": install("HEAD")}
-    run = ["trackfuse", "run", MAIN_CONFIG, "--workers", "2", "--no-plots", "--no-progress",
-           "--out", "{out}"]
-    lines = {"first run": run, "preload cold": ["python", "-c", PRELOAD]}
-    times: dict[str, dict[str, list]] = {k: {v: [] for v in homes} for k in
-                                         [*lines, "preload warm"]}
-    for rep in range(args.repeats):
-        for version in list(homes)[::1 if rep % 2 == 0 else -1]:
-            for line, cmd in lines.items():
-                times[line][version].append(cold(homes[version], *cmd))
-    with tempfile.TemporaryDirectory() as caches:
-        for version, home in homes.items():  # fill each version's cache, untimed
-            timed(home, f"{caches}/{version}", "python", "-c", PRELOAD)
-        for rep in range(args.warm_repeats):
+    lines = ("cold", "warm", "empty", "reinstall")
+    times: dict[str, dict[str, list[float]]] = {v: {line: [] for line in lines} for v in homes}
+    with tempfile.TemporaryDirectory() as stash_root:
+        stashes = {v: Path(stash_root) / v for v in homes}
+        for version, home in homes.items():
+            times[version]["reinstall"].append(reinstall(home))
+            stashes[version].mkdir()
+            shipped_cache(home, stashes[version])
+        for rep in range(args.repeats):
             for version in list(homes)[::1 if rep % 2 == 0 else -1]:
-                times["preload warm"][version].append(
-                    timed(homes[version], f"{caches}/{version}", "python", "-c", PRELOAD))
-    print(f"baseline {homes['baseline'].name}, current {homes['current'].name}; "
-          "median [min, max] seconds")
-    for line, per_version in times.items():
-        for version, values in per_version.items():
-            cells = [f"{statistics.median(v):6.2f} [{min(v):.2f}, {max(v):.2f}]"
-                     for v in zip(*values, strict=True)]
-            print(f"{line:<13} {version:<9} wall {cells[0]}  cpu {cells[1]}")
+                home = homes[version]
+                reset_cache(home, stashes[version])
+                times[version]["cold"].append(timed_run(home))
+                times[version]["warm"].append(timed_run(home))
+                reset_cache(home, None)
+                times[version]["empty"].append(timed_run(home))
+            for version, home in homes.items():  # leave each venv as installed
+                reset_cache(home, stashes[version])
+    print(f"baseline {homes['baseline'].name}, current {homes['current'].name}: trackfuse "
+          f"{' '.join(RUN)}; wall seconds, median [min, max] of {args.repeats}")
+    for version, per_line in times.items():
+        for line, values in per_line.items():
+            print(f"{version:<9} {line:<10} {cell(values)}")
+        ratio = statistics.median(per_line["cold"]) / statistics.median(per_line["warm"])
+        print(f"{version:<9} cold/warm  {ratio:6.2f}")
 
 
 if __name__ == "__main__":

@@ -23,10 +23,12 @@ import numpy as np
 
 from trackfuse.association.assignment import pair_weights, solve_exact
 from trackfuse.association.passive_scene import SENSORS, scene_targets, simulate_scan
-from trackfuse.association.pga import pga
-from trackfuse.association.pga_kernel import pga_compiled
+from trackfuse.association.pga_search import pga as pga_compiled
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+from pga_reference import pga  # noqa: E402 (the Python oracle lives with the tests)
+
 SIGMA, P_D, P_F = 0.005, 0.95, 0.05
 
 

@@ -3,8 +3,8 @@
 Measures, at clutter mean 10,
   (a) one sensor, EKF covariance + single-sensor PDAF, and
   (b) two sensors, MGEKF + fused (parallel, (m1+1)(m2+1)-hypothesis) PDA,
-three ways: the compiled filter loop alone (``kernel.run_filter_compiled``, best of 5 on the
-same simulated batch), its plain numpy reference (``model.run_filter``, which also scores),
+three ways: the compiled filter loop alone (``trackfuse.tracking.pda.run_filter``, best of 5 on the
+same simulated batch), its numpy oracle (``tests/pda_reference.py``, which also scores),
 and the whole ``run_batch`` (random streams, simulation, filter, scoring, rows),
 for the experiment's default ``in_gate`` clutter and for ``window`` clutter (a fixed box of
 +-0.03 rad about the line of sight, roughly the gate size, so about 10 false returns fall in
@@ -23,20 +23,24 @@ import cProfile
 import io
 import math
 import pstats
+import sys
 import time
+from pathlib import Path
 
 from trackfuse.experiments.twin_sensor import EXPERIMENT
-from trackfuse.experiments.twin_sensor.kernel import run_filter_compiled
 from trackfuse.experiments.twin_sensor.model import (
     FILTERS,
     LossRules,
     build_scenario,
-    run_filter,
     simulate,
     stack,
 )
 from trackfuse.seeding import trial_streams
-from trackfuse.tracking.pda import PDAOptions
+from trackfuse.tracking.pda import run_filter
+from trackfuse.tracking.pda_options import PDAOptions
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+import pda_reference as reference  # noqa: E402 (the numpy oracle lives with the tests)
 
 
 def params(sensors: int, algorithm: str, model: str) -> dict:
@@ -64,14 +68,14 @@ def filter_rates(p: dict, batch: int) -> tuple[float, float]:
     data = stack([simulate(sc, trial_streams(1, 0, t)) for t in range(batch)])
     assoc, filt = p["algorithms"][0].split("/")
     options = PDAOptions(assoc, FILTERS[filt], P_G=sc.P_G)
-    run_filter_compiled(sc, data, options)  # load (or compile) outside the timing
+    run_filter(sc, data, options)  # load (or compile) outside the timing
     best = math.inf
     for _ in range(5):
         start = time.perf_counter()
-        run_filter_compiled(sc, data, options)
+        run_filter(sc, data, options)
         best = min(best, time.perf_counter() - start)
     start = time.perf_counter()
-    run_filter(sc, data, options, LossRules.from_params(p))
+    reference.run_filter(sc, data, options, LossRules.from_params(p))
     return batch / best, batch / (time.perf_counter() - start)
 
 

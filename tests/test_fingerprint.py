@@ -127,8 +127,8 @@ def test_fingerprinting_runs_none_of_the_modules_it_hashes():
             "from trackfuse.experiments import get\n"
             "from trackfuse.fingerprint import code_fingerprint\n"
             "modules = code_fingerprint(get('twin_sensor')).modules\n"
-            "print('trackfuse.experiments.twin_sensor.kernel' in modules, "
-            "'trackfuse.experiments.twin_sensor.kernel' in sys.modules, 'numba' in sys.modules)")
+            "print('trackfuse.tracking.pda' in modules, "
+            "'trackfuse.tracking.pda' in sys.modules, 'numba' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, cwd=ROOT).stdout.split()
     assert out == ["True", "False", "False"]

@@ -3,15 +3,15 @@
 import itertools
 
 import numpy as np
+import pga_reference as reference
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import trackfuse.association.pga as reference
+import trackfuse.association.pga as pga_setup
 from trackfuse.association.assignment import PairWeights, pair_weights
 from trackfuse.association.passive_scene import SENSORS, scene_targets, simulate_scan
-from trackfuse.association.pga import pga
-from trackfuse.association.pga_kernel import pga_compiled
+from trackfuse.association.pga_search import pga as pga_compiled
 from trackfuse.experiments.passive_assoc.model import VARIANTS
 
 
@@ -26,7 +26,7 @@ def random_weights(rng, m1, m2, integer=False):
 def assert_identical(weights, seed, **options):
     """Run both implementations from the same generator state; every field of the result
     but the wall times must be equal exactly (``array_equal``, no tolerance)."""
-    want = pga(weights, np.random.default_rng(seed), **options)
+    want = reference.pga(weights, np.random.default_rng(seed), **options)
     got = pga_compiled(weights, np.random.default_rng(seed), **options)
     np.testing.assert_array_equal(got.checkpoints, want.checkpoints)
     np.testing.assert_array_equal(got.partner1, want.partner1)
@@ -73,7 +73,7 @@ def test_random_problems_of_the_experiment_variants_match(seed, m1, m2, variant,
 @pytest.mark.parametrize("m1, m2", [(30, 40), (50, 50), (60, 45)])
 @pytest.mark.parametrize("variant", ["pga_paper", "pga_evict", "pga_anneal"])
 def test_larger_problems_across_blocks_of_draws_match(monkeypatch, m1, m2, variant):
-    monkeypatch.setattr(reference, "_BLOCK", 97)  # checkpoints inside and across blocks
+    monkeypatch.setattr(pga_setup, "_BLOCK", 97)  # checkpoints inside and across blocks
     weights = random_weights(np.random.default_rng(m1 * m2), m1, m2)
     res = assert_identical(weights, m1 + m2, ops=3000, checkpoints=[0, 96, 97, 500, 1000],
                            t0=2.0, **VARIANTS[variant])
@@ -106,7 +106,7 @@ def test_a_changed_option_changes_the_result(change):
     for seed in range(5):
         weights = random_weights(np.random.default_rng(seed), 8, 10)
         options = dict(ops=300, accept="anneal", t0=2.0, repair_moves=True)
-        base = pga(weights, np.random.default_rng(seed), **options)
+        base = reference.pga(weights, np.random.default_rng(seed), **options)
         other = pga_compiled(weights, np.random.default_rng(seed), **{**options, **change})
         differ += not np.array_equal(other.partner1, base.partner1)
     assert differ
@@ -117,6 +117,6 @@ def test_a_changed_option_changes_the_result(change):
 def test_unknown_options_are_refused_like_the_reference(bad):
     weights = random_weights(np.random.default_rng(0), 3, 4)
     with pytest.raises(ValueError):
-        pga(weights, np.random.default_rng(0), **bad)
+        reference.pga(weights, np.random.default_rng(0), **bad)
     with pytest.raises(ValueError):
         pga_compiled(weights, np.random.default_rng(0), **bad)

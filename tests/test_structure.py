@@ -67,9 +67,9 @@ def _function_level_imports(tree: ast.AST) -> list[tuple[int, str]]:
 # which only a running passive_sd trial needs; the house style
 # imports matplotlib (about 0.4 s), which only drawing needs (the runner imports reports).
 LAZY_IMPORTS = {("trackfuse.experiments.twin_sensor.model",
-                 "trackfuse.experiments.twin_sensor.kernel"),
+                 "trackfuse.tracking.pda"),
                 ("trackfuse.experiments.passive_assoc.model",
-                 "trackfuse.association.pga_kernel"),
+                 "trackfuse.association.pga_search"),
                 ("trackfuse.experiments.passive_sd.model",
                  "trackfuse.association.sd_assignment"),
                 ("trackfuse.reports", "trackfuse.plots.style")}

@@ -4,17 +4,17 @@ import itertools
 
 import numpy as np
 import pytest
-from scipy.stats import chi2, multivariate_normal
-
-from trackfuse.tracking.models import wrap
-from trackfuse.tracking.pda import (
-    PDAOptions,
+from pda_reference import (
     SensorReturns,
     linearize,
     pair_weights,
     pda_update,
     single_weights,
 )
+from scipy.stats import chi2, multivariate_normal
+
+from trackfuse.tracking.models import wrap
+from trackfuse.tracking.pda_options import PDAOptions
 from trackfuse.tracking.sensors import azel, azel_jacobian, gate_threshold, modified_rows
 
 P_G = 0.99

@@ -20,7 +20,7 @@ from trackfuse.experiments.twin_sensor.model import (
     angle_off_target,
     bounds,
     build_scenario,
-    run_filter,
+    score_estimates,
     simulate,
     stack,
     truth_trajectory,
@@ -32,7 +32,8 @@ from trackfuse.rundata import RunData
 from trackfuse.seeding import trial_streams
 from trackfuse.stats import nees_band, wilson_interval
 from trackfuse.tracking.models import cv_noise_gain, cv_transition, wrap
-from trackfuse.tracking.pda import PDAOptions
+from trackfuse.tracking.pda import run_filter
+from trackfuse.tracking.pda_options import PDAOptions
 from trackfuse.tracking.sensors import azel
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -676,13 +677,15 @@ def test_angle_rule_flags_a_diverged_filter_and_not_a_good_one():
     sc, good = _diverged_batch(p, 20, 0.0)
     sc, bad = _diverged_batch(p, 20, 6.0)
     for batch, expected in ((good, 0.0), (bad, 1.0)):
-        out = run_filter(sc, batch, PDAOptions("mspda_parallel", "mgekf", P_G=sc.P_G), rules)
+        options = PDAOptions("mspda_parallel", "mgekf", P_G=sc.P_G)
+        out = score_estimates(sc, batch, run_filter(sc, batch, options), rules)
         assert out["lost_angle"][:, -1].mean() == expected
         # one or two off-target scans are not a loss: the window must be filled
         assert out["lost_angle"][:, : rules.angle_window - 1].sum() == 0
     # an off-target run shorter than the window never counts
     long_window = replace(rules, angle_window=sc.K + 1)
-    out = run_filter(sc, bad, PDAOptions("nn", "ekf_joseph", P_G=sc.P_G), long_window)
+    options = PDAOptions("nn", "ekf_joseph", P_G=sc.P_G)
+    out = score_estimates(sc, bad, run_filter(sc, bad, options), long_window)
     assert out["lost_angle"].sum() == 0
 
 

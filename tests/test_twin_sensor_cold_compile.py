@@ -1,5 +1,6 @@
 """The first-run compile of the twin-sensor kernel on two cores (cold_compile)."""
 
+import hashlib
 import os
 import pickle
 import subprocess
@@ -8,19 +9,20 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import numba
+import pda_reference as reference
 import pytest
 import twin_sensor_pinned as pinned
 
 from trackfuse.experiments.twin_sensor import cold_compile
-from trackfuse.experiments.twin_sensor import kernel as k
 from trackfuse.experiments.twin_sensor.cold_compile import (
     HELPER,
     callee_args,
     compile_in,
     compile_on_two_cores,
 )
-from trackfuse.experiments.twin_sensor.model import run_filter, score_estimates
+from trackfuse.experiments.twin_sensor.model import score_estimates
 from trackfuse.experiments.twin_sensor.preload import load_kernel
+from trackfuse.tracking import pda as k
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -37,25 +39,29 @@ def test_the_callees_are_compiled_for_the_signatures_filter_batch_asks_for():
     assert {d: list(d.signatures) for d in callee_args()} == before
 
 
-def test_an_index_of_another_numba_version_or_python_is_not_the_kernel_cached(tmp_path,
-                                                                              monkeypatch):
-    """After a numba upgrade numba ignores the old index and compiles: that compile must
-    use both cores, so the old index must not count as cached."""
+def test_only_an_index_of_this_numba_python_and_source_is_the_kernel_cached(tmp_path,
+                                                                             monkeypatch):
+    """After a numba upgrade or an edit of the filter numba ignores the old index and
+    compiles: that compile must use both cores, so the old index must not count as cached.
+    An index written before the source file (a wheel's, unpacked in any order) counts."""
     monkeypatch.setattr(k, "_filter_batch",
                         SimpleNamespace(stats=SimpleNamespace(cache_path=str(tmp_path))))
     name = f"kernel._filter_batch-1.py{sys.version_info.major}{sys.version_info.minor}.nbi"
+    source = Path(k.__file__).read_bytes()
 
-    def index(version, file_name=name) -> bool:
+    def index(version, stamp=hashlib.sha256(source).digest(), file_name=name) -> bool:
         for old in tmp_path.iterdir():
             old.unlink()
         with (tmp_path / file_name).open("wb") as f:
             pickle.dump(version, f, protocol=-1)
-            f.write(b"the rest of numba's index")
+            f.write(pickle.dumps((stamp, {}), protocol=-1))
+        os.utime(tmp_path / file_name, (0, 0))  # older than the source
         return cold_compile.kernel_cached()
 
     assert index(numba.__version__)
     assert not index("0.1.0")  # written by another numba
-    assert not index(numba.__version__, "kernel._filter_batch-1.py27.nbi")  # another Python
+    assert not index(numba.__version__, hashlib.sha256(source + b"#").digest())  # edited
+    assert not index(numba.__version__, file_name=name.replace(".py3", ".py2"))  # Python
     (tmp_path / name).write_bytes(b"not a pickle")
     assert not cold_compile.kernel_cached()
 
@@ -82,8 +88,8 @@ def test_a_failing_helper_does_not_fail_the_load(monkeypatch, owner, name, value
     algorithm = "mspda_parallel/mgekf"
     p, sc, batch, rules = pinned.setup({}, trials=3)
     options = pinned.options(p, sc, algorithm)
-    got = score_estimates(sc, batch, k.run_filter_compiled(sc, batch, options), rules)
-    pinned.assert_pinned(got, run_filter(sc, batch, options, rules))
+    got = score_estimates(sc, batch, k.run_filter(sc, batch, options), rules)
+    pinned.assert_pinned(got, reference.run_filter(sc, batch, options, rules))
     assert got["n_valid"].mean() > 1.0  # the clutter was gated: the PDA path ran
 
 

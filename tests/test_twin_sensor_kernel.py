@@ -3,18 +3,18 @@
 from dataclasses import replace
 
 import numpy as np
+import pda_reference as reference
 import pytest
 import twin_sensor_pinned as pinned
 
-from trackfuse.experiments.twin_sensor import EXPERIMENT, kernel
-from trackfuse.experiments.twin_sensor.kernel import run_filter_compiled
+from trackfuse.experiments.twin_sensor import EXPERIMENT
 from trackfuse.experiments.twin_sensor.model import (
     ALGORITHMS,
     run_batch,
-    run_filter,
     score_estimates,
 )
 from trackfuse.seeding import trial_streams
+from trackfuse.tracking import pda as kernel
 
 CASES = [(algorithm, {}) for algorithm in ALGORITHMS] + [
     ("mspda_parallel/ekf", {"sensors.count": 1}),
@@ -42,8 +42,8 @@ CASES = [(algorithm, {}) for algorithm in ALGORITHMS] + [
 def test_compiled_filter_equals_the_numpy_reference(algorithm, overrides):
     p, sc, batch, rules = pinned.setup(overrides)
     options = pinned.options(p, sc, algorithm)
-    got = score_estimates(sc, batch, run_filter_compiled(sc, batch, options), rules)
-    pinned.assert_pinned(got, run_filter(sc, batch, options, rules))
+    got = score_estimates(sc, batch, kernel.run_filter(sc, batch, options), rules)
+    pinned.assert_pinned(got, reference.run_filter(sc, batch, options, rules))
     if p["clutter.mean"] > 0 and p["sensors.pd"] > 0:
         assert got["n_valid"].mean() > 1.0  # clutter really was gated
 
@@ -69,8 +69,8 @@ def test_the_python_path_takes_the_log_of_zero_as_the_compiled_one(
     -inf, Python's ``math.log`` raised ``ValueError: math domain error``."""
     p, sc, batch, rules = pinned.setup(overrides, trials=2)
     options = pinned.options(p, sc, algorithm)
-    got = score_estimates(sc, batch, kernel.run_filter_compiled(sc, batch, options), rules)
-    pinned.assert_pinned(got, run_filter(sc, batch, options, rules))
+    got = score_estimates(sc, batch, kernel.run_filter(sc, batch, options), rules)
+    pinned.assert_pinned(got, reference.run_filter(sc, batch, options, rules))
 
 
 def test_a_diverged_trial_is_flagged_alike_and_leaves_the_others_untouched():
@@ -80,11 +80,11 @@ def test_a_diverged_trial_is_flagged_alike_and_leaves_the_others_untouched():
     broken = replace(batch, x0=x0)
     for algorithm in ("mspda_parallel/mgekf", "mspda_sequential/ekf", "nn/mgekf"):
         options = pinned.options(p, sc, algorithm)
-        got = score_estimates(sc, broken, run_filter_compiled(sc, broken, options), rules)
-        pinned.assert_pinned(got, run_filter(sc, broken, options, rules))
+        got = score_estimates(sc, broken, kernel.run_filter(sc, broken, options), rules)
+        pinned.assert_pinned(got, reference.run_filter(sc, broken, options, rules))
         assert got["lost_angle"][3].all() and got["lost_gate"][3].all()
         assert np.isnan(got["nees"][3]).all() and (got["n_valid"][3] == 0).all()
-        clean = score_estimates(sc, batch, run_filter_compiled(sc, batch, options), rules)
+        clean = score_estimates(sc, batch, kernel.run_filter(sc, batch, options), rules)
         for key in got:
             np.testing.assert_array_equal(np.delete(got[key], 3, axis=0),
                                           np.delete(clean[key], 3, axis=0), err_msg=key)

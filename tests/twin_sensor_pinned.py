@@ -15,7 +15,7 @@ from trackfuse.experiments.twin_sensor.model import (
     stack,
 )
 from trackfuse.seeding import trial_streams
-from trackfuse.tracking.pda import PDAOptions
+from trackfuse.tracking.pda_options import PDAOptions
 
 
 def setup(overrides: dict, trials: int = 40):

@@ -171,12 +171,12 @@ def _partner2(partner1: np.ndarray, m2: int) -> np.ndarray:
 def run_trial(params: dict[str, Any], streams: TrialStreams) -> list[dict[str, Any]]:
     """One scan: simulate, weigh, solve exactly and by each PGA variant; rows per checkpoint.
 
-    The PGA runs compiled (:func:`trackfuse.association.pga_kernel.pga_compiled`, bit for
+    The PGA runs compiled (:func:`trackfuse.association.pga_search.pga`, bit for
     bit :func:`trackfuse.association.pga.pga`).
     """
     import scipy.optimize  # noqa: F401 - on use, and before the exact solve is timed
 
-    from trackfuse.association.pga_kernel import pga_compiled  # numba: on use
+    from trackfuse.association.pga_search import pga  # numba: on use
 
     truth, noise, shuffle, algo = streams.common.spawn(4)
     clutter = streams.point
@@ -219,7 +219,7 @@ def run_trial(params: dict[str, Any], streams: TrialStreams) -> list[dict[str, A
     for stream, (name, options) in zip(variant_streams, VARIANTS.items(), strict=True):
         if name not in wanted:
             continue
-        result = pga_compiled(weights, stream, ops=int(params["pga.ops"]),
+        result = pga(weights, stream, ops=int(params["pga.ops"]),
                               checkpoints=[int(c) for c in params["pga.checkpoints"]],
                               p_m=params["pga.p_m"], init=params["pga.init"],
                               roulette=params["pga.roulette"], second=params["pga.second"],

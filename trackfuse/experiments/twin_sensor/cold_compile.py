@@ -1,16 +1,18 @@
-"""Compile the twin-sensor kernel on two cores when numba's on-disk cache lacks it.
+"""Compile the PDA filter (:mod:`trackfuse.tracking.pda`) on two cores when numba's on-disk
+cache lacks it.
 
 numba compiles one function at a time in a process, so the fork server (:mod:`.preload`)
-compiled the whole kernel on one core on the first run after installing. Here a helper
-process compiles the two-sensor update :func:`.kernel._pair_update` (with its callees, about
-half the work) into numba's cache, while this process compiles the other callees of
-:func:`.kernel._filter_batch`; compiled last, ``_filter_batch`` loads ``_pair_update`` from
-the cache. Whatever the helper does (fails, or loses a race with another run), the result is
-the same: numba compiles here what the cache lacks.
+compiled the whole filter on one core on the first run after installing. Here a helper
+process compiles the two-sensor update ``_pair_update`` (with its callees, about half the
+work) into numba's cache, while this process compiles the other callees of
+``_filter_batch``; compiled last, ``_filter_batch`` loads ``_pair_update`` from the cache.
+Whatever the helper does (fails, or loses a race with another run), the result is the
+same: numba compiles here what the cache lacks.
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
 import pickle
 import subprocess
@@ -22,7 +24,7 @@ import numba
 import numpy as np
 from numba import typeof
 
-from trackfuse.experiments.twin_sensor import kernel as k
+from trackfuse.tracking import pda as k
 
 #: The helper's program: this process's module path (its argument list) first, so that it
 #: imports the same kernel file, whose path names its folder in numba's cache.
@@ -33,25 +35,31 @@ HELPER = ("import sys; sys.path[:] = sys.argv[1:]; "
 
 def kernel_cached() -> bool:
     """Whether numba's cache holds an index of ``_filter_batch`` that numba will use: one for
-    this Python (numba's file name), written by this numba version after the kernel's source.
+    this Python (numba's file name), written by this numba version for this source (numba's
+    stamp: the source's SHA-256, or its modification time and size before numba 0.62).
     A wrong answer costs time only: a stale index read as current means compiling on one
     core; a current one read as stale, a helper process that loads from the cache."""
-    source_time = Path(k.__file__).stat().st_mtime
+    source = Path(k.__file__)
+    st = source.stat()
+    stamps = (hashlib.sha256(source.read_bytes()).digest(), (st.st_mtime, st.st_size))
     python = f".py{sys.version_info.major}{sys.version_info.minor}"
     index = Path(k._filter_batch.stats.cache_path).glob(f"*._filter_batch-*{python}*.nbi")
-    return any(p.stat().st_mtime >= source_time and index_version(p) == numba.__version__
-               for p in index)
+    return any(index_stamp(p) in stamps for p in index)
 
 
-def index_version(path: Path) -> str | None:
-    """The numba version that wrote the cache index ``path`` (numba pickles it first, and
-    ignores an index of another version), or ``None`` if it cannot be read."""
+def index_stamp(path: Path) -> object:
+    """The source stamp of the cache index ``path`` if this numba version wrote it (numba
+    pickles its version first, then the stamp and the entries, and ignores an index of
+    another version), or ``None`` if it is another version's or cannot be read."""
     try:
         with path.open("rb") as f:
             version = pickle.load(f)  # numba's own cache file: numba unpickles it too
-    except (OSError, pickle.UnpicklingError, EOFError, ValueError):
+            if version != numba.__version__:
+                return None
+            stamp, _ = pickle.loads(f.read())
+    except (OSError, pickle.UnpicklingError, EOFError, ValueError, TypeError):
         return None
-    return version if isinstance(version, str) else None
+    return stamp
 
 
 def callee_args() -> dict:

@@ -91,7 +91,6 @@ from trackfuse.experiments.base import NON_NEGATIVE, Metric, Param
 from trackfuse.experiments.twin_sensor.stonesoup import (
     STONESOUP_ALGORITHMS,
     STONESOUP_PARAMS,
-    Estimates,
     is_stonesoup,
     run_stonesoup,
 )
@@ -106,15 +105,13 @@ from trackfuse.tracking.pcrlb import (
     position_bound,
     range_bound,
 )
-from trackfuse.tracking.pda import METHODS, PDAOptions, SensorReturns, pda_update
+from trackfuse.tracking.pda_options import METHODS, Estimates, PDAOptions
 from trackfuse.tracking.platforms import baseline_offset, orbit_positions, straight_positions
 from trackfuse.tracking.sensors import (
     azel,
     azel_jacobian,
-    ellipse_points,
     gate_threshold,
     gate_volume,
-    inv2,
     unit_disk,
 )
 
@@ -443,40 +440,9 @@ ROW_METRICS = (
 )
 """Every metric column of the rows (see the module docstring)."""
 METRICS = tuple(m.name for m in ROW_METRICS if not m.name.endswith("_time_s"))
-"""Per-scan metric columns of a trial's rows (the compiled kernel's and the reference
-:func:`run_filter`'s alike)."""
+"""Per-scan metric columns of a trial's rows (:func:`score_estimates`)."""
 BINARY_METRICS = tuple(m.name for m in ROW_METRICS if m.binary)
 """The 0/1 columns among :data:`METRICS` (Wilson intervals in the summary)."""
-
-
-def _scan_returns(sc: Scenario, b: Batch, k: int, Xp: np.ndarray,
-                  Pp: np.ndarray) -> tuple[list[SensorReturns], np.ndarray]:
-    """Returns of every sensor at scan ``k`` and whether the noise-free target return lies
-    inside at least one sensor's gate, ``(N,)`` bool, for predictions ``Xp: (N, 6)``,
-    ``Pp: (N, 6, 6)``."""
-    N = Xp.shape[0]
-    returns, inside = [], np.zeros(N, dtype=bool)
-    for s in range(sc.R.shape[0]):
-        pos = sc.sensor_pos[k, s]
-        d = Xp[:, :3] - pos
-        zh = azel(d)
-        H = azel_jacobian(d)
-        S_s = H @ Pp @ H.transpose(0, 2, 1) + sc.R[s]
-        nu_true = wrap(b.los[:, k - 1, s] - zh)
-        d2_true = ((nu_true[:, None] @ inv2(S_s)[0])[:, 0] * nu_true).sum(axis=1)
-        with np.errstate(invalid="ignore"):
-            inside |= d2_true <= sc.gamma
-        if sc.clutter_model == "in_gate":
-            zc = ellipse_points(b.clutter[:, k - 1, s], zh, S_s, sc.gamma)
-            lam = sc.clutter_mean / gate_volume(S_s, sc.gamma)
-        else:
-            zc = b.clutter[:, k - 1, s]
-            lam = np.full(N, sc.window_density)
-        z = np.concatenate([b.z_target[:, k - 1, s][:, None], zc], axis=1)
-        valid = np.concatenate([b.detected[:, k - 1, s][:, None], b.clutter_ok[:, k - 1, s]],
-                               axis=1)
-        returns.append(SensorReturns(z, valid, pos, sc.R[s], float(sc.P_D[s]), lam))
-    return returns, inside
 
 
 def angle_off_target(X: np.ndarray, sensor: np.ndarray, los_true: np.ndarray,
@@ -489,35 +455,6 @@ def angle_off_target(X: np.ndarray, sensor: np.ndarray, los_true: np.ndarray,
     with np.errstate(invalid="ignore"):
         err = np.abs(wrap(azel(X[..., :3] - sensor) - los_true)) / sigma
         return ~(err <= sigmas).all(axis=-1)
-
-
-def run_filter(sc: Scenario, b: Batch, options: PDAOptions,
-               rules: LossRules) -> dict[str, np.ndarray]:
-    """Run one algorithm (its association and filter choices in ``options``) over a batch;
-    every metric of :data:`METRICS` is returned as ``(N, K)``.
-
-    This is the plain numpy reference of the compiled filter loop that :func:`run_batch`
-    uses (:mod:`.kernel`): the tests pin the two together to 1e-9 and the speed benchmark
-    times both. A trial whose mean or covariance stops being finite has diverged: NaN from
-    that scan on, as in the kernel."""
-    N = b.x0.shape[0]
-    X = b.x0.copy()
-    P = np.broadcast_to(sc.P0, (N, 6, 6)).copy()
-    est = Estimates(np.empty((N, sc.K, 6)), np.empty((N, sc.K, 6, 6)),
-                    np.empty((N, sc.K, len(sc.R))), np.empty((N, sc.K), dtype=bool))
-    diverged = np.zeros(N, dtype=bool)
-    for k in range(1, sc.K + 1):
-        Xp = X @ sc.F.T
-        Pp = sc.F @ P @ sc.F.T + sc.Q_filter
-        returns, inside = _scan_returns(sc, b, k, Xp, Pp)
-        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            X, P, m = pda_update(Xp, Pp, returns, options)
-        P = 0.5 * (P + P.transpose(0, 2, 1))
-        diverged |= ~(np.isfinite(X).all(axis=1) & np.isfinite(P).all(axis=(1, 2)))
-        X[diverged], P[diverged] = np.nan, np.nan
-        est.X[:, k - 1], est.P[:, k - 1], est.n_valid[:, k - 1] = X, P, m
-        est.inside[:, k - 1] = inside
-    return score_estimates(sc, b, est, rules)
 
 
 def _runs(flags: np.ndarray) -> np.ndarray:
@@ -534,8 +471,8 @@ def _runs(flags: np.ndarray) -> np.ndarray:
 def score_estimates(sc: Scenario, b: Batch, est: Estimates,
                     rules: LossRules) -> dict[str, np.ndarray]:
     """Every metric of :data:`METRICS` as ``(N, K)`` for per-scan estimates ``est`` (ours,
-    from :func:`run_filter` or the kernel, or another library's,
-    :class:`~trackfuse.experiments.twin_sensor.stonesoup.Estimates`), all scored alike.
+    from :func:`trackfuse.tracking.pda.run_filter` or another library's,
+    :class:`~trackfuse.tracking.pda_options.Estimates`), all scored alike.
 
     ``P`` is symmetrized; a trial is diverged from the first scan where its mean or
     covariance is not finite, and both are NaN from then on. The loss flags are permanent:
@@ -597,7 +534,7 @@ def run_batch(params: dict[str, Any], streams: Sequence[TrialStreams]) -> RowTab
     Rows are trial-major, then algorithm, then scan; the CPU time of each algorithm over
     the whole batch, per trial and scan, is the batch's timing table.
     """
-    from trackfuse.experiments.twin_sensor.kernel import run_filter_compiled  # numba: on use
+    from trackfuse.tracking.pda import run_filter  # numba: on use
 
     sc = build_scenario(params)
     batch = stack([simulate(sc, s) for s in streams])
@@ -615,7 +552,7 @@ def run_batch(params: dict[str, Any], streams: Sequence[TrialStreams]) -> RowTab
             options = PDAOptions(assoc, FILTERS[filt], str(params["pda.joint_cov"]),
                                  str(params["pda.density"]), str(params["filter.mg_at"]),
                                  sc.P_G)
-            results.append(score_estimates(sc, batch, run_filter_compiled(sc, batch, options),
+            results.append(score_estimates(sc, batch, run_filter(sc, batch, options),
                                            rules))
         cpu.append((time.process_time() - t0) / (N * K))
     A = len(names)

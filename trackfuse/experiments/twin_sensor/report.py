@@ -103,7 +103,7 @@ from trackfuse.stats import (
     t_interval,
     wilson_interval,
 )
-from trackfuse.tracking.pda import METHODS
+from trackfuse.tracking.pda_options import METHODS
 
 SCHEMA = {p.key: p for p in PARAMS}
 CLAIM = TWIN_SENSOR.result("loss rate up to 9 false returns")

@@ -43,6 +43,7 @@ import numpy as np
 from trackfuse.experiments.base import Param
 from trackfuse.interop import stonesoup as ss
 from trackfuse.seeding import TrialStreams
+from trackfuse.tracking.pda_options import Estimates
 from trackfuse.tracking.sensors import ellipse_points, gate_volume, inv2
 
 if TYPE_CHECKING:
@@ -84,21 +85,6 @@ def missing_stonesoup(params: Mapping[str, Any],
         return "algorithms", (f"{wanted[0]} needs Stone Soup, which is not installed; "
                               "install it with: pip install 'trackfuse[stonesoup]'")
     return None
-
-
-@dataclass(frozen=True)
-class Estimates:
-    """Per-scan output of a filter over ``N`` trials and ``K`` scans, in our state order.
-
-    ``X: (N, K, 6)`` posterior means, ``P: (N, K, 6, 6)`` covariances (NaN after a failure),
-    ``n_valid: (N, K, S)`` validated returns per sensor, ``inside: (N, K)`` whether the
-    noise-free target return lay in at least one sensor's gate (the gate rule's input).
-    """
-
-    X: np.ndarray
-    P: np.ndarray
-    n_valid: np.ndarray
-    inside: np.ndarray
 
 
 @dataclass

@@ -1,19 +1,17 @@
-"""Compiled search loop of the partheno-genetic algorithm (numba), bit for bit the reference.
+"""The partheno-genetic algorithm's search (:mod:`trackfuse.association.pga`), compiled.
 
-:func:`pga_compiled` takes the arguments of :func:`trackfuse.association.pga.pga` and returns
-the same :class:`~trackfuse.association.pga.PGAResult`: the same solutions and objectives at
-every checkpoint, bit for bit, for every option (only ``elapsed_s``, a wall time, differs).
-The setup (orientation, roulette weights, initial solution), the random draws (the same
-numpy blocks, :func:`~trackfuse.association.pga.draw_blocks`) and the collection are the
-reference's own functions; only the genetic operations run compiled. They repeat the
-reference's :class:`~trackfuse.association.pga._Search` step by step on arrays: the same
+:func:`pga` runs the algorithm on one assignment problem. The setup (orientation, roulette
+weights, initial solution), the random draws (numpy blocks,
+:func:`~trackfuse.association.pga.draw_blocks`) and the collection are
+:mod:`trackfuse.association.pga`'s; the genetic operations run compiled (numba), on arrays.
+Their plain-Python oracle, ``tests/pga_reference.py``, does the same on lists: the same
 column choices (the roulette's binary search over the integer cumulative weights), the same
 moves, the same floating-point operations in the same order (``J`` grows by the same gains,
 the Metropolis test is ``u < exp(dJ / T)`` and ``T`` is multiplied by the same cooling
 factor after every operation). ``tests/test_pga_kernel.py`` pins the two exactly.
 
 The loop runs from checkpoint to checkpoint (and block to block of draws), so the wall time
-of each checkpoint is measured as in the reference. The compiled code is cached on disk
+of each checkpoint is measured as in the oracle. The compiled code is cached on disk
 beside this module (``cache=True``): the first run on a machine compiles it (a few
 seconds), later processes load it.
 """
@@ -51,20 +49,40 @@ _EMPTY, _PAIRED = np.bool_(False), np.bool_(True)
 J_CUR, J_BEST, TEMPERATURE = range(3)
 
 
-def pga_compiled(weights: PairWeights, rng: np.random.Generator, ops: int = 1000,
-                 checkpoints: Sequence[int] = CHECKPOINTS, p_m: float = 0.2,
-                 init: str = "random_B", roulette: str = "worse", second: str = "roulette",
-                 repair_moves: bool = False, staged: bool = False, evict: bool = False,
-                 accept: str = "monotone", t0: float = 1.0, t1: float = 0.01) -> PGAResult:
-    """:func:`trackfuse.association.pga.pga` with the genetic operations compiled (same
-    parameters, same result)."""
+def pga(weights: PairWeights, rng: np.random.Generator, ops: int = 1000,
+        checkpoints: Sequence[int] = CHECKPOINTS, p_m: float = 0.2, init: str = "random_B",
+        roulette: str = "worse", second: str = "roulette", repair_moves: bool = False,
+        staged: bool = False, evict: bool = False, accept: str = "monotone", t0: float = 1.0,
+        t1: float = 0.01) -> PGAResult:
+    """Run the (improved) partheno-genetic algorithm on one assignment problem.
+
+    Parameters
+    ----------
+    weights : the scan's :class:`PairWeights` (m1 x m2, either orientation).
+    rng : the algorithm's own random stream.
+    ops : number of genetic operations.
+    checkpoints : operation counts at which the best solution is recorded; counts above
+        ``ops`` are ignored and ``ops`` itself is always added.
+    p_m : mutation probability per operation.
+    init : ``"random_B"`` (random injection of the rows into distinct columns) or
+        ``"standard"`` (row i in column i, paper eq. 31).
+    roulette : ``"worse"`` (weight num(j)) or ``"better"`` (weight m1 + 2 - num(j)).
+    second : second crossover column by ``"roulette"`` over the rest or ``"uniform"``.
+    repair_moves : enable the re-pair move (module docstring).
+    evict : half of the re-pair moves pick any column, whose row then goes to the dummy
+        column (:func:`exchange`); otherwise re-pair only into empty columns.
+    staged : evaluate (and accept or reject) the crossover offspring and the mutation
+        offspring separately within one operation, instead of only their combination.
+    accept : ``"monotone"`` or ``"anneal"``.
+    t0, t1 : initial and final annealing temperatures, in units of J (nats).
+    """
     start = time.perf_counter()
     w, rank, transpose = orient(weights, roulette)
     marks, anneal, cool = schedule(ops, checkpoints, accept, second, t0, t1)
     m1, m2 = rank.shape[0] - 1, rank.shape[1]
     columns = np.arange(m2)
 
-    def objective(col_row: list[int]) -> float:  # the reference's sum, of Python floats
+    def objective(col_row: list[int]) -> float:  # the oracle's sum, of Python floats
         return sum(w[col_row, columns].tolist())
 
     cur = initial_solution(m1, m2, init, rng)
@@ -95,7 +113,7 @@ def _search(draws, w, rank, cur, best, q, state, p_m, roulette_second, repair_mo
     """Run the genetic operations of ``draws: (n, 8)`` from the solution ``cur: (m2,)``
     (with its roulette weights ``q``), updating ``cur``, ``q``, ``best`` and ``state``
     (``J``, best ``J``, temperature) in place; the flags are the options of
-    :func:`pga_compiled`. One iteration is ``_Search.operate`` of the reference.
+    :func:`pga`. One iteration is ``_Search.operate`` of the oracle.
     """
     m1, m2 = w.shape[0] - 1, w.shape[1]
     J, J_best, T = state[J_CUR], state[J_BEST], state[TEMPERATURE]
@@ -198,7 +216,7 @@ def _bisect_right(cum, x, lo, hi, shift):
 
 @njit(**INNER)
 def _columns(cum, q, u1, u2, roulette_second):
-    """The crossover's two columns (``_Search._crossover`` of the reference)."""
+    """The crossover's two columns (``_Search._crossover`` of the oracle)."""
     m2 = cum.shape[0]
     j1 = min(_bisect_right(cum, u1 * cum[m2 - 1], _ZERO, m2, _ZERO), m2 - 1)
     if roulette_second:
@@ -217,7 +235,7 @@ def _columns(cum, q, u1, u2, roulette_second):
 @njit(**INNER)
 def _mutate(child, w, d, child_paired, repair_moves, evict, scratch, seen):
     """Re-pair (plain or evicting) or unpair in place (``_Search._mutate`` of the
-    reference). Returns the gain, the touched column (-1 for none) and the pair count."""
+    oracle). Returns the gain, the touched column (-1 for none) and the pair count."""
     m1, m2 = w.shape[0] - 1, w.shape[1]
     if repair_moves and d[REPAIR] < 0.5 and child_paired < m1:
         seen[:] = False

@@ -1,0 +1,74 @@
+"""What the PDA filter (:mod:`trackfuse.tracking.pda`) is asked and what it returns.
+
+Kept apart from the compiled filter so that reading the options (a config check, the
+report's algorithm names) does not import numba.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from trackfuse.tracking.sensors import gate_threshold
+
+METHODS = ("mspda_parallel", "mspda_sequential", "nn", "paper_approx")
+COVARIANCES = ("mgekf", "ekf_joseph")
+JOINT_COVS = ("full", "blockdiag")
+DENSITIES = ("parametric", "nonparametric")
+MG_AT = ("hypothesis", "combined")
+
+
+@dataclass(frozen=True)
+class PDAOptions:
+    """How :func:`pda_update` associates and updates (every choice in one place).
+
+    Attributes
+    ----------
+    method : association variant, one of :data:`METHODS`.
+    covariance : ``"mgekf"`` (modified rows in the Joseph form) or ``"ekf_joseph"``.
+    joint_cov : ``"full"`` or ``"blockdiag"`` joint innovation covariance in ``w_ij``.
+    density : ``"parametric"`` (the caller's clutter density) or ``"nonparametric"``
+        (``m_s / V_s``).
+    mg_at : ``"hypothesis"`` (MGEKF rows at each hypothesis's own returns) or
+        ``"combined"`` (at the beta-weighted combined return of each sensor, W000-4).
+    P_G : gate probability of each sensor's gate.
+    n_z : dimension of one sensor's measurement (2: azimuth, elevation).
+    gamma : the gate threshold ``chi2_{n_z}^-1(P_G)``, derived once at construction.
+    """
+
+    method: str = "mspda_parallel"
+    covariance: str = "mgekf"
+    joint_cov: str = "full"
+    density: str = "parametric"
+    mg_at: str = "hypothesis"
+    P_G: float = 0.99
+    n_z: int = 2
+    gamma: float = field(init=False)
+
+    def __post_init__(self) -> None:
+        for name, allowed in (("method", METHODS), ("covariance", COVARIANCES),
+                              ("joint_cov", JOINT_COVS), ("density", DENSITIES),
+                              ("mg_at", MG_AT)):
+            if getattr(self, name) not in allowed:
+                raise ValueError(f"unknown PDA {name} {getattr(self, name)!r}; "
+                                 f"choose from {allowed}")
+        if not 0.0 < self.P_G < 1.0:
+            raise ValueError(f"gate probability P_G must lie in (0, 1), got {self.P_G}")
+        object.__setattr__(self, "gamma", gate_threshold(self.P_G, self.n_z))
+
+
+
+@dataclass(frozen=True)
+class Estimates:
+    """Per-scan output of a filter over ``N`` trials and ``K`` scans, in our state order.
+
+    ``X: (N, K, 6)`` posterior means, ``P: (N, K, 6, 6)`` covariances (NaN after a failure),
+    ``n_valid: (N, K, S)`` validated returns per sensor, ``inside: (N, K)`` whether the
+    noise-free target return lay in at least one sensor's gate (the gate rule's input).
+    """
+
+    X: np.ndarray
+    P: np.ndarray
+    n_valid: np.ndarray
+    inside: np.ndarray
