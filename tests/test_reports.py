@@ -151,6 +151,7 @@ def test_the_run_page_loads_in_a_browser_with_every_image_decoded(toy_run, tmp_p
     assert shot.stat().st_size > 10_000
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2, reason="needs two cores")
 def test_figures_drawn_in_two_processes_are_the_bytes_drawn_in_one(tmp_path, monkeypatch):
     run = run_data(tmp_path, "twin_sensor", {"algorithms": ["mspda_parallel/mgekf"]},
