@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import pytest
 from conftest import trackfuse
 from typer.testing import CliRunner
 
@@ -101,6 +102,7 @@ def test_comparing_nothing_fails_the_gate(write_config, tmp_path):
                                    "only in NEW (e.g. shift=0.5")
 
 
+@pytest.mark.slow
 def test_plot_and_compare_say_the_same_accurate_line_for_what_is_no_run(write_config,
                                                                          tmp_path):
     """`plot` said "(no manifest.json)" and `compare` "(not a directory)" for paths of one

@@ -223,6 +223,7 @@ def test_the_esm_radar_cv_nis_example_runs_on_a_run_folder(tmp_path):
     assert len(means) == 8 and all(w > s for s, w in zip(means[:4], means[4:], strict=True))
 
 
+@pytest.mark.slow
 def test_the_interval_coverage_example_runs_on_a_run_folder(tmp_path):
     """examples/interval_coverage.py (docs/statistics.md) on 100 trials of the orbit
     config's nearest neighbour: all three measurements, one null comparison."""
@@ -237,6 +238,7 @@ def test_the_interval_coverage_example_runs_on_a_run_folder(tmp_path):
                         r"cells .*", lines[-1])
 
 
+@pytest.mark.slow
 def test_the_gap_coverage_example_measures_against_the_run_mean_gap(tmp_path):
     """examples/gap_coverage.py (docs/papers/passive_assoc.md, Metrics and intervals) on 40
     trials of two PGA variants: one line per N and variant, whose true value is the mean gap

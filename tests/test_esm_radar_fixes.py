@@ -112,6 +112,7 @@ def test_chi2_alpha_max_needs_the_nis_index():
     assert alpha_max(dict(p, **{"alpha.max_mode": "fixed"})) == (10.0, "fixed")
 
 
+@pytest.mark.slow
 def test_phase_config_runs_and_the_spacing_sharpens_the_phase_factor(tmp_path):
     """d/lambda reaches the data, in the direction the physics says. With the radar's own
     phase noise (`table`), a tenfold spacing multiplies the T1/T2 phase difference by ten

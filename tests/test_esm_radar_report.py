@@ -38,7 +38,12 @@ def house_figures(run: RunData, names: list[str]) -> dict:
         return report.figures(run, names)
 
 
-@pytest.fixture(scope="module", params=CONFIGS, ids=lambda p: p.stem)
+#: Table 3's config runs in the fast suite; the sweeps and ablations in the slow one.
+PARAMS = [p if p.stem == "esm_radar_snake_cross" else pytest.param(p, marks=pytest.mark.slow)
+          for p in CONFIGS]
+
+
+@pytest.fixture(scope="module", params=PARAMS, ids=lambda p: p.stem)
 def shipped_run(request, tmp_path_factory) -> RunData:
     """A shipped config run by the real runner with 6 trials per point."""
     cfg = load(request.param)
@@ -383,6 +388,7 @@ def _upright_after_a_full_draw(fig, axes):
             ax.tick_params(axis="x", labelrotation=90)
 
 
+@pytest.mark.slow
 def test_tick_labels_measured_by_the_layout_alone_give_the_bytes_of_a_full_draw(
         tmp_path, monkeypatch):
     """Crowded (Fig. 3 grid, two panels) and nearly crowded x labels: the figure files are the

@@ -18,6 +18,8 @@ from trackfuse.executors import STOPPING_WHEN_LOADED, ExecutorError, make_execut
 from trackfuse.results import BatchSpan, read_part
 from trackfuse.runner import Runner
 
+pytestmark = pytest.mark.slow  # kills, resumes and dask clusters
+
 CFG = """
 experiment: toy_experiments:GAUSSIAN
 trials: 31

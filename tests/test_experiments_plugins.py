@@ -62,6 +62,7 @@ def _install_entry_point(site: Path) -> None:
     (info / "entry_points.txt").write_text(f"[{ENTRY_POINT_GROUP}]\ncoin = coin:EXPERIMENT\n")
 
 
+@pytest.mark.slow
 def test_an_installed_plugin_is_listed_validated_and_run_by_name(tmp_path):
     site = tmp_path / "site"
     site.mkdir()
@@ -114,6 +115,7 @@ def test_a_plugins_hints_name_what_trackfuse_list_takes(tmp_path):
     assert listed.returncode == 0, listed.stderr
 
 
+@pytest.mark.slow
 def test_a_report_module_off_the_path_is_refused_before_the_run(tmp_path):
     """A plugin whose report module was not on the path ran every trial, then failed to
     draw (exit 1): now `run` refuses it at once, `--no-plots` runs, `validate` warns."""

@@ -50,6 +50,7 @@ def _runs(out: Path) -> list[Path]:
     return sorted(p for p in (out / "shifty").iterdir() if p.is_dir())
 
 
+@pytest.mark.slow
 def test_editing_the_experiment_code_gives_new_numbers_in_a_new_folder(tmp_path):
     (tmp_path / "shifty.yaml").write_text(CONFIG)
     plugin = tmp_path / "shifty_plugin.py"

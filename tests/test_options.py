@@ -126,6 +126,7 @@ def _closed_stdout(*args: str) -> subprocess.CompletedProcess:
         os.close(write)
 
 
+@pytest.mark.slow
 def test_a_closed_stdout_is_silent_and_keeps_the_commands_exit_status(write_config, tmp_path):
     """`trackfuse list twin_sensor | head -1` and `compare A B | head -1` exited 1 with
     nothing on stderr, and compare's 1 means "regression"."""

@@ -211,6 +211,7 @@ def test_figures_for_the_three_studies(tmp_path):
     assert (table.loc[table["algorithm"] == "exact", "at_opt"] == 1).all()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["passive_assoc_ci", "passive_scale_ci", "passive_mutation_ci"])
 def test_ci_config_runs_through_the_cli(tmp_path, name):
     proc = trackfuse("run", ROOT / "configs" / "ci" / f"{name}.yaml", "--out", tmp_path,
@@ -309,6 +310,7 @@ print(rows[0]["solve_time_s"])
 """
 
 
+@pytest.mark.slow
 def test_exact_solve_time_excludes_importing_the_solver():
     """The first trial of a worker must not time the lazy import of scipy.optimize: it
     inflated the exact solver's mean time at the first sweep point (14-20 ms instead of

@@ -36,7 +36,12 @@ UNIT = re.compile(r"\(.+\)", re.S)  # a unit in brackets, over 1 or 2 lines
 SMALL = {"pga.ops": 200}
 
 
-@pytest.fixture(scope="module", params=CONFIGS, ids=lambda p: p.stem)
+#: The paper's own config runs in the fast suite; the other studies' configs in the slow one.
+PARAMS = [p if p.stem == "passive_association" else pytest.param(p, marks=pytest.mark.slow)
+          for p in CONFIGS]
+
+
+@pytest.fixture(scope="module", params=PARAMS, ids=lambda p: p.stem)
 def shipped_run(request, tmp_path_factory) -> RunData:
     cfg = load(request.param)
     params = {**cfg.params, **SMALL}
@@ -148,6 +153,7 @@ def random_run(tmp_path_factory) -> RunData:
                             {"targets.n": [5, 10, 20, 50]}, trials=2, seed=5)
 
 
+@pytest.mark.slow
 def test_checkpoints_past_0_fill_log_axes_in_rows_legible_7_inches_wide(random_run):
     """No empty stretch from 0 to the first checkpoint: a log axis ticked at the checkpoints,
     which span it; at most 3 panels a row; no text under 7 pt when printed 7 in wide; the
@@ -275,6 +281,7 @@ def test_scale_figure_carries_no_host_text_and_stays_inside_its_canvas(tmp_path,
     assert inside_canvas(fig) and text_overlaps(fig) == []
 
 
+@pytest.mark.slow
 def test_every_figure_prints_legibly_one_page_wide(shipped_run):
     """Printed 7.16 in wide (a two-column page), no text of any figure is under 6.5 pt and
     none overlaps another."""

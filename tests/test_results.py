@@ -22,6 +22,8 @@ from trackfuse.results import RunFolder, atomic_write
 from trackfuse.runner import RunInterrupted, Runner
 from trackfuse_cli.main import app
 
+pytestmark = pytest.mark.slow  # every damage of every file of a run folder, each through a resume
+
 CFG = """
 experiment: toy_experiments:TIMED
 trials: 10

@@ -241,6 +241,7 @@ def _apply(folder: Path, name: str, content, forge: bool) -> None:
           suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(manifest=contents, config=contents, trials=contents, summary=contents,
        forge=st.booleans())
+@pytest.mark.slow
 def test_fuzzed_run_folders_plot_or_fail_in_one_line(manifest, config, trials, summary, forge,
                                                      finished):
     """Random replacements of the files plot reads, with or without a manifest forged to

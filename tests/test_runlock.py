@@ -17,6 +17,8 @@ from conftest import cli_env
 
 from trackfuse.runlock import HOLDER_FILE, RunFolderBusy, RunLock
 
+pytestmark = pytest.mark.slow  # concurrent and killed runs of one folder
+
 BURN = "experiment: toy_experiments:BURN\ntrials: 300\nseed: 3\nparams: {work: 30}\n"
 BUSY = re.compile(r"^error: (?P<folder>\S+): in use by trackfuse pid (?P<pid>\d+) on "
                   r"(?P<host>\S+) \(since [^)]+\); wait for it to finish \(or stop it\) and run "

@@ -245,6 +245,7 @@ def test_dry_run_runs_nothing(write_config, tmp_path):
     assert not any(tmp_path.glob("cfg/*"))
 
 
+@pytest.mark.slow
 def test_dry_run_says_what_the_run_would_start_from(write_config, tmp_path):
     path = write_config(CFG)
     out = tmp_path / "out"
@@ -274,6 +275,7 @@ def test_dry_run_says_what_the_run_would_start_from(write_config, tmp_path):
     assert plan().endswith("(stopped before it ended; resumes from its saved batches)")
 
 
+@pytest.mark.slow
 def test_dry_run_refuses_an_output_folder_the_run_could_not_create(write_config, tmp_path):
     path = write_config(CFG)
     blocker = tmp_path / "a_file"
@@ -291,6 +293,7 @@ def test_dry_run_refuses_an_output_folder_the_run_could_not_create(write_config,
     assert dangling.returncode == 2 and "is not a folder" in dangling.stderr
 
 
+@pytest.mark.slow
 def test_dry_run_refuses_a_folder_the_run_could_not_use(write_config, tmp_path):
     """--dry-run promised a resume or a complete run where the run then stopped: a final file
     that is a folder, a run folder another process holds."""
@@ -319,6 +322,7 @@ def test_plot_refuses_an_incomplete_run(write_config, tmp_path):
     assert result.returncode == 2 and "not complete" in result.stderr
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_cleanly_and_the_run_resumes(write_config, tmp_path):
     path = write_config("experiment: toy_experiments:BURN\ntrials: 400\nseed: 1\n"
                         "params: {work: 30}\n", "burn")
@@ -347,6 +351,7 @@ def test_ctrl_c_stops_cleanly_and_the_run_resumes(write_config, tmp_path):
     assert got.read_bytes() == want.read_bytes()
 
 
+@pytest.mark.slow
 def test_reproduce_runs_every_config_of_a_folder_and_resumes(tmp_path):
     configs = tmp_path / "configs"
     configs.mkdir()

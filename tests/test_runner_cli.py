@@ -7,9 +7,12 @@ import re
 from types import SimpleNamespace
 
 import pandas as pd
+import pytest
 from conftest import trackfuse
 
 from trackfuse_cli.main import exit_status
+
+pytestmark = pytest.mark.slow  # runs through the real command line
 
 
 def _configs(tmp_path):

@@ -20,6 +20,8 @@ from trackfuse.config import ConfigError, load
 from trackfuse.executors import STOPPING_WHEN_LOADED, default_workers
 from trackfuse.sweep import parse_sets
 
+pytestmark = pytest.mark.slow  # signals, kills and runs through the real command line
+
 CI = ROOT / "configs" / "ci"
 PASSIVE = CI / "passive_assoc_ci.yaml"
 SLOW_ARGS = ("--set", "trials=40", "--set", "batch_size=2", "--no-progress")

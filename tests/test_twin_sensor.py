@@ -286,7 +286,8 @@ def test_a_shipped_config_asks_only_for_figures_it_draws(name):
         assert set(wanted) <= DRAWN[name]
 
 
-@pytest.mark.parametrize("name", SHIPPED)
+@pytest.mark.parametrize("name", [n if n == "twin_sensor_orbit" else  # Fig. 1's config fast
+                                  pytest.param(n, marks=pytest.mark.slow) for n in SHIPPED])
 def test_every_figure_of_a_shipped_config_is_clean(shipped, name):
     """Every declared figure is drawn or gives a one-line reason; a drawn one has no
     overlapping text, a suptitle of at most two lines, and axis labels with units (a y

@@ -27,6 +27,7 @@ from trackfuse.tracking import pda as k
 ROOT = Path(__file__).resolve().parents[1]
 
 
+@pytest.mark.slow
 def test_the_callees_are_compiled_for_the_signatures_filter_batch_asks_for():
     """Compiling ``_filter_batch`` anew adds no signature to a callee compiled from
     ``callee_args`` (a mismatch would compile that callee twice on the first run)."""

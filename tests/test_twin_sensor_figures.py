@@ -849,6 +849,7 @@ def test_a_matched_q_is_said_once_in_the_title(run_hard):
         assert all(t.startswith("manoeuvring index") and "filter q" not in t for t in titles)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fixture", ["run_50", "run_wide", "run_hard"])
 def test_every_figure_prints_its_smallest_text_at_6_5_pt_without_overlaps(fixture, request):
     """The three-panel figures were 11.25 in wide, their 7-9 pt text 4.5-5.7 pt once printed
