@@ -138,6 +138,11 @@ DAMAGES: dict[str, Callable[[Scene], None]] = {
     "a table file a link out": file_link_out("tables/paper_vs_reproduced.csv", "keep.csv"),
     "a figure file a link out": file_link_out("figures/estimate.png", "estimate.png"),
     "index.html a link out": file_link_out("index.html", "keep.md"),
+    "manifest.json a link out": file_link_out("manifest.json", "keep.md"),
+    "trials.csv a link out": file_link_out("trials.csv", "keep.csv"),
+    "config.yaml a link out": file_link_out("config.yaml", "keep.md"),
+    "the lock file a link out": file_link_out(".lock", "keep.csv"),
+    "the lock's holder file a link out": file_link_out(".lock.holder.json", "keep.md"),
     "user file in tables/": user_file("tables/my_notes.md"),
     "user file in figures/, a figure's name in another format": user_file(
         "figures/estimate.svg"),
