@@ -65,7 +65,7 @@ def _params(path: Path) -> dict[str, Any]:
     """The parameters of the run at ``path`` from its ``config.yaml`` (swept keys as their
     lists of values), or ``{}`` when it is missing or not a run's config."""
     try:
-        config = read_yaml_file(path / CONFIG)
+        config = read_yaml_file(path / CONFIG, regular_only=True)  # a FIFO: no wait
     except (OSError, YamlInputError):
         return {}
     if not isinstance(config, dict) or not isinstance(config.get("params"), dict):
