@@ -383,3 +383,16 @@ def test_unpicklable_names_the_function_that_cannot_be_sent():
     why = unpicklable(Experiment(name="n", title="t", params=(), run_trial=abs,
                                  run_batch=nested))
     assert why.startswith("its run_batch cannot be sent")
+
+
+def test_dask_workers_dying_every_time_is_one_line_and_exit_2_as_on_the_pool(write_config,
+                                                                             tmp_path):
+    """A batch whose dask workers died on it four times gave a KilledWorker traceback after
+    about 60 lines of the cluster's log, exit 1 (the process pool: one line, exit 2)."""
+    pytest.importorskip("distributed")
+    path = write_config("experiment: toy_experiments:DOOMED\ntrials: 10\nseed: 1\n")
+    result = trackfuse("run", path, "--out", tmp_path / "out", "--executor", "dask",
+                       "--workers", "2", "--no-plots", "--no-progress", timeout=300)
+    assert result.returncode == 2, result.stderr
+    assert result.stderr.startswith("error: dask workers died each time they ran one batch")
+    assert result.stderr.count("\n") == 1, result.stderr

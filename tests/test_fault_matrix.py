@@ -176,3 +176,21 @@ def test_trial_timeout_fails_the_hung_trials_and_the_run_goes_on(tmp_path):
                             cwd=tmp_path)
         assert refused.returncode == 2 and refused.stderr.startswith(
             "error: --trial-timeout: got "), refused.stderr
+
+
+@pytest.mark.parametrize("how", ["figures_exit", "figures_os_exit", "tables_exit",
+                                 "tables_os_exit"])
+def test_a_report_that_exits_is_a_report_error_not_a_silent_success(how, tmp_path):
+    """A report module's figures() or tables() calling sys.exit(0) or os._exit(0) ended the
+    run with exit status 0 and no report, the run left 'running'."""
+    (tmp_path / "r.yaml").write_text("experiment: toy_experiments:UNRULY_REPORT\ntrials: 4\n"
+                                     f"params: {{report_how: {how}}}\n")
+    result = trackfuse("run", "r.yaml", "--executor", "serial", "--no-progress", "--out",
+                       "out", cwd=tmp_path)
+    assert result.returncode == 1, result.stderr
+    kind = "figure values" if how.startswith("figures") else "tables"
+    error = "PluginExit: os._exit(0) called" if how.endswith("os_exit") else "SystemExit: 0"
+    assert f"warning: {kind}: " in result.stderr and error in result.stderr
+    folder = next(tmp_path.glob("out/r/*"))
+    assert json.loads((folder / "manifest.json").read_text())["status"] == "complete"
+    assert (folder / "index.html").is_file()

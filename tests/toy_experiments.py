@@ -447,3 +447,17 @@ GLOBAL_NUMPY = register(Experiment(
     run_trial=global_numpy_trial,
     batch_size=3,
 ))
+
+
+REPORT_WAYS = ("figures_exit", "figures_os_exit", "tables_exit", "tables_os_exit")
+
+UNRULY_REPORT = register(Experiment(
+    name="toy_unruly_report",
+    title="A report whose figures() or tables() end the process",
+    params=(Param("report_how", "tables_exit", "how the report misbehaves", "", kind=str,
+                  choices=REPORT_WAYS, draws=False),),
+    run_trial=trivial_trial,
+    metrics=(Metric("value", "1", "a uniform draw"),),
+    report="toy_unruly_report",
+    figures={"values": FigureSpec("nothing")},
+))

@@ -326,9 +326,8 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
                                            f" allowed: at most {MAX_POINTS}")
     figures, formats = _outputs(source, exp, raw.get("outputs") or {})
     _check_experiment(exp, params, sweep, mode, source, set(sets), set(sweeps or {}))
-    timeout = _trial_timeout(origin["trial_timeout"], raw.get("trial_timeout"))
-    return Config(source, exp, title, trials, seed, batch_size, params, sweep, mode,
-                  figures, formats, name, timeout)
+    return Config(source, exp, title, trials, seed, batch_size, params, sweep, mode, figures,
+                  formats, name, _trial_timeout(origin["trial_timeout"], raw.get("trial_timeout")))
 
 
 def _trial_timeout(source: str, value: Any) -> float | None:

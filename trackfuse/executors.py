@@ -19,12 +19,14 @@ so completion order never reaches the output files.
 from __future__ import annotations
 
 import json
+import logging
 import multiprocessing
 import os
 import pickle
 import signal
 import socket
 import threading
+import warnings
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -247,8 +249,14 @@ class DaskExecutor:
             if address:
                 self._client = Client(address=address, timeout="20s")
             else:
-                self._cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
-                                             processes=True, dashboard_address=None)
+                # its log lines (a worker restarted, a task failed) are said in one line
+                # by imap_unordered, or not at all; its HTTP server takes another port if
+                # 8787 is taken, with a warning that is no business of the run
+                with warnings.catch_warnings():
+                    warnings.filterwarnings("ignore", "Port .* is already in use")
+                    self._cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
+                                                 processes=True, dashboard_address=None,
+                                                 silence_logs=logging.CRITICAL)
                 self._client = Client(self._cluster)
             info = self._client.scheduler_info()
         except Exception as err:  # noqa: BLE001 - dask raises many kinds; one line for all
@@ -271,7 +279,7 @@ class DaskExecutor:
         for future in stream:
             for task in islice(tasks, 1):
                 stream.add(self._client.submit(fn, task, pure=False))
-            yield future.result()
+            yield _result(future)
             future.release()
 
     def worker_environments(self, probe: Callable[[], dict[str, Any]]) -> dict[str, Any]:
@@ -283,6 +291,21 @@ class DaskExecutor:
         self._client.close()
         if self._cluster is not None:
             self._cluster.close()
+
+
+def _result(future: Any) -> Any:
+    """A dask future's result; the workers dying on its batch as often as the scheduler
+    allows (``distributed.scheduler.allowed-failures``) said in one line, as the process
+    pool says it (a ``KilledWorker`` traceback)."""
+    from distributed import KilledWorker
+
+    try:
+        return future.result()
+    except KilledWorker:
+        raise ExecutorError(
+            "dask workers died each time they ran one batch (out of memory, or killed?); the "
+            "batches they finished are saved: run the same command to resume, or add "
+            "--executor serial to see the failure in this process") from None
 
 
 def _probe(address: str) -> None:

@@ -73,6 +73,7 @@ from trackfuse.results import (
 )
 from trackfuse.rowtable import frame_csv
 from trackfuse.rundata import RunData, load, swept_keys
+from trackfuse.trial_guard import PLUGIN_FAILURES, guarded
 
 PNG_DPI = 200
 #: zlib level of PNG files: 1 halves the encoding time of level 6 for files ~1.3x larger.
@@ -246,8 +247,9 @@ def _module(run: RunData, report: Report) -> ModuleType | None:
     if not run.experiment.report:
         return None
     try:
-        return importlib.import_module(run.experiment.report)
-    except Exception as err:  # noqa: BLE001 - a report bug must not lose the run
+        with guarded():
+            return importlib.import_module(run.experiment.report)
+    except PLUGIN_FAILURES as err:  # a report bug must not lose the run
         report.errors.append(f"report module {run.experiment.report}: {one_line(err)}")
         return None
 
@@ -258,8 +260,9 @@ def _write_tables(run: RunData, module: ModuleType, report: Report) -> dict[str,
     folder = run.path / "tables"
     folder.mkdir(exist_ok=True)
     try:
-        made = module.tables(run)
-    except Exception as err:  # noqa: BLE001 - a report bug must not lose the run
+        with guarded():
+            made = module.tables(run)
+    except PLUGIN_FAILURES as err:  # a report bug must not lose the run
         report.errors.append(f"tables: {one_line(err)}")
         return {}
     if not isinstance(made, dict) or not all(
@@ -289,9 +292,9 @@ def _draw(run: RunData, module: ModuleType, names: Sequence[str],
     part, source = Report(), provenance(run)
     for name in names:
         try:
-            with context():  # every text of the figure in the house sizes
+            with context(), guarded():  # every text of the figure in the house sizes
                 fig = module.figures(run, [name]).get(name)
-        except Exception as err:  # noqa: BLE001 - one figure's bug must not lose the others
+        except PLUGIN_FAILURES as err:  # one figure's bug must not lose the others
             part.errors.append(f"figure {name}: {one_line(err)}")
             continue
         if fig is None or isinstance(fig, str):

@@ -54,6 +54,11 @@ class TrialTimeout(BaseException):
                          "(trial_timeout, --trial-timeout)")
 
 
+#: What plugin code run in this process may raise and be failed for, not stop the run:
+#: any error, ``sys.exit`` and ``os._exit`` (Ctrl-C still stops it).
+PLUGIN_FAILURES = (Exception, SystemExit, PluginExit)
+
+
 def _timeout_of(limit: float) -> type[TrialTimeout]:
     """:class:`TrialTimeout` for ``limit``, built without arguments (as an exception set
     in another thread is)."""
