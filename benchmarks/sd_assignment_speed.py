@@ -20,7 +20,7 @@ import numpy as np
 
 from trackfuse.association.assignment import PairWeights, solve_exact
 from trackfuse.association.passive_scene import KM, SENSORS, scene_targets, simulate_scan
-from trackfuse.association.pga_kernel import pga_compiled
+from trackfuse.association.pga_search import pga
 from trackfuse.association.sd_assignment import solve_sd, solve_sd_exact
 from trackfuse.association.sd_costs import tuple_costs
 
@@ -61,7 +61,7 @@ def row(n_targets: int, n_sensors: int, instances: int) -> str:
             others.setdefault("exact_2d", []).append(t)
             weights = PairWeights(a=gain, a_i0=np.zeros(len(gain)),
                                   a_0j=np.zeros(gain.shape[1]), chi2=np.zeros_like(gain))
-            _, t = timed(partial(pga_compiled, weights, np.random.default_rng(seed), ops=1000,
+            _, t = timed(partial(pga, weights, np.random.default_rng(seed), ops=1000,
                                  repair_moves=True, staged=True, evict=True))
             others.setdefault("pga_evict", []).append(t)
     ms = {name: 1e3 * float(np.median(v)) for name, v in
@@ -78,9 +78,9 @@ def main() -> None:
     parser.add_argument("--instances", type=int, default=20, help="instances per row")
     args = parser.parse_args()
     solve_sd(instance(3, 3, 0))  # load or compile the kernel
-    pga_compiled(PairWeights(a=np.zeros((1, 1)), a_i0=np.zeros(1), a_0j=np.zeros(1),
-                             chi2=np.zeros((1, 1))), np.random.default_rng(0), ops=10,
-                 repair_moves=True, staged=True, evict=True)
+    pga(PairWeights(a=np.zeros((1, 1)), a_i0=np.zeros(1), a_0j=np.zeros(1),
+                    chi2=np.zeros((1, 1))), np.random.default_rng(0), ops=10,
+        repair_moves=True, staged=True, evict=True)
     print("median wall time per instance (ms); one core")
     for n_sensors, sizes in ((2, (10, 20, 40)), (3, (5, 10, 20, 40)), (4, (5, 10, 20))):
         for n in sizes:

@@ -72,6 +72,8 @@ LOOKS: dict[str, Look] = {
     "chi2": Look("chi-square ML reference", BLACK, "", "reference"),
     "chi2_lrt": Look("chi-square reference, may abstain", GREYS[0], "", "reference"),
     "chi2_5f": Look("chi-square, 5 factors (diagnostic)", GREYS[1], "", "reference"),
+    "counting": Look("counting test, track history", GREYS[0], "v", "variant"),
+    "sprt": Look("sequential test (SPRT)", GREYS[1], "X", "variant"),
     # paper 002 (passive_assoc)
     "pga_paper": Look("partheno-genetic algorithm (paper)", VERMILLION, "s", "paper"),
     "pga_evict": Look("PGA + evicting re-pair (ours)", GREEN, "o", "ours"),

@@ -38,6 +38,14 @@ chi2_5f            ``chi2`` on all five factors, the TDOA-DF range entering with
                    first-order covariance. Kept as a diagnostic: the range error is skewed
                    (the inversion divides by a noisy denominator), so the Gaussian model is
                    wrong for it and this variant falls far below ``chi2``
+counting           counting test over the last ``counting.window`` scans on the ``chi2``
+                   factors: scans inside the ``history.p_gate`` chi-square gate, associated
+                   at a count whose binomial false-association rate is ``history.alpha``
+                   (:mod:`trackfuse.association.track_history_tests`); may answer "no
+                   decision"
+sprt               Wald's sequential test on the same gate indicators over the whole
+                   history (design rates ``history.alpha`` and ``sprt.beta``); may answer
+                   "no decision"
 =================  ===========================================================================
 
 The traditional baseline's Gaussian grade uses a *static* spread by default
@@ -48,9 +56,10 @@ constant-acceleration filter on the ESM range difference, with ``alpha_max`` its
 quantile (W001-4); ``alpha.index = literal`` is the paper's form.
 
 Row metrics: ``chosen`` (radar track 1..3, or 0 for "no decision"), ``correct`` (0/1, Wilson
-interval), ``decided`` (0/1; always 1 except for ``chi2_lrt``), ``margin`` (the
-decision statistic's lead of the winner over the runner-up: mean membership for ``mean``
-decisions, vote share for ``vote``, log-likelihood ratio for ``chi2*``), and diagnostics shared
+interval), ``decided`` (0/1; always 1 except for ``chi2_lrt``, ``counting`` and ``sprt``),
+``margin`` (the decision statistic's lead of the winner over the runner-up: mean membership
+for ``mean`` decisions, vote share for ``vote``, log-likelihood ratio for ``chi2*`` and
+``sprt``, count for ``counting``), and diagnostics shared
 by all algorithms or specific to one: ``range_weight_mean``/``range_weight_min`` (the range
 factor's weight over the scans; 0 if the algorithm does not weight range), ``alpha_mean`` and
 ``alpha_peak`` (the manoeuvre index over the scans where it is defined), ``esm_invalid``
@@ -109,7 +118,17 @@ from trackfuse.association.manoeuvre import (
 )
 from trackfuse.association.tdoa_df import C
 from trackfuse.association.time_align import bracket, interpolate, interpolate_covariance
-from trackfuse.association.track_likelihood import abstaining_decision, ml_track_decision
+from trackfuse.association.track_history_tests import (
+    counting_decision,
+    counting_threshold,
+    sprt_decision,
+)
+from trackfuse.association.track_likelihood import (
+    abstaining_decision,
+    gaussian_nll_terms,
+    ml_track_decision,
+)
+from trackfuse.chi2 import chi2_quantile
 from trackfuse.experiments.base import NON_NEGATIVE, Metric, Param
 from trackfuse.reported import ESM_RADAR_WEIGHTS
 from trackfuse.rowtable import RowTable
@@ -167,6 +186,10 @@ ALGORITHMS: dict[str, Variant] = {
                         summary="chi2 with a no-decision outcome (LR threshold, chi2 gate)"),
     "chi2_5f": Variant(FIVE, "chi2",
                        summary="ML on all 5 factors, linearized TDOA-DF range covariance"),
+    "counting": Variant(("speed", "angle", "tdoa", "phase"), "counting",
+                        summary="counting test: scans inside the chi2 gate, binomial threshold"),
+    "sprt": Variant(("speed", "angle", "tdoa", "phase"), "sprt",
+                    summary="Wald's sequential test on the chi2 gate indicators"),
 }
 
 PARAMS = (
@@ -245,6 +268,18 @@ PARAMS = (
     Param("gate.alpha", 0.001, "chi2_lrt: false-rejection probability of the chi-square "
           "goodness-of-fit gate on the best track (0 = no gate)", "1", low=0.0, high=0.5,
           draws=False),
+    Param("history.p_gate", 0.99, "counting, sprt: probability that a scan of the ESM's own "
+          "radar track falls inside the chi-square gate (the gate's quantile)", "1", low=0.5,
+          high=0.999999, draws=False),
+    Param("history.p_false", 0.1, "counting, sprt: declared probability that a scan of "
+          "another target's radar track falls inside the gate (must be below "
+          "history.p_gate)", "1", low=1e-6, high=0.99, draws=False),
+    Param("history.alpha", 0.01, "counting, sprt: design false-association rate", "1",
+          low=1e-9, high=0.5, draws=False),
+    Param("counting.window", 20, "counting: the last n scans counted (all when n exceeds "
+          "scan.count)", "samples", kind=int, low=1, high=10_000, draws=False),
+    Param("sprt.beta", 0.01, "sprt: design missed-association rate", "1", low=1e-9,
+          high=0.5, draws=False),
     Param("baseline.factors", ["range", "speed", "angle"], "factors of 'traditional'", kind=list,
           choices=FACTORS, draws=False),
     Param("baseline.tau", 0.5, "Gaussian grade exp(-tau d^2/(s_E^2+s_R^2))", "1", low=1e-6,
@@ -555,6 +590,8 @@ def evaluate(variant: Variant, diff: Differences, alpha: np.ndarray,
     idx = [FACTORS.index(f) for f in names]
     N, K = alpha.shape
     d = diff.d[..., idx]
+    if variant.membership in ("counting", "sprt"):
+        return history_test(variant.membership, d, diff.S[..., idx, :][..., idx], params)
     if variant.membership in ("chi2", "chi2_lrt"):
         key = tuple(idx)
         if key not in diff.ml_cache:
@@ -581,6 +618,29 @@ def evaluate(variant: Variant, diff: Differences, alpha: np.ndarray,
     a_range = a[..., 0] if names[0] == "range" else np.zeros((N, K))
     return {"chosen": j, "margin": margin, "range_weight_mean": a_range.mean(axis=-1),
             "range_weight_min": a_range.min(axis=-1), "weights": a, "range_weights": a_range}
+
+
+def history_test(kind: str, d: np.ndarray, S: np.ndarray, params: Mapping[str, Any]
+                 ) -> dict[str, np.ndarray]:
+    """The counting test or the SPRT (``kind``) on differences ``d`` (N, K, J, F) with
+    covariances ``S`` (N, K, J, F, F): the :func:`evaluate` result, ``margin`` the winner's
+    lead in count (counting) or in log-likelihood ratio (sprt, nats) over the runner-up."""
+    p_gate, p_false = params["history.p_gate"], params["history.p_false"]
+    if p_false >= p_gate:
+        raise ValueError(f"history.p_false {p_false} must be below history.p_gate {p_gate}")
+    m2, _ = gaussian_nll_terms(d, S)                                   # (N, K, J)
+    gamma = chi2_quantile(p_gate, d.shape[-1])
+    if kind == "counting":
+        n = min(int(params["counting.window"]), m2.shape[1])
+        threshold = counting_threshold(n, p_false, params["history.alpha"])
+        j, score = counting_decision(m2, gamma, n, threshold)
+    else:
+        j, score = sprt_decision(m2, gamma, p_gate, p_false, params["history.alpha"],
+                                 params["sprt.beta"])
+    top2 = -np.sort(-score.astype(float), axis=-1)[..., :2]
+    zero = np.zeros(len(m2))
+    return {"chosen": j, "margin": top2[..., 0] - top2[..., 1], "range_weight_mean": zero,
+            "range_weight_min": zero}
 
 
 #: Per-scan columns (``;``-separated, one value per ESM scan, ``nan`` where undefined) and
@@ -682,7 +742,8 @@ ROW_METRICS = (
            categorical=True),
     Metric("correct", "1", "the ESM track was associated with its radar track", binary=True,
            better="higher"),
-    Metric("decided", "1", "a radar track was chosen (always 1 except for chi2_lrt)",
+    Metric("decided", "1", "a radar track was chosen (always 1 except for chi2_lrt, "
+           "counting and sprt)",
            binary=True),
     Metric("margin", "1", "decision statistic's lead of the winner over the runner-up"),
     Metric("range_weight_mean", "1", "range factor's weight, mean over the scans"),

@@ -1,0 +1,92 @@
+"""Track-to-track association over the track history: the counting test and Wald's SPRT.
+
+Both read one statistic per scan and radar track: whether the squared Mahalanobis distance
+``m2_k = d_k' S_k^-1 d_k`` of the factor difference falls inside the chi-square gate
+``m2_k <= gamma``, ``gamma`` the ``p_gate`` quantile of chi-square with ``F`` degrees of
+freedom (``docs/papers/esm_radar.md``, "Tests over the track history"). If the ESM and the
+radar track see the same target, the scans are inside the gate independently with
+probability ``p_gate`` (H0); if they see different targets, with a smaller probability
+``p_false`` that the designer declares (H1: it depends on how close the targets are).
+
+**Counting test** (the counting technique of Sagild, Hem and Brekke, FUSION 2021): count the
+scans inside the gate among the last ``n`` and associate when the count is at least ``M``,
+the smallest integer with ``P(Binomial(n, p_false) >= M) <= alpha``: the false-association
+rate is then at most ``alpha`` by design, and the missed-association rate is
+``P(Binomial(n, p_gate) < M)``.
+
+**Sequential test** (Wald 1945): the log-likelihood ratio of H0 against H1 grows by
+``ln(p_gate / p_false)`` for a scan inside the gate and by ``ln((1 - p_gate) / (1 -
+p_false))`` for one outside; the track is associated when it reaches
+``ln((1 - beta) / alpha)``, rejected when it reaches ``ln(beta / (1 - alpha))``, and left
+undecided if the history ends first. Wald's bounds give false-association rate
+``<= alpha / (1 - beta)`` and missed rate ``<= beta / (1 - alpha)``.
+
+With several radar tracks, the associated tracks compete: the counting test picks the
+largest count, the sequential test the earliest acceptance, both breaking ties by the
+smallest summed ``m2``; no associated track is "no decision" (-1).
+
+References
+----------
+Sagild, Hem, Brekke, FUSION 2021: the counting technique for track-to-track association.
+Wald A., "Sequential tests of statistical hypotheses", Ann. Math. Statist. 16(2), 1945.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def binomial_tail(n: int, p: float, m: int) -> float:
+    """``P(Binomial(n, p) >= m)``, summed exactly."""
+    return float(sum(math.comb(n, k) * p**k * (1.0 - p) ** (n - k)
+                     for k in range(max(m, 0), n + 1)))
+
+
+def counting_threshold(n: int, p_false: float, alpha: float) -> int:
+    """The least count ``M`` (0..n+1) with ``P(Binomial(n, p_false) >= M) <= alpha``;
+    ``n + 1`` (never associate) when even ``n`` hits are too likely under H1."""
+    return next((m for m in range(n + 2) if binomial_tail(n, p_false, m) <= alpha), n + 1)
+
+
+def _pick(accepted: np.ndarray, score: np.ndarray, m2_sum: np.ndarray) -> np.ndarray:
+    """Per trial, the accepted track of best ``score`` (lower is better), ties by the
+    smaller ``m2_sum``; -1 where none is accepted. All (..., J)."""
+    key = np.where(accepted, score, np.inf)
+    best = key.min(axis=-1, keepdims=True)
+    tied = accepted & (key == best)
+    j = np.argmin(np.where(tied, m2_sum, np.inf), axis=-1)
+    return np.where(accepted.any(axis=-1), j, -1)
+
+
+def counting_decision(m2: np.ndarray, gamma: float, n: int, threshold: int
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """Counting test on the last ``n`` scans of ``m2`` (..., K, J).
+
+    Returns the chosen track (..., ) (-1: none reaches ``threshold``) and the counts
+    (..., J)."""
+    window = m2[..., -n:, :]
+    counts = (window <= gamma).sum(axis=-2)
+    chosen = _pick(counts >= threshold, -counts.astype(float), window.sum(axis=-2))
+    return chosen, counts
+
+
+def sprt_decision(m2: np.ndarray, gamma: float, p_gate: float, p_false: float, alpha: float,
+                  beta: float) -> tuple[np.ndarray, np.ndarray]:
+    """Wald's SPRT per track on the gate indicators of ``m2`` (..., K, J).
+
+    Returns the chosen track (...,) (-1: none accepted) and the log-likelihood ratio of
+    each track when its test stopped, or at the last scan (..., J), nats."""
+    inside = m2 <= gamma
+    step = np.where(inside, math.log(p_gate / p_false),
+                    math.log((1.0 - p_gate) / (1.0 - p_false)))
+    llr = np.cumsum(step, axis=-2)
+    upper, lower = math.log((1.0 - beta) / alpha), math.log(beta / (1.0 - alpha))
+    crossed = (llr >= upper) | (llr <= lower)
+    k = m2.shape[-2]
+    stop = np.where(crossed.any(axis=-2), np.argmax(crossed, axis=-2), k - 1)
+    final = np.take_along_axis(llr, stop[..., None, :], axis=-2)[..., 0, :]
+    accepted = final >= upper
+    chosen = _pick(accepted, stop.astype(float), m2.sum(axis=-2))
+    return chosen, final
