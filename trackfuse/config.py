@@ -114,6 +114,19 @@ for _limit, _value in (("maxlevel", 3), ("maxtuple", 4), ("maxlist", 4), ("maxdi
 _KEY_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_.-]{0,39}$")
 
 
+def _check_top_level(source: str, raw: dict[Any, Any]) -> None:
+    """Refuse an unknown top-level key, named with a did-you-mean; a key that is no key
+    name means the file is not a config (a password file parses as a mapping): it is
+    refused without echoing any of its text."""
+    for key in raw:
+        if key not in TOP_LEVEL and not (isinstance(key, str) and _KEY_NAME.match(key)):
+            raise ConfigError(source, "", "not a trackfuse config: a top-level key is not a "
+                              f"key name; allowed: a YAML mapping of {', '.join(TOP_LEVEL)}")
+        if key not in TOP_LEVEL:
+            raise ConfigError(source, str(key), "unknown top-level key"
+                              f"{did_you_mean(key, TOP_LEVEL)}; allowed: {', '.join(TOP_LEVEL)}")
+
+
 def _describe(value: Any) -> str:
     """A repr of ``value`` cut to 60 characters, never rendering more than it prints."""
     try:
@@ -286,14 +299,7 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
         raise ConfigError(source, "", f"expected a mapping at the top level, got "
                                       f"{type(raw).__name__}")
     raw = dict(raw)
-    for key in raw:
-        if key not in TOP_LEVEL and not (isinstance(key, str) and _KEY_NAME.match(key)):
-            # not a config (a password file parses as a mapping): never echo its text
-            raise ConfigError(source, "", "not a trackfuse config: a top-level key is not a "
-                              f"key name; allowed: a YAML mapping of {', '.join(TOP_LEVEL)}")
-        if key not in TOP_LEVEL:
-            raise ConfigError(source, str(key), "unknown top-level key"
-                              f"{did_you_mean(key, TOP_LEVEL)}; allowed: {', '.join(TOP_LEVEL)}")
+    _check_top_level(source, raw)
     sets = dict(sets or {})
     origin = {key: source for key in TOP_LEVEL}
     for key in [k for k in sets if k in OVERRIDABLE_TOP_LEVEL]:
