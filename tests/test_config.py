@@ -41,7 +41,7 @@ BAD = {
     "not_mapping": ("- 1\n- 2", "", "", "", "expected a mapping"),
     "unknown_top_key": ("experiment: toy_gaussian\ntrails: 5", "trails",
                         "experiment, title, trials, seed, batch_size, params, sweep, "
-                        "sweep_mode, outputs", "trials", ""),
+                        "sweep_mode, outputs, trial_timeout", "trials", ""),
     "unknown_param": ("experiment: toy_gaussian\nparams: {sigam: 1}", "params.sigam", "",
                       "sigma", "unknown parameter"),
     "wrong_type": ("experiment: toy_gaussian\nparams: {n: many}", "params.n",

@@ -385,6 +385,7 @@ def test_unpicklable_names_the_function_that_cannot_be_sent():
     assert why.startswith("its run_batch cannot be sent")
 
 
+@pytest.mark.slow
 def test_dask_workers_dying_every_time_is_one_line_and_exit_2_as_on_the_pool(write_config,
                                                                              tmp_path):
     """A batch whose dask workers died on it four times gave a KilledWorker traceback after

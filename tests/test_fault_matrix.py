@@ -142,6 +142,7 @@ def dask_address():
         cluster.close()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fault", ON_DASK)
 def test_a_fault_is_the_same_failed_row_on_dask(fault, serial_runs, tmp_path, dask_address):
     folder = _run(fault, tmp_path, executor="dask", scheduler=dask_address)
@@ -150,7 +151,9 @@ def test_a_fault_is_the_same_failed_row_on_dask(fault, serial_runs, tmp_path, da
         (serial_runs(fault) / "trials.csv").read_bytes()
 
 
-@pytest.mark.parametrize("executor", [("--executor", "serial"), ("--workers", "2")])
+@pytest.mark.parametrize("executor", [pytest.param(("--executor", "serial"),
+                                                   marks=pytest.mark.slow),
+                                      ("--workers", "2")])
 def test_a_thread_a_trial_leaves_running_does_not_hold_the_run_s_exit(executor, tmp_path):
     """A non-daemon thread left by a trial: the process pool waited for its worker in the
     pool's shutdown for ever, before merging; serially the run wrote everything and never
@@ -163,6 +166,7 @@ def test_a_thread_a_trial_leaves_running_does_not_hold_the_run_s_exit(executor, 
     assert next(tmp_path.glob("out/thread/*/summary.csv")).is_file()
 
 
+@pytest.mark.slow
 def test_trial_timeout_fails_the_hung_trials_and_the_run_goes_on(tmp_path):
     (tmp_path / "hang.yaml").write_text("experiment: toy_experiments:UNRULY\ntrials: 10\n"
                                         "seed: 3\nparams: {how: hang}\n")
@@ -178,7 +182,8 @@ def test_trial_timeout_fails_the_hung_trials_and_the_run_goes_on(tmp_path):
             "error: --trial-timeout: got "), refused.stderr
 
 
-@pytest.mark.parametrize("how", ["figures_exit", "figures_os_exit", "tables_exit",
+@pytest.mark.parametrize("how", [*(pytest.param(how, marks=pytest.mark.slow) for how in
+                                   ("figures_exit", "figures_os_exit", "tables_exit")),
                                  "tables_os_exit"])
 def test_a_report_that_exits_is_a_report_error_not_a_silent_success(how, tmp_path):
     """A report module's figures() or tables() calling sys.exit(0) or os._exit(0) ended the
