@@ -88,3 +88,27 @@ def test_score_counts_ghosts_accuracy_and_found_targets():
     got = score(ghost, labels, n_targets=2)
     assert got["ghosts"] == 2 and got["ghost_rate"] == 1.0 and got["found"] == 0.0
     assert got["correct"] == 0
+
+
+def test_the_preload_compiles_the_versions_a_trial_calls(monkeypatch):
+    """The fork server's preload must compile exactly the kernels' versions a trial uses,
+    else every worker compiles its own."""
+    from numba import typeof
+
+    from trackfuse.association import sd_assignment, sd_costs
+    from trackfuse.experiments.passive_sd import preload
+
+    def types_of(call) -> dict:
+        seen = {"reduce_tail": set(), "_combination_chi2": set()}
+        with monkeypatch.context() as m:
+            for module, name in ((sd_assignment, "reduce_tail"), (sd_costs, "_combination_chi2")):
+                def record(*args, _compiled=getattr(module, name), _name=name):
+                    seen[_name].add(tuple(typeof(a) for a in args))
+                    return _compiled(*args)
+                m.setattr(module, name, record)
+            call()
+        return seen
+
+    trial = types_of(lambda: rows_of(params(**{"targets.n": 4})))
+    ahead = types_of(preload.load_kernels)
+    assert all(trial.values()) and trial == ahead

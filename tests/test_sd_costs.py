@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from sd_reference import subset_chi2 as reference_chi2
 
 from trackfuse.association.assignment import pair_weights
 from trackfuse.association.passive_scene import (
@@ -10,7 +11,7 @@ from trackfuse.association.passive_scene import (
     scene_targets,
     simulate_scan,
 )
-from trackfuse.association.sd_costs import tuple_costs
+from trackfuse.association.sd_costs import subset_chi2, tuple_costs
 from trackfuse.association.triangulation import common_perpendicular_midpoint, intersect
 
 THREE = np.vstack([SENSORS, [[15000.0, -2000.0, 1000.0]]])
@@ -80,3 +81,13 @@ def test_parallel_lines_of_sight_cost_infinity():
 def test_an_unknown_cost_form_is_refused():
     with pytest.raises(ValueError, match="unknown cost"):
         tuple_costs([np.zeros((1, 2))] * 2, SENSORS, SIGMA, SIGMA, P_D, P_F, cost="other")
+
+
+@pytest.mark.parametrize("sensors", [2, 3, 4])
+def test_the_compiled_chi_square_is_pinned_to_the_numpy_reference(sensors):
+    every = np.vstack([THREE, [[20000.0, 20000.0, 0.0]]])[:sensors]
+    s = scan(every, n=7)
+    mine = subset_chi2(list(s.z), every, SIGMA, 2 * SIGMA)
+    theirs = reference_chi2(list(s.z), every, SIGMA, 2 * SIGMA)
+    assert mine.shape == tuple(len(z) for z in s.z)
+    assert np.allclose(mine, theirs, rtol=1e-9, atol=1e-9)

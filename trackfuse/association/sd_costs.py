@@ -3,7 +3,8 @@
 A tuple ``(i_1, ..., i_S)`` takes measurement ``i_s`` of sensor ``s`` (0: none, the dummy).
 For a tuple with ``k >= 2`` real measurements (``docs/papers/sd_assignment.md``, "Costs"):
 the target position ``p_hat`` is the least-squares intersection of its ``k`` lines of sight
-(:func:`trackfuse.association.triangulation.intersect`), ``chi2`` the sum of the ``2k``
+(the point of :func:`trackfuse.association.triangulation.intersect`, computed in a compiled
+loop over the combinations, cached on disk beside this module), ``chi2`` the sum of the ``2k``
 squared noise-normalised angle residuals at ``p_hat``, and the cost is the negative
 log-likelihood ratio of "one target, seen by these ``k`` sensors and missed by the other
 ``S - k``" against "these ``k`` measurements are false alarms":
@@ -24,13 +25,18 @@ sight are parallel (no intersection) costs ``+inf``.
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Sequence
 
 import numpy as np
+from numba import njit
 
-from trackfuse.association.triangulation import intersect, los_residuals
+from trackfuse.association.triangulation import los_rows
+
+JIT = {"cache": True, "nogil": True, "error_model": "numpy"}
 
 COSTS = ("paper", "pattipati")
+"""Tuple-cost forms of :func:`tuple_costs` (those of paper 002's pair weights)."""
 
 
 def sensor_gains(n_sensors: int, sigma_a: float, sigma_b: float, p_d: float, p_f: float,
@@ -51,17 +57,75 @@ def subset_chi2(z: Sequence[np.ndarray], sensors: np.ndarray, sigma_a: float,
     """Chi-square of every combination of one measurement per listed sensor.
 
     z : S' arrays (m_s, 2) rad; sensors : (S', 3) m. Returns (m_1, ..., m_S') at the
-    least-squares intersection (``+inf`` where it is undefined)."""
+    least-squares intersection (``+inf`` where it is undefined). The loop over the
+    combinations runs compiled (:func:`_combination_chi2`); ``tests/sd_reference.py`` holds
+    the vectorized numpy version the tests pin it to."""
     shape = tuple(len(zs) for zs in z)
     if 0 in shape:
         return np.zeros(shape)
-    grids = np.meshgrid(*[np.arange(n) for n in shape], indexing="ij")
-    picked = [zs[g.ravel()] for zs, g in zip(z, grids, strict=True)]
-    with np.errstate(divide="ignore", invalid="ignore"):  # parallel lines: inf below
-        p = intersect(picked, sensors)
-        r = los_residuals(p, picked, sensors) / np.tile([sigma_a, sigma_b], len(z))
-        chi2 = np.einsum("ki,ki->k", r, r)
-    return np.where(np.isfinite(chi2), chi2, np.inf).reshape(shape)
+    width = max(shape)
+    rows = np.zeros((len(z), width, 2, 3))
+    rhs = np.zeros((len(z), width, 2))
+    angles = np.zeros((len(z), width, 2))
+    for s, (zs, pos) in enumerate(zip(z, sensors, strict=True)):
+        rows[s, :len(zs)], rhs[s, :len(zs)] = los_rows(np.asarray(zs, dtype=float), pos)
+        angles[s, :len(zs)] = zs
+    chi2 = _combination_chi2(rows, rhs, angles, np.asarray(sensors, dtype=float),
+                             np.array(shape, np.int64), 1.0 / sigma_a, 1.0 / sigma_b)
+    return chi2.reshape(shape)
+
+
+@njit(**JIT)
+def _combination_chi2(rows, rhs, angles, sensors, counts, inv_a, inv_b):
+    """Chi-square (C order over the combinations, ``prod(counts)``) of every combination of
+    one measurement per sensor: the least-squares point of the stacked unit-normal
+    ``rows`` (k, m, 2, 3) and ``rhs`` (k, m, 2) by Cramer's rule, then the squared
+    normalised angle residuals of ``angles`` (k, m, 2) rad seen from ``sensors`` (k, 3)."""
+    k = counts.shape[0]
+    total = 1
+    for s in range(k):
+        total *= counts[s]
+    out = np.empty(total)
+    pick = np.empty(k, np.int64)
+    for flat in range(total):
+        rest = flat
+        for s in range(k - 1, -1, -1):
+            pick[s] = rest % counts[s]
+            rest //= counts[s]
+        p = _intersection(rows, rhs, pick)
+        chi2 = 0.0
+        for s in range(k):
+            dx, dy = p[0] - sensors[s, 0], p[1] - sensors[s, 1]
+            dz = p[2] - sensors[s, 2]
+            r_a = (angles[s, pick[s], 0] - math.atan2(dy, dx) + math.pi) % (2.0 * math.pi) \
+                - math.pi
+            r_b = angles[s, pick[s], 1] - math.atan2(dz, math.hypot(dx, dy))
+            chi2 += (r_a * inv_a) ** 2 + (r_b * inv_b) ** 2
+        out[flat] = chi2 if math.isfinite(chi2) else math.inf
+    return out
+
+
+@njit(**JIT)
+def _intersection(rows, rhs, pick):
+    """Least-squares point (3,) of the rows of the picked measurements (normal equations,
+    inverse = adjugate / determinant, the adjugate's rows cross products of the columns)."""
+    m = np.zeros((3, 3))
+    v = np.zeros(3)
+    for s in range(pick.shape[0]):
+        for r in range(2):
+            a = rows[s, pick[s], r]
+            for i in range(3):
+                v[i] += a[i] * rhs[s, pick[s], r]
+                for j in range(3):
+                    m[i, j] += a[i] * a[j]
+    adj = np.empty((3, 3))
+    for i in range(3):
+        c1, c2 = m[:, (i + 1) % 3], m[:, (i + 2) % 3]
+        adj[i, 0] = c1[1] * c2[2] - c1[2] * c2[1]
+        adj[i, 1] = c1[2] * c2[0] - c1[0] * c2[2]
+        adj[i, 2] = c1[0] * c2[1] - c1[1] * c2[0]
+    det = m[0, 0] * adj[0, 0] + m[1, 0] * adj[0, 1] + m[2, 0] * adj[0, 2]
+    return (adj @ v) / det
 
 
 def tuple_costs(z: Sequence[np.ndarray], sensors: np.ndarray, sigma_a: float,

@@ -49,9 +49,8 @@ from typing import Any
 
 import numpy as np
 
-from trackfuse.association.assignment import solve_exact
+from trackfuse.association.assignment import COSTS, solve_exact
 from trackfuse.association.passive_scene import KM, SENSORS, scene_targets, simulate_scan
-from trackfuse.association.sd_costs import COSTS, tuple_costs
 from trackfuse.experiments.base import FRACTION, NON_NEGATIVE, Metric, Param
 from trackfuse.seeding import TrialStreams
 
@@ -148,6 +147,8 @@ def score(tuples: np.ndarray, labels: tuple[np.ndarray, ...], n_targets: int
 
 def _exact_2d(scan, params: dict[str, Any], sigma: float) -> tuple[np.ndarray, float]:
     """Sensors 1 and 2 alone, solved exactly: tuples (K, 2) and the objective."""
+    from trackfuse.association.sd_costs import tuple_costs  # numba: on use
+
     cost = tuple_costs(scan.z[:2], scan.sensors[:2], sigma, sigma, params["sensor.p_d"],
                        params["assoc.p_f"], params["assoc.cost"], scan.psi[:2])
     match = solve_exact(-cost[1:, 1:])
@@ -160,6 +161,7 @@ def _exact_2d(scan, params: dict[str, Any], sigma: float) -> tuple[np.ndarray, f
 def run_trial(params: dict[str, Any], streams: TrialStreams) -> list[dict[str, Any]]:
     """One scan of S sensors: simulate, cost the tuples, solve by each algorithm."""
     from trackfuse.association.sd_assignment import solve_sd, solve_sd_exact  # numba: on use
+    from trackfuse.association.sd_costs import tuple_costs
 
     truth, noise, shuffle = streams.common.spawn(3)
     sigma, n = float(params["noise.sigma"]), int(params["targets.n"])
