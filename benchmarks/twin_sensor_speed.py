@@ -13,7 +13,13 @@ When Stone Soup is importable (the optional ``stonesoup`` extra) it runs Stone S
 (the ``stonesoup_pda/ekf`` algorithm, :mod:`trackfuse.interop.stonesoup`) on the one-sensor
 window scenario, on exactly the same simulated returns, in this process, and prints the ratio.
 
-Usage: ``python benchmarks/twin_sensor_speed.py [--trials 2000] [--batch 500] [--profile]``
+Then the whole ``run_batch`` side by side with a baseline commit (installed as in
+``end_to_end.py``), in fresh processes, alternating, at the experiment's default ``in_gate``
+clutter: trials per wall second and per CPU second of the process (on a shared machine the
+CPU figure is the steadier one), median of the repeats, and the ratio current / baseline.
+
+Usage: ``python benchmarks/twin_sensor_speed.py [--trials 2000] [--batch 500] [--profile]
+[--baseline b359dda] [--repeats 3]`` (``--baseline ''`` skips the comparison)
 """
 
 from __future__ import annotations
@@ -21,11 +27,16 @@ from __future__ import annotations
 import argparse
 import cProfile
 import io
+import json
 import math
 import pstats
+import statistics
+import subprocess
 import sys
 import time
 from pathlib import Path
+
+from end_to_end import install
 
 from trackfuse.experiments.twin_sensor import EXPERIMENT
 from trackfuse.experiments.twin_sensor.model import (
@@ -33,7 +44,6 @@ from trackfuse.experiments.twin_sensor.model import (
     LossRules,
     build_scenario,
     simulate,
-    stack,
 )
 from trackfuse.seeding import trial_streams
 from trackfuse.tracking.pda import run_filter
@@ -41,6 +51,9 @@ from trackfuse.tracking.pda_options import PDAOptions
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 import pda_reference as reference  # noqa: E402 (the numpy oracle lives with the tests)
+
+CASES = {"(a) 1 sensor, EKF + PDAF": (1, "mspda_parallel/ekf"),
+         "(b) 2 sensors, MGEKF + fused PDA": (2, "mspda_parallel/mgekf")}
 
 
 def params(sensors: int, algorithm: str, model: str) -> dict:
@@ -65,7 +78,7 @@ def filter_rates(p: dict, batch: int) -> tuple[float, float]:
     """Trials per second of the compiled filter loop (best of 5) and of the numpy reference,
     on one simulated batch of ``batch`` trials."""
     sc = build_scenario(p)
-    data = stack([simulate(sc, trial_streams(1, 0, t)) for t in range(batch)])
+    data = simulate(sc, [trial_streams(1, 0, t) for t in range(batch)])
     assoc, filt = p["algorithms"][0].split("/")
     options = PDAOptions(assoc, FILTERS[filt], P_G=sc.P_G)
     run_filter(sc, data, options)  # load (or compile) outside the timing
@@ -77,6 +90,46 @@ def filter_rates(p: dict, batch: int) -> tuple[float, float]:
     start = time.perf_counter()
     reference.run_filter(sc, data, options, LossRules.from_params(p))
     return batch / best, batch / (time.perf_counter() - start)
+
+
+#: Times ``run_batch`` in a fresh process of either version (the same code for both: the
+#: experiment's ``run_batch(params, streams)`` has not changed its signature).
+RATE = """
+import json, sys, time
+from trackfuse.experiments.twin_sensor import EXPERIMENT
+from trackfuse.seeding import trial_streams
+p, trials, batch = json.loads(sys.argv[1])
+EXPERIMENT.run_batch(p, [trial_streams(1, 0, t) for t in range(8)])
+start, cpu = time.perf_counter(), time.process_time()
+for first in range(0, trials, batch):
+    EXPERIMENT.run_batch(p, [trial_streams(1, 0, t) for t in range(first, min(first + batch,
+                                                                            trials))])
+print(trials / (time.perf_counter() - start), trials / (time.process_time() - cpu))
+"""
+
+
+def side_by_side(baseline: str, trials: int, batch: int, repeats: int) -> None:
+    """Print the whole ``run_batch`` rate of this checkout and of ``baseline``, each case
+    timed in fresh processes, alternating the versions."""
+    home = install(baseline)
+    pythons = {"current": (sys.executable, Path(__file__).resolve().parents[1]),
+               "baseline": (str(home / "venv" / "bin" / "python"), home / "src")}
+    print(f"whole run_batch, in_gate clutter, trials/s (median of {repeats}), "
+          f"baseline {home.name}:")
+    for name, (sensors, algorithm) in CASES.items():
+        arg = json.dumps([params(sensors, algorithm, "in_gate"), trials, batch])
+        rates: dict[str, list[list[float]]] = {v: [] for v in pythons}
+        for rep in range(repeats):
+            for version in list(pythons)[::1 if rep % 2 == 0 else -1]:
+                python, cwd = pythons[version]
+                out = subprocess.run([python, "-c", RATE, arg], cwd=cwd, check=True,
+                                     capture_output=True, text=True).stdout
+                rates[version].append([float(x) for x in out.split()[-2:]])
+        for i, clock in enumerate(("wall", "CPU")):
+            cur, base = (statistics.median(r[i] for r in rates[v])
+                         for v in ("current", "baseline"))
+            print(f"  {name:34s} per {clock:4s} s: current {cur:8.1f} | baseline {base:8.1f}"
+                  f" | {cur / base:.2f}x")
 
 
 def stonesoup_rate(p: dict, trials: int) -> float:
@@ -91,18 +144,18 @@ def main() -> None:
     parser.add_argument("--batch", type=int, default=500)
     parser.add_argument("--stonesoup-trials", type=int, default=20)
     parser.add_argument("--profile", action="store_true", help="cProfile case (b), in_gate")
+    parser.add_argument("--baseline", default="b359dda")
+    parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
-    cases = {"(a) 1 sensor, EKF + PDAF": (1, "mspda_parallel/ekf"),
-             "(b) 2 sensors, MGEKF + fused PDA": (2, "mspda_parallel/mgekf")}
     print(f"twin_sensor, 20 scans/trial, clutter mean 10, batch {args.batch}, one process; "
           "trials/s of: compiled filter | numpy reference | whole run_batch")
     rates = {}
     for model in ("in_gate", "window"):
-        for name, (sensors, algorithm) in cases.items():
+        for name, (sensors, algorithm) in CASES.items():
             p = params(sensors, algorithm, model)
-            compiled, reference = filter_rates(p, args.batch)
+            compiled, numpy_rate = filter_rates(p, args.batch)
             rates[name, model] = ours(p, args.trials, args.batch)
-            print(f"  trackfuse {name:34s} {model:8s} {compiled:10.1f} | {reference:8.1f} | "
+            print(f"  trackfuse {name:34s} {model:8s} {compiled:10.1f} | {numpy_rate:8.1f} | "
                   f"{rates[name, model]:8.1f}")
     try:
         import stonesoup  # noqa: F401
@@ -113,6 +166,8 @@ def main() -> None:
         mine = rates["(a) 1 sensor, EKF + PDAF", "window"]
         print(f"  Stone Soup (a) 1 sensor, EKF + PDA           window   {ss:10.1f} trials/s")
         print(f"  ratio trackfuse / Stone Soup, case (a), window: {mine / ss:.0f}x")
+    if args.baseline:
+        side_by_side(args.baseline, args.trials, args.batch, args.repeats)
     if args.profile:
         p = params(2, "mspda_parallel/mgekf", "in_gate")
         rngs = [trial_streams(1, 0, t) for t in range(args.batch)]

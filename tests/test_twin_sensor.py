@@ -22,7 +22,6 @@ from trackfuse.experiments.twin_sensor.model import (
     build_scenario,
     score_estimates,
     simulate,
-    stack,
     truth_trajectory,
 )
 from trackfuse.plots.algorithms import look
@@ -69,16 +68,16 @@ def test_a_parameter_marked_draws_false_changes_no_simulated_data(model):
 
     def data(p):
         streams = trial_streams(9, 0, 2)
-        return simulate(build_scenario(p), streams), streams.point.random()
+        return simulate(build_scenario(p), [streams]), streams.point.random()
 
     ref, ref_next = data(base)
-    simulated = ("x_true", "detected", "los", "z_target", "n_clutter", "clutter")
+    simulated = ("x_true", "detected", "los", "z_target", "clutter_ok", "clutter")
     quiet = [p for p in EXPERIMENT.params if not p.draws]
     assert {"filter.q", "init.sigma_range", "algorithms"} | SENSOR_SCALES <= {
         p.key for p in quiet}
     for param in quiet:
         got, got_next = data({**base, param.key: another_value(param, base[param.key])})
-        kept = ("x_true", "los", "n_clutter", "clutter") if param.key in SENSOR_SCALES \
+        kept = ("x_true", "los", "clutter_ok", "clutter") if param.key in SENSOR_SCALES \
             else simulated
         for name in kept:
             np.testing.assert_array_equal(getattr(got, name), getattr(ref, name),
@@ -156,12 +155,12 @@ def test_adding_an_algorithm_does_not_change_the_data_or_other_results():
 
 def test_window_clutter_is_centred_on_the_line_of_sight():
     sc = build_scenario(params(clutter__model="window", clutter__mean=30.0))
-    d = simulate(sc, trial_streams(4, 0, 0))
-    assert d.clutter.shape == (int(d.n_clutter.sum()), 2)
-    assert abs(d.n_clutter.mean() - 30.0) < 3.0
-    np.testing.assert_allclose(d.los, azel(d.x_true[1:, None, :3] - sc.sensor_pos[1:]))
-    centre = np.repeat(d.los.reshape(-1, 2), d.n_clutter.ravel(), axis=0)
-    off = np.abs(wrap(d.clutter - centre))  # uniform on [0, window] per axis
+    d = simulate(sc, [trial_streams(4, 0, 0)])
+    counts = d.clutter_ok.sum(axis=-1)
+    assert abs(counts.mean() - 30.0) < 3.0
+    np.testing.assert_allclose(d.los[0], azel(d.x_true[0, 1:, None, :3] - sc.sensor_pos[1:]))
+    off = np.abs(wrap(d.clutter - d.los[..., None, :]))[d.clutter_ok]  # uniform on [0, window]
+    assert not d.clutter[~d.clutter_ok].any()
     assert off.max() <= 0.1 + 1e-12 and abs(off.mean() - 0.05) < 0.005
     # the noisy target returns are not the centre: they scatter by sigma about it
     assert 0 < np.abs(wrap(d.z_target - d.los)).max() < 6 * 0.01
@@ -662,7 +661,7 @@ def _diverged_batch(p: dict, trials: int, offset_sigmas: float):
     """Scenario and batch whose filters start ``offset_sigmas`` sensor-1 sigmas off in
     azimuth with a prior so confident (1 m) that the data cannot pull them back."""
     sc = build_scenario(p)
-    batch = stack([simulate(sc, trial_streams(5, 0, t)) for t in range(trials)])
+    batch = simulate(sc, [trial_streams(5, 0, t) for t in range(trials)])
     d = sc.x_start[:3] - sc.platform[0]
     across = np.array([-d[1], d[0], 0.0]) / np.hypot(d[0], d[1])
     shift = offset_sigmas * 0.01 * np.linalg.norm(d) * across
@@ -719,7 +718,7 @@ def _first_update_shift(p: dict, n: int) -> tuple[float, float]:
         return [trial_streams(77, 0, t) for t in range(n)]
 
     sc = build_scenario(p)
-    x0 = np.stack([simulate(sc, s).x0 for s in streams()])
+    x0 = simulate(sc, streams()).x0
     r_true = np.linalg.norm(sc.x_start[:3] - sc.platform[1])
     prior_err = np.linalg.norm(x0[:, :3] - sc.platform[1], axis=1) - r_true
     scan1_err = np.array([rows[0]["range_err_m"]

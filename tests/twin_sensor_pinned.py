@@ -12,7 +12,6 @@ from trackfuse.experiments.twin_sensor.model import (
     LossRules,
     build_scenario,
     simulate,
-    stack,
 )
 from trackfuse.seeding import trial_streams
 from trackfuse.tracking.pda_options import PDAOptions
@@ -24,7 +23,7 @@ def setup(overrides: dict, trials: int = 40):
     p = EXPERIMENT.defaults()
     p.update({"clutter.mean": 6.0, **overrides})
     sc = build_scenario(p)
-    batch = stack([simulate(sc, trial_streams(11, 0, t)) for t in range(trials)])
+    batch = simulate(sc, [trial_streams(11, 0, t) for t in range(trials)])
     return p, sc, batch, LossRules.from_params(p)
 
 

@@ -122,9 +122,18 @@ def gate_volume(S: np.ndarray, gamma: float) -> np.ndarray:
 
 def unit_disk(rng: np.random.Generator, n: int) -> np.ndarray:
     """``n`` points ``(n, 2)`` uniform in the unit disk (polar sampling with sqrt radius)."""
-    r = np.sqrt(rng.random(n))
-    a = 2.0 * np.pi * rng.random(n)
-    return np.stack([r * np.cos(a), r * np.sin(a)], axis=-1)
+    return disk_points(rng.random(n), rng.random(n))
+
+
+def disk_points(u_radius: np.ndarray, u_angle: np.ndarray) -> np.ndarray:
+    """Points ``(n, 2)`` of the unit disk from uniforms on [0, 1): radius ``sqrt(u_radius)``,
+    angle ``2 pi u_angle`` (uniform in the disk when the uniforms are independent)."""
+    r = np.sqrt(u_radius)
+    a = 2.0 * np.pi * u_angle
+    out = np.empty(r.shape + (2,))
+    np.multiply(r, np.cos(a), out=out[..., 0])
+    np.multiply(r, np.sin(a), out=out[..., 1])
+    return out
 
 
 def inv2(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -110,9 +110,9 @@ from trackfuse.tracking.platforms import baseline_offset, orbit_positions, strai
 from trackfuse.tracking.sensors import (
     azel,
     azel_jacobian,
+    disk_points,
     gate_threshold,
     gate_volume,
-    unit_disk,
 )
 
 FILTERS = {"mgekf": "mgekf", "ekf": "ekf_joseph"}
@@ -313,64 +313,13 @@ def truth_trajectory(sc: Scenario, rng: np.random.Generator | None) -> np.ndarra
 
 
 @dataclass(frozen=True)
-class TrialData:
-    """Simulated data of one trial (shapes: ``K`` scans, ``S`` sensors, ``C`` clutter points).
-
-    ``x_true: (K+1, 6)``; ``x0: (6,)`` filter initialization; ``detected: (K, S)``;
-    ``los: (K, S, 2)`` noise-free target returns (rad); ``z_target: (K, S, 2)`` noisy target
-    returns (rad); ``n_clutter: (K, S)``;
-    ``clutter: (C, 2)`` unit-disk points (in_gate) or absolute angles (window), in scan-major,
-    sensor-minor order.
-    """
-
-    x_true: np.ndarray
-    x0: np.ndarray
-    detected: np.ndarray
-    los: np.ndarray
-    z_target: np.ndarray
-    n_clutter: np.ndarray
-    clutter: np.ndarray
-
-
-def simulate(sc: Scenario, streams: TrialStreams) -> TrialData:
-    """Draw one trial's truth, initialization, target returns and clutter.
-
-    Truth, initialization, detections and noise come from the trial's common stream (the
-    same at every sweep point; detections and noise are drawn for :data:`MAX_SENSORS`
-    sensors, so a one-sensor point sees sensor 1's returns of a two-sensor point); clutter
-    comes from the point stream.
-    """
-    g_truth, g_init, g_noise = streams.common.spawn(3)
-    g_clutter = streams.point
-    x_true = truth_trajectory(sc, g_truth)
-    x0 = x_true[0] + sc.P0_chol @ g_init.standard_normal(6)
-    S = sc.R.shape[0]
-    detected = (g_noise.random((sc.K, MAX_SENSORS)) < _padded(sc.P_D))[:, :S]
-    los = azel(x_true[1:, None, :3] - sc.sensor_pos[1:])
-    unit_noise = g_noise.standard_normal((sc.K, MAX_SENSORS, 2))[:, :S]
-    z_target = wrap(los + sc.noise_sd * unit_noise)
-    n_clutter = g_clutter.poisson(sc.clutter_mean, (sc.K, S))
-    total = int(n_clutter.sum())
-    if sc.clutter_model == "in_gate":
-        clutter = unit_disk(g_clutter, total)
-    else:
-        centre = np.repeat(los.reshape(-1, 2), n_clutter.ravel(), axis=0)
-        clutter = centre + g_clutter.uniform(-sc.window, sc.window, (total, 2))
-        clutter[:, 0] = wrap(clutter[:, 0])
-    return TrialData(x_true, x0, detected, los, z_target, n_clutter, clutter)
-
-
-def _padded(P_D: np.ndarray) -> np.ndarray:
-    """Detection probabilities ``(MAX_SENSORS,)``: ``P_D: (S,)`` padded with zeros."""
-    return np.concatenate([P_D, np.zeros(MAX_SENSORS - len(P_D))])
-
-
-@dataclass(frozen=True)
 class Batch:
-    """Trial data stacked over ``N`` trials, clutter padded to ``C`` with a validity mask.
+    """The simulated data of ``N`` trials, clutter padded to ``C`` slots with a validity mask.
 
-    ``x_true: (N, K+1, 6)``, ``x0: (N, 6)``, ``detected: (N, K, S)``, ``los, z_target:
-    (N, K, S, 2)``, ``clutter: (N, K, S, C, 2)``, ``clutter_ok: (N, K, S, C)``.
+    ``x_true: (N, K+1, 6)``; ``x0: (N, 6)`` filter initialization; ``detected: (N, K, S)``;
+    ``los: (N, K, S, 2)`` noise-free target returns (rad); ``z_target: (N, K, S, 2)`` noisy
+    target returns (rad); ``clutter: (N, K, S, C, 2)`` unit-disk points (in_gate) or absolute
+    angles (window), zero where ``clutter_ok: (N, K, S, C)`` is False.
     """
 
     x_true: np.ndarray
@@ -382,16 +331,69 @@ class Batch:
     clutter_ok: np.ndarray
 
 
-def stack(trials: Sequence[TrialData]) -> Batch:
-    """Stack trials into a :class:`Batch` (padding entries are zeros, masked out)."""
-    counts = np.stack([t.n_clutter for t in trials])  # (N, K, S)
+def simulate(sc: Scenario, streams: Sequence[TrialStreams]) -> Batch:
+    """Draw each trial's truth, initialization, target returns and clutter from its streams.
+
+    Truth, initialization, detections and noise come from the trial's common stream (the
+    same at every sweep point; detections and noise are drawn for :data:`MAX_SENSORS`
+    sensors, so a one-sensor point sees sensor 1's returns of a two-sensor point); clutter
+    comes from the point stream. Per trial only the random draws run in a loop; what is
+    computed from them is computed for the whole batch at once (element by element, so a
+    trial's numbers do not depend on the batch it is in).
+    """
+    N, K, S = len(streams), sc.K, sc.R.shape[0]
+    moving = sc.q_truth > 0  # else the truth draws nothing and is the same in every trial
+    x_true, x0 = np.empty((N, K + 1, 6)), np.empty((N, 6))
+    if not moving:
+        x_true[:] = truth_trajectory(sc, None)
+    uniform, normal = np.empty((N, K, MAX_SENSORS)), np.empty((N, K, MAX_SENSORS, 2))
+    counts = np.empty((N, K, S), dtype=np.int64)
+    chol, draws = sc.P0_chol, []
+    for n, trial in enumerate(streams):
+        g_truth, g_init, g_noise = trial.common.spawn(3)
+        if moving:
+            x_true[n] = truth_trajectory(sc, g_truth)
+        x0[n] = x_true[n, 0] + chol @ g_init.standard_normal(6)
+        uniform[n] = g_noise.random((K, MAX_SENSORS))
+        normal[n] = g_noise.standard_normal((K, MAX_SENSORS, 2))
+        counts[n] = trial.point.poisson(sc.clutter_mean, (K, S))
+        draws.append(_clutter_draws(sc, trial.point, int(counts[n].sum())))
+    detected = (uniform < _padded(sc.P_D))[..., :S]
+    los = azel(x_true[:, 1:, None, :3] - sc.sensor_pos[1:])
+    z_target = wrap(los + sc.noise_sd * normal[:, :, :S])
     C = max(int(counts.max()) if counts.size else 0, 1)
     ok = np.arange(C) < counts[..., None]
     clutter = np.zeros(ok.shape + (2,))
-    clutter[ok] = np.concatenate([t.clutter for t in trials])  # both trial-, scan-, sensor-major
-    return Batch(np.stack([t.x_true for t in trials]), np.stack([t.x0 for t in trials]),
-                 np.stack([t.detected for t in trials]), np.stack([t.los for t in trials]),
-                 np.stack([t.z_target for t in trials]), clutter, ok)
+    points = _clutter_points(sc, np.concatenate(draws, axis=1), los, counts)
+    clutter.reshape(-1, 2)[np.flatnonzero(ok)] = points  # trial-, scan-, sensor-major
+    return Batch(x_true, x0, detected, los, z_target, clutter, ok)
+
+
+def _clutter_draws(sc: Scenario, rng: np.random.Generator, total: int) -> np.ndarray:
+    """The uniforms ``(2, total)`` behind one trial's ``total`` clutter points: radius and
+    angle in the unit disk (in_gate, the draws of ``unit_disk``), or the azimuth and
+    elevation offsets in the window (``window`` clutter, on ``[-window, window)``)."""
+    if sc.clutter_model == "in_gate":
+        return rng.random((2, total))  # the radii's uniforms, then the angles'
+    return rng.uniform(-sc.window, sc.window, (total, 2)).T
+
+
+def _clutter_points(sc: Scenario, draws: np.ndarray, los: np.ndarray,
+                    counts: np.ndarray) -> np.ndarray:
+    """Clutter points ``(total, 2)`` of a batch from its :func:`_clutter_draws`
+    (concatenated, trial-, scan-, sensor-major), its lines of sight ``(N, K, S, 2)`` (rad)
+    and clutter counts ``(N, K, S)``."""
+    if sc.clutter_model == "in_gate":
+        return disk_points(draws[0], draws[1])
+    centre = np.repeat(los.reshape(-1, 2), counts.ravel(), axis=0)
+    points = centre + draws.T
+    points[:, 0] = wrap(points[:, 0])
+    return points
+
+
+def _padded(P_D: np.ndarray) -> np.ndarray:
+    """Detection probabilities ``(MAX_SENSORS,)``: ``P_D: (S,)`` padded with zeros."""
+    return np.concatenate([P_D, np.zeros(MAX_SENSORS - len(P_D))])
 
 
 @dataclass(frozen=True)
@@ -537,7 +539,7 @@ def run_batch(params: dict[str, Any], streams: Sequence[TrialStreams]) -> RowTab
     from trackfuse.tracking.pda import run_filter  # numba: on use
 
     sc = build_scenario(params)
-    batch = stack([simulate(sc, s) for s in streams])
+    batch = simulate(sc, streams)
     N, K = len(streams), sc.K
     rules = LossRules.from_params(params)
     names = list(params["algorithms"])
