@@ -366,6 +366,7 @@ def _config_paths(folder: Path | None) -> list[Path]:
     """The ``*.yaml`` configs ``reproduce`` runs (one-line error if there are none): by
     default the first folder a config name is looked up in (``./configs``, else the shipped
     configs: :func:`trackfuse.shipped.config_folders`)."""
+    from trackfuse.regular_files import non_regular
     from trackfuse.shipped import config_folders
     if folder is None:
         folders = config_folders()
@@ -377,6 +378,9 @@ def _config_paths(folder: Path | None) -> list[Path]:
     paths = sorted(folder.glob("*.yaml"))
     if not paths:
         fail(f"{folder}: no *.yaml configs")
+    for path in paths:  # found, not named: a FIFO there is no one's pipe (it would hang)
+        if kind := non_regular(path):
+            fail(f"{path}: {kind}, not a config file; allowed: YAML files in {folder}")
     return paths
 
 

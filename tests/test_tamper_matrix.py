@@ -291,3 +291,18 @@ def test_a_fifo_config_named_on_the_command_line_is_read(tmp_path):
     with deadline(HANG_S):
         result = CliRunner().invoke(app, ["validate", str(pipe)])
     assert result.exit_code == 0 and result.stdout.startswith("ok:"), result.output
+
+
+def test_reproduce_refuses_a_fifo_among_the_configs_it_finds(tmp_path):
+    """A config `reproduce` finds in its folder is not named by the user: a FIFO there
+    hung it."""
+    folder = tmp_path / "configs"
+    folder.mkdir()
+    (folder / "a.yaml").write_text(CONFIG)
+    os.mkfifo(folder / "b.yaml")
+    with deadline(HANG_S):
+        result = CliRunner().invoke(app, ["reproduce", str(folder), "--out",
+                                          str(tmp_path / "out"), "--dry-run"])
+    assert result.exit_code == 2
+    assert result.stderr == f"error: {folder / 'b.yaml'}: a FIFO (named pipe), not a config " \
+                            f"file; allowed: YAML files in {folder}\n"
