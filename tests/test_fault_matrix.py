@@ -199,3 +199,16 @@ def test_a_report_that_exits_is_a_report_error_not_a_silent_success(how, tmp_pat
     folder = next(tmp_path.glob("out/r/*"))
     assert json.loads((folder / "manifest.json").read_text())["status"] == "complete"
     assert (folder / "index.html").is_file()
+
+
+def test_a_run_whose_last_session_died_unrecorded_says_so_as_it_resumes(tmp_path):
+    """A serial run ended by its trial (SIGKILL, a crash in compiled code: nothing a guard
+    can catch) left its manifest 'running'; the next run resumed without a word."""
+    config = _config("raise")
+    warnings: list[str] = []
+    first = Runner(config, tmp_path, executor="serial", plots=False, progress=False).run()
+    manifest = json.loads((first.folder / "manifest.json").read_text())
+    (first.folder / "manifest.json").write_text(json.dumps({**manifest, "status": "running"}))
+    Runner(config, tmp_path, executor="serial", plots=False, progress=False,
+           warn=warnings.append).run()
+    assert [w for w in warnings if "stopped before the run ended without recording why" in w]

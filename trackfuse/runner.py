@@ -458,11 +458,22 @@ class Runner:
                       "amplified ones more (docs/runner.md, run id)")
 
     def _previous_manifest(self) -> dict[str, Any] | None:
+        """The run folder's manifest, if readable. One that still says ``running`` (its lock
+        is free, so its process is gone) is said: that session was killed, ran out of
+        memory, crashed (in compiled code, or a trial run in its own process with
+        ``--executor serial`` that ended it past :mod:`trackfuse.trial_guard`) or stopped on
+        an error."""
         try:
-            return self.folder.read_manifest()
+            previous = self.folder.read_manifest()
         except RunFolderError as err:
             self.warn(f"{err}; writing a new one")
             return None
+        if previous is not None and previous.get("status") == RunStatus.RUNNING:
+            self.warn(f"{self.folder.path}: its last session (started "
+                      f"{previous.get('started')}) stopped before the run ended without "
+                      "recording why (killed, out of memory, a crash or an error); resuming "
+                      "from its saved batches")
+        return previous
 
     def _report(self, scan: PartScan) -> None:
         if scan.stray:
