@@ -17,7 +17,7 @@ import itertools
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from trackfuse.association.triangulation import intersect, los_residuals
+from trackfuse.association.triangulation import angle_jacobian, intersect, los_residuals
 
 
 def brute_force(cost: np.ndarray) -> tuple[float, list[tuple[int, ...]]]:
@@ -130,10 +130,11 @@ def lagrangian(cost: np.ndarray, max_gap: float = 0.01, max_iter: int = 100,
     return float(best_primal), float(min(best_dual, best_primal)), it, np.array(declared)
 
 
-def subset_chi2(z: list[np.ndarray], sensors: np.ndarray, sigma_a: float, sigma_b: float
-                ) -> np.ndarray:
-    """``sd_costs.subset_chi2`` vectorized with numpy: every combination triangulated at once
-    (:func:`~trackfuse.association.triangulation.intersect`), ``+inf`` where undefined."""
+def subset_fit(z: list[np.ndarray], sensors: np.ndarray, sigma_a: float, sigma_b: float
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """``sd_costs.subset_fit`` vectorized with numpy: every combination triangulated at once
+    (:func:`~trackfuse.association.triangulation.intersect`); the chi-square (``+inf``
+    where undefined) and the log-determinant of the position information."""
     shape = tuple(len(zs) for zs in z)
     grids = np.meshgrid(*[np.arange(n) for n in shape], indexing="ij")
     picked = [zs[g.ravel()] for zs, g in zip(z, grids, strict=True)]
@@ -141,4 +142,9 @@ def subset_chi2(z: list[np.ndarray], sensors: np.ndarray, sigma_a: float, sigma_
         p = intersect(picked, sensors)
         r = los_residuals(p, picked, sensors) / np.tile([sigma_a, sigma_b], len(z))
         chi2 = np.einsum("ki,ki->k", r, r)
-    return np.where(np.isfinite(chi2), chi2, np.inf).reshape(shape)
+        scale = np.array([1.0 / sigma_a, 1.0 / sigma_b])[:, None]
+        info = sum(np.einsum("kri,krj->kij", h, h) for h in
+                   (angle_jacobian(p, s) * scale for s in sensors))
+        sign, logdet = np.linalg.slogdet(info)
+    logdet = np.where(sign > 0, logdet, -np.inf)
+    return np.where(np.isfinite(chi2), chi2, np.inf).reshape(shape), logdet.reshape(shape)

@@ -99,9 +99,9 @@ def test_the_preload_compiles_the_versions_a_trial_calls(monkeypatch):
     from trackfuse.experiments.passive_sd import preload
 
     def types_of(call) -> dict:
-        seen = {"reduce_tail": set(), "_combination_chi2": set()}
+        seen = {"reduce_tail": set(), "_combination_fit": set()}
         with monkeypatch.context() as m:
-            for module, name in ((sd_assignment, "reduce_tail"), (sd_costs, "_combination_chi2")):
+            for module, name in ((sd_assignment, "reduce_tail"), (sd_costs, "_combination_fit")):
                 def record(*args, _compiled=getattr(module, name), _name=name):
                     seen[_name].add(tuple(typeof(a) for a in args))
                     return _compiled(*args)
@@ -112,3 +112,15 @@ def test_the_preload_compiles_the_versions_a_trial_calls(monkeypatch):
     trial = types_of(lambda: rows_of(params(**{"targets.n": 4})))
     ahead = types_of(preload.load_kernels)
     assert all(trial.values()) and trial == ahead
+
+
+def test_the_marginal_likelihood_declares_fewer_ghosts_with_three_sensors():
+    """The fitted ratio charges nothing for a tuple's free position, so a target's
+    measurement and a false alarm make a cheap pair; integrating the position out charges
+    every declared tuple (docs/papers/sd_assignment.md)."""
+    ghosts = {}
+    for position in ("fitted", "marginal"):
+        p = params(**{"targets.n": 10, "noise.sigma": 0.01, "algorithms": ["sd_exact"],
+                      "assoc.position": position})
+        ghosts[position] = sum(rows_of(p, trial)["sd_exact"]["ghosts"] for trial in range(8))
+    assert ghosts["marginal"] < ghosts["fitted"]

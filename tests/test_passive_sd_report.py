@@ -43,7 +43,7 @@ def test_every_figure_is_drawn_cleanly(geometry_run):
         assert smallest_printed_text(fig)[0] >= 6.5, (name, smallest_printed_text(fig))
     ghosts = figs["ghosts"]
     assert [ax.get_title() for ax in ghosts.axes if ax.get_visible()] == [
-        "targets.n = 4", "targets.n = 6"]
+        "n = 4", "n = 6"]
     assert all(ax.get_xscale() == "linear" for ax in ghosts.axes)  # two values: no log axis
 
 

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from sd_reference import subset_chi2 as reference_chi2
+from sd_reference import subset_fit as reference_fit
 
 from trackfuse.association.assignment import pair_weights
 from trackfuse.association.passive_scene import (
@@ -11,7 +11,7 @@ from trackfuse.association.passive_scene import (
     scene_targets,
     simulate_scan,
 )
-from trackfuse.association.sd_costs import subset_chi2, tuple_costs
+from trackfuse.association.sd_costs import occam_term, subset_fit, tuple_costs
 from trackfuse.association.triangulation import common_perpendicular_midpoint, intersect
 
 THREE = np.vstack([SENSORS, [[15000.0, -2000.0, 1000.0]]])
@@ -84,10 +84,34 @@ def test_an_unknown_cost_form_is_refused():
 
 
 @pytest.mark.parametrize("sensors", [2, 3, 4])
-def test_the_compiled_chi_square_is_pinned_to_the_numpy_reference(sensors):
+def test_the_compiled_fit_is_pinned_to_the_numpy_reference(sensors):
     every = np.vstack([THREE, [[20000.0, 20000.0, 0.0]]])[:sensors]
     s = scan(every, n=7)
-    mine = subset_chi2(list(s.z), every, SIGMA, 2 * SIGMA)
-    theirs = reference_chi2(list(s.z), every, SIGMA, 2 * SIGMA)
-    assert mine.shape == tuple(len(z) for z in s.z)
-    assert np.allclose(mine, theirs, rtol=1e-9, atol=1e-9)
+    chi2, logdet = subset_fit(list(s.z), every, SIGMA, 2 * SIGMA)
+    chi2_ref, logdet_ref = reference_fit(list(s.z), every, SIGMA, 2 * SIGMA)
+    assert chi2.shape == logdet.shape == tuple(len(z) for z in s.z)
+    assert np.allclose(chi2, chi2_ref, rtol=1e-9, atol=1e-9)
+    assert np.allclose(logdet, logdet_ref, rtol=1e-9, atol=1e-9)
+
+
+def test_the_marginal_cost_charges_each_tuple_its_occam_term():
+    s = scan(THREE, n=5)
+    volume = 3.6e12
+    fitted = tuple_costs(s.z, s.sensors, SIGMA, SIGMA, P_D, P_F)
+    marginal = tuple_costs(s.z, s.sensors, SIGMA, SIGMA, P_D, P_F, volume=volume)
+    _, logdet = reference_fit(list(s.z), s.sensors, SIGMA, SIGMA)
+    assert np.allclose(marginal[1:, 1:, 1:], fitted[1:, 1:, 1:] - occam_term(logdet, volume),
+                       rtol=1e-9)
+    singles = (np.indices(fitted.shape) > 0).sum(axis=0) <= 1
+    assert not marginal[singles].any()
+    # two lines of sight of a target 11-15 km away, 0.01 rad, a 3,650 km^3 box: about -12 nats
+    target = np.array([[10e3, 10e3, 5e3]])
+    z = [los_angles(target, p) for p in SENSORS]
+    _, logdet = subset_fit(z, SENSORS, 0.01, 0.01)
+    assert -13.0 < float(occam_term(logdet, 3.65e12)[0, 0]) < -10.0
+
+
+def test_parallel_lines_of_sight_cost_infinity_in_the_marginal_form_too():
+    sensors = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    z = [np.array([[0.3, 0.2]]), np.array([[0.3, 0.2]])]
+    assert tuple_costs(z, sensors, SIGMA, SIGMA, P_D, P_F, volume=1e12)[1, 1] == np.inf

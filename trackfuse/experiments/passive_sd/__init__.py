@@ -22,8 +22,8 @@ FIGURES = {
         "mean with its 95 % interval, against the swept geometry or target count", ""),
     "duality_gap": FigureSpec(
         "distribution of the Lagrangian relaxation's relative duality gap per trial "
-        "(empirical CDF), one curve per target count (or sweep point), with the configured "
-        "stopping gap", ""),
+        "(empirical CDF), one curve per target count, one panel per value of the other "
+        "swept keys (geometry pooled), with the configured stopping gap", ""),
 }
 
 EXPERIMENT = Experiment(

@@ -13,6 +13,11 @@ sd_assignment.md``):
 * ``exact_2d``: the exact two-sensor assignment on sensors 1 and 2 alone (paper 002's
   problem, the baseline a third sensor improves on).
 
+Tuple costs: ``assoc.position: fitted`` (default) is the generalised likelihood ratio with
+the target position fitted, paper 002's weights at two sensors; ``marginal`` integrates the
+position over the box the targets are drawn in (:data:`PRIOR_VOLUME`), which charges each
+declared tuple for its free coordinates.
+
 Sensor positions (km): S1 = (0, 0, 0) and S2 = (0, 20, 7) (paper 002), S3 =
 (``sensor3.baseline``, 0, 0), S4 = (20, 20, 0). A small baseline puts S3 beside S1: its
 lines of sight repeat S1's, and the ghosts of S1 and S2 stay; a long one sees the scene from
@@ -50,11 +55,21 @@ from typing import Any
 import numpy as np
 
 from trackfuse.association.assignment import COSTS, solve_exact
-from trackfuse.association.passive_scene import KM, SENSORS, scene_targets, simulate_scan
+from trackfuse.association.passive_scene import (
+    KM,
+    PAPER_BOX,
+    SENSORS,
+    scene_targets,
+    simulate_scan,
+)
 from trackfuse.experiments.base import FRACTION, NON_NEGATIVE, Metric, Param
 from trackfuse.seeding import TrialStreams
 
 ALGORITHMS = ("sd_lagrangian", "sd_exact", "exact_2d")
+#: Choices of ``assoc.position`` (module docstring).
+POSITIONS = ("fitted", "marginal")
+#: Volume (m^3) of the box the targets are drawn in: the position prior of the marginal cost.
+PRIOR_VOLUME = float(np.prod(PAPER_BOX[1] - PAPER_BOX[0]))
 #: Relative tolerance of ``at_opt``; a Lagrangian primal below the exact optimum by more is
 #: :class:`ExactSolverError`.
 AT_OPT_RTOL = 1e-9
@@ -89,6 +104,9 @@ PARAMS = (
     Param("assoc.cost", "paper", "tuple cost: paper 002's weights or Pattipati's "
           "FOV-normalised likelihood ratio, with the missed-detection term", kind=str,
           choices=COSTS, draws=False),
+    Param("assoc.position", "fitted", "target position in the tuple likelihood: fitted "
+          "(generalised ratio, paper 002's at two sensors) or integrated over the box the "
+          "targets are drawn in (marginal ratio)", kind=str, choices=POSITIONS, draws=False),
     Param("algorithms", list(ALGORITHMS), "solvers reported per trial", kind=list,
           choices=ALGORITHMS, draws=False),
     Param("sd.max_gap", 0.01, "relative duality gap at which the relaxation stops", "1",
@@ -103,6 +121,11 @@ def sensor_positions(params: dict[str, Any]) -> np.ndarray:
     third = np.array([[float(params["sensor3.baseline"]) * KM, 0.0, 0.0]])
     every = np.vstack([SENSORS, third, np.array([SENSOR4_KM]) * KM])
     return every[:int(params["sensors.n"])]
+
+
+def prior_volume(params: dict[str, Any]) -> float | None:
+    """The position prior's volume (m^3) for ``assoc.position: marginal``, else None."""
+    return PRIOR_VOLUME if params["assoc.position"] == "marginal" else None
 
 
 def _true_tuple(labels: tuple[np.ndarray, ...]) -> dict[tuple[int, int], frozenset]:
@@ -150,7 +173,8 @@ def _exact_2d(scan, params: dict[str, Any], sigma: float) -> tuple[np.ndarray, f
     from trackfuse.association.sd_costs import tuple_costs  # numba: on use
 
     cost = tuple_costs(scan.z[:2], scan.sensors[:2], sigma, sigma, params["sensor.p_d"],
-                       params["assoc.p_f"], params["assoc.cost"], scan.psi[:2])
+                       params["assoc.p_f"], params["assoc.cost"], scan.psi[:2],
+                       prior_volume(params))
     match = solve_exact(-cost[1:, 1:])
     rows = np.stack([np.arange(1, cost.shape[0]), match.partner1 + 1], 1)
     alone = np.flatnonzero(match.partner2 < 0) + 1
@@ -172,7 +196,8 @@ def run_trial(params: dict[str, Any], streams: TrialStreams) -> list[dict[str, A
     wanted = params["algorithms"]
     start = time.perf_counter()
     cost = tuple_costs(scan.z, scan.sensors, sigma, sigma, params["sensor.p_d"],
-                       params["assoc.p_f"], params["assoc.cost"], scan.psi)
+                       params["assoc.p_f"], params["assoc.cost"], scan.psi,
+                       prior_volume(params))
     costs_time = time.perf_counter() - start
     solved = {}
     for name in ("sd_exact", "sd_lagrangian"):  # the optimum first: at_opt needs it

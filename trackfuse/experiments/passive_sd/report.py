@@ -7,8 +7,9 @@ Figures (:data:`trackfuse.experiments.passive_sd.FIGURES`):
   baseline (or, without it, the swept target count), one panel per value of the other
   swept keys. The S-D methods and the two-sensor baseline share each panel's scans.
 * ``duality_gap``: the empirical CDF of ``sd_lagrangian``'s relative duality gap per trial
-  (``trials.csv``), one curve per value of the swept keys other than the x axis's (the
-  target count; the geometry pooled), else per point, with the configured stopping gap.
+  (``trials.csv``), one curve per target count (when swept), one panel per value of the
+  other swept keys but the x axis's (the geometry is pooled), with the configured stopping
+  gap.
 
 Tables: ``final`` (every metric's mean and interval per point and algorithm) and
 ``versus_exact`` (per point: how often the relaxation reached the exact optimum, its mean
@@ -43,14 +44,22 @@ def _x_key(config: dict[str, Any]) -> str | None:
     return next((k for k in X_KEYS if k in swept), None)
 
 
-def _panels(summary: pd.DataFrame, config: dict[str, Any], x_key: str
+def label(keys: list[str], values: Any) -> str:
+    """A short title for the values of swept ``keys``: a word as itself, a number as
+    ``name = value`` with the key's last dotted part (``fitted, n = 5``)."""
+    values = values if isinstance(values, tuple) else (values,)
+    return ", ".join(str(v) if isinstance(v, str) else f"{k.split('.')[-1]} = {v}"
+                     for k, v in zip(keys, values, strict=True))
+
+
+def _panels(frame: pd.DataFrame, config: dict[str, Any], skip: Collection[str]
             ) -> list[tuple[str, pd.DataFrame]]:
-    """``(title, rows)`` per combination of the swept keys other than ``x_key``."""
-    others = [k for k in swept_keys(config) if k != x_key]
+    """``(title, rows)`` per combination of the swept keys not in ``skip``."""
+    others = [k for k in swept_keys(config) if k not in skip]
     if not others:
-        return [("", summary)]
-    return [(", ".join(f"{k} = {v}" for k, v in zip(others, values, strict=True)), rows)
-            for values, rows in summary.groupby(others, sort=True)]
+        return [("", frame)]
+    return [(label(others, values), rows)
+            for values, rows in frame.groupby(others, sort=True)]
 
 
 def _curve(ax: Axes, rows: pd.DataFrame, name: str, x_key: str) -> None:
@@ -74,7 +83,7 @@ def metric_figure(run: RunData, metric: str, ylabel: str) -> Figure | str:
     if x_key is None:
         return f"needs one of {', '.join(X_KEYS)} swept (the x axis)"
     summary = run.summary[run.summary["metric"] == metric]
-    panels = _panels(summary, config, x_key)
+    panels = _panels(summary, config, [x_key])
     ncols = min(3, len(panels))
     nrows = -(-len(panels) // ncols)
     fig, axes = new_figure(ncols, nrows, *PANEL)
@@ -101,22 +110,26 @@ def gap_figure(run: RunData) -> Figure | str:
     mine = trials[trials["algorithm"] == "sd_lagrangian"]
     if mine.empty:
         return "needs the algorithm sd_lagrangian"
-    fig, ax = new_figure(1, 1, 4.2, 2.8)
-    x_key = _x_key(run.config)
-    keys = [k for k in swept_keys(run.config) if k != x_key] or ["point"]
-    colour = look("sd_lagrangian").colour
-    for k, (values, rows) in enumerate(mine.groupby(keys, sort=True)):
-        gap = np.sort(rows["duality_gap"].to_numpy(float)) * 100.0
-        label = ", ".join(f"{key} = {v}" for key, v in zip(keys, values, strict=True))
-        ax.step(np.concatenate([[0.0], gap]), np.arange(len(gap) + 1) / len(gap),
-                where="post", label=label, color=colour, linewidth=1.2,
-                linestyle=LINE_STYLES[k % len(LINE_STYLES)])
+    swept = swept_keys(run.config)
+    curve_keys = ["targets.n"] if "targets.n" in swept else []
+    panels = _panels(mine, run.config, [_x_key(run.config), *curve_keys])
+    fig, axes = new_figure(len(panels), 1, 3.4, 2.6)
+    axes = np.atleast_1d(axes)
     stop = 100.0 * float(run.config["params"]["sd.max_gap"])
-    ax.axvline(stop, color="0.4", linestyle=":", linewidth=1.0, label="stopping gap")
-    ax.set_xlabel("relative duality gap per trial (%)")
-    ax.set_ylabel("fraction of trials at or below")
-    ax.set_ylim(0.0, 1.02)
-    legend_below(fig, *legend_entries([ax]), column_width=2.1)
+    for ax, (title, rows) in zip(axes, panels, strict=True):
+        groups = rows.groupby(curve_keys, sort=True) if curve_keys else [((), rows)]
+        for k, (values, group) in enumerate(groups):
+            gap = np.sort(group["duality_gap"].to_numpy(float)) * 100.0
+            ax.step(np.concatenate([[0.0], gap]), np.arange(len(gap) + 1) / len(gap),
+                    where="post", label=label(curve_keys, values) or "all trials",
+                    color=look("sd_lagrangian").colour, linewidth=1.2,
+                    linestyle=LINE_STYLES[k % len(LINE_STYLES)])
+        ax.axvline(stop, color="0.4", linestyle=":", linewidth=1.0, label="stopping gap")
+        ax.set_xlabel("relative duality gap per trial (%)")
+        ax.set_ylabel("fraction of trials at or below")
+        ax.set_ylim(0.0, 1.02)
+        ax.set_title(title)
+    legend_below(fig, *legend_entries(axes), column_width=1.6)
     return fig
 
 
