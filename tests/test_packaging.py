@@ -2,11 +2,17 @@
 
 from __future__ import annotations
 
+import hashlib
+import os
+import pickle
 import subprocess
 import sys
 import tomllib
+import zipfile
 from pathlib import Path
 
+import numba
+import pytest
 from setuptools import find_packages
 
 from trackfuse.shipped import config_path, configs_folder
@@ -43,3 +49,26 @@ def test_shipped_configs_run_by_name_outside_a_checkout(tmp_path):
                          capture_output=True, text=True, cwd=tmp_path)
     assert out.returncode == 0 and "ok:" in out.stdout, out.stderr
     assert config_path(Path("ci/passive_assoc_ci")).is_file()
+
+
+@pytest.mark.skipif(not os.environ.get("TRACKFUSE_COLD_COMPILE"),
+                    reason="builds the wheel, compiling the kernels (about 1 min); "
+                           "set TRACKFUSE_COLD_COMPILE=1")
+def test_the_wheel_ships_the_kernels_compiled_for_its_own_sources(tmp_path):
+    """setup.py packs numba's cache of both kernels beside their modules, stamped with the
+    shipped sources (else numba would ignore it and compile on the first run)."""
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps",
+                    "-q", "-w", str(tmp_path), str(ROOT)], check=True, capture_output=True)
+    with zipfile.ZipFile(next(tmp_path.glob("trackfuse-*.whl"))) as wheel:
+        names = wheel.namelist()
+        for module, kernel in (("trackfuse/tracking/pda", "_filter_batch"),
+                               ("trackfuse/association/pga_search", "_search")):
+            folder, stem = module.rsplit("/", 1)
+            index = [n for n in names if n.startswith(f"{folder}/__pycache__/{stem}.{kernel}-")
+                     and n.endswith(".nbi")]
+            assert len(index) == 1, (module, index)
+            with wheel.open(index[0]) as f:
+                assert pickle.load(f) == numba.__version__
+                stamp, entries = pickle.loads(f.read())
+            assert stamp == hashlib.sha256(wheel.read(f"{module}.py")).digest()
+            assert len(entries) == 1  # one compiled version, the one a run asks for
