@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from conftest import trackfuse
 
-from trackfuse.config import ConfigError, build, load
+from trackfuse.config import TOP_LEVEL, ConfigError, build, load
 
 GOOD = """
 experiment: toy_experiments:GAUSSIAN
@@ -40,8 +40,7 @@ BAD = {
     "empty_file": ("", "", "", "", "the file is empty"),
     "not_mapping": ("- 1\n- 2", "", "", "", "expected a mapping"),
     "unknown_top_key": ("experiment: toy_gaussian\ntrails: 5", "trails",
-                        "experiment, title, trials, seed, batch_size, params, sweep, "
-                        "sweep_mode, outputs", "trials", ""),
+                        ", ".join(TOP_LEVEL), "trials", ""),
     "unknown_param": ("experiment: toy_gaussian\nparams: {sigam: 1}", "params.sigam", "",
                       "sigma", "unknown parameter"),
     "wrong_type": ("experiment: toy_gaussian\nparams: {n: many}", "params.n",
