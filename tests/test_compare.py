@@ -78,6 +78,7 @@ def test_per_cell_false_alarm_rate_is_near_the_nominal_level_and_power_is_high()
     assert len(gate(base, new, family_wise=False).regressions) / 300 >= 0.9
 
 
+@pytest.mark.slow
 def test_family_wise_gate_stays_quiet_over_many_null_cells():
     """300 null cells: Bonferroni keeps the chance of any alarm below alpha; over ten
     independent families at most one alarm is expected, and a real shift is still found."""

@@ -69,6 +69,7 @@ def test_random_documents_validate_or_fail_in_one_line(doc, extra, tmp_path):
     check(invoke(["run", str(path), "--dry-run", "--out", str(tmp_path / "o"), *flags]))
 
 
+@pytest.mark.slow
 @settings(max_examples=250, deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(text=st.text(max_size=200), cut=st.integers(0, 200))

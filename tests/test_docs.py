@@ -205,6 +205,7 @@ def _example_on_a_small_run(tmp_path, config: str, example: str, trials: int = 2
     return proc.stdout.splitlines()
 
 
+@pytest.mark.slow
 def test_the_esm_radar_spread_example_runs_on_a_run_folder(tmp_path):
     """examples/esm_radar_spread.py (docs/papers/esm_radar.md, W001-8) on a small run."""
     lines = _example_on_a_small_run(tmp_path, "esm_radar_baseline_spread.yaml",
@@ -213,6 +214,7 @@ def test_the_esm_radar_spread_example_runs_on_a_run_folder(tmp_path):
     assert len(lines) == 3 and all("of 20 trials change" in line for line in lines[1:])
 
 
+@pytest.mark.slow
 def test_the_esm_radar_cv_nis_example_runs_on_a_run_folder(tmp_path):
     """examples/esm_radar_cv_nis.py (docs/papers/esm_radar.md, W001-4) on a small run of the
     weave config: it recomputes the run's own index, and the weave raises every NIS."""
@@ -276,6 +278,7 @@ def test_the_gap_coverage_example_covers_a_normal_mean_at_the_nominal_level():
         assert abs(hits.mean() - 0.95) < 3 * np.sqrt(0.95 * 0.05 / 400)
 
 
+@pytest.mark.slow
 def test_the_first_update_example_prints_shift_and_formula():
     """examples/first_update_shift.py (docs/papers/twin_sensor.md, W000-3) on 200 trials."""
     proc = subprocess.run([sys.executable, "examples/first_update_shift.py", "--trials", "200",
@@ -287,6 +290,7 @@ def test_the_first_update_example_prints_shift_and_formula():
     assert lines[2].startswith("cue_2km: ") and lines[2].endswith("formula 20 m")
 
 
+@pytest.mark.slow
 def test_the_first_update_example_pairs_a_runs_own_trials(tmp_path, monkeypatch):
     """``--run`` (the number docs/results.md quotes): the shift is the run's scan-1 mean minus the
     prior mean on the same trials, its paired interval far narrower than the scan-1 mean's

@@ -84,6 +84,7 @@ def test_an_rms_metric_must_be_an_error_in_a_unit():
         Metric("e", "m", "an error", aggregate="median")
 
 
+@pytest.mark.slow
 def test_plot_and_compare_find_the_plugin_from_the_run_wherever_they_run(plugin_folder,
                                                                         tmp_path):
     out = tmp_path / "out"

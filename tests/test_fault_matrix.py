@@ -23,6 +23,8 @@ from conftest import trackfuse
 from trackfuse.config import build
 from trackfuse.runner import Runner
 
+pytestmark = pytest.mark.slow  # every fault on every executor, dask included
+
 #: fault -> (toy experiment, its ``how``, text every failed row's error holds, or ``None``
 #: for rows that are right however odd their container: they are kept[, config keys])
 FAULTS = {

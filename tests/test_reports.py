@@ -142,6 +142,7 @@ def test_the_headline_table_shows_its_interval_as_one_column(toy_run):
     assert {"ci_low", "ci_high"} <= set(csv.columns)
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(chromium() is None, reason="no Chromium on this machine (.ci/run "
                     "installs Debian's chromium package)")
 def test_the_run_page_loads_in_a_browser_with_every_image_decoded(toy_run, tmp_path):

@@ -96,6 +96,7 @@ def test_a_paper_none_of_whose_configs_ran_gets_no_empty_table(runs):
     assert "<table>" not in (out / REPORT_HTML).read_text()
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(chromium() is None, reason="no Chromium on this machine (.ci/run "
                     "installs Debian's chromium package)")
 def test_the_report_page_loads_in_a_browser_with_every_image_decoded(runs, tmp_path):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from conftest import trackfuse
 
 from trackfuse.shipped import config_folders, config_path, configs_folder
@@ -52,6 +53,7 @@ def test_run_dry_run_validate_and_run_name_the_file_they_used(tmp_path):
     assert shipped.endswith(f"/configs/{CI}.yaml: twin_sensor, 3 points x 8 trials")
 
 
+@pytest.mark.slow
 def test_run_by_name_says_which_file_it_ran(tmp_path):
     (tmp_path / "configs").mkdir()
     (tmp_path / "configs" / "toy.yaml").write_text("experiment: toy_experiments:TRIVIAL\n"

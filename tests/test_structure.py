@@ -4,8 +4,10 @@ draws nothing, functions stay short, experiments declare what their reports draw
 from __future__ import annotations
 
 import ast
+import re
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -231,3 +233,20 @@ def test_every_benchmark_script_imports():
             runpy.run_path(str(script), run_name="imported_by_a_test")
     finally:
         sys.path.remove(str(folder))
+
+
+# The test suite's own rules: `pytest` runs the fast suite quietly, the slow tests carry the
+# registered `slow` marker, and no test is switched on or off by an environment variable.
+
+def test_the_slow_marker_is_registered_and_the_default_run_is_quiet_and_strict():
+    options = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["pytest"][
+        "ini_options"]
+    assert any(marker.startswith("slow:") for marker in options["markers"])
+    assert set(options["addopts"].split()) >= {"-q", "--strict-markers"}
+
+
+def test_no_test_is_gated_by_an_environment_variable():
+    gate = re.compile(r"skip(?:if)?\([^)]*(?:os\.environ|os\.getenv)", re.S)
+    gated = [path.name for path in sorted((ROOT / "tests").glob("test_*.py"))
+             if gate.search(path.read_text(encoding="utf-8"))]
+    assert not gated, gated

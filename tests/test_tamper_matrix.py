@@ -27,6 +27,8 @@ from trackfuse.config import load
 from trackfuse.runner import Runner
 from trackfuse_cli.main import app
 
+pytestmark = pytest.mark.slow  # every damage against every command
+
 CONFIG = "experiment: toy_experiments:GAUSSIAN\ntrials: 6\nseed: 1\nsweep: {mu: [0, 1]}\n"
 #: Seconds a command may take before it counts as hung (each takes well under one).
 HANG_S = 30

@@ -286,12 +286,10 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
           experiment: Experiment | None = None) -> Config:
     """Validate a parsed YAML document plus overrides into a :class:`Config`.
 
-    ``sets`` are ``--set`` overrides (dotted key -> value; keys outside the top level are
-    experiment parameters, and a set on a swept key removes that axis); ``sweeps`` are
-    ``--sweep`` axes (dotted key -> list or ``"range(...)"``), replacing config axes. A bad
-    override is blamed on ``--set``/``--sweep``, not on the file. ``experiment``: the
-    object to run, used as it is instead of looking ``raw["experiment"]`` up by name.
-    """
+    ``sets``: ``--set`` overrides (dotted key -> value; a set on a swept key removes that
+    axis); ``sweeps``: ``--sweep`` axes (dotted key -> list or ``"range(...)"``), replacing
+    the file's. A bad override is blamed on ``--set``/``--sweep``, not on the file.
+    ``experiment``: run this object as it is instead of looking up ``raw["experiment"]``."""
     if raw is None:
         raise ConfigError(source, "", "the file is empty; expected a mapping with at least "
                                       "'experiment'")
