@@ -113,7 +113,7 @@ def gap_figure(run: RunData) -> Figure | str:
     swept = swept_keys(run.config)
     curve_keys = ["targets.n"] if "targets.n" in swept else []
     panels = _panels(mine, run.config, [_x_key(run.config), *curve_keys])
-    fig, axes = new_figure(len(panels), 1, 3.4, 2.6)
+    fig, axes = new_figure(len(panels), 1, 3.4, 2.8)
     axes = np.atleast_1d(axes)
     stop = 100.0 * float(run.config["params"]["sd.max_gap"])
     for ax, (title, rows) in zip(axes, panels, strict=True):
@@ -126,7 +126,7 @@ def gap_figure(run: RunData) -> Figure | str:
                     linestyle=LINE_STYLES[k % len(LINE_STYLES)])
         ax.axvline(stop, color="0.4", linestyle=":", linewidth=1.0, label="stopping gap")
         ax.set_xlabel("relative duality gap per trial (%)")
-        ax.set_ylabel("fraction of trials at or below")
+        ax.set_ylabel("fraction of trials (ECDF)")
         ax.set_ylim(0.0, 1.02)
         ax.set_title(title)
     legend_below(fig, *legend_entries(axes), column_width=1.6)
