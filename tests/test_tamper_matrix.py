@@ -205,7 +205,7 @@ def _snapshot(folder: Path) -> dict[str, bytes]:
     return {p.name: p.read_bytes() for p in sorted(folder.iterdir())}
 
 
-@pytest.mark.slow  # 221 commands, about 90 s: `pytest -m slow` or `pytest --all`
+@pytest.mark.slow  # 216 commands, about 90 s: `pytest -m slow` or `pytest --all`
 @pytest.mark.parametrize("command", COMMANDS)
 @pytest.mark.parametrize("damage", DAMAGES)
 def test_no_command_hangs_writes_outside_or_deletes_what_it_did_not_write(
