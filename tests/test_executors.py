@@ -14,7 +14,12 @@ import pytest
 from conftest import cli_env, trackfuse
 
 from trackfuse.config import build, load
-from trackfuse.executors import STOPPING_WHEN_LOADED, ExecutorError, make_executor
+from trackfuse.executors import (
+    STOPPING_WHEN_LOADED,
+    ExecutorError,
+    ProcessExecutor,
+    make_executor,
+)
 from trackfuse.results import BatchSpan, read_part
 from trackfuse.runner import Runner
 
@@ -397,3 +402,18 @@ def test_dask_workers_dying_every_time_is_one_line_and_exit_2_as_on_the_pool(wri
     assert result.returncode == 2, result.stderr
     assert result.stderr.startswith("error: dask workers died each time they ran one batch")
     assert result.stderr.count("\n") == 1, result.stderr
+
+
+def test_the_pool_replaces_its_workers_after_a_result_asks_for_it():
+    """A trial interrupted at its time limit was stopped wherever it was: its worker is
+    replaced once the batches in flight are done, and the run goes on in fresh ones."""
+    from toy_experiments import worker_pid
+
+    pool = ProcessExecutor(1)
+    try:
+        results = list(pool.imap_unordered(worker_pid, [True, *[False] * 6]))
+    finally:
+        pool.close()
+    first = results[0].pid
+    assert len(results) == 7 and results[-1].pid != first
+    assert [r.pid for r in results[3:]] == [results[-1].pid] * 4  # in flight: on the old one

@@ -461,3 +461,18 @@ UNRULY_REPORT = register(Experiment(
     report="toy_unruly_report",
     figures={"values": FigureSpec("nothing")},
 ))
+
+
+@dataclasses.dataclass(frozen=True)
+class WorkerPid:
+    """A result saying which worker process computed it, and whether to replace it."""
+
+    pid: int
+    renew_worker: bool
+
+
+def worker_pid(renew: bool) -> WorkerPid:
+    """The worker's process id (for tests of the pool's replacing its workers)."""
+    import os
+
+    return WorkerPid(os.getpid(), renew)

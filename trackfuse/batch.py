@@ -17,7 +17,7 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -27,7 +27,7 @@ from trackfuse.experiments.base import Experiment
 from trackfuse.results import FAILED_ROW, TIME_SUFFIX, BatchSpan, rows_to_csv, split_timings
 from trackfuse.rowtable import Constant, RowTable, columns_csv
 from trackfuse.seeding import batch_streams, seed_numpy_global, trial_streams
-from trackfuse.trial_guard import guarded
+from trackfuse.trial_guard import guarded, timeouts
 from trackfuse.trial_rows import checked_rows, table_problem, table_suspect
 
 #: Longest error text of a failed trial's row (characters): the record in ``trials.csv``
@@ -64,6 +64,8 @@ class BatchResult:
     timings_csv: str
     timing_rows: int
     wall_s: float
+    #: A trial of it was interrupted at its time limit: its worker is to be replaced.
+    renew_worker: bool = False
 
 
 def _on_sigint(signum: int, frame: object) -> None:
@@ -198,7 +200,15 @@ def execute_batch(task: BatchTask) -> BatchResult:
     """Run one batch (in a worker). A trial that fails becomes a ``failed`` row; a batch
     form that raises is run again trial by trial (to isolate the failing trials), one that
     returns rows without a declared metric fails all its trials (a retry would hide the
-    bug wherever ``run_trial`` is right)."""
+    bug wherever ``run_trial`` is right). A batch a trial of which was interrupted at its
+    time limit asks for its worker to be replaced (``renew_worker``)."""
+    before = timeouts()
+    result = _execute(task)
+    return replace(result, renew_worker=True) if timeouts() > before else result
+
+
+def _execute(task: BatchTask) -> BatchResult:
+    """:func:`execute_batch`, but for replacing the worker."""
     t0 = time.perf_counter()
     span = task.span
     trials = range(span.first, span.stop)

@@ -8,7 +8,9 @@ so completion order never reaches the output files.
 * ``serial``: in this process (debugging, profiling, tiny runs).
 * ``process``: :class:`concurrent.futures.ProcessPoolExecutor` with the ``forkserver``
   start method (safe next to the progress thread; workers import the package once). If a
-  worker dies, the pool is restarted and the unfinished batches are resubmitted.
+  worker dies, the pool is restarted and the unfinished batches are resubmitted. After a
+  trial was interrupted at its time limit (:mod:`trackfuse.trial_guard`), the batches in
+  flight finish and the workers are replaced before the next is submitted.
 * ``dask``: a ``dask.distributed`` client to a running scheduler (``tcp://host:8786`` or a
   scheduler file, the HPC way) or a LocalCluster started here. The scheduler retries a batch
   whose worker died (``distributed.scheduler.allowed-failures``). A scheduler file is read
@@ -167,9 +169,10 @@ class ProcessExecutor:
         pending: dict[Future, Any] = {}
         retry: list[Any] = []
         restarts = 0
+        renew = False  # a result asked for its worker to be replaced: drain, then renew
         while True:
             try:
-                while len(pending) < limit:
+                while len(pending) < limit and not renew:
                     task = retry.pop() if retry else next(tasks, _END)
                     if task is _END:
                         break
@@ -184,8 +187,12 @@ class ProcessExecutor:
             except BrokenProcessPool:
                 broken = True
             if not broken:
-                if not pending:
+                if not pending and not renew:
                     return
+                if not pending:
+                    self._renew_workers()
+                    renew = False
+                    continue
                 done, _ = wait(pending, return_when=FIRST_COMPLETED)
                 for future in done:
                     task = pending.pop(future)
@@ -195,6 +202,7 @@ class ProcessExecutor:
                         retry.append(task)
                         broken = True
                         continue
+                    renew = renew or getattr(result, "renew_worker", False)
                     yield result
             if broken:
                 restarts += 1
@@ -214,6 +222,20 @@ class ProcessExecutor:
         self._pool = ProcessPoolExecutor(self.workers, mp_context=self._ctx,
                                          initializer=setup_child, initargs=(os.getpid(),))
 
+    def _renew_workers(self) -> None:
+        """Replace the idle pool's workers with fresh ones: a trial was interrupted at its
+        time limit in one of them, wherever it was (a lock held, a module half set up)."""
+        self._end_workers()
+        self._pool = ProcessPoolExecutor(self.workers, mp_context=self._ctx,
+                                         initializer=setup_child, initargs=(os.getpid(),))
+
+    def _end_workers(self) -> None:
+        """Shut the pool down and end its workers at once (no other child process)."""
+        self._pool.shutdown(wait=False, cancel_futures=True)
+        for process in set(multiprocessing.active_children()) - self._other_children:
+            process.terminate()
+            process.join()
+
     def close(self, abort: bool = False) -> None:
         """Shut the pool down once its workers are idle; with ``abort`` (the run stops on an
         interrupt or an error) end them at once instead: their batches are lost anyway, and
@@ -222,10 +244,7 @@ class ProcessExecutor:
         if not abort:
             self._pool.shutdown(wait=True, cancel_futures=True)
             return
-        self._pool.shutdown(wait=False, cancel_futures=True)
-        for process in set(multiprocessing.active_children()) - self._other_children:
-            process.terminate()
-            process.join()
+        self._end_workers()
 
 
 class DaskExecutor:

@@ -36,6 +36,7 @@ _real_exit = os._exit
 _guarded: set[tuple[int, int]] = set()
 _left: weakref.WeakSet[threading.Thread] = weakref.WeakSet()
 _exit_hook_set = False
+_timeouts = 0  # trials this process interrupted at their time limit
 
 
 class PluginExit(BaseException):
@@ -65,6 +66,18 @@ def _timeout_of(limit: float) -> type[TrialTimeout]:
     def init(self: TrialTimeout) -> None:
         TrialTimeout.__init__(self, limit)
     return type("TrialTimeout", (TrialTimeout,), {"__init__": init})
+
+
+def timeouts() -> int:
+    """How many trials this process has interrupted at their time limit: a worker that
+    did is replaced once idle (:class:`~trackfuse.executors.ProcessExecutor`), since the
+    trial was stopped wherever it was."""
+    return _timeouts
+
+
+def _timed_out() -> None:
+    global _timeouts
+    _timeouts += 1
 
 
 def _exit_unless_guarded(code: int) -> None:
@@ -141,6 +154,7 @@ def _time_limit(limit: float | None) -> Iterator[None]:
 @contextmanager
 def _alarm(limit: float) -> Iterator[None]:
     def expire(signum: int, frame: Any) -> None:
+        _timed_out()
         raise TrialTimeout(limit)
 
     previous = signal.signal(signal.SIGALRM, expire)
@@ -162,6 +176,7 @@ def _async_alarm(limit: float) -> Iterator[None]:
     def expire() -> None:
         with lock:
             if state["active"]:
+                _timed_out()
                 ctypes.pythonapi.PyThreadState_SetAsyncExc(
                     ctypes.c_ulong(ident), ctypes.py_object(_timeout_of(limit)))
                 state["fired"] = True
