@@ -5,7 +5,7 @@ After the package files are copied into the build tree, ``python -m trackfuse.pr
 runs on them, so numba's on-disk cache (``__pycache__/*.nbi, *.nbc`` beside each kernel
 module) is packed with them and the first run after ``pip install .`` loads the kernels
 instead of compiling them (docs/benchmarks.md, "First run"). An editable install compiles on
-first use instead; a failed compile only warns: the kernels then compile on first use.
+first use instead; a kernel that fails to compile here only warns: it compiles on first use.
 """
 
 import os
@@ -28,12 +28,13 @@ class BuildPyWithKernels(build_py):
         for stale in [*tree.rglob("*.nbi"), *tree.rglob("*.nbc")]:  # an earlier build's
             stale.unlink()
         env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}
-        env["PYTHONPATH"] = str(tree)
+        # the build tree first, then pip's isolated build environment (numba, numpy)
+        env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(tree), env.get("PYTHONPATH")]))
         done = subprocess.run([sys.executable, "-m", "trackfuse.precompile"], env=env,
                               cwd=tree, capture_output=True, text=True)
         if done.returncode != 0:
-            self.warn("trackfuse: compiling the numba kernels failed; they will compile on "
-                      f"first use:\n{done.stderr[-2000:]}")
+            self.warn("trackfuse: some numba kernels did not compile here; they will compile "
+                      f"on first use:\n{done.stderr[-2000:]}")
 
 
 setup(cmdclass={"build_py": BuildPyWithKernels})

@@ -86,7 +86,7 @@ def main() -> None:
     exact = args.jacobian == "analytic"
     sc = build_scenario(p)
     streams = [trial_streams(1, 0, t) for t in range(args.trials)]
-    b = simulate(sc, [s for s in streams])
+    b = simulate(sc, list(streams))
     run_stonesoup("stonesoup_pda/ekf", p, sc, b, streams[:1])  # imports outside the timing
     start = time.perf_counter()
     usual = run_stonesoup("stonesoup_pda/ekf", p, sc, b, streams)

@@ -74,7 +74,7 @@ def prior_errors(p: dict, seed: int, point: int, trials: range) -> np.ndarray:
     """Each trial's prior range error (m): its initial estimate's distance from sensor 1 at
     scan 1 minus the true one."""
     sc = build_scenario(p)
-    x0 = np.stack([simulate(sc, trial_streams(seed, point, t)).x0 for t in trials])
+    x0 = simulate(sc, [trial_streams(seed, point, t) for t in trials]).x0
     r_true = np.linalg.norm(sc.x_start[:3] - sc.platform[1])
     return np.linalg.norm(x0[:, :3] - sc.platform[1], axis=1) - r_true
 

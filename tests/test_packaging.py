@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import hashlib
-import os
 import pickle
 import subprocess
 import sys
@@ -51,9 +50,7 @@ def test_shipped_configs_run_by_name_outside_a_checkout(tmp_path):
     assert config_path(Path("ci/passive_assoc_ci")).is_file()
 
 
-@pytest.mark.skipif(not os.environ.get("TRACKFUSE_COLD_COMPILE"),
-                    reason="builds the wheel, compiling the kernels (about 1 min); "
-                           "set TRACKFUSE_COLD_COMPILE=1")
+@pytest.mark.slow  # builds the wheel in pip's build environment, compiling the kernels
 def test_the_wheel_ships_the_kernels_compiled_for_its_own_sources(tmp_path):
     """setup.py packs numba's cache of both kernels beside their modules, stamped with the
     shipped sources (else numba would ignore it and compile on the first run)."""

@@ -95,8 +95,8 @@ def test_the_preload_compiles_the_versions_a_trial_calls(monkeypatch):
     else every worker compiles its own."""
     from numba import typeof
 
+    from trackfuse import precompile
     from trackfuse.association import sd_assignment, sd_costs
-    from trackfuse.experiments.passive_sd import preload
 
     def types_of(call) -> dict:
         seen = {"reduce_tail": set(), "_combination_fit": set()}
@@ -110,7 +110,7 @@ def test_the_preload_compiles_the_versions_a_trial_calls(monkeypatch):
         return seen
 
     trial = types_of(lambda: rows_of(params(**{"targets.n": 4})))
-    ahead = types_of(preload.load_kernels)
+    ahead = types_of(precompile.load_sd_kernels)
     assert all(trial.values()) and trial == ahead
 
 
