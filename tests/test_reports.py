@@ -333,5 +333,5 @@ def test_index_md_shows_raw_html_from_titles_and_names_as_text(toy_run, monkeypa
     for shown in ("# &lt;script&gt;alert(1)&lt;/script&gt; &amp; co",
                   "- &lt;img src=x onerror=alert(2)&gt;: &lt;b&gt;why&lt;/b&gt;",
                   "- figure &lt;i&gt;x&lt;/i&gt;: failed", "## Table: &lt;t&gt;",
-                  "| &lt;a href='http://example.com'&gt;a&lt;/a&gt; | 1 |"):
+                  "| &lt;a href='http://example.com'&gt;a&lt;/a&gt; | 1.00 |"):
         assert shown in md
