@@ -82,7 +82,7 @@ class PaperSection:
 
     def lines(self) -> list[Line]:
         """The bottom line: one verdict per paper item that declares its answer."""
-        return bottom_line(self.paper.results, self.rows)
+        return bottom_line(self.paper.results, self.rows, self.runs)
 
 
 def _headline(run: RunData) -> pd.DataFrame:
@@ -373,7 +373,7 @@ def _contents_html(sections: Sequence[PaperSection]) -> str:
     esc = html.escape
     items = "".join(
         f"<li><a href='#paper-{esc(s.key)}'>{esc(s.title)}</a><ul>"
-        + "".join(f"<li><a href='#{esc(s.key)}-{_anchor(f)}'>{esc(f.paper_item)} "
+        + "".join(f"<li><a href='#{esc(s.key)}-{_anchor(f)}'>{esc(f.paper_item or f.png.stem)} "
                   f"({esc(f.config)})</a></li>" for f in s.figures)
         + f"<li><a href='#{esc(s.key)}-rows'>every compared row</a></li></ul></li>"
         for s in sections)
@@ -382,7 +382,8 @@ def _contents_html(sections: Sequence[PaperSection]) -> str:
 
 
 def _anchor(f: MainFigure) -> str:
-    return re.sub(r"[^a-z0-9]+", "-", f"{f.paper_item} {f.config}".lower()).strip("-")
+    return re.sub(r"[^a-z0-9]+", "-", f"{f.paper_item or f.png.stem} {f.config}".lower()
+                  ).strip("-")
 
 
 def _section_html(s: PaperSection, out: Path) -> str:
@@ -392,10 +393,13 @@ def _section_html(s: PaperSection, out: Path) -> str:
     parts += [f"<p>problem: {esc(p)}</p>" for p in s.problems]
     for f in s.figures:
         rel = esc(os.path.relpath(f.png, out))
+        item = f.paper_item or f.png.stem
+        says = (paper_claims(s, f.paper_item) if f.paper_item
+                else "a figure of our own: the paper has none")
         parts.append(
-            f"<div class='pair' id='{esc(s.key)}-{_anchor(f)}'><div><h3>{esc(f.paper_item)}: "
-            f"the paper</h3><p>{esc(paper_claims(s, f.paper_item))}</p></div>"
-            f"<figure><img src='{rel}' alt='{esc(f.paper_item)}, {esc(f.config)}'>"
+            f"<div class='pair' id='{esc(s.key)}-{_anchor(f)}'><div><h3>{esc(item)}: "
+            f"the paper</h3><p>{esc(says)}</p></div>"
+            f"<figure><img src='{rel}' alt='{esc(item)}, {esc(f.config)}'>"
             f"<figcaption>Ours ({esc(f.config)}): {esc(f.caption)}</figcaption></figure></div>")
     if s.linked:
         parts.append("<p>Main figures of the other configs: " + ", ".join(

@@ -30,7 +30,7 @@ interval and a one-line reason in plain words (:class:`Verdict`). The rules:
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
 from decimal import ROUND_HALF_UP, Decimal
 
@@ -217,19 +217,22 @@ def _answers(item: Reported, rows: pd.DataFrame) -> pd.Series:
     return config & named & setting
 
 
-def bottom_line(results: Sequence[Reported], rows: pd.DataFrame) -> list[Line]:
+def bottom_line(results: Sequence[Reported], rows: pd.DataFrame,
+                ran: Collection[str] | None = None) -> list[Line]:
     """One :class:`Line` per item of ``results`` that declares an answer (rule 5 of the module
     docstring), from ``rows`` (headline rows of every config, with a ``config`` column):
     the answering rows' verdicts :func:`combined`; "not comparable" when the answering
-    config did not run or gave no row."""
+    config gave no row, or is not among the configs that ``ran`` (when given)."""
     out = []
     for item in (r for r in results if r.answer is not None):
         about = rows[rows["claim"] == item.quantity] if len(rows) else rows
         answering = about[_answers(item, about)] if len(about) else about
         supporting = about.drop(index=answering.index)
         if answering.empty:
-            out.append(Line(item, NOT_COMPARABLE, f"{item.answer.config} gave no row for it",
-                            answering, supporting))
+            config = item.answer.config
+            why = (f"{config} was not run" if ran is not None and config not in ran
+                   else f"{config} gave no row for it")
+            out.append(Line(item, NOT_COMPARABLE, why, answering, supporting))
             continue
         word = combined(list(answering["verdict"]))
         first = answering[answering["verdict"] == word].iloc[0]
