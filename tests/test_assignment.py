@@ -104,6 +104,21 @@ def test_paper_weights_sign_and_implied_gate():
     assert np.all(np.diff(w.a.ravel()[order]) <= 1e-12)
 
 
+def test_the_printed_eq_17_pairs_below_chi2_11_8_whatever_the_angle_unit():
+    """Eq. 17 as printed has no Gaussian normalising term: the pairing threshold is
+    4 ln(P_D / p_f) = 11.8, the same for every sigma (the sign-corrected "paper" weight's is
+    46.8 at sigma = 0.005 rad and moves with it)."""
+    p_d, p_f = 0.95, 0.05
+    threshold = 4 * np.log(p_d / p_f)
+    assert threshold == pytest.approx(11.8, abs=0.05)
+    sc = scan(4, n=10)
+    for sigma in (0.005, 0.02):
+        w = pair_weights(*sc.z, S1, S2, sigma, sigma, p_d, p_f, cost="printed")
+        np.testing.assert_allclose(w.a_i0, np.log(p_f))
+        np.testing.assert_allclose(w.gain > 0, w.chi2 < threshold)
+        np.testing.assert_allclose(w.a, 2 * np.log(p_d) - 0.5 * w.chi2)
+
+
 def test_pattipati_weights_use_fov_area():
     sc = scan(5, n=7)
     sigma, p_d = 0.005, 0.95

@@ -25,9 +25,11 @@ def test_every_package_is_listed_and_the_cli_is_renamed():
     config_folders = [f"trackfuse.configs.{d.name}" for d in (ROOT / "configs").iterdir()
                       if d.is_dir() and any(d.glob("*.yaml"))]
     assert sorted(listed) == sorted([*find_packages(str(ROOT), include=["trackfuse*"]),
-                                     "trackfuse_cli", "trackfuse.configs", *config_folders])
-    assert PYPROJECT["tool"]["setuptools"]["package-dir"] == {"trackfuse_cli": "cli",
-                                                              "trackfuse.configs": "configs"}
+                                     "trackfuse_cli", "trackfuse.configs", "trackfuse.papers",
+                                     *config_folders])
+    assert PYPROJECT["tool"]["setuptools"]["package-dir"] == {
+        "trackfuse_cli": "cli", "trackfuse.configs": "configs",
+        "trackfuse.papers": "docs/papers"}
     assert PYPROJECT["project"]["scripts"]["trackfuse"] == "trackfuse_cli.main:app"
 
 

@@ -397,8 +397,8 @@ def test_the_high_rate_verdict_follows_the_margin_below_the_optimum(shipped_run)
     rows = table[table["quantity"].str.startswith("accuracy after")]
     margin = 100 * PASSIVE_ASSOC.result("high correct rate").margin
     for _, row in rows.iterrows():
-        low, high = map(float, re.search(r"exact minus PGA \S+ points \((\S+) to (\S+)\)",
-                                         row["reason"]).groups())
+        low, high = (float(x.replace("\u2212", "-")) for x in re.search(
+            r"exact minus PGA \S+ points \((\S+) to (\S+)\)", row["reason"]).groups())
         expected = ("agrees" if high <= margin else "differs" if low > margin
                     else "inconclusive")
         assert row["verdict"] == expected, row["reason"]

@@ -12,7 +12,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 import toy_report
-from browser import chromium, decoded_images
+from browser import broken_links, chromium, decoded_images
 from PIL import Image
 
 from trackfuse import reports
@@ -34,6 +34,11 @@ def toy_run(tmp_path_factory):
                     sweep={"mu": [0.0, 1.0]}, trials=20, seed=4)
 
 
+def _facts(index_md: Path) -> str:
+    """The run facts of an ``index.md``: its ``## Run`` section."""
+    return index_md.read_text().split("\n## Run\n")[1].split("\n## ")[0]
+
+
 def test_each_interval_pair_becomes_one_column_after_its_estimate():
     table = pd.DataFrame({"algorithm": ["a"], "rmse_km": [1.23456], "rmse_km_ci_low": [1.0],
                           "rmse_km_ci_high": [1.5], "lost_pct": [2.0],
@@ -41,7 +46,7 @@ def test_each_interval_pair_becomes_one_column_after_its_estimate():
     shown = display_table(table)
     assert list(shown.columns) == ["algorithm", "rmse_km", "rmse_km 95 % CI", "lost_pct",
                                    "lost_pct 95 % CI"]
-    assert shown.loc[0, "lost_pct 95 % CI"] == "[0.5, 7.25]"
+    assert shown.loc[0, "lost_pct 95 % CI"] == "0.500\u20137.25"  # three significant figures
 
 
 def test_a_headline_row_shows_the_papers_value_as_printed_and_no_interval_of_an_exact_one():
@@ -55,9 +60,9 @@ def test_a_headline_row_shows_the_papers_value_as_printed_and_no_interval_of_an_
                          columns=reports.HEADLINE_COLUMNS).astype({"trials": "Int64"})
     shown = display_table(table)
     assert shown["paper_value"].tolist() == ["0.059375", "0.8959"]
-    assert shown.loc[0, "95 % CI"] == "" and shown.loc[1, "95 % CI"] == "[0.8, 0.95]"
+    assert shown.loc[0, "95 % CI"] == "" and shown.loc[1, "95 % CI"] == "0.800\u20130.950"
     first = reports.markdown_table(shown).splitlines()[2].split(" | ")
-    assert first[3:8] == ["0.059375", "0.05937", "", "1", ""]  # paper, ours, CI, unit, trials
+    assert first[3:8] == ["0.059375", "0.0594", "", "1", ""]  # paper, ours, CI, unit, trials
 
 
 def test_a_wanted_figure_the_report_cannot_draw_is_listed_with_its_reason(toy_run):
@@ -129,7 +134,7 @@ def test_the_index_written_while_the_run_finishes_prints_no_none(toy_run):
     running = dataclasses.replace(toy_run, manifest={
         **m, "finished": None, "versions": {**m["versions"], "stonesoup": None}})
     write_report(running)
-    facts = (toy_run.path / "index.md").read_text().split("\n## ")[0]
+    facts = _facts(toy_run.path / "index.md")
     assert "None" not in facts
     assert f"**started**: {m['started']}" in facts and "stonesoup not installed" in facts
 
@@ -145,12 +150,21 @@ def test_the_headline_table_shows_its_interval_as_one_column(toy_run):
 @pytest.mark.slow
 @pytest.mark.skipif(chromium() is None, reason="no Chromium on this machine (.ci/run "
                     "installs Debian's chromium package)")
-def test_the_run_page_loads_in_a_browser_with_every_image_decoded(toy_run, tmp_path):
-    write_report(toy_run)
+def test_the_run_page_loads_in_a_browser_with_every_image_decoded_and_link_resolving(
+        toy_run, tmp_path):
+    report = write_report(toy_run)
     shot = tmp_path / "index.png"
     images = decoded_images(toy_run.path / "index.html", shot)
     assert images == [("figures/estimate.png", True)]
     assert shot.stat().st_size > 10_000
+    # the contents, the reasons' links into the rendered note (its section lands), the note
+    # back to the page
+    assert report.notes == [toy_run.path / "notes" / "twin_sensor.html"]
+    count, broken = broken_links(toy_run.path / "index.html")
+    assert count >= 5 and not broken
+    page = (toy_run.path / "index.html").read_text()
+    assert "href='notes/twin_sensor.html#metrics'" in page
+    assert broken_links(report.notes[0])[1] == []
 
 
 @pytest.mark.slow
@@ -200,18 +214,20 @@ def test_the_headline_table_comes_before_the_figures_and_detail_tables_after(toy
                                                            "short_detail": short, **tables})
     write_report(toy_run)
     md = (toy_run.path / "index.md").read_text()
-    order = [md.index(h) for h in ("## Table: paper_vs_reproduced", "## Figure: estimate",
+    order = [md.index(h) for h in ("## Paper against reproduced", "## Figure: estimate",
                                    "## Table: long_detail", "## Table: short_detail")]
     assert order == sorted(order)
     # index.md links a long table (the orbit run's 1,346-row paired_loss made it 208 KB)
     assert "## Table: long_detail\n\n31 rows: [tables/long_detail.md](tables/long_detail.md)" \
-        in md and "| 30 | 1.5 |" not in md and "| 0 | 2.5 |" in md
+        in md and "| 30 | 1.50 |" not in md and "| 0 | 2.50 |" in md
     assert (toy_run.path / "tables" / "long_detail.md").exists()
     page = (toy_run.path / "index.html").read_text()
-    assert page.index("Table: paper_vs_reproduced") < page.index("<figure>") < page.index(
-        "<details><summary><h2 style='display:inline'>Table: long_detail</h2> (31 rows; also "
-        "<a href='tables/long_detail.csv'>") < page.index("<h2>Table: short_detail</h2>")
-    assert page.count("<details>") == 1
+    assert page.index("Paper against reproduced</h2>") < page.index("<h2 id='contents'>") \
+        < page.index("<figure") < page.index(
+        "<details id='table-long_detail'><summary><h2 style='display:inline'>Table: "
+        "long_detail</h2> (31 rows; also <a href='tables/long_detail.csv'>") \
+        < page.index("<h2 id='table-short_detail'>Table: short_detail</h2>")
+    assert page.count("<details") == 1
 
 
 def test_the_index_names_every_cpu_that_computed_the_run(toy_run):
@@ -221,7 +237,7 @@ def test_the_index_names_every_cpu_that_computed_the_run(toy_run):
                                                                         "Haswell"}}
     mixed = dataclasses.replace(toy_run, manifest={**m, "cpu": [*m["cpu"], older]})
     write_report(mixed)
-    facts = (toy_run.path / "index.md").read_text().split("\n## ")[0]
+    facts = _facts(toy_run.path / "index.md")
     here = m["cpu"][0]
     assert f"**CPU**: {here['model']}, numpy {'/'.join(here['numpy_simd'])}, " \
            f"{'/'.join(here['blas'])}; an older machine, numpy baseline, " \
@@ -317,5 +333,5 @@ def test_index_md_shows_raw_html_from_titles_and_names_as_text(toy_run, monkeypa
     for shown in ("# &lt;script&gt;alert(1)&lt;/script&gt; &amp; co",
                   "- &lt;img src=x onerror=alert(2)&gt;: &lt;b&gt;why&lt;/b&gt;",
                   "- figure &lt;i&gt;x&lt;/i&gt;: failed", "## Table: &lt;t&gt;",
-                  "| &lt;a href='http://example.com'&gt;a&lt;/a&gt; | 1 |"):
+                  "| &lt;a href='http://example.com'&gt;a&lt;/a&gt; | 1.00 |"):
         assert shown in md

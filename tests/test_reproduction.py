@@ -1,34 +1,37 @@
-"""The reproduce report (trackfuse/reproduction.py): one section per paper with verdicts,
-main figures beside the paper's claims, and a page a browser loads with every image."""
+"""The reproduce report (trackfuse/reproduction.py): a bottom line with one verdict per paper
+item, a table of contents, each main figure once beside the paper's claims, links to every
+run's page and to the rendered notes, and a page a browser loads with every image decoded
+and every link resolving."""
 
 from __future__ import annotations
 
 import pandas as pd
 import pytest
-from browser import chromium, decoded_images
+from browser import broken_links, chromium, decoded_images
 
 from trackfuse.config import load
 from trackfuse.harness import run_data
-from trackfuse.reported import ESM_RADAR, Paper, Reported
-from trackfuse.reports import VERDICTS
+from trackfuse.reported import ESM_RADAR, Answer, Paper, Reported
 from trackfuse.reproduction import (
     REPORT_HTML,
     REPORT_MD,
+    MainFigure,
     PaperSection,
     _claims,
-    _doc_link,
-    _summary_line,
     collect,
     main_figure_names,
+    one_per_item,
     paper_claims,
     paper_item_names,
     write_reproduction_report,
 )
 from trackfuse.runner import Runner
 
-TOY_PAPER = {"toy_gaussian": Paper("toy_gaussian", "A. Author, a toy paper, 2026", (
+TOY_PAPER = {"toy_gaussian": Paper("toy_gaussian", 'A. Author, "A toy paper", 2026', (
     Reported("Fig. 1", "coverage", 0.95, "fraction", 50, "the interval covers mu 95 % of "
-             "the time"),), configs=("paper",))}
+             "the time", answer=Answer("paper", "mean")),), configs=("paper",))}
+NEEDS_BROWSER = pytest.mark.skipif(chromium() is None, reason="no Chromium on this machine "
+                                   "(.ci/run installs Debian's chromium package)")
 
 
 @pytest.fixture(scope="module")
@@ -45,16 +48,27 @@ def runs(tmp_path_factory):
     return root, folders + [trivial.path]
 
 
-def test_one_section_per_paper_with_every_headline_row_and_main_figure(runs):
+def test_one_section_per_paper_with_every_configs_rows_and_one_figure_per_item(runs):
     root, folders = runs
     sections = collect(folders, TOY_PAPER)
     assert [s.key for s in sections] == ["toy_gaussian"]
     section = sections[0]
-    assert len(section.rows) == 2  # two algorithms of the paper's config; no toy_trivial
-    assert sum(section.verdict_counts().values()) == 2
-    assert sum(section.others["extension"].values()) == 2  # the other config: counts only
+    # two algorithms; both configs give the same coverage (it does not depend on sigma), so
+    # each row is listed once with both configs; no toy_trivial
+    assert len(section.rows) == 2
+    assert set(section.rows["config"]) == {"paper, extension"}
     assert [(f.config, f.paper_item) for f in section.figures] == [("paper", "Fig. 1")]
     assert [f.config for f in section.linked] == ["extension"]
+    assert set(section.runs) == {"paper", "extension"}
+
+
+def test_the_bottom_line_gives_one_verdict_from_the_declared_config(runs):
+    root, folders = runs
+    (line,) = collect(folders, TOY_PAPER)[0].lines()
+    assert list(line.answering["config"]) == ["paper, extension"]
+    assert list(line.answering["algorithm"]) == ["mean"]
+    assert list(line.supporting["algorithm"]) == ["median"]
+    assert line.verdict == line.answering["verdict"].iloc[0]
 
 
 def test_a_comparison_that_several_configs_give_identically_is_listed_once(runs):
@@ -66,49 +80,67 @@ def test_a_comparison_that_several_configs_give_identically_is_listed_once(runs)
     again = Runner(load(copy), root, executor="serial", progress=False).run()
     section = collect([folders[0], again.folder], paper)[0]
     assert len(section.rows) == 2 and set(section.rows["config"]) == {"paper, again"}
+    assert section.lines()[0].answering["config"].tolist() == ["paper, again"]
 
 
-def test_the_markdown_names_paper_value_our_interval_and_verdict(runs):
+def test_the_markdown_starts_with_the_bottom_line_and_links_every_run(runs):
     root, folders = runs
     write_reproduction_report(folders, root, TOY_PAPER)
     text = (root / REPORT_MD).read_text()
-    assert "## toy_gaussian" in text and "2 paper items compared in the paper's own" in text
-    assert "Other configs (their own index.html): extension: " in text
-    row = next(line for line in text.splitlines() if line.startswith("| paper | Fig. 1"))
-    assert "| 0.95 |" in row and "[" in row and ("**agrees**" in row or "**differs**" in row)
-    assert "Paper: Fig. 1: the interval covers mu 95 % of the time" in text
+    assert text.index("## Bottom line") < text.index("## A toy paper") < text.index("## Runs")
+    row = next(line for line in text.splitlines() if line.startswith("| A toy paper | Fig. 1 |"))
+    assert "the interval covers mu 95 %" in row and "| paper, mean |" in row
+    assert "(notes/twin_sensor.html#metrics)" in row  # the reason's link to its note
+    assert ("**agrees**" in row or "**differs**" in row)
+    for name in ("paper", "extension"):
+        link = next(line for line in text.splitlines() if line.startswith(f"- [{name}]("))
+        assert (root / link.split("(")[1].rstrip(")")).name == "index.html"
+        assert (root / link.split("(")[1].rstrip(")")).is_file()
     for line in text.splitlines():
         if line.startswith("!["):
             assert (root / line.split("(")[1].rstrip(")")).is_file()
 
 
-def test_a_paper_none_of_whose_configs_ran_gets_no_empty_table(runs):
-    """A reproduce of configs that are not the paper's own (configs/ci) printed a header-only
-    table under "No paper item could be compared"."""
+def test_the_page_reads_bottom_line_contents_papers_runs(runs):
+    root, folders = runs
+    page = write_reproduction_report(folders, root, TOY_PAPER).read_text()
+    order = [page.index(x) for x in ("id='bottom-line'", "id='contents'",
+                                     "id='paper-toy_gaussian'", "id='runs'")]
+    assert order == sorted(order)
+    # the other verdicts on the item fold under its row; numbers sit in the house format
+    assert "1 more verdict from other configs, methods or settings</summary>" in page
+    assert "W000" not in page and "paper_vs_reproduced" not in page
+    assert page.count("<img ") == 1  # each figure once
+
+
+def test_a_paper_none_of_whose_configs_ran_gets_no_bottom_line_row_that_pretends(runs):
     root, folders = runs
     toy = TOY_PAPER["toy_gaussian"]
-    paper = {"toy_gaussian": Paper(toy.key, toy.citation, toy.results, ("not-run",))}
-    out = root / "none"
-    out.mkdir()
-    write_reproduction_report(folders, out, paper)
-    text = (out / REPORT_MD).read_text()
-    assert "No paper item could be compared" in text and "| config |" not in text
-    assert "<table>" not in (out / REPORT_HTML).read_text()
+    item = Reported("Fig. 1", "coverage", 0.95, "fraction", 50, "covers",
+                    answer=Answer("not-run"))
+    paper = {"toy_gaussian": Paper(toy.key, toy.citation, (item,), ("not-run",))}
+    (line,) = collect(folders, paper)[0].lines()
+    assert line.verdict == "not comparable" and line.reason == "not-run was not run"
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(chromium() is None, reason="no Chromium on this machine (.ci/run "
-                    "installs Debian's chromium package)")
-def test_the_report_page_loads_in_a_browser_with_every_image_decoded(runs, tmp_path):
+@NEEDS_BROWSER
+def test_the_report_page_loads_with_every_image_decoded_and_every_link_resolving(runs,
+                                                                                 tmp_path):
     root, folders = runs
     page = write_reproduction_report(folders, root, TOY_PAPER)
     assert page == root / REPORT_HTML
     images = decoded_images(page, tmp_path / "report.png")
     assert len(images) == 1 and all(ok for _, ok in images)
+    count, broken = broken_links(page)
+    assert count >= 6 and not broken  # contents, runs, the note's section
+    note = root / "notes" / "twin_sensor.html"
+    count, broken = broken_links(note)
+    assert count >= 2 and not broken  # back to the report, within the note
 
 
 def test_a_paper_item_shows_every_claim_of_its_tables_and_figures():
-    section = PaperSection("esm_radar", "", _claims(ESM_RADAR), pd.DataFrame())
+    section = PaperSection(ESM_RADAR, _claims(ESM_RADAR), pd.DataFrame())
     text = paper_claims(section, "Table 3, Figs. 3-4")
     # Table 3 has several results, most without words: the words are not lost among them
     assert "Table 3: improved fuzzy comprehensive evaluation" in text
@@ -116,6 +148,14 @@ def test_a_paper_item_shows_every_claim_of_its_tables_and_figures():
     assert "Fig. 3: both methods degrade" in text and "Fig. 4: both decline" in text
     assert paper_item_names("Figs. 1-2, Abstract") == ["Fig. 1", "Fig. 2", "Abstract"]
     assert paper_claims(section, "Figs. 1-2").endswith("(the paper gives no number for it)")
+
+
+def test_each_paper_item_shows_the_figure_of_the_config_that_answers_it(tmp_path):
+    figures = [MainFigure(tmp_path / f"{c}.png", "", "Table 3", c)
+               for c in ("esm_radar_separation", "esm_radar_snake_cross")]
+    shown, linked = one_per_item(figures, ESM_RADAR)
+    assert [f.config for f in shown] == ["esm_radar_snake_cross"]
+    assert [f.config for f in linked] == ["esm_radar_separation"]
 
 
 def test_another_config_is_shown_by_its_declared_main_figure():
@@ -131,29 +171,3 @@ def test_another_config_is_shown_by_its_declared_main_figure():
         "loss_vs_manoeuvring_index"]
     # the paper's own config: every drawn paper figure, in the wanted order
     assert main_figure_names(declared, drawn, paper_items, own=True) == ["range_error_vs_time"]
-
-
-def test_doc_links_stay_valid_wherever_the_report_folder_is(tmp_path):
-    checkout = tmp_path / "checkout"
-    page = checkout / "guide" / "x.md"  # any page of the checkout (not a real docs page)
-    page.parent.mkdir(parents=True)
-    page.write_text("# x\n")
-    inside, outside = checkout / "results" / "repro", tmp_path / "elsewhere" / "repro"
-    link, text = _doc_link("guide/x.md#table-3", inside, [checkout])
-    assert text == "guide/x.md#table-3"
-    assert link == "../../guide/x.md#table-3"  # moves with the checkout
-    link, _ = _doc_link("guide/x.md#table-3", outside, [checkout])
-    assert link == f"{page.resolve()}#table-3"  # survives moving the report folder
-    assert _doc_link("guide/missing.md", outside, [checkout]) == ("", "guide/missing.md")
-
-
-def test_the_summary_counts_the_papers_methods_apart_from_ours():
-    """The reproduce report said "10 agrees, 9 differs" for paper 002 when every "agrees"
-    was one of our variants and every row of the paper's PGA differed."""
-    rows = pd.DataFrame({"algorithm": ["pga_paper", "pga_evict", "pga_anneal", None, "exact"],
-                         "verdict": ["differs", "agrees", "agrees", "differs", "differs"]})
-    section = PaperSection("toy", "a paper", {}, rows)
-    assert section.verdict_counts(ours=False) == {**dict.fromkeys(VERDICTS, 0), "differs": 3}
-    assert _summary_line(section).startswith(
-        "5 paper items compared in the paper's own configs: the paper's methods and claims "
-        "3 differs; ours and other variants 2 agrees.")

@@ -270,9 +270,9 @@ def test_the_reference_folder_holds_every_kind_of_file(reference):
     for expected in ("config.yaml", "manifest.json", "trials.csv", "timings.csv", "summary.csv",
                      "timings_summary.csv", "figures/estimate.png", ".lock", "index.md",
                      "index.html", "parts/p000001-b0000001.timings.csv",
-                     "tables/paper_vs_reproduced.csv"):
+                     "tables/paper_vs_reproduced.csv", "notes/twin_sensor.html"):
         assert expected in names
-    assert len(names) == 8 + 2 + 2 + 2 + 7  # files, figures, index, table, parts
+    assert len(names) == 8 + 2 + 2 + 2 + 1 + 7  # files, figures, index, table, note, parts
 
 
 @pytest.mark.parametrize("state", ["complete", "interrupted"])

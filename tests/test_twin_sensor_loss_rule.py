@@ -11,10 +11,9 @@ from trackfuse.experiments.twin_sensor.model import (
     build_scenario,
     score_estimates,
     simulate,
-    stack,
 )
-from trackfuse.experiments.twin_sensor.stonesoup import Estimates
 from trackfuse.seeding import trial_streams
+from trackfuse.tracking.pda_options import Estimates
 
 START = 4  # the first off-target scan (0-based)
 
@@ -24,7 +23,7 @@ def _scored(off_scans: int, window: int, rule: str) -> np.ndarray:
     for ``off_scans`` consecutive scans from :data:`START` (far off in angle for the angle
     rule, the target return outside every gate for the gate rule)."""
     sc = build_scenario(EXPERIMENT.defaults())
-    b = stack([simulate(sc, trial_streams(3, 0, 0))])
+    b = simulate(sc, [trial_streams(3, 0, 0)])
     X = b.x_true[:, 1:].copy()  # (1, K, 6): exactly on target
     inside = np.ones((1, sc.K), dtype=bool)
     off = slice(START, START + off_scans)

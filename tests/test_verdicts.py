@@ -95,7 +95,7 @@ def test_a_bound_from_the_papers_runs_is_the_largest_count_under_it():
         assert v.below_paper_bound(3 * n // 100, n, 0.05, 50).word == "agrees"
     high = v.below_paper_bound(10, 50, 0.05, 50)
     assert high.word == "differs" and high.low > 0
-    assert "at most 2 of 50 runs (4 %)" in high.reason
+    assert "at most 2 of 50 runs (4.00 %)" in high.reason
 
 
 @pytest.mark.parametrize(("ours", "printed", "word"), [

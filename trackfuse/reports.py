@@ -58,6 +58,10 @@ from trackfuse.child_processes import ctrl_c_held, setup_child
 from trackfuse.coerce import one_line
 from trackfuse.environment import cpu_words, recorded_cpus
 from trackfuse.failures import first_failure
+from trackfuse.reportkit.headline import READER_HEADERS, reader_cells
+from trackfuse.reportkit.htmltable import TABLE_CSS, cell_text, frame_html, html_table
+from trackfuse.reportkit.notes import NOTES, note_href, write_notes
+from trackfuse.reportkit.numberformat import interval_text
 from trackfuse.reportkit.verdicts import VERDICTS
 from trackfuse.results import (
     FAILED_ROW,
@@ -134,10 +138,12 @@ FIGURE_FILES = {".png": "the figure above, image (PNG)", ".pdf": "the figure abo
 
 @dataclass
 class Report:
-    """What :func:`write_report` wrote: figure and table files, the index, and one message
-    per figure or table that failed (the data stay complete), the reason for each wanted
-    figure this run's config cannot draw (``not_drawn``) and each table it cannot fill
-    (``not_tabulated``), and the files of an earlier draw it deleted (``removed``)."""
+    """What :func:`write_report` wrote: figure and table files, the index, the notes on the
+    paper its headline table links to (``notes``, :mod:`trackfuse.reportkit.notes`; their
+    links by docs page in ``note_pages``), one message per figure or table that failed (the
+    data stay complete), the reason for each wanted figure this run's config cannot draw
+    (``not_drawn``) and each table it cannot fill (``not_tabulated``), and the files of an
+    earlier draw it deleted (``removed``)."""
 
     figures: list[Path] = field(default_factory=list)
     tables: list[Path] = field(default_factory=list)
@@ -146,11 +152,14 @@ class Report:
     not_drawn: dict[str, str] = field(default_factory=dict)
     not_tabulated: dict[str, str] = field(default_factory=dict)
     removed: list[Path] = field(default_factory=list)
+    notes: list[Path] = field(default_factory=list)
+    note_pages: dict[str, str] = field(default_factory=dict)
 
     def manifest_entries(self, run_path: Path) -> dict[str, Any]:
         """What the run's manifest records of this report: its problems and its files,
         relative to the run folder ``run_path`` (:func:`trackfuse.runstate.has_report`)."""
-        files = [*self.figures, *self.tables, run_path / INDEX_MD, run_path / INDEX_HTML]
+        files = [*self.figures, *self.tables, *self.notes, run_path / INDEX_MD,
+                 run_path / INDEX_HTML]
         return {"figure_errors": list(self.errors),
                 REPORT_FILES: [p.relative_to(run_path).as_posix() for p in files]}
 
@@ -165,15 +174,11 @@ def md_text(text: Any) -> str:
     return html.escape(str(text), quote=False)
 
 
-def markdown_table(table: pd.DataFrame, digits: int = 4) -> str:
-    """A GitHub-style Markdown table; floats with ``digits`` significant digits; text as
-    :func:`md_text` writes it."""
+def markdown_table(table: pd.DataFrame) -> str:
+    """A GitHub-style Markdown table; numbers with three significant figures
+    (:func:`~trackfuse.reportkit.htmltable.cell_text`); text as :func:`md_text` writes it."""
     def cell(v: Any) -> str:
-        if isinstance(v, float):
-            return "" if pd.isna(v) else f"{v:.{digits}g}"
-        if v is pd.NA:  # a missing integer (a headline row with no trials)
-            return ""
-        return md_text(v).replace("|", "\\|")
+        return md_text(cell_text(v)).replace("|", "\\|")
 
     lines = ["| " + " | ".join(map(cell, table.columns)) + " |",
              "|" + "|".join("---" for _ in table.columns) + "|"]
@@ -193,9 +198,10 @@ def as_printed(value: Any) -> Any:
 
 def display_table(table: pd.DataFrame) -> pd.DataFrame:
     """``table`` for reading: each numeric pair ``<q>_ci_low``/``<q>_ci_high`` (or a bare
-    ``ci_low``/``ci_high``) becomes one column ``<q> 95 % CI`` holding ``[low, high]`` (4
-    significant digits), placed after ``<q>``; a paper's value is shown as printed
-    (:func:`as_printed`). The CSV files keep the numeric columns."""
+    ``ci_low``/``ci_high``) becomes one column ``<q> 95 % CI`` holding ``low–high`` (three
+    significant figures, :func:`~trackfuse.reportkit.numberformat.interval_text`), placed
+    after ``<q>``; a paper's value is shown as printed (:func:`as_printed`). The CSV files
+    keep the numeric columns."""
     shown = table.copy()
     if "paper_value" in shown.columns:
         shown["paper_value"] = [as_printed(v) for v in shown["paper_value"]]
@@ -205,8 +211,7 @@ def display_table(table: pd.DataFrame) -> pd.DataFrame:
         stem = stem.rstrip("_")
         if high not in shown.columns:
             continue
-        text = [("" if pd.isna(lo) or pd.isna(hi) else f"[{lo:.4g}, {hi:.4g}]")
-                for lo, hi in zip(shown[low], shown[high], strict=True)]
+        text = [interval_text(lo, hi) for lo, hi in zip(shown[low], shown[high], strict=True)]
         at = list(shown.columns).index(low)
         shown = shown.drop(columns=[low, high])
         shown.insert(min(at, len(shown.columns)), f"{stem} 95 % CI".lstrip(), text)
@@ -461,7 +466,12 @@ def write_report(run: RunData, wanted: Collection[str] | None = None,
     if module is not None:
         _write_figures(run, module, list(wanted), formats, report,
                        meanwhile=lambda: tables.update(_write_tables(run, module, report)))
-    written = {*report.figures, *report.tables, *(run.path / n for n in INDEX_FILES)}
+    if HEADLINE_TABLE in tables:  # its reasons link into the notes on the paper
+        report.note_pages = write_notes(run.path, f"../{INDEX_HTML}",
+                                        tables[HEADLINE_TABLE]["docs"])
+        report.notes = [run.path / page for page in report.note_pages.values()]
+    written = {*report.figures, *report.tables, *report.notes,
+               *(run.path / n for n in INDEX_FILES)}
     _remove_earlier(run, written, report)  # it would look like a result of this one
     md = index_markdown(run, tables, report)
     atomic_write(run.path / INDEX_MD, md)
@@ -531,16 +541,36 @@ def _figure_link(report: Report, name: str) -> tuple[str, bool]:
     return f"figures/{written[fmt].name}", fmt in SHOWN_FORMATS
 
 
+def _headline_cells(table: pd.DataFrame, report: Report, link: bool) -> list[list[str]]:
+    """The headline rows in a reader's words (:func:`~trackfuse.reportkit.headline.reader_cells`),
+    the reason last, followed, when ``link``, by an HTML link to its section of the notes."""
+    rows = []
+    for _, row in table.iterrows():
+        cells = reader_cells(row)
+        href = note_href(str(row.get("docs", "")), report.note_pages)
+        if link:
+            cells[-1] = html.escape(cells[-1]) + (
+                f" (<a href='{html.escape(href)}'>more</a>)" if href else "")
+        elif href:
+            cells[-1] += f" ([more]({href}))"
+        rows.append(cells)
+    return rows
+
+
 def index_markdown(run: RunData, tables: dict[str, pd.DataFrame], report: Report) -> str:
-    """The run's report as Markdown: what was run, the headline table, the figures, the
-    other tables (a link to one longer than :data:`FOLDED_TABLE_ROWS` rows), then what was
-    not drawn and the files."""
+    """The run's report as Markdown: the paper against this run first (when the experiment
+    has a headline table), what was run, the figures, the other tables (a link to one
+    longer than :data:`FOLDED_TABLE_ROWS` rows), then what was not drawn and the files."""
     esc = md_text
     lines = [f"# {esc(run.config.get('title') or run.config['experiment'])}", ""]
-    lines += [f"- **{k}**: {esc(v)}" for k, v in _run_facts(run)] + [""]
     headline, others = _split_tables(tables)
     for name in headline:
-        lines += [f"## Table: {esc(name)}", "", markdown_table(display_table(tables[name]))]
+        lines += ["## Paper against reproduced", "",
+                  "| " + " | ".join(READER_HEADERS) + " |",
+                  "|" + "|".join("---" for _ in READER_HEADERS) + "|"]
+        lines += ["| " + " | ".join(esc(c).replace("|", "\\|") for c in cells) + " |"
+                  for cells in _headline_cells(tables[name], report, link=False)] + [""]
+    lines += ["## Run", ""] + [f"- **{k}**: {esc(v)}" for k, v in _run_facts(run)] + [""]
     captions = _captions(run)
     for name in _figure_names(report):
         path, shown = _figure_link(report, name)
@@ -578,55 +608,80 @@ def _file_list(run: RunData, report: Report) -> list[tuple[str, str]]:
     files += [(f"tables/{p.name}", "report table") for p in report.tables]
     files += [(f"figures/{p.name}", FIGURE_FILES.get(p.suffix, "figure"))
               for p in report.figures]
+    files += [(f"{NOTES}/{p.name}", "the notes on the paper, which the reasons link to")
+              for p in report.notes]
     return files
 
 
 _CSS = ("body{font-family:sans-serif;max-width:70em;margin:2em auto;padding:0 1em;"
-        "line-height:1.4}table{border-collapse:collapse;font-size:90%;margin:1em 0}"
-        "td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}"
-        "th{background:#f3f3f3}img{max-width:100%}figure{margin:2em 0}"
+        "line-height:1.4}" + TABLE_CSS + "img{max-width:100%}figure{margin:2em 0}"
         "dt{font-weight:bold;float:left;width:8em}dd{margin-left:9em}")
 
 
+def _contents(run: RunData, tables: dict[str, pd.DataFrame], report: Report) -> str:
+    """The page's table of contents: the paper table, the run, each figure and table."""
+    esc = html.escape
+    headline, others = _split_tables(tables)
+    items = [("paper", "Paper against reproduced")] if headline else []
+    items += [("run", "Run: config, seed, code, machine")]
+    items += [(f"figure-{n}", f"Figure: {n}") for n in _figure_names(report)]
+    items += [(f"table-{n}", f"Table: {n}") for n in others]
+    items += [(h.lower().replace(" ", "-"), h) for h, r in (
+        ("Not drawn", report.not_drawn), ("Not tabulated", report.not_tabulated),
+        ("Problems", report.errors)) if r]
+    items += [("files", "Files")]
+    return ("<h2 id='contents'>Contents</h2><ul>" + "".join(
+        f"<li><a href='#{esc(a)}'>{esc(t)}</a></li>" for a, t in items) + "</ul>")
+
+
 def index_html(run: RunData, tables: dict[str, pd.DataFrame], report: Report) -> str:
-    """The run's report as one HTML page (no JavaScript; images beside it)."""
+    """The run's report as one HTML page (no JavaScript; images beside it): the paper
+    against this run first, a table of contents, then the run, figures and tables."""
     esc = html.escape
     title = esc(str(run.config.get("title") or run.config["experiment"]))
     parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>{title}"
-             f"</title><style>{_CSS}</style></head><body><h1>{title}</h1><dl>"]
-    parts += [f"<dt>{esc(k)}</dt><dd>{esc(v)}</dd>" for k, v in _run_facts(run)]
-    parts.append("</dl>")
+             f"</title><style>{_CSS}</style></head><body><h1>{title}</h1>"]
     headline, others = _split_tables(tables)
-    parts += [f"<h2>Table: {esc(name)}</h2>" + _html_table(tables[name]) for name in headline]
+    parts += ["<h2 id='paper'>Paper against reproduced</h2>" + html_table(
+        READER_HEADERS, _headline_cells(tables[name], report, link=True),
+        raw=[len(READER_HEADERS) - 1]) for name in headline]
+    parts.append(_contents(run, tables, report))
+    parts.append("<h2 id='run'>Run</h2><dl>" + "".join(
+        f"<dt>{esc(k)}</dt><dd>{esc(v)}</dd>" for k, v in _run_facts(run)) + "</dl>")
     captions = _captions(run)
     for name in _figure_names(report):
         path, shown = _figure_link(report, name)
         body = (f"<img src='{esc(path)}' alt='{esc(name)}'>" if shown
                 else f"<a href='{esc(path)}'>{esc(path)}</a>")
-        parts.append(f"<figure>{body}"
+        parts.append(f"<figure id='figure-{esc(name)}'>{body}"
                      f"<figcaption><b>{esc(name)}</b>: {esc(captions.get(name, ''))}"
                      "</figcaption></figure>")
-    for name in others:
-        rows = len(tables[name])
-        if rows > FOLDED_TABLE_ROWS:
-            parts.append(f"<details><summary><h2 style='display:inline'>Table: {esc(name)}</h2>"
-                         f" ({rows} rows; also <a href='tables/{esc(name)}.csv'>tables/"
-                         f"{esc(name)}.csv</a>)</summary>{_html_table(tables[name])}</details>")
-        else:
-            parts.append(f"<h2>Table: {esc(name)}</h2>" + _html_table(tables[name]))
+    parts += [_table_part(name, tables[name]) for name in others]
     for heading, reasons in (("Not drawn", report.not_drawn),
                              ("Not tabulated", report.not_tabulated)):
         if reasons:
-            parts.append(f"<h2>{heading}</h2><ul>" + "".join(
-                f"<li>{esc(n)}: {esc(why)}</li>" for n, why in reasons.items()) + "</ul>")
+            parts.append(f"<h2 id='{heading.lower().replace(' ', '-')}'>{heading}</h2><ul>"
+                         + "".join(f"<li>{esc(n)}: {esc(why)}</li>"
+                                   for n, why in reasons.items()) + "</ul>")
     if report.errors:
-        parts.append("<h2>Problems</h2><ul>"
+        parts.append("<h2 id='problems'>Problems</h2><ul>"
                      + "".join(f"<li>{esc(e)}</li>" for e in report.errors) + "</ul>")
-    parts.append("<h2>Files</h2><ul>" + "".join(
+    parts.append("<h2 id='files'>Files</h2><ul>" + "".join(
         f"<li><code>{esc(f)}</code>: {esc(d)}</li>" for f, d in _file_list(run, report))
         + "</ul></body></html>")
     return "\n".join(parts) + "\n"
 
 
+def _table_part(name: str, table: pd.DataFrame) -> str:
+    """A table of the page under its heading; folded (closed) when it is long."""
+    esc = html.escape
+    rows = len(table)
+    if rows > FOLDED_TABLE_ROWS:
+        return (f"<details id='table-{esc(name)}'><summary><h2 style='display:inline'>Table: "
+                f"{esc(name)}</h2> ({rows} rows; also <a href='tables/{esc(name)}.csv'>tables/"
+                f"{esc(name)}.csv</a>)</summary>{_html_table(table)}</details>")
+    return f"<h2 id='table-{esc(name)}'>Table: {esc(name)}</h2>" + _html_table(table)
+
+
 def _html_table(table: pd.DataFrame) -> str:
-    return display_table(table).to_html(index=False, na_rep="", float_format="{:.4g}".format)
+    return frame_html(display_table(table))

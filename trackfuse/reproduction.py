@@ -3,19 +3,18 @@
 :func:`write_reproduction_report` reads finished run folders (each one's
 ``tables/paper_vs_reproduced.csv``, in the :data:`trackfuse.reports.HEADLINE_COLUMNS` schema,
 its figures and its config) and writes :data:`REPORT_MD` and :data:`REPORT_HTML` into the
-output root. One section per paper: the citation, a count of verdicts, one row per paper
-item compared (the paper's value beside ours with its 95 % interval, the verdict and a
-one-line reason linking to ``docs/papers/``), then each main figure of the paper's own configs
-(a figure whose :class:`~trackfuse.experiments.base.FigureSpec` names a paper figure or table)
-beside what the paper itself shows, and a link to the main figure of every other config: the
-first figure of its ``outputs.figures`` that was drawn (the experiment's declared order when
-it says ``all``). The page needs no network and no JavaScript; its images are the run
-folders' PNG files, linked by relative paths.
+output root, with the notes of ``docs/papers/`` rendered beside them
+(:mod:`trackfuse.reportkit.notes`) so that each reason's link lands on its section.
 
-Links into ``docs/`` (the headline table's ``docs`` column) point at the checkout that holds
-the running code (else the current folder): relative to the output folder when it lies inside
-that checkout, so they survive moving the whole checkout; an absolute path otherwise, so they
-survive moving the output folder. A page found in neither is named without a link.
+The page reads as a document: first the bottom line, one row per paper item with one
+verdict from the config declared to answer it (:func:`trackfuse.reportkit.verdicts.bottom_line`)
+and a one-line reason, the other configs' verdicts for the item folded under it; then a
+table of contents; per paper, every compared row (folded), each main figure once beside
+what the paper itself shows (for each paper item, the figure of the config that answers
+it), links to the other configs' main figures; last, a link to every run's own
+``index.html``. Numbers in one format (:mod:`trackfuse.reportkit.numberformat`), methods
+by their display names. The page needs no network and no JavaScript; its images are the
+run folders' PNG files, linked by relative paths.
 """
 
 from __future__ import annotations
@@ -29,11 +28,14 @@ from pathlib import Path
 
 import pandas as pd
 
-import trackfuse
-from trackfuse.plots.algorithms import OUR_ROLES, look
 from trackfuse.reported import PAPERS, Paper
-from trackfuse.reports import HEADLINE_COLUMNS, HEADLINE_TABLE, VERDICTS, wanted_figures
-from trackfuse.results import atomic_write
+from trackfuse.reportkit.headline import READER_HEADERS, method, ours, reader_cells
+from trackfuse.reportkit.headline import text as _text
+from trackfuse.reportkit.htmltable import TABLE_CSS, html_table
+from trackfuse.reportkit.notes import note_href, write_notes
+from trackfuse.reportkit.verdicts import Line, bottom_line
+from trackfuse.reports import HEADLINE_COLUMNS, HEADLINE_TABLE, wanted_figures
+from trackfuse.results import INDEX_HTML, atomic_write
 from trackfuse.rundata import RunData, load
 
 #: Headline columns a report module may leave out: without them a row is listed with its
@@ -56,37 +58,31 @@ class MainFigure:
 @dataclass
 class PaperSection:
     """Everything the report shows for one paper (an experiment with reported results):
-    ``figures`` drawn beside the paper's claims (from the paper's own configs, or from every
-    config when none of those ran), ``linked`` the other configs' main figures."""
+    ``rows`` the headline rows of every config (with a ``config`` column), ``figures`` drawn
+    beside the paper's claims (one per paper item), ``linked`` the other main figures,
+    ``runs`` each config's run folder."""
 
-    key: str
-    citation: str
+    paper: Paper
     claims: dict[str, str]
     rows: pd.DataFrame
     figures: list[MainFigure] = field(default_factory=list)
     linked: list[MainFigure] = field(default_factory=list)
-    configs: list[str] = field(default_factory=list)
+    runs: dict[str, Path] = field(default_factory=dict)
     problems: list[str] = field(default_factory=list)
-    others: dict[str, dict[str, int]] = field(default_factory=dict)
 
-    def verdict_counts(self, ours: bool | None = None) -> dict[str, int]:
-        """How many compared items got each verdict (in :data:`VERDICTS` order): of every
-        row, or (``ours``) only of the rows about our methods and other variants, or (not
-        ``ours``) only of the rest (:func:`about_ours`)."""
-        rows = self.rows
-        if ours is not None and len(rows):
-            rows = rows[rows["algorithm"].map(about_ours) == ours]
-        counts = rows["verdict"].value_counts() if len(rows) else pd.Series()
-        return {v: int(counts.get(v, 0)) for v in VERDICTS}
+    @property
+    def key(self) -> str:
+        return self.paper.key
 
+    @property
+    def title(self) -> str:
+        """The paper's title in words (from its citation)."""
+        found = re.search(r'"([^"]+)"', self.paper.citation)
+        return found.group(1) if found else self.paper.key
 
-def about_ours(algorithm: object) -> bool:
-    """Whether a headline row's ``algorithm`` is one of ours or another variant
-    (:data:`trackfuse.plots.algorithms.ROLES`), not the paper's method or its baseline; a
-    row with no algorithm, or with a reference solver (the exact optimum answering the
-    paper's claim about the Hungarian method), is about the paper's claim itself."""
-    return isinstance(algorithm, str) and bool(algorithm) and \
-        look(algorithm).role in OUR_ROLES
+    def lines(self) -> list[Line]:
+        """The bottom line: one verdict per paper item that declares its answer."""
+        return bottom_line(self.paper.results, self.rows, self.runs)
 
 
 def _headline(run: RunData) -> pd.DataFrame:
@@ -146,8 +142,12 @@ def _claims(paper: Paper) -> dict[str, str]:
 def collect(folders: Sequence[Path],
             papers: Mapping[str, Paper] = PAPERS) -> list[PaperSection]:
     """One :class:`PaperSection` per paper among the complete runs in ``folders``, in the
-    order of ``papers`` (experiment name -> paper); other experiments' runs are skipped."""
+    order of ``papers`` (experiment name -> paper); other experiments' runs are skipped.
+    Every config's headline rows are kept (the bottom line picks the answering ones); the
+    main figures of the paper's own configs stand beside the paper, one per paper item
+    (:func:`one_per_item`), the rest are linked."""
     sections: dict[str, PaperSection] = {}
+    own_figures: dict[str, list[MainFigure]] = {}
     for folder in folders:
         run = load(folder)
         key = str(run.config["experiment"])
@@ -155,27 +155,42 @@ def collect(folders: Sequence[Path],
         if paper is None:
             continue
         section = sections.setdefault(key, PaperSection(
-            key, paper.citation, _claims(paper),
-            pd.DataFrame(columns=["config", *HEADLINE_COLUMNS])))
+            paper, _claims(paper), pd.DataFrame(columns=["config", *HEADLINE_COLUMNS])))
+        name = _config_name(run)
+        section.runs[name] = run.path
         try:
             rows = _headline(run)
         except ValueError as err:
             section.problems.append(str(err))
             rows = pd.DataFrame()
-        own = _config_name(run) in paper.configs or not paper.configs
-        if len(rows) and own:
+        if len(rows):
             section.rows = rows if section.rows.empty else pd.concat(
                 [section.rows, rows], ignore_index=True)
-        elif len(rows):
-            counts = rows["verdict"].value_counts()
-            section.others[_config_name(run)] = {v: int(counts.get(v, 0)) for v in VERDICTS}
-        (section.figures if own else section.linked).extend(_main_figures(run, own))
-        section.configs.append(_config_name(run))
-    for section in sections.values():
+        own = name in paper.configs or not paper.configs
+        figures = _main_figures(run, own)
+        (own_figures.setdefault(key, []) if own else section.linked).extend(figures)
+    for key, section in sections.items():
         section.rows = _merge_repeats(section.rows)
+        shown, more = one_per_item(own_figures.get(key, []), section.paper)
+        section.figures, section.linked = shown, more + section.linked
         if not section.figures:
             section.figures, section.linked = section.linked, []
     return [sections[k] for k in papers if k in sections]
+
+
+def one_per_item(figures: Sequence[MainFigure], paper: Paper
+                 ) -> tuple[list[MainFigure], list[MainFigure]]:
+    """``(shown, linked)``: each paper item's figure once, from the config declared to
+    answer one of its items when that config drew it (else the first), the others linked."""
+    answering = {(r.where, r.answer.config) for r in paper.results if r.answer}
+    def answers(f: MainFigure) -> bool:
+        return any((item, f.config) in answering for item in paper_item_names(f.paper_item))
+    ranked = sorted(figures, key=lambda f: not answers(f))  # stable: answering ones first
+    shown: dict[str, MainFigure] = {}
+    for f in ranked:
+        shown.setdefault(f.paper_item, f)
+    kept = [f for f in figures if shown.get(f.paper_item) is f]
+    return kept, [f for f in figures if shown.get(f.paper_item) is not f]
 
 
 def _merge_repeats(rows: pd.DataFrame) -> pd.DataFrame:
@@ -189,60 +204,6 @@ def _merge_repeats(rows: pd.DataFrame) -> pd.DataFrame:
     kept = rows.loc[~keys.duplicated()].copy()
     kept["config"] = configs.loc[keys[~keys.duplicated()]].to_numpy()
     return kept.reset_index(drop=True)
-
-
-def _text(value: object) -> str:
-    return "" if pd.isna(value) else str(value)
-
-
-def _ours(row: pd.Series) -> str:
-    value = row["reproduced"]
-    if pd.isna(value):
-        return ""
-    text = f"{value:.4g}"
-    if not (pd.isna(row["ci_low"]) or pd.isna(row["ci_high"])):
-        text += f" [{row['ci_low']:.4g}, {row['ci_high']:.4g}]"
-    unit = _text(row["unit"])
-    return f"{text} {unit}".strip() if unit not in ("1", "fraction") else text
-
-
-def _counted(counts: Mapping[str, int]) -> str:
-    return ", ".join(f"{n} {v}" for v, n in counts.items() if n) or "none"
-
-
-def _summary_line(section: PaperSection) -> str:
-    """The section's verdicts counted: the paper's methods and claims apart from ours and
-    other variants, so that our methods' agreement does not pass for the paper's."""
-    total = sum(section.verdict_counts().values())
-    line = (f"{total} paper items compared in the paper's own configs: the paper's methods and "
-            "claims "
-            f"{_counted(section.verdict_counts(ours=False))}; ours and other variants "
-            f"{_counted(section.verdict_counts(ours=True))}."
-            if total else "No paper item could be compared from the paper's own configs.")
-    others = "; ".join(f"{name}: {_counted(counts)}" for name, counts in section.others.items())
-    return line + (f" Other configs (their own index.html): {others}." if others else "")
-
-
-#: The checkout holding the running code (its ``docs/`` sits beside ``trackfuse/``).
-CHECKOUT = Path(trackfuse.__file__).resolve().parent.parent
-
-
-def _doc_link(docs: object, out: Path, checkouts: Sequence[Path] | None = None
-              ) -> tuple[str, str]:
-    """``(href, text)`` for the ``docs`` column (``docs/papers/<page>.md#<anchor>``): the page in
-    the first of ``checkouts`` (default: :data:`CHECKOUT`, then the current folder) that
-    holds it, linked relative to ``out`` when ``out`` lies inside that checkout, else by
-    its absolute path (see the module docstring); no link when no checkout holds it."""
-    target = "" if pd.isna(docs) else str(docs)
-    page, _, anchor = target.partition("#")
-    suffix = f"#{anchor}" if anchor else ""
-    for root in checkouts if checkouts is not None else (CHECKOUT, Path.cwd()):
-        local = root.resolve() / page
-        if target and local.is_file():
-            inside = out.resolve().is_relative_to(root.resolve())
-            return (os.path.relpath(local, out.resolve()) if inside else str(local)) + suffix, \
-                target
-    return "", target
 
 
 _ITEM = re.compile(r"(Figs?|Tables?)\.?\s*(\d+)(?:\s*-\s*(\d+))?$")
@@ -270,30 +231,69 @@ def paper_claims(section: PaperSection, paper_items: str) -> str:
     return " ".join(found) or f"{paper_items} (the paper gives no number for it)"
 
 
-def report_markdown(sections: Sequence[PaperSection], out: Path) -> str:
-    """The whole report as Markdown; image and doc links relative to ``out``."""
-    lines = ["# trackfuse reproduce: paper reported vs reproduced", "",
-             "Each paper item is set against our estimate with its 95 % interval; "
-             "`agrees` means the paper's number lies inside our interval (or the data show "
-             "its claim), `differs` that it lies outside (or the data contradict the claim), "
-             "`inconclusive` that the data can do neither, `not comparable` that the config "
-             "cannot answer it or the paper gives no number to set beside ours; the reason "
-             "is in one line. Links into "
-             "`docs/` point at the checkout that ran the code: relative when this folder lies "
-             "inside it, absolute otherwise.", ""]
+
+#: What each verdict word means, in one line each (the page's key).
+VERDICT_WORDS = (
+    ("agrees", "our result is consistent with the paper's number (its sample and ours), or "
+               "shows its claim"),
+    ("differs", "the paper's number lies outside what both samples allow, or the data exclude "
+                "the smallest effect that counts as the claim (declared before the run)"),
+    ("inconclusive", "the runs can neither show nor exclude the claim"),
+    ("not comparable", "the run cannot answer it, or the paper gives no number"),
+)
+
+
+def answered_by(line: Line) -> str:
+    """The config (and method, setting) declared to answer the line's item, in words."""
+    answer = line.item.answer
+    assert answer is not None
+    parts = [answer.config, method(answer.algorithm)]
+    parts += [f"{k} = {v}" for k, v in answer.setting.items()]
+    return ", ".join(p for p in parts if p)
+
+
+def _deciding(line: Line) -> pd.Series | None:
+    """The answering row whose verdict is the line's (the first), or ``None``."""
+    rows = line.answering[line.answering["verdict"] == line.verdict]
+    return rows.iloc[0] if len(rows) else None
+
+
+def _supporting_rows(line: Line) -> list[list[str]]:
+    """The other configs' (and settings') rows for the line's item: config, method,
+    quantity, ours, verdict."""
+    return [[_text(r["config"]), method(r["algorithm"]), _text(r["quantity"]), ours(r),
+             _text(r["verdict"])] for _, r in line.supporting.iterrows()]
+
+
+SUPPORT_HEADERS = ["config", "method", "what we measured", "ours (95 % interval)", "verdict"]
+ROW_HEADERS = ["config", *READER_HEADERS]
+
+
+def _row_cells(row: pd.Series) -> list[str]:
+    return [_text(row["config"]), *reader_cells(row)]
+
+
+def report_markdown(sections: Sequence[PaperSection], out: Path,
+                    notes: Mapping[str, str] | None = None) -> str:
+    """The whole report as Markdown; image, run and note links relative to ``out``."""
+    notes = notes or {}
+    lines = ["# Paper reported against reproduced", "", "## Bottom line", "",
+             "One verdict per paper item, from the config declared to answer it; "
+             + "; ".join(f"**{w}**: {m}" for w, m in VERDICT_WORDS) + ".", "",
+             "| paper | item | the paper says | verdict | answered by | why |",
+             "|---|---|---|---|---|---|"]
     for s in sections:
-        lines += [f"## {s.key}", "", f"*{s.citation}*", "", _summary_line(s), ""]
-        if not s.rows.empty:
-            lines += ["| config | paper item | quantity | algorithm | paper | ours [95 % CI] "
-                      "| verdict | reason |", "|---|---|---|---|---|---|---|---|"]
-        for _, r in s.rows.iterrows():
-            link, text = _doc_link(r["docs"], out)
-            reason = (f"{r['reason']} ([{text}]({link}))" if link
-                      else f"{r['reason']} ({text})" if text else str(r["reason"]))
-            cells = [r["config"], r["paper_item"], r["quantity"], _text(r["algorithm"]),
-                     _text(r["paper_value"]), _ours(r), f"**{r['verdict']}**", reason]
-            lines.append("| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |")
-        lines += [""] if not s.rows.empty else []
+        for line in s.lines():
+            lines.append(_md_row([s.title, line.item.where, line.item.claim,
+                                  f"**{line.verdict}**", answered_by(line),
+                                  line.reason + _md_note(line, notes)]))
+    lines += [""]
+    for s in sections:
+        lines += [f"## {s.title}", "", f"*{s.paper.citation}*", ""]
+        for line in (x for x in s.lines() if len(x.supporting)):
+            lines += [f"Other verdicts on {line.item.where}, {line.item.claim}:", ""]
+            lines += [f"- {r[0]}, {r[1] or 'no method'}: {r[2]}: {r[3]} **{r[4]}**"
+                      for r in _supporting_rows(line)] + [""]
         lines += [f"- problem: {p}" for p in s.problems] + ([""] if s.problems else [])
         for f in s.figures:
             rel = os.path.relpath(f.png, out)
@@ -304,74 +304,140 @@ def report_markdown(sections: Sequence[PaperSection], out: Path) -> str:
             lines += ["Main figures of the other configs: " + ", ".join(
                 f"[{f.config}: {f.png.stem}]({os.path.relpath(f.png, out)})"
                 for f in s.linked), ""]
+    lines += ["## Runs", ""] + [
+        f"- [{name}]({os.path.relpath(folder / INDEX_HTML, out)})"
+        for s in sections for name, folder in s.runs.items()]
     return "\n".join(lines) + "\n"
 
 
+def _md_row(cells: Sequence[str]) -> str:
+    return "| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |"
+
+
+def _md_note(line: Line, notes: Mapping[str, str]) -> str:
+    row = _deciding(line)
+    href = note_href(_text(row["docs"]), notes) if row is not None else ""
+    return f" ([more]({href}))" if href else ""
+
+
 _CSS = ("body{font-family:sans-serif;max-width:80em;margin:2em auto;padding:0 1em;"
-        "line-height:1.4}table{border-collapse:collapse;font-size:90%;margin:1em 0}"
-        "td,th{border:1px solid #ccc;padding:2px 6px;vertical-align:top}"
-        "th{background:#f3f3f3}.agrees{background:#e6f4ea}.differs{background:#fce8e6}"
-        ".inconclusive{background:#fef7e0}"
+        "line-height:1.4}" + TABLE_CSS +
+        ".agrees td.v{background:#e6f4ea}.differs td.v{background:#fce8e6}"
+        ".inconclusive td.v{background:#fef7e0}"
         ".pair{display:grid;grid-template-columns:1fr 2fr;gap:1em;margin:1.5em 0;"
         "border-top:1px solid #ddd;padding-top:1em}img{max-width:100%}"
-        "section{margin-bottom:3em}")
+        "section{margin-bottom:3em}details table{font-size:85%}td.why{min-width:24em}"
+        "th.paper{text-align:left;background:#e8eef7}")
+#: The bottom line's columns; the one of :data:`BOTTOM_NUMBER` holds numbers.
+BOTTOM_HEADERS = ("item", "the paper says", "verdict", "ours (95 % interval)", "answered by",
+                  "why")
+BOTTOM_NUMBER = 3
 
 
-def _html_rows(section: PaperSection, out: Path) -> str:
+def _bottom_row(line: Line, notes: Mapping[str, str]) -> str:
+    """One row of the bottom line; the other verdicts on its item folded in its reason."""
     esc = html.escape
-    if section.rows.empty:
-        return ""
-    head = ("<tr><th>config</th><th>paper item</th><th>quantity</th><th>algorithm</th>"
-            "<th>paper</th><th>ours [95 % CI]</th><th>verdict</th><th>reason</th></tr>")
-    body = []
-    for _, r in section.rows.iterrows():
-        link, text = _doc_link(r["docs"], out)
-        more = (f" (<a href='{esc(link)}'>{esc(text)}</a>)" if link
-                else f" ({esc(text)})" if text else "")
-        verdict = str(r["verdict"])
-        body.append(
-            f"<tr class='{esc(verdict.replace(' ', '-'))}'>" + "".join(
-                f"<td>{esc(_text(c))}</td>" for c in (r["config"], r["paper_item"],
-                                                      r["quantity"], r["algorithm"],
-                                                      r["paper_value"], _ours(r)))
-            + f"<td><b>{esc(verdict)}</b></td><td>{esc(str(r['reason']))}{more}</td></tr>")
-    return f"<table>{head}{''.join(body)}</table>"
+    row = _deciding(line)
+    href = note_href(_text(row["docs"]), notes) if row is not None else ""
+    why = esc(line.reason) + (f" (<a href='{esc(href)}'>more</a>)" if href else "")
+    if len(line.supporting):
+        more = len(line.supporting)
+        why += (f"<details><summary>{more} more verdict{'s' if more > 1 else ''} from other "
+                "configs, methods or settings</summary>"
+                + html_table(SUPPORT_HEADERS, _supporting_rows(line)) + "</details>")
+    cells = [line.item.where, line.item.claim, line.verdict,
+             ours(row) if row is not None else "", answered_by(line)]
+    classes = ["", "", "v", "num", ""]
+    tds = "".join(f"<td class='{c}'>{esc(text)}</td>" for c, text in zip(classes, cells,
+                                                                          strict=True))
+    return (f"<tr class='{esc(line.verdict.replace(' ', '-'))}'>{tds}"
+            f"<td class='why'>{why}</td></tr>")
 
 
-def report_html(sections: Sequence[PaperSection], out: Path) -> str:
-    """The whole report as one HTML page (no JavaScript); images linked relative to ``out``."""
+def _bottom_line_html(sections: Sequence[PaperSection], notes: Mapping[str, str]) -> str:
+    """The first screen: the bottom line, a heading row per paper, with the key to its
+    verdict words."""
+    head = "".join(f"<th class='{'num' if i == BOTTOM_NUMBER else ''}'>{h}</th>"
+                   for i, h in enumerate(BOTTOM_HEADERS))
+    body = "".join(
+        f"<tr><th colspan='{len(BOTTOM_HEADERS)}' class='paper'><a href='#paper-"
+        f"{html.escape(s.key)}'>{html.escape(s.title)}</a></th></tr>"
+        + "".join(_bottom_row(line, notes) for line in s.lines()) for s in sections)
+    key = "".join(f"<li><b>{w}</b>: {html.escape(m)}</li>" for w, m in VERDICT_WORDS)
+    return (f"<h2 id='bottom-line'>Bottom line</h2><p>One verdict per paper item, from the "
+            f"config declared to answer it.</p><table><tr>{head}</tr>{body}</table>"
+            f"<ul>{key}</ul>")
+
+
+def _contents_html(sections: Sequence[PaperSection]) -> str:
     esc = html.escape
+    items = "".join(
+        f"<li><a href='#paper-{esc(s.key)}'>{esc(s.title)}</a><ul>"
+        + "".join(f"<li><a href='#{esc(s.key)}-{_anchor(f)}'>{esc(f.paper_item or f.png.stem)} "
+                  f"({esc(f.config)})</a></li>" for f in s.figures)
+        + f"<li><a href='#{esc(s.key)}-rows'>every compared row</a></li></ul></li>"
+        for s in sections)
+    return (f"<h2 id='contents'>Contents</h2><ul><li><a href='#bottom-line'>Bottom line</a>"
+            f"</li>{items}<li><a href='#runs'>Runs: each config's own page</a></li></ul>")
+
+
+def _anchor(f: MainFigure) -> str:
+    return re.sub(r"[^a-z0-9]+", "-", f"{f.paper_item or f.png.stem} {f.config}".lower()
+                  ).strip("-")
+
+
+def _section_html(s: PaperSection, out: Path) -> str:
+    esc = html.escape
+    parts = [f"<section id='paper-{esc(s.key)}'><h2>{esc(s.title)}</h2>"
+             f"<p><i>{esc(s.paper.citation)}</i></p>"]
+    parts += [f"<p>problem: {esc(p)}</p>" for p in s.problems]
+    for f in s.figures:
+        rel = esc(os.path.relpath(f.png, out))
+        item = f.paper_item or f.png.stem
+        says = (paper_claims(s, f.paper_item) if f.paper_item
+                else "a figure of our own: the paper has none")
+        parts.append(
+            f"<div class='pair' id='{esc(s.key)}-{_anchor(f)}'><div><h3>{esc(item)}: "
+            f"the paper</h3><p>{esc(says)}</p></div>"
+            f"<figure><img src='{rel}' alt='{esc(item)}, {esc(f.config)}'>"
+            f"<figcaption>Ours ({esc(f.config)}): {esc(f.caption)}</figcaption></figure></div>")
+    if s.linked:
+        parts.append("<p>Main figures of the other configs: " + ", ".join(
+            f"<a href='{esc(os.path.relpath(f.png, out))}'>{esc(f.config)}: "
+            f"{esc(f.png.stem)}</a>" for f in s.linked) + "</p>")
+    rows = [_row_cells(r) for _, r in s.rows.iterrows()]
+    parts.append(f"<details id='{esc(s.key)}-rows'><summary>Every compared row ({len(rows)}, "
+                 "every config)</summary>"
+                 + (html_table(ROW_HEADERS, rows) if rows else "<p>none</p>") + "</details>")
+    return "".join(parts) + "</section>"
+
+
+def report_html(sections: Sequence[PaperSection], out: Path,
+                notes: Mapping[str, str] | None = None) -> str:
+    """The whole report as one HTML page (no JavaScript); images, runs and notes linked
+    relative to ``out``."""
+    esc = html.escape
+    notes = notes or {}
+    runs = "".join(f"<li><a href='{esc(os.path.relpath(folder / INDEX_HTML, out))}'>"
+                   f"{esc(name)}</a></li>" for s in sections for name, folder in s.runs.items())
     parts = ["<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
-             "<title>trackfuse reproduce: paper reported vs reproduced</title>"
+             "<title>Paper reported against reproduced</title>"
              f"<style>{_CSS}</style></head><body>"
-             "<h1>Paper reported vs reproduced</h1>"]
-    for s in sections:
-        parts.append(f"<section><h2>{esc(s.key)}</h2><p><i>{esc(s.citation)}</i></p>"
-                     f"<p>{esc(_summary_line(s))}</p>{_html_rows(s, out)}"
-                     + "".join(f"<p>problem: {esc(p)}</p>" for p in s.problems))
-        for f in s.figures:
-            rel = esc(os.path.relpath(f.png, out))
-            parts.append(
-                f"<div class='pair'><div><h3>{esc(f.paper_item)}: the paper</h3>"
-                f"<p>{esc(paper_claims(s, f.paper_item))}</p></div>"
-                f"<figure><img src='{rel}' alt='{esc(f.paper_item)}, {esc(f.config)}'>"
-                f"<figcaption>Ours ({esc(f.config)}): {esc(f.caption)}</figcaption>"
-                "</figure></div>")
-        if s.linked:
-            parts.append("<p>Main figures of the other configs: " + ", ".join(
-                f"<a href='{esc(os.path.relpath(f.png, out))}'>{esc(f.config)}: "
-                f"{esc(f.png.stem)}</a>" for f in s.linked) + "</p>")
-        parts.append("</section>")
-    parts.append("</body></html>")
+             "<h1>Paper reported against reproduced</h1>",
+             _bottom_line_html(sections, notes), _contents_html(sections),
+             *(_section_html(s, out) for s in sections),
+             f"<h2 id='runs'>Runs</h2><p>Each config's own page, with its run facts, every "
+             f"figure and table:</p><ul>{runs}</ul></body></html>"]
     return "\n".join(parts) + "\n"
 
 
 def write_reproduction_report(folders: Sequence[Path], out: Path,
                               papers: Mapping[str, Paper] = PAPERS) -> Path:
-    """Write ``out/REPORT.md`` and ``out/report.html`` for the runs in ``folders``;
-    returns the HTML path."""
+    """Write ``out/REPORT.md`` and ``out/report.html`` for the runs in ``folders``, with the
+    notes of ``docs/papers/`` rendered into ``out/notes/``; returns the HTML path."""
     out.mkdir(parents=True, exist_ok=True)
     sections = collect(folders, papers)
-    atomic_write(out / REPORT_MD, report_markdown(sections, out))
-    atomic_write(out / REPORT_HTML, report_html(sections, out))
+    notes = write_notes(out, f"../{REPORT_HTML}")
+    atomic_write(out / REPORT_MD, report_markdown(sections, out, notes))
+    atomic_write(out / REPORT_HTML, report_html(sections, out, notes))
     return out / REPORT_HTML

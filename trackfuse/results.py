@@ -52,7 +52,7 @@ TRIALS, TIMINGS, SUMMARY, MANIFEST, CONFIG = (
     "trials.csv", "timings.csv", "summary.csv", "manifest.json", "config.yaml")
 TIMING_SUMMARY = "timings_summary.csv"
 FINAL_FILES = (CONFIG, TRIALS, TIMINGS, SUMMARY, TIMING_SUMMARY)
-REPORT_DIRS = ("figures", "tables")
+REPORT_DIRS = ("figures", "tables", "notes")
 INDEX_MD, INDEX_HTML = "index.md", "index.html"
 INDEX_FILES = (INDEX_MD, INDEX_HTML)
 #: Manifest key: the report's files, relative to the run folder (written with the report);
@@ -455,7 +455,7 @@ class RunFolder:
     def report_files(self, manifest: dict[str, Any]) -> list[Path]:
         """The files the manifest's :data:`REPORT_FILES` records the report wrote that are
         still there (not folders): ``index.md``, ``index.html`` and plain names directly in
-        ``figures/`` or ``tables/``; any other entry (``../x``, ``trials.csv``) is ignored."""
+        one of :data:`REPORT_DIRS`; any other entry (``../x``, ``trials.csv``) is ignored."""
         recorded = manifest.get(REPORT_FILES)
         found = []
         for entry in recorded if isinstance(recorded, list) else []:

@@ -3,14 +3,20 @@
 Weights (``docs/papers/passive_assoc.md``, "Weights"). For a candidate pair (measurement
 ``i`` of sensor 1, ``j`` of sensor 2)
 triangulate ``p_hat`` (see :mod:`trackfuse.association.triangulation`), predict the four
-angles and form ``chi2_ij``, the sum of the four squared noise-normalised residuals. Two
-weight models are offered; both are *gains* to be maximised:
+angles and form ``chi2_ij``, the sum of the four squared noise-normalised residuals. Three
+weight models are offered; all are *gains* to be maximised:
 
 ``"paper"`` (paper 002, eq. 12-18, sign of the quadratic corrected)
     ``a_ij = sum_s [ln P_D - ln(2 pi sigma_a sigma_b)] - chi2_ij / 2`` and
     ``a_i0 = a_0j = ln p_f``. A pair beats two unpaired measurements iff
     ``chi2 < 2 sum_s ln(P_D / (2 pi sigma_a sigma_b p_f))``, a threshold that depends on the
     angle unit because a density is compared with a probability (weakness W002-4).
+``"printed"`` (paper 002's eq. 17 as printed, sign of the quadratic corrected)
+    ``a_ij = sum_s ln P_D - chi2_ij / 2`` and ``a_i0 = a_0j = ln p_f``: the printed weight
+    has no Gaussian normalising term ``ln(2 pi sigma_a sigma_b)``, so a pair beats two
+    unpaired measurements iff ``chi2 < 2 sum_s ln(P_D / p_f)`` (11.8 at P_D = 0.95,
+    p_f = 0.05; ``"paper"`` gives 46.8 at sigma = 0.005 rad). Its term ``- n_s ln p_m``
+    cannot be read and is left out, as in ``"paper"``.
 ``"pattipati"`` (Pattipati et al. 1992; Deb et al. 1997)
     ``a_ij = sum_s ln(P_D psi_s / (2 pi sigma_a sigma_b)) - chi2_ij / 2`` and
     ``a_i0 = a_0j = 0``, with ``psi_s`` the area of sensor ``s``'s field of view (rad^2),
@@ -59,7 +65,7 @@ import numpy as np
 
 from trackfuse.association.triangulation import angle_residuals, triangulate
 
-COSTS = ("paper", "pattipati")
+COSTS = ("paper", "printed", "pattipati")
 """Pair-weight forms of :func:`pair_weights`."""
 EXACT = ("lsa_clip", "lsa_augmented")
 """Exact solvers a config may choose; ``"enumerate"`` (brute force) is a test reference."""
@@ -135,16 +141,17 @@ def pair_weights(z1: np.ndarray, z2: np.ndarray, s1: np.ndarray, s2: np.ndarray,
     s1, s2 : (3,) sensor positions, m.
     sigma_a, sigma_b : angle noise standard deviations, rad (both sensors).
     p_d : detection probability (both sensors).
-    p_f : the paper's false-alarm likelihood (``"paper"`` cost only).
-    cost : ``"paper"`` or ``"pattipati"``.
+    p_f : the paper's false-alarm likelihood (``"paper"`` and ``"printed"`` costs).
+    cost : one of :data:`COSTS`.
     tri : triangulation method for ``p_hat``.
     psi : (2,) field-of-view areas, rad^2 (``"pattipati"`` cost only).
     """
     chi2 = pair_chi2(z1, z2, s1, s2, sigma_a, sigma_b, tri)
     m1, m2 = chi2.shape
     log_norm = np.log(2.0 * np.pi * sigma_a * sigma_b)
-    if cost == "paper":
-        a = 2.0 * (np.log(p_d) - log_norm) - 0.5 * chi2
+    if cost in ("paper", "printed"):
+        norm = log_norm if cost == "paper" else 0.0
+        a = 2.0 * (np.log(p_d) - norm) - 0.5 * chi2
         dummy = np.log(p_f)
     elif cost == "pattipati":
         a = np.sum(np.log(p_d * np.asarray(psi, dtype=float)) - log_norm) - 0.5 * chi2

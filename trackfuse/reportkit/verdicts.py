@@ -30,13 +30,14 @@ interval and a one-line reason in plain words (:class:`Verdict`). The rules:
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
 from decimal import ROUND_HALF_UP, Decimal
 
 import pandas as pd
 
 from trackfuse.reported import Reported
+from trackfuse.reportkit.numberformat import sig3
 from trackfuse.stats import proportion_difference_interval, two_proportion_p
 
 #: ``agrees``: the data are consistent with the paper's number (its sample and ours), or show
@@ -66,10 +67,8 @@ class Verdict:
 
 def points(value: float) -> str:
     """A difference of two rates (fractions) in percentage points, signed, 3 significant
-    figures: ``+1.60``, ``-8.20``, ``0``."""
-    if value == 0 or not math.isfinite(value):
-        return "0" if value == 0 else "n/a"
-    return f"{100 * value:+#.3g}".rstrip(".")
+    figures: ``+1.60``, ``−8.20``, ``0``."""
+    return sig3(100 * value, signed=True) if math.isfinite(value) else "n/a"
 
 
 def against_paper_sample(k: int, n: int, paper_k: int, paper_n: int) -> Verdict:
@@ -80,7 +79,7 @@ def against_paper_sample(k: int, n: int, paper_k: int, paper_n: int) -> Verdict:
     low, high = (float(v) for v in proportion_difference_interval(paper_k, paper_n, k, n))
     p = float(two_proportion_p(k, n, paper_k, paper_n))
     span = f"{points(diff)} points ({points(low)} to {points(high)}), p = {p:.2g}"
-    paper = f"the paper's {paper_k} of {paper_n} ({100 * paper_k / paper_n:.3g} %)"
+    paper = f"the paper's {paper_k} of {paper_n} ({sig3(100 * paper_k / paper_n)} %)"
     if low <= 0 <= high:
         return Verdict(AGREES, diff, low, high, f"consistent with {paper}: ours minus "
                        f"the paper's {span}")
@@ -97,7 +96,7 @@ def below_paper_bound(k: int, n: int, bound: float, paper_n: int) -> Verdict:
     diff = k / n - most / paper_n
     low, high = (float(v) for v in proportion_difference_interval(most, paper_n, k, n))
     span = f"{points(diff)} points ({points(low)} to {points(high)})"
-    paper = f"the paper's at most {most} of {paper_n} runs ({100 * most / paper_n:.3g} %)"
+    paper = f"the paper's at most {most} of {paper_n} runs ({sig3(100 * most / paper_n)} %)"
     if low > 0:
         return Verdict(DIFFERS, diff, low, high, f"above {paper} by {span}")
     return Verdict(AGREES, diff, low, high, f"consistent with {paper}: ours minus that {span}")
@@ -110,7 +109,7 @@ def at_least(estimate: float, low: float, high: float, margin: float, claim: str
     sign = 1.0 if margin > 0 else -1.0
     near, far = sorted((sign * low, sign * high))
     shown = f"{points(estimate)} points ({points(low)} to {points(high)})"
-    size = f"{100 * abs(margin):.3g} points"
+    size = f"{100 * abs(margin):g} points"  # declared, exact: not an estimate
     if far < abs(margin):
         return Verdict(DIFFERS, estimate, low, high, f"{shown}: {claim} of {size} or more, "
                        "the smallest that counts, is excluded")
@@ -210,25 +209,30 @@ def _answers(item: Reported, rows: pd.DataFrame) -> pd.Series:
     answer = item.answer
     assert answer is not None
     config = rows["config"].map(lambda c: answer.config in str(c).split(", "))
-    algorithm = rows["algorithm"].fillna("").astype(str)
-    named = algorithm == answer.algorithm if answer.algorithm else True
-    setting = rows["setting"].fillna("").map(lambda s: matches(s, answer.setting))
+    def text(value: object) -> str:
+        return "" if pd.isna(value) else str(value)
+
+    named = (rows["algorithm"].map(text) == answer.algorithm if answer.algorithm else True)
+    setting = rows["setting"].map(lambda s: matches(text(s), answer.setting))
     return config & named & setting
 
 
-def bottom_line(results: Sequence[Reported], rows: pd.DataFrame) -> list[Line]:
+def bottom_line(results: Sequence[Reported], rows: pd.DataFrame,
+                ran: Collection[str] | None = None) -> list[Line]:
     """One :class:`Line` per item of ``results`` that declares an answer (rule 5 of the module
     docstring), from ``rows`` (headline rows of every config, with a ``config`` column):
     the answering rows' verdicts :func:`combined`; "not comparable" when the answering
-    config did not run or gave no row."""
+    config gave no row, or is not among the configs that ``ran`` (when given)."""
     out = []
     for item in (r for r in results if r.answer is not None):
         about = rows[rows["claim"] == item.quantity] if len(rows) else rows
         answering = about[_answers(item, about)] if len(about) else about
         supporting = about.drop(index=answering.index)
         if answering.empty:
-            out.append(Line(item, NOT_COMPARABLE, f"{item.answer.config} gave no row for it",
-                            answering, supporting))
+            config = item.answer.config
+            why = (f"{config} was not run" if ran is not None and config not in ran
+                   else f"{config} gave no row for it")
+            out.append(Line(item, NOT_COMPARABLE, why, answering, supporting))
             continue
         word = combined(list(answering["verdict"]))
         first = answering[answering["verdict"] == word].iloc[0]

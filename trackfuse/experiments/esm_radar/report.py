@@ -297,7 +297,7 @@ def _table3_rows(run: RunData) -> list[dict[str, Any]]:
             verdict = against_paper_sample(int(x.sum()), len(x),
                                            round(item.value * item.runs), item.runs)
             why = ("; the radar's own TDOA decides the choice (see the notes on the radar's "
-                   "TDOA and phase)" if verdict.estimate < 0 and verdict.word == DIFFERS
+                   "TDOA and phase)" if verdict.estimate > 0 and verdict.word == DIFFERS
                    and params["radar.factor_model"] == "table" else "")
             out.append(headline_row(
                 "Table 3", "correct association rate at 200 m separation, radar range sd 1 %"
@@ -377,8 +377,9 @@ def _gap_rows(item: str, anchor: str, x: str, setting: str, imp: pd.DataFrame,
         out.append(headline_row(
             item, f"improved - traditional at the closest separation, {_fmt_x(x, x0)}{where}",
             "improved", "clearly higher", verdict.estimate, verdict.low, verdict.high,
-            "fraction", n, verdict.word, verdict.reason + " (same runs, Newcombe's paired "
-            "interval)", f"{DOCS}#{anchor}", claim=claim.quantity, setting=at))
+            "fraction difference", n, verdict.word,
+            verdict.reason + " (same runs, Newcombe's paired interval)", f"{DOCS}#{anchor}",
+            claim=claim.quantity, setting=at))
         out.append(_narrowing_row(item, anchor, x, where, imp, trad, xs, at))
     out.append(_always_higher_row(item, anchor, x, where, n, gaps, at))
     return out
@@ -421,8 +422,8 @@ def _narrowing_row(item: str, anchor: str, x: str, where: str, imp: pd.DataFrame
             f"the gap widens from {_fmt_x(x, xa)} to {_fmt_x(x, xb)}, Holm p = {q:.2g}"))
     return headline_row(item, f"gap at {_fmt_x(x, x0)} minus gap at {_fmt_x(x, x1)}, same "
                         f"trials{where}", "improved", "gap narrows as separation grows",
-                        d_end, lo_end, hi_end, "fraction", len(imp), verdict.word, reason,
-                        f"{DOCS}#{anchor}", claim=claim.quantity, setting=at)
+                        d_end, lo_end, hi_end, "fraction difference", len(imp), verdict.word,
+                        reason, f"{DOCS}#{anchor}", claim=claim.quantity, setting=at)
 
 
 def _always_higher_row(item: str, anchor: str, x: str, where: str, n: int,
@@ -453,7 +454,7 @@ def _always_higher_row(item: str, anchor: str, x: str, where: str, n: int,
     return headline_row("Abstract" if separation else item,
                         f"smallest improved - traditional over the {len(gaps)} values, at "
                         f"{_fmt_x(x, xm)}{where}", "improved", claim.claim, float(gm.diff),
-                        float(gm.low), float(gm.high), "fraction", n, word, reason,
+                        float(gm.low), float(gm.high), "fraction difference", n, word, reason,
                         f"{DOCS}#{anchor}", claim=claim.quantity, setting=at)
 
 
@@ -473,7 +474,7 @@ def _trend_rows(item: str, anchor: str, x: str, setting: str, rates: dict[str, p
         out.append(headline_row(item, f"rate at {_fmt_x(x, hard[0])} minus at "
                                 f"{_fmt_x(x, easy[0])}" + (f" ({setting})" if setting else ""),
                                 name, "declines", verdict.estimate, verdict.low, verdict.high,
-                                "fraction", len(r), verdict.word,
+                                "fraction difference", len(r), verdict.word,
                                 verdict.reason + " (same runs, Newcombe's paired interval)",
                                 f"{DOCS}#{anchor}", claim=claim.quantity, setting=at))
     return out

@@ -108,8 +108,9 @@ PARAMS = (
           "(cost 'paper' only)", "1", low=1e-12, high=1.0, draws=False),
     Param("assoc.tri", "unit_normal", "triangulation of a candidate pair", kind=str,
           choices=("paper", "unit_normal", "wls", "ml"), draws=False),
-    Param("assoc.cost", "paper", "assignment weights: the paper's (sign-corrected) or "
-          "Pattipati's FOV-normalised likelihood ratio", kind=str, choices=COSTS, draws=False),
+    Param("assoc.cost", "paper", "assignment weights: the paper's (sign-corrected, with the "
+          "Gaussian normalising term), its eq. 17 as printed (without it), or Pattipati's "
+          "FOV-normalised likelihood ratio", kind=str, choices=COSTS, draws=False),
     Param("assoc.exact", "lsa_clip", "exact solver for the reference optimum", kind=str,
           choices=EXACT, draws=False),
     Param("algorithms", ["exact", "pga_paper", "pga_evict"], "solvers reported per trial",

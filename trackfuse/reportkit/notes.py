@@ -1,0 +1,124 @@
+"""The notes on each paper (``docs/papers/*.md``) as HTML pages beside a report.
+
+A report's reasons link into these notes (``docs/papers/esm_radar.md#table-3``). A browser
+shows a Markdown file as raw text, where an anchor never lands, and an installed package
+has no ``docs/``; so the notes ship as the data package ``trackfuse.papers`` (see
+``pyproject.toml``) and :func:`write_notes` renders them with markdown-it-py (CommonMark and
+tables) into ``<out>/notes/<name>.html``, each heading with the id GitHub gives it, so the
+same anchors land. A link in a note to a file that is not rendered beside it (``../runner.md``)
+keeps its text and loses the link, so no link of the page leads nowhere.
+"""
+
+from __future__ import annotations
+
+import html
+import re
+from collections.abc import Collection
+from pathlib import Path
+
+from markdown_it import MarkdownIt
+from markdown_it.token import Token
+
+import trackfuse
+from trackfuse.results import atomic_write
+
+#: Where a report's ``docs`` links point, and the folder they are rendered into.
+DOCS_PREFIX = "docs/papers/"
+NOTES = "notes"
+_CSS = ("body{font-family:sans-serif;max-width:50em;margin:2em auto;padding:0 1em;"
+        "line-height:1.5}table{border-collapse:collapse;font-size:90%}"
+        "td,th{border:1px solid #ccc;padding:2px 6px;text-align:left}"
+        "pre{background:#f6f6f6;padding:.5em;overflow-x:auto}code{background:#f6f6f6}")
+
+
+def notes_folder() -> Path | None:
+    """The notes: ``trackfuse/papers`` of an installed package, else a checkout's
+    ``docs/papers`` beside the package; ``None`` if neither holds one."""
+    package = Path(trackfuse.__file__).resolve().parent
+    for folder in (package / "papers", package.parent / "docs" / "papers"):
+        if folder.is_dir() and any(folder.glob("*.md")):
+            return folder
+    return None
+
+
+def slug(text: str) -> str:
+    """GitHub's id of a heading: lower case, punctuation other than ``-`` and ``_``
+    dropped, each space a ``-`` (``"W001-2 radar TDOA"`` -> ``"w001-2-radar-tdoa"``)."""
+    return re.sub(r"[^\w\- ]", "", text.strip().lower()).replace(" ", "-")
+
+
+def _heading_ids(tokens: list[Token]) -> None:
+    """Give each heading its :func:`slug` as id, ``-1``, ``-2`` ... after a repeat."""
+    seen: dict[str, int] = {}
+    for opening, inline in zip(tokens, tokens[1:], strict=False):
+        if opening.type != "heading_open":
+            continue
+        text = "".join(c.content for c in inline.children or [] if c.type in ("text",
+                                                                                "code_inline"))
+        base = slug(text)
+        count = seen.get(base, 0)
+        seen[base] = count + 1
+        opening.attrSet("id", base if count == 0 else f"{base}-{count}")
+
+
+def _local_links(tokens: list[Token], rendered: set[str]) -> None:
+    """Point a link to another rendered note at its page; unlink one to a file that is not
+    rendered beside it (its text stays)."""
+    for token in (t for t in tokens for t in [t, *(t.children or [])]):
+        if token.type != "link_open":
+            continue
+        href = str(token.attrGet("href") or "")
+        page, _, anchor = href.partition("#")
+        if not page or "://" in page or href.startswith("mailto:"):
+            continue
+        if Path(page).name in rendered and Path(page).suffix == ".md":
+            token.attrSet("href", f"{Path(page).stem}.html" + (f"#{anchor}" if anchor else ""))
+        else:
+            token.tag = "span"
+            token.attrs = {}
+            token.type = "span_open"
+
+
+def render_note(text: str, title: str, rendered: set[str], back: str) -> str:
+    """One note (Markdown ``text``) as a standalone HTML page titled ``title``, linking to
+    the other ``rendered`` notes (file names) and ``back`` to the report."""
+    md = MarkdownIt("commonmark").enable("table")
+    tokens = md.parse(text)
+    _heading_ids(tokens)
+    _local_links(tokens, rendered)
+    body = md.renderer.render(tokens, md.options, {})
+    return (f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>"
+            f"{html.escape(title)}</title><style>{_CSS}</style></head><body>"
+            f"<p><a href='{html.escape(back)}'>Back to the report</a></p>{body}</body></html>\n")
+
+
+def write_notes(out: Path, back: str, only: Collection[str] | None = None) -> dict[str, str]:
+    """Render the notes into ``out/notes/`` (pages link ``back``, relative to that folder,
+    to the report): every note, or ``only`` those named (``docs/papers/<name>.md``, an
+    anchor allowed); returns ``{"docs/papers/<name>.md": "notes/<name>.html"}`` for the
+    notes written (empty when none is found)."""
+    folder = notes_folder()
+    wanted = None if only is None else {str(d).partition("#")[0] for d in only}
+    sources = [p for p in sorted(folder.glob("*.md")) if wanted is None
+               or f"{DOCS_PREFIX}{p.name}" in wanted] if folder is not None else []
+    if not sources:
+        return {}
+    (out / NOTES).mkdir(parents=True, exist_ok=True)
+    rendered = {p.name for p in sources}
+    written = {}
+    for source in sources:
+        text = source.read_text(encoding="utf-8")
+        title = next((line.lstrip("# ") for line in text.splitlines() if line.startswith("#")),
+                     source.stem)
+        atomic_write(out / NOTES / f"{source.stem}.html",
+                     render_note(text, title, rendered, back))
+        written[f"{DOCS_PREFIX}{source.name}"] = f"{NOTES}/{source.stem}.html"
+    return written
+
+
+def note_href(docs: str, written: dict[str, str]) -> str:
+    """The link of a report's ``docs`` entry (``docs/papers/<name>.md#<anchor>``) to its
+    rendered note, relative to the report; ``""`` when the note was not rendered."""
+    page, _, anchor = str(docs).partition("#")
+    target = written.get(page)
+    return "" if target is None else target + (f"#{anchor}" if anchor else "")
