@@ -14,7 +14,7 @@ from conftest import ROOT, TESTS, cli_env, ctrl_c_at_part
 from toy_experiments import GAUSSIAN
 
 from trackfuse.config import load
-from trackfuse.environment import unseen_cpus
+from trackfuse.environment import recorded_cpus, unseen_cpus
 from trackfuse.experiments import get
 from trackfuse.fingerprint import NUMBERS_PATH, code_fingerprint
 from trackfuse.runner import RunInterrupted, Runner
@@ -220,3 +220,11 @@ def test_a_cpu_recorded_before_blas_was_is_compared_on_the_rest():
     assert unseen_cpus([here], [older]) == []
     assert unseen_cpus([here], [{**older, "numpy_simd": ["SSE42"]}]) == [here]
     assert unseen_cpus([here], [{**here, "blas": ["openblas SkylakeX"]}]) == [here]
+
+
+@pytest.mark.parametrize("recorded", [{"model": "AMD EPYC"}, [{"model": "AMD EPYC"}], None])
+def test_every_manifest_form_of_the_cpu_is_read(recorded):
+    """A manifest from before the CPUs were listed holds one dict, or none: the run page's
+    provenance reads each form."""
+    found = recorded_cpus(recorded)
+    assert [c["model"] for c in found] == ([] if recorded is None else ["AMD EPYC"])

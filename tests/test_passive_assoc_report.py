@@ -404,14 +404,6 @@ def test_the_high_rate_verdict_follows_the_margin_below_the_optimum(shipped_run)
         assert row["verdict"] == expected, row["reason"]
 
 
-@pytest.mark.parametrize("cpu", [{"model": "AMD EPYC"}, [{"model": "AMD EPYC"}], None])
-def test_the_machine_words_read_every_manifest_form_of_the_cpu(cpu):
-    """A run recorded before the manifest listed its CPUs (``cpu`` one dict, or none) made
-    the scale figure fail with an AttributeError."""
-    words = report._machine({"workers": 2, "cpu": cpu})
-    assert words == ("2 workers, AMD EPYC" if cpu else "2 workers, CPU not recorded")
-
-
 def test_a_variant_is_one_headline_row_per_setting_when_algorithms_are_swept(tmp_path):
     """Two points of a swept algorithms list run pga_paper on the same draws: its headline
     rows came twice, alike."""
