@@ -1,19 +1,19 @@
 """How robust is the Table 3 match of paper 001 (docs/papers/esm_radar.md, "Table 3 under
 jointly varied open settings")?
 
-``configs/esm_radar_robustness.yaml`` runs the Table 3 scene (200 m separation, radar range
-sd 1 %, the paper's two methods) at 40 settings of the six things the paper leaves open, each
-under both readings of the radar's TDOA/phase factors (80 points, 500 trials each). The 40
-settings are a Latin hypercube over the ranges in :data:`RANGES`, drawn once with
+``examples/esm_radar_robustness_lhs.yaml`` runs the Table 3 scene (200 m separation, radar
+range sd 1 %, the paper's two methods) at 40 joint settings of seven values the paper leaves
+open, each under both readings of the radar's TDOA/phase factors (80 points, 500 trials
+each). The 40 settings are a Latin hypercube over the ranges in :data:`RANGES`, drawn once with
 :data:`DESIGN_SEED` and written out literally in the config; ``design`` prints that block
 again, so the config can be checked against its recipe.
 
 Usage::
 
-    python examples/esm_radar_robustness.py design            # the config's sweep block
-    trackfuse run configs/esm_radar_robustness.yaml --no-plots
-    python examples/esm_radar_robustness.py judge results/esm_radar_robustness/seed20170638-<id> \\
-        --png robustness.png --csv robustness.csv
+    python examples/esm_radar_robustness_lhs.py design      # the config's sweep block
+    trackfuse run examples/esm_radar_robustness_lhs.yaml --no-plots
+    python examples/esm_radar_robustness_lhs.py judge \\
+        results/esm_radar_robustness_lhs/seed20170638-<id> --png lhs.png --csv lhs.csv
 
 ``judge`` reads the run's ``summary.csv`` (each point's correct count is its ``n`` times its
 ``mean``), compares each method's count with the paper's (370 and 276 of 500) as two
