@@ -1,5 +1,5 @@
-"""How robust is the Table 3 match of paper 001 (docs/papers/esm_radar.md, "Table 3 under
-jointly varied open settings")?
+"""How robust is the Table 3 match of paper 001 (docs/papers/esm_radar.md, "How robust is
+the match: all settings at once")?
 
 ``examples/esm_radar_robustness_lhs.yaml`` runs the Table 3 scene (200 m separation, radar
 range sd 1 %, the paper's two methods) at 40 joint settings of seven values the paper leaves
