@@ -148,7 +148,8 @@ def figure(table: pd.DataFrame, settings: pd.DataFrame, png: Path) -> None:
                 m = g["consistent"].to_numpy() == ok
                 ax.plot(x[m], rate[m], markers[algorithm], ms=3.5, color=colours[algorithm],
                         mfc=colours[algorithm] if ok else "white",
-                        label=f"{algorithm}, {'consistent' if ok else 'differs'}")
+                        label=f"{algorithm}: {'consistent with' if ok else 'differs from'}"
+                              " the paper")
             k, n = PAPER[algorithm]
             ax.axhline(100 * k / n, color=colours[algorithm], ls="--", lw=0.9,
                        label=f"paper's {algorithm} ({100 * k / n:.1f} %, {k}/{n})")
