@@ -479,10 +479,11 @@ def plot(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR",
     """Redraw every figure and table of RUN_DIR from its CSVs (nothing is recomputed).
 
     The final files are checked against the checksums in the run's manifest first. Only
-    files an earlier draw wrote (the manifest lists them) are replaced or deleted. The
-    figures show the successful trials; a run with none (or whose trials.csv lacks a column
-    the runner writes) is refused and its earlier report removed. Plotting a run of a plugin
-    experiment imports the plugin's module (a config is code)."""
+    files an earlier draw wrote (the manifest lists them) are replaced or deleted.
+
+    The figures show the successful trials; a run with none (or whose trials.csv lacks a
+    column the runner writes) is refused and its earlier report removed. Plotting a run of a
+    plugin experiment imports the plugin's module (a config is code)."""
     from trackfuse.failures import first_failure
     from trackfuse.reports import write_report
     from trackfuse.results import CONFIG, RunFolder, RunFolderError, removed_words
@@ -744,9 +745,11 @@ def compare(
     A cell is a sweep point x row key x metric: both means, the difference NEW - BASE with
     its 95 % interval. Runs with the same seed are paired on the trials both have (paired t,
     Newcombe and McNemar for 0/1 metrics); otherwise unpaired (Welch, Newcombe hybrid
-    score). The config values that differ between the runs are listed. A one-line bottom
-    line comes first, the gated cells (metrics with a better direction) before the others;
-    --metric and --algorithm narrow the comparison (and the gate's family) to those cells.
+    score). The config values that differ between the runs are listed.
+
+    A one-line bottom line comes first, the gated cells (metrics with a better direction)
+    before the others; --metric and --algorithm narrow the comparison (and the gate's
+    family) to those cells.
 
     Exit 0; 1 with --fail-on-regression on a regression, a cell of BASE missing from NEW,
     nothing compared or nothing gated (the reason in one line on stderr; cells only NEW has

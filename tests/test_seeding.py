@@ -72,7 +72,8 @@ def test_only_the_shipped_configs_with_a_non_drawing_axis_share_clutter_across_p
             sharing.add(path.stem)
     expected = {"passive_mutation", "passive_mutation_ci", "twin_sensor_range",
                 "twin_sensor_stonesoup_jacobian", "esm_radar_baseline_spread",
-                "esm_radar_weave", "passive_noise", "passive_noise_ci"}
+                "esm_radar_weave", "passive_noise", "passive_noise_ci", "passive_best_pm",
+                "passive_3sensor", "passive_3sensor_ci"}
     assert sharing == {name for name in expected if HAS_STONESOUP or name not in NEEDS_EXTRA}
 
 
