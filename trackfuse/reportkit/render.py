@@ -1,0 +1,307 @@
+"""The one renderer: draws a declared :class:`~trackfuse.reportkit.spec.Plot` from a
+finished run's ``summary.csv`` (no trial is recomputed).
+
+Labels come from the experiment's declaration (``Param.label``, ``Metric.label``,
+``Experiment.row_labels``) in print typography (:mod:`.typography`); each algorithm takes
+its declared look (:mod:`.looks`); rates and fractions are drawn in %. A curve that would
+hide another (the same means at every x) is shifted sideways by a small offset.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from trackfuse.reportkit import axes as kit_axes
+from trackfuse.reportkit.looks import Look, look_of
+from trackfuse.reportkit.spec import MAX_ENTRIES, Plot, Reference
+from trackfuse.reportkit.style import context, legend_below, panels
+from trackfuse.reportkit.typography import number, unit_text
+
+if TYPE_CHECKING:
+    from trackfuse.experiments.base import Experiment
+    from trackfuse.rundata import RunData
+
+#: Shading of an interval band, and of a reference's (lighter, behind every band).
+BAND_ALPHA, REFERENCE_BAND = 0.18, {"color": "k", "alpha": 0.07, "linewidth": 0, "zorder": 0.5}
+#: Sideways shift of a curve that coincides with one drawn before it, as a fraction of the
+#: x span on the axis's scale; of the points of one category, the spread of the methods.
+COINCIDING_SHIFT, CATEGORY_SPREAD = 0.012, 0.28
+#: Mean width (in) of a character of an 8 pt axis label: when to break it over two lines.
+LABEL_CHAR_IN = 0.066
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """How a column is shown: ``label``, printed ``unit``, drawn in % (``percent``),
+    counted (``count``: integer ticks)."""
+
+    label: str
+    unit: str
+    percent: bool = False
+    count: bool = False
+    symbol: str = ""
+    bounds: tuple[float, float] | None = None
+
+    def axis(self, scale: str = "", room: float = float("inf")) -> str:
+        """Its axis label, naming a log or symlog scale, over two lines when longer than
+        ``room`` inches."""
+        shown = "%" if self.percent else self.unit
+        inside = ", ".join(p for p in (shown, f"{scale} scale" if scale else "") if p)
+        if not inside:
+            return self.label
+        one_line = f"{self.label} ({inside})"
+        return one_line if len(one_line) * LABEL_CHAR_IN <= room else f"{self.label}\n({inside})"
+
+    def shown(self, values: np.ndarray) -> tuple[float, Quantity]:
+        """``(factor, quantity)`` that ``values`` are drawn in: % for a rate, ms for times
+        in seconds all below 0.1 s."""
+        if self.percent:
+            return 100.0, self
+        if self.unit == "s" and np.nanmax(np.abs(values), initial=0.0) < 0.1:
+            return 1e3, replace(self, unit="ms")
+        return 1.0, self
+
+    def value(self, v: Any) -> str:
+        """``v`` in a panel title: ``5``, ``0.2``, ``0.005 rad``."""
+        text = number(v) if isinstance(v, int | float) and not isinstance(v, bool) else str(v)
+        return f"{text} {self.unit}" if self.unit and not self.count else text
+
+
+def quantity(experiment: Experiment, key: str) -> Quantity:
+    """How ``key`` (a parameter, metric or row key) of ``experiment`` is shown."""
+    if key in experiment.schema:
+        p = experiment.schema[key]
+        count = p.kind is int or p.item_kind is int and p.kind is list
+        return Quantity(p.label or key, unit_text(p.unit), count=count,
+                        symbol=p.symbol or p.label or key)
+    metric = next((m for m in experiment.metrics if m.name == key), None)
+    if metric is not None:
+        return Quantity(metric.label or key, unit_text(metric.unit), metric.percent,
+                        bounds=metric.bounds or ((0.0, 1.0) if metric.binary else None))
+    label, unit = experiment.row_labels.get(key, (key, ""))
+    return Quantity(label, unit_text(unit), count=unit == "count")
+
+
+def looks_of(experiment: Experiment, name: str) -> Look:
+    """The declared look of algorithm ``name``."""
+    return look_of(experiment.looks, name)
+
+
+def selected(summary: pd.DataFrame, plot: Plot) -> pd.DataFrame:
+    """The summary rows a plot draws: its metrics, its row keys held at ``plot.at``
+    (``"last"``: each algorithm's largest value at each point)."""
+    rows = summary[summary["metric"].isin(plot.metrics)]
+    for key, value in plot.at.items():
+        if value == "last":
+            last = rows.groupby(["point", "algorithm"])[key].transform("max")
+            rows = rows[rows[key] == last]
+        else:
+            rows = rows[rows[key] == value]
+    return rows
+
+
+def facets(run: RunData, plot: Plot) -> list[dict[str, Any]]:
+    """``{swept key: value}`` of each panel: every setting of the swept keys but ``x`` and
+    ``algorithms``, in sweep-point order (``columns`` first varying fastest)."""
+    keys = [k for k in run.sweep if k not in ("algorithms", plot.x)]
+    seen: dict[tuple, dict[str, Any]] = {}
+    for point in run.points:
+        seen.setdefault(tuple(point.get(k) for k in keys), {k: point.get(k) for k in keys})
+    found = list(seen.values())
+    if plot.columns in keys:
+        rest = [k for k in keys if k != plot.columns]
+        found.sort(key=lambda f: tuple(str(f[k]) for k in rest))
+    return found
+
+
+def algorithms(data: pd.DataFrame, plot: Plot) -> list[str]:
+    """The curves drawn: the declared ones run (else every one run), references apart,
+    at most :data:`MAX_ENTRIES` entries with the labelled references."""
+    present = list(dict.fromkeys(data["algorithm"]))
+    refs = {r.algorithm for r in plot.references if r.algorithm}
+    names = [a for a in (plot.algorithms or present) if a in present and a not in refs]
+    room = MAX_ENTRIES - sum(bool(r.label or r.algorithm) for r in plot.references)
+    return names[:room]
+
+
+def grid(plot: Plot, cells: list[dict[str, Any]]) -> tuple[int, int]:
+    """``(rows, columns)`` of the panel grid: a row per metric when several, else the
+    ``columns`` key's values across (or at most ``max_columns``), the rest wrapping."""
+    if len(plot.metrics) > 1:
+        return len(plot.metrics), max(1, len(cells))
+    if plot.columns:
+        across = len({str(c.get(plot.columns)) for c in cells})
+    else:
+        across = min(plot.max_columns, len(cells))
+    across = max(1, across)
+    return math.ceil(len(cells) / across), across
+
+
+def draw(run: RunData, plot: Plot, title: str = "") -> Figure | str:
+    """The figure ``plot`` declares for ``run``, or a one-line reason it cannot be drawn."""
+    if plot.x in run.experiment.schema and len(run.sweep.get(plot.x, ())) < 2:
+        return f"{plot.x} is not swept over at least 2 values"
+    data = selected(run.summary, plot)
+    if data.empty or plot.x not in data:
+        return f"no {', '.join(plot.metrics)} rows against {plot.x} in this run"
+    names = algorithms(data, plot)
+    cells = facets(run, plot)
+    nrows, ncols = grid(plot, cells)
+    share = "row" if len(plot.metrics) > 1 else "all"
+    fig, axes = panels(nrows, ncols, plot.width, plot.panel_height,
+                       extra_height=0.75 + 0.35 * bool(title), sharex=True, sharey=share)
+    with context():
+        for ax, metric, cell in _cells(axes, plot, cells):
+            _panel(ax, run.experiment, data, plot, metric, cell, names)
+        _frame(fig, axes, run.experiment, plot, data, cells)
+        legend_below(fig, axes.ravel())
+        if title:
+            fig.suptitle(title)
+    return fig
+
+
+def _cells(axes: np.ndarray, plot: Plot, cells: list[dict[str, Any]]
+           ) -> Iterator[tuple[Axes, str, dict[str, Any]]]:
+    """``(axes, metric, cell)`` of each panel drawn; the grid's unused panels hidden."""
+    if len(plot.metrics) > 1:
+        for r, metric in enumerate(plot.metrics):
+            for c, cell in enumerate(cells):
+                yield axes[r, c], metric, cell
+        return
+    flat = axes.ravel()
+    for ax, cell in zip(flat, cells, strict=False):
+        yield ax, plot.metrics[0], cell
+    for ax in flat[len(cells):]:
+        ax.set_visible(False)
+
+
+def _rows(data: pd.DataFrame, metric: str, cell: dict[str, Any], name: str, x: str
+          ) -> pd.DataFrame:
+    """One algorithm's rows of one panel, sorted by ``x``."""
+    sel = data[(data["metric"] == metric) & (data["algorithm"] == name)]
+    for key, value in cell.items():
+        sel = sel[sel[key] == value]
+    return sel.sort_values(x)
+
+
+def _panel(ax: Axes, experiment: Experiment, data: pd.DataFrame, plot: Plot, metric: str,
+           cell: dict[str, Any], names: list[str]) -> None:
+    """One panel: each algorithm's mean with its interval, then the references."""
+    scale, _ = quantity(experiment, metric).shown(
+        data.loc[data["metric"] == metric, "mean"].to_numpy(float))
+    xs = np.unique(data[plot.x].to_numpy(float))
+    drawn: list[np.ndarray] = []
+    for i, name in enumerate(names):
+        rows = _rows(data, metric, cell, name, plot.x)
+        if rows.empty:
+            continue
+        x = rows[plot.x].to_numpy(float)
+        mean = scale * rows["mean"].to_numpy(float)
+        low, high = (scale * rows[c].to_numpy(float) for c in ("ci_low", "ci_high"))
+        if plot.categories:
+            x = np.searchsorted(xs, x) + CATEGORY_SPREAD * (2 * i / max(1, len(names) - 1) - 1
+                                                            if len(names) > 1 else 0.0)
+        elif any(len(m) == len(mean) and np.allclose(m, mean, equal_nan=True) for m in drawn):
+            x = kit_axes.shifted(x, xs, plot.xscale, COINCIDING_SHIFT)
+        drawn.append(mean)
+        _series(ax, x, mean, low, high, looks_of(experiment, name), plot.categories)
+    for reference in plot.references:
+        _reference(ax, experiment, data, plot, metric, cell, reference, scale)
+
+
+def _series(ax: Axes, x: np.ndarray, mean: np.ndarray, low: np.ndarray, high: np.ndarray,
+            look: Look, categories: bool) -> None:
+    """A mean with its interval: a band (bars for unjoined categories) for the emphasised
+    methods, the mean alone for the others."""
+    kw = look.line()
+    if categories:
+        kw["linestyle"] = "none"
+        ax.errorbar(x, mean, yerr=np.maximum([mean - low, high - mean], 0), fmt="none",
+                    ecolor=look.colour, elinewidth=0.8, zorder=kw["zorder"])
+    ax.plot(x, mean, **kw)
+    if look.emphasised and not categories:
+        ax.fill_between(x, low, high, color=look.colour, alpha=BAND_ALPHA, linewidth=0)
+
+
+def _reference(ax: Axes, experiment: Experiment, data: pd.DataFrame, plot: Plot,
+               metric: str, cell: dict[str, Any], ref: Reference, scale: float) -> None:
+    """One :class:`~trackfuse.reportkit.spec.Reference` in a panel."""
+    kw = {"color": "k", "linestyle": "--", "linewidth": 0.9, "zorder": 4}
+    if ref.y is not None:
+        ax.axhline(scale * ref.y, label=ref.label, **kw)
+    for x in ref.x:
+        ax.axvline(x, color="0.45", linewidth=0.7, linestyle=":", zorder=1)
+    if ref.band is not None:
+        ax.axhspan(scale * ref.band[0], scale * ref.band[1], color="0.85", zorder=0,
+                   label=ref.label)
+    if not ref.algorithm:
+        return
+    rows = _rows(data, metric, cell, ref.algorithm, plot.x)
+    if rows.empty:
+        return
+    label = ref.label or looks_of(experiment, ref.algorithm).label
+    mean, low, high = (scale * rows[c].to_numpy(float) for c in ("mean", "ci_low", "ci_high"))
+    if rows[plot.x].nunique() == 1:  # one value for every x: a level with its interval
+        ax.axhline(mean[0], label=label, **kw)
+        ax.axhspan(low[0], high[0], **REFERENCE_BAND)
+        return
+    x = rows[plot.x].to_numpy(float)
+    if plot.categories:
+        x = np.searchsorted(np.unique(data[plot.x].to_numpy(float)), x).astype(float)
+        for xi, m in zip(x, mean, strict=True):
+            ax.plot([xi - 0.42, xi + 0.42], [m, m], **kw)
+        ax.lines[-1].set_label(label)
+        return
+    ax.plot(x, mean, label=label, **kw)
+    ax.fill_between(x, low, high, **REFERENCE_BAND)
+
+
+def _frame(fig: Figure, axes: np.ndarray, experiment: Experiment, plot: Plot,
+           data: pd.DataFrame, cells: list[dict[str, Any]]) -> None:
+    """Axes scales, ticks and labels, panel titles: the x label under each column's
+    lowest panel, the y label on the first column."""
+    xq = quantity(experiment, plot.x)
+    xs = np.unique(data[plot.x].to_numpy(float))
+    shown = [ax for ax in axes.ravel() if ax.get_visible()]
+    room = 0.85 * fig.get_figwidth() / axes.shape[1]
+    xlabel = kit_axes.x_axis(shown, xs, plot.xscale, xq, plot.categories, room)
+    nrows, ncols = axes.shape
+    for r in range(nrows):
+        metric = plot.metrics[r] if len(plot.metrics) > 1 else plot.metrics[0]
+        yscale = plot.yscale_of(metric)
+        for ax in axes[r]:
+            if yscale != "linear" and ax.get_visible():
+                kit_axes.y_log(ax, yscale)
+        factor, yq = quantity(experiment, metric).shown(
+            data.loc[data["metric"] == metric, "mean"].to_numpy(float))
+        ylabel = yq.axis("" if yscale == "linear" else yscale, room=0.9 * plot.panel_height)
+        if len(plot.metrics) > 1 or nrows == 1:
+            axes[r, 0].set_ylabel(ylabel)
+        elif r == 0:  # one metric over several rows: one label for them all
+            fig.supylabel(ylabel.replace("\n", " "))
+        if yq.bounds is not None:
+            kit_axes.bounded_limits(axes[r, 0], *(factor * b for b in yq.bounds))
+    for (r, c), ax in np.ndenumerate(axes):
+        lowest = r + 1 == nrows or not axes[r + 1, c].get_visible()
+        if ax.get_visible():
+            ax.xaxis.set_tick_params(labelbottom=lowest)
+            if lowest:
+                ax.set_xlabel(xlabel)
+    titled = axes[0] if len(plot.metrics) > 1 else axes.ravel()
+    for ax, cell in zip(titled, cells, strict=False):
+        ax.set_title(panel_title(experiment, cell))
+
+
+def panel_title(experiment: Experiment, cell: dict[str, Any]) -> str:
+    """``N = 5, p_m = 0.2``: a panel's setting in the declared labels."""
+    shown = {k: quantity(experiment, k) for k in cell}
+    return ", ".join(f"{shown[k].symbol or shown[k].label} = {shown[k].value(v)}"
+                     for k, v in cell.items())
