@@ -169,3 +169,19 @@ def journal_problems(fig: Figure, pdf: bytes | None = None) -> list[str]:
     if "Type3" in types or not types & {"TrueType", "CIDFontType2"}:
         problems.append(f"PDF font types {sorted(types)}, not TrueType")
     return problems
+
+
+def internal_names(fig: Figure, experiment) -> list[str]:
+    """Texts of ``fig`` that show a reader an internal name: a parameter key
+    (``baseline.spread``), an algorithm id (``paper_approx/mgekf``, ``nis_tdoa``) or a
+    plain-ASCII unit (``m^2``, ``(1)``)."""
+    ids = {*experiment.schema, *experiment.algorithms,
+           *(str(c) for p in experiment.params if p.choices and p.kind is str for c in p.choices)}
+    words = {i for i in ids if "." in i or "_" in i or "/" in i}
+    found = []
+    for text in (t.get_text() for t in _rendered_texts(fig)):
+        plain = re.sub(r"\$[^$]*\$", "", text)  # mathtext symbols (p_m) are typeset
+        if any(re.search(rf"(?<![\w.]){re.escape(w)}(?![\w.])", plain) for w in words) \
+                or re.search(r"\^\d|\(1\)", plain):
+            found.append(text)
+    return found

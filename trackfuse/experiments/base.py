@@ -100,6 +100,9 @@ class Param:
     label: str = ""
     #: Its short name in panel titles (``"N"``, ``"$p_m$"``); ``""``: the label.
     symbol: str = ""
+    #: ``((value, word), ...)``: what figures call some of its values (``("table", "radar
+    #: factors from their own noise")``); a value without a word is printed as it is.
+    words: tuple[tuple[Any, str], ...] = ()
 
     def __post_init__(self) -> None:
         if problem := self._declaration_problem():
@@ -167,6 +170,13 @@ class Metric:
     categorical: bool = False
     bounds: tuple[float, float] | None = None
     aggregate: Aggregate = "mean"
+    #: What figures and tables call it (``"tracks lost"``); ``""``: its name.
+    label: str = ""
+
+    @property
+    def percent(self) -> bool:
+        """Shown in % (a 0/1 rate or a fraction): figures and tables alike."""
+        return self.binary or self.bounds == FRACTION
 
     def __post_init__(self) -> None:
         if problem := column_name_problem(self.name):
@@ -189,13 +199,6 @@ def column_name_problem(name: object) -> str | None:
         return ("the name holds a line break, a control character or leading or trailing "
                 "white space; allowed: printable text")
     return None
-    #: What figures and tables call it (``"tracks lost"``); ``""``: its name.
-    label: str = ""
-
-    @property
-    def percent(self) -> bool:
-        """Shown in % (a 0/1 rate or a fraction): figures and tables alike."""
-        return self.binary or self.bounds == FRACTION
 
 
 #: :attr:`Metric.bounds` of a fraction, and of a quantity that cannot be negative.

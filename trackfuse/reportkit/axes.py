@@ -5,7 +5,7 @@ by a panel's edge."""
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from matplotlib.axes import Axes
@@ -57,16 +57,17 @@ def _ticks(values: np.ndarray, scale: str) -> Sequence[float] | None:
     return [0.0] * bool(values[0] == 0) + list(powers)
 
 
-def x_axis(axes: Sequence[Axes], values: np.ndarray, wanted: str, shown: Quantity,
+def x_axis(axes: Sequence[Axes], values: Sequence[Any], wanted: str, shown: Quantity,
            categories: bool, room: float) -> str:
     """Scale, ticks and limits of the shared x axis over the sorted ``values``; returns its
     label (naming a log or symlog scale; over two lines when wider than ``room`` in)."""
     if categories:
         for ax in axes:
-            ax.set_xticks(range(len(values)), [number(v) for v in values])
+            ax.set_xticks(range(len(values)), [shown.word(v) for v in values])
             ax.set_xlim(-0.6, len(values) - 0.4)
             ax.grid(False, axis="x")
         return shown.axis(room=room)
+    values = np.asarray(values, dtype=float)
     scale = scale_of(values, wanted)
     ticks = _ticks(values, scale)
     for ax in axes:

@@ -10,6 +10,7 @@ hide another (the same means at every x) is shifted sideways by a small offset.
 from __future__ import annotations
 
 import math
+import textwrap
 from collections.abc import Iterator
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
@@ -34,8 +35,9 @@ BAND_ALPHA, REFERENCE_BAND = 0.18, {"color": "k", "alpha": 0.07, "linewidth": 0,
 #: Sideways shift of a curve that coincides with one drawn before it, as a fraction of the
 #: x span on the axis's scale; of the points of one category, the spread of the methods.
 COINCIDING_SHIFT, CATEGORY_SPREAD = 0.012, 0.28
-#: Mean width (in) of a character of an 8 pt axis label: when to break it over two lines.
-LABEL_CHAR_IN = 0.066
+#: Mean width (in) of a character of an 8 pt axis label and of an 8.5 pt title: when to
+#: break them over two lines.
+LABEL_CHAR_IN, TITLE_CHAR_IN = 0.066, 0.072
 
 
 @dataclass(frozen=True)
@@ -49,6 +51,7 @@ class Quantity:
     count: bool = False
     symbol: str = ""
     bounds: tuple[float, float] | None = None
+    words: tuple[tuple[Any, str], ...] = ()
 
     def axis(self, scale: str = "", room: float = float("inf")) -> str:
         """Its axis label, naming a log or symlog scale, over two lines when longer than
@@ -69,8 +72,18 @@ class Quantity:
             return 1e3, replace(self, unit="ms")
         return 1.0, self
 
+    def word(self, v: Any) -> str:
+        """``v`` as a tick or category label: its declared word, else :meth:`value`."""
+        return next((w for value, w in self.words if value == v), None) or self.value(v)
+
+    def title(self, v: Any) -> str:
+        """A panel's setting: the value's declared word, else ``symbol = value``."""
+        if words := [w for value, w in self.words if value == v]:
+            return words[0]
+        return f"{self.symbol or self.label} = {self.value(v)}"
+
     def value(self, v: Any) -> str:
-        """``v`` in a panel title: ``5``, ``0.2``, ``0.005 rad``."""
+        """``v`` with its unit: ``5``, ``0.2``, ``0.005 rad``."""
         text = number(v) if isinstance(v, int | float) and not isinstance(v, bool) else str(v)
         return f"{text} {self.unit}" if self.unit and not self.count else text
 
@@ -81,7 +94,7 @@ def quantity(experiment: Experiment, key: str) -> Quantity:
         p = experiment.schema[key]
         count = p.kind is int or p.item_kind is int and p.kind is list
         return Quantity(p.label or key, unit_text(p.unit), count=count,
-                        symbol=p.symbol or p.label or key)
+                        symbol=p.symbol or p.label or key, words=p.words)
     metric = next((m for m in experiment.metrics if m.name == key), None)
     if metric is not None:
         return Quantity(metric.label or key, unit_text(metric.unit), metric.percent,
@@ -147,12 +160,16 @@ def grid(plot: Plot, cells: list[dict[str, Any]]) -> tuple[int, int]:
 
 def draw(run: RunData, plot: Plot, title: str = "") -> Figure | str:
     """The figure ``plot`` declares for ``run``, or a one-line reason it cannot be drawn."""
-    if plot.x in run.experiment.schema and len(run.sweep.get(plot.x, ())) < 2:
+    swept = len(run.sweep.get(plot.x, ())) >= 2
+    if plot.x in run.experiment.schema and not swept and not plot.categories:
         return f"{plot.x} is not swept over at least 2 values"
     data = selected(run.summary, plot)
+    if plot.categories and plot.x not in data and plot.x in run.params:
+        data = data.assign(**{plot.x: run.params[plot.x]})  # one category: the setting
     if data.empty or plot.x not in data:
         return f"no {', '.join(plot.metrics)} rows against {plot.x} in this run"
     names = algorithms(data, plot)
+    order = x_order(run, plot, data)
     cells = facets(run, plot)
     nrows, ncols = grid(plot, cells)
     share = "row" if len(plot.metrics) > 1 else "all"
@@ -160,11 +177,11 @@ def draw(run: RunData, plot: Plot, title: str = "") -> Figure | str:
                        extra_height=0.75 + 0.35 * bool(title), sharex=True, sharey=share)
     with context():
         for ax, metric, cell in _cells(axes, plot, cells):
-            _panel(ax, run.experiment, data, plot, metric, cell, names)
-        _frame(fig, axes, run.experiment, plot, data, cells)
+            _panel(ax, run.experiment, data, plot, (metric, cell), names, order)
+        _frame(fig, axes, run.experiment, plot, data, cells, order)
         legend_below(fig, axes.ravel())
         if title:
-            fig.suptitle(title)
+            fig.suptitle(textwrap.fill(title, int(fig.get_figwidth() / TITLE_CHAR_IN)))
     return fig
 
 
@@ -192,29 +209,51 @@ def _rows(data: pd.DataFrame, metric: str, cell: dict[str, Any], name: str, x: s
     return sel.sort_values(x)
 
 
-def _panel(ax: Axes, experiment: Experiment, data: pd.DataFrame, plot: Plot, metric: str,
-           cell: dict[str, Any], names: list[str]) -> None:
-    """One panel: each algorithm's mean with its interval, then the references."""
+def x_order(run: RunData, plot: Plot, data: pd.DataFrame) -> list[Any]:
+    """The x values in drawing order: a category axis in the sweep's order (words allowed),
+    a number axis sorted."""
+    if plot.categories:
+        return list(dict.fromkeys(run.sweep.get(plot.x) or list(data[plot.x].unique())))
+    return list(np.unique(data[plot.x].to_numpy(float)))
+
+
+def _positions(rows: pd.DataFrame, plot: Plot, order: list[Any], slot: float = 0.0
+               ) -> np.ndarray:
+    """Where ``rows`` are drawn on x: their category's index plus ``slot``, or x itself."""
+    if plot.categories:
+        return np.array([order.index(v) for v in rows[plot.x]], dtype=float) + slot
+    return rows[plot.x].to_numpy(float)
+
+
+def _slot(i: int, n: int) -> float:
+    """Sideways place of the ``i``-th of ``n`` methods in a category."""
+    return CATEGORY_SPREAD * (2 * i / (n - 1) - 1) if n > 1 else 0.0
+
+
+def _panel(ax: Axes, experiment: Experiment, data: pd.DataFrame, plot: Plot,
+           where: tuple[str, dict[str, Any]], names: list[str], order: list[Any]) -> None:
+    """One panel (``where``: its metric and setting): each algorithm's mean with its
+    interval, then the references."""
+    metric, cell = where
     scale, _ = quantity(experiment, metric).shown(
         data.loc[data["metric"] == metric, "mean"].to_numpy(float))
-    xs = np.unique(data[plot.x].to_numpy(float))
     drawn: list[np.ndarray] = []
     for i, name in enumerate(names):
         rows = _rows(data, metric, cell, name, plot.x)
         if rows.empty:
             continue
-        x = rows[plot.x].to_numpy(float)
+        x = _positions(rows, plot, order, _slot(i, len(names)))
         mean = scale * rows["mean"].to_numpy(float)
         low, high = (scale * rows[c].to_numpy(float) for c in ("ci_low", "ci_high"))
-        if plot.categories:
-            x = np.searchsorted(xs, x) + CATEGORY_SPREAD * (2 * i / max(1, len(names) - 1) - 1
-                                                            if len(names) > 1 else 0.0)
-        elif any(len(m) == len(mean) and np.allclose(m, mean, equal_nan=True) for m in drawn):
-            x = kit_axes.shifted(x, xs, plot.xscale, COINCIDING_SHIFT)
+        if not plot.categories and any(len(m) == len(mean) and np.allclose(
+                m, mean, equal_nan=True) for m in drawn):
+            x = kit_axes.shifted(x, np.asarray(order, float), plot.xscale, COINCIDING_SHIFT)
         drawn.append(mean)
         _series(ax, x, mean, low, high, looks_of(experiment, name), plot.categories)
     for reference in plot.references:
-        _reference(ax, experiment, data, plot, metric, cell, reference, scale)
+        _reference(ax, experiment, data, plot, where, reference, (scale, order))
+        if reference.values:
+            _paper_values(ax, experiment, data, plot, where, reference, (scale, order))
 
 
 def _series(ax: Axes, x: np.ndarray, mean: np.ndarray, low: np.ndarray, high: np.ndarray,
@@ -232,11 +271,15 @@ def _series(ax: Axes, x: np.ndarray, mean: np.ndarray, low: np.ndarray, high: np
 
 
 def _reference(ax: Axes, experiment: Experiment, data: pd.DataFrame, plot: Plot,
-               metric: str, cell: dict[str, Any], ref: Reference, scale: float) -> None:
-    """One :class:`~trackfuse.reportkit.spec.Reference` in a panel."""
+               where: tuple[str, dict[str, Any]], ref: Reference,
+               shown: tuple[float, list[Any]]) -> None:
+    """One :class:`~trackfuse.reportkit.spec.Reference` in a panel (``shown``: the y
+    factor and the x order)."""
+    (metric, cell), (scale, order) = where, shown
     kw = {"color": "k", "linestyle": "--", "linewidth": 0.9, "zorder": 4}
-    if ref.y is not None:
-        ax.axhline(scale * ref.y, label=ref.label, **kw)
+    if ref.y is not None:  # a level (a bound, chance): dotted, apart from the curves
+        ax.axhline(scale * ref.y, label=ref.label, color="0.35", linestyle=":",
+                   linewidth=1.0, zorder=1.5)
     for x in ref.x:
         ax.axvline(x, color="0.45", linewidth=0.7, linestyle=":", zorder=1)
     if ref.band is not None:
@@ -253,9 +296,8 @@ def _reference(ax: Axes, experiment: Experiment, data: pd.DataFrame, plot: Plot,
         ax.axhline(mean[0], label=label, **kw)
         ax.axhspan(low[0], high[0], **REFERENCE_BAND)
         return
-    x = rows[plot.x].to_numpy(float)
+    x = _positions(rows, plot, order)
     if plot.categories:
-        x = np.searchsorted(np.unique(data[plot.x].to_numpy(float)), x).astype(float)
         for xi, m in zip(x, mean, strict=True):
             ax.plot([xi - 0.42, xi + 0.42], [m, m], **kw)
         ax.lines[-1].set_label(label)
@@ -264,15 +306,40 @@ def _reference(ax: Axes, experiment: Experiment, data: pd.DataFrame, plot: Plot,
     ax.fill_between(x, low, high, **REFERENCE_BAND)
 
 
+#: Marker of the paper's values: an open star in the method's colour.
+PAPER_STAR = {"marker": "*", "markersize": 8, "markerfacecolor": "white",
+              "markeredgewidth": 1.0, "linestyle": "none", "zorder": 5}
+
+
+def _paper_values(ax: Axes, experiment: Experiment, data: pd.DataFrame, plot: Plot,
+                  where: tuple[str, dict[str, Any]], ref: Reference,
+                  shown: tuple[float, list[Any]]) -> None:
+    """The paper's value of each method of ``ref.values`` as an open star in its colour,
+    at the x of every point of ``ref.points`` in the panel: right of the methods of a
+    category, beside our marker on a curve; one legend entry (``ref.label``, grey)."""
+    (metric, cell), (scale, order) = where, shown
+    for name, value in ref.values:
+        rows = _rows(data, metric, cell, name, plot.x)
+        rows = rows[rows["point"].isin(ref.points)]
+        if rows.empty:
+            continue
+        x = _positions(rows, plot, order, CATEGORY_SPREAD + 0.14)
+        if not plot.categories:
+            x = kit_axes.shifted(x, np.asarray(order, float), plot.xscale, 2 * COINCIDING_SHIFT)
+        ax.plot(x, np.full(len(x), scale * value), markeredgecolor=looks_of(
+            experiment, name).colour, **PAPER_STAR)
+    if ref.label and not any(h.get_label() == ref.label for h in ax.get_lines()):
+        ax.plot([], [], markeredgecolor="0.3", label=ref.label, **PAPER_STAR)
+
+
 def _frame(fig: Figure, axes: np.ndarray, experiment: Experiment, plot: Plot,
-           data: pd.DataFrame, cells: list[dict[str, Any]]) -> None:
+           data: pd.DataFrame, cells: list[dict[str, Any]], order: list[Any]) -> None:
     """Axes scales, ticks and labels, panel titles: the x label under each column's
     lowest panel, the y label on the first column."""
     xq = quantity(experiment, plot.x)
-    xs = np.unique(data[plot.x].to_numpy(float))
     shown = [ax for ax in axes.ravel() if ax.get_visible()]
     room = 0.85 * fig.get_figwidth() / axes.shape[1]
-    xlabel = kit_axes.x_axis(shown, xs, plot.xscale, xq, plot.categories, room)
+    xlabel = kit_axes.x_axis(shown, order, plot.xscale, xq, plot.categories, room)
     nrows, ncols = axes.shape
     for r in range(nrows):
         metric = plot.metrics[r] if len(plot.metrics) > 1 else plot.metrics[0]
@@ -302,6 +369,4 @@ def _frame(fig: Figure, axes: np.ndarray, experiment: Experiment, plot: Plot,
 
 def panel_title(experiment: Experiment, cell: dict[str, Any]) -> str:
     """``N = 5, p_m = 0.2``: a panel's setting in the declared labels."""
-    shown = {k: quantity(experiment, k) for k in cell}
-    return ", ".join(f"{shown[k].symbol or shown[k].label} = {shown[k].value(v)}"
-                     for k, v in cell.items())
+    return ", ".join(quantity(experiment, k).title(v) for k, v in cell.items())

@@ -26,10 +26,14 @@ class Reference:
 
     * ``algorithm``: that algorithm's curve drawn as a dashed reference (an exact optimum),
       its interval shaded light grey;
-    * ``y``: a horizontal level (a bound, the paper's value) labelled ``label``;
+    * ``y``: a horizontal level (a bound, chance) drawn dotted, labelled ``label`` (an
+      unlabelled one is named in the caption);
     * ``x``: vertical lines at each of ``at`` (a setting the paper names), unlabelled
       (the caption says what they are);
-    * ``band``: ``(low, high)`` shaded as the paper's claim, labelled ``label``.
+    * ``band``: ``(low, high)`` shaded as the paper's claim, labelled ``label``;
+    * ``values``: ``((algorithm, y), ...)`` the paper's value of each method, drawn as an
+      open star in its colour at the sweep ``points`` where the run is at the paper's
+      setting (one legend entry, ``label``).
     """
 
     algorithm: str = ""
@@ -37,6 +41,8 @@ class Reference:
     x: tuple[float, ...] = ()
     band: tuple[float, float] | None = None
     label: str = ""
+    values: tuple[tuple[str, float], ...] = ()
+    points: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)

@@ -83,14 +83,21 @@ def panels(rows: int, columns: int, width: str = "auto", panel_height: float = 1
     return fig, axes
 
 
-def legend_below(fig: Figure, axes: Iterable[Axes]) -> None:
-    """One legend below the panels, each label once (the first handle drawn with it), at
-    most :data:`~trackfuse.reportkit.spec.MAX_ENTRIES` entries, in as many columns as fit."""
+def legend_entries(axes: Iterable[Axes]) -> tuple[list, list[str]]:
+    """``(handles, labels)`` of every labelled artist of ``axes``, each label once (the
+    first handle drawn with it)."""
     entries: dict[str, object] = {}
     for ax in axes:
         for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
             if not label.startswith("_"):
                 entries.setdefault(label, handle)
+    return list(entries.values()), list(entries)
+
+
+def legend_below(fig: Figure, axes: Iterable[Axes]) -> None:
+    """One legend below the panels, each label once (:func:`legend_entries`), at most
+    :data:`~trackfuse.reportkit.spec.MAX_ENTRIES` entries, in as many columns as fit."""
+    entries = dict(zip(*reversed(legend_entries(axes)), strict=True))
     if not entries:
         return
     if len(entries) > MAX_ENTRIES:
