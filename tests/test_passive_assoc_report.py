@@ -7,7 +7,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from figure_checks import alike_legend_entries, journal_problems, pdf_font_types
+from figure_checks import (
+    alike_legend_entries,
+    internal_names,
+    journal_problems,
+    pdf_font_types,
+)
 
 from trackfuse import harness
 from trackfuse.config import load
@@ -57,6 +62,7 @@ def test_every_figure_of_every_shipped_config_meets_the_journal_rules(shipped_ru
             continue
         assert journal_problems(fig) == [], name
         assert alike_legend_entries(fig) == [], name
+        assert internal_names(fig, EXPERIMENT) == [], name
         for ax in (a for a in fig.axes if a.get_visible() and a.get_xlabel()):
             assert UNIT.search(ax.get_xlabel()), (name, ax.get_xlabel())
         for ax in (a for a in fig.axes if a.get_visible() and a.get_ylabel()):

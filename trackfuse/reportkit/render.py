@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import textwrap
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
@@ -109,10 +109,11 @@ def looks_of(experiment: Experiment, name: str) -> Look:
 
 
 def selected(summary: pd.DataFrame, plot: Plot) -> pd.DataFrame:
-    """The summary rows a plot draws: its metrics, its row keys held at ``plot.at``
-    (``"last"``: each algorithm's largest value at each point)."""
+    """The summary rows a plot draws: its metrics, its row keys (or swept keys) held at
+    ``plot.at`` (``"last"``: each algorithm's largest value at each point; a key the run
+    has no column of is ignored)."""
     rows = summary[summary["metric"].isin(plot.metrics)]
-    for key, value in plot.at.items():
+    for key, value in ((k, v) for k, v in plot.at.items() if k in rows):
         if value == "last":
             last = rows.groupby(["point", "algorithm"])[key].transform("max")
             rows = rows[rows[key] == last]
@@ -370,3 +371,38 @@ def _frame(fig: Figure, axes: np.ndarray, experiment: Experiment, plot: Plot,
 def panel_title(experiment: Experiment, cell: dict[str, Any]) -> str:
     """``N = 5, p_m = 0.2``: a panel's setting in the declared labels."""
     return ", ".join(quantity(experiment, k).title(v) for k, v in cell.items())
+
+
+def draw_beside(parts: Sequence[tuple[RunData, str]], plot: Plot, title: str = ""
+                ) -> Figure | str:
+    """The same ``plot`` for each run of ``parts`` (``(run, panel title)``), one panel
+    each side by side on one y axis: a paper's scenario beside an analogue where the effect
+    shows (paper 000's Fig. 1: flat at 0 % at its scenario, rising with clutter in the close
+    geometry). Each run sweeps ``plot.x`` alone but for keys ``plot.at`` holds; a one-line
+    reason when one does not."""
+    for run, _ in parts:
+        if set(run.sweep) - {"algorithms", plot.x, *plot.at} or \
+                len(run.sweep.get(plot.x, ())) < 2:
+            return f"{run.path.name}: {plot.x} is not the one swept key"
+    fig, axes = panels(1, len(parts), plot.width, plot.panel_height,
+                       extra_height=0.75 + 0.35 * bool(title), sharey=True)
+    with context():
+        for ax, (run, panel_title) in zip(axes[0], parts, strict=True):
+            data = selected(run.summary, plot)
+            order = x_order(run, plot, data)
+            _panel(ax, run.experiment, data, plot, (plot.metrics[0], {}),
+                   algorithms(data, plot), order)
+            ax.set_xlabel(kit_axes.x_axis([ax], order, plot.xscale,
+                                          quantity(run.experiment, plot.x), plot.categories,
+                                          0.85 * fig.get_figwidth() / len(parts)))
+            ax.set_title(panel_title)
+        run = parts[0][0]
+        factor, yq = quantity(run.experiment, plot.metrics[0]).shown(
+            run.summary.loc[run.summary["metric"] == plot.metrics[0], "mean"].to_numpy(float))
+        axes[0, 0].set_ylabel(yq.axis(room=0.9 * plot.panel_height))
+        if yq.bounds is not None:
+            kit_axes.bounded_limits(axes[0, 0], *(factor * b for b in yq.bounds))
+        legend_below(fig, axes.ravel())
+        if title:
+            fig.suptitle(textwrap.fill(title, int(fig.get_figwidth() / TITLE_CHAR_IN)))
+    return fig
