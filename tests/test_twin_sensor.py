@@ -315,6 +315,11 @@ def test_every_figure_of_a_shipped_config_is_clean(shipped, name):
         assert "runs per point" in fig.get_suptitle().replace("\n", " "), fig_name
         for ax in (a for a in fig.axes if a.get_visible() and a.has_data()):
             assert "=" not in ax.get_title(), (fig_name, ax.get_title())
+            low, high = sorted(ax.get_xlim())  # every curve in view (a moved one set none)
+            for line in (ln for ln in ax.get_lines()  # curves, not axhline's axes fractions
+                         if ln.get_transform().contains_branch(ax.transData)):
+                x = np.asarray(line.get_xdata(), dtype=float)
+                assert ((x >= low) & (x <= high)).all(), (fig_name, line.get_label())
 
 
 def _legend_texts(fig) -> list[str]:

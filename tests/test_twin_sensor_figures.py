@@ -612,3 +612,18 @@ def test_fig1_headline_draws_the_papers_scenario_beside_the_close_analogue(tmp_p
     for ax in (left, right):
         curves = [ln for ln in ax.get_lines() if ln.get_label() in labels]
         assert len(curves) == 2 and all(len(ln.get_xdata()) == 2 for ln in curves)
+
+
+def test_curves_shifted_beside_equal_ones_stay_in_view(tmp_path):
+    """configs/ci/twin_sensor_ci.yaml: every curve of the ablation lies at 0 %, so each is
+    shifted beside the next; a line drawn in a moved frame sets no data limits, and the
+    x axis showed -0.05 to 0.05 with the curves off to its right."""
+    cfg = load(ROOT / "configs" / "ci" / "twin_sensor_ci.yaml")
+    run = harness.run_data(tmp_path, EXPERIMENT, cfg.params, cfg.sweep, trials=cfg.trials,
+                           seed=cfg.seed)
+    with context():
+        fig = report.figures(run, ["loss_vs_clutter_ablation"])["loss_vs_clutter_ablation"]
+        fig.canvas.draw()
+    for ax in (a for a in fig.axes if a.get_visible() and a.has_data()):
+        low, high = sorted(ax.get_xlim())
+        assert low <= 0.0 and high >= 10.0, ax.get_xlim()

@@ -504,7 +504,7 @@ def _by_filter(entries: dict[str, Any]) -> dict[str, Any]:
     return {**out, **FILTER_KEYS}
 
 
-COINCIDING_SHIFT = 2.5
+COINCIDING_SHIFT = 4.0
 """Sideways shift (points) of a curve equal at every swept value to one drawn after it
 (fig1_claim: both at 0 % everywhere), so that both show; more for each further one."""
 IN_THE_CAPTION = ("95 % band", "95 % Wilson interval", "95 % interval runs past the top",
@@ -664,8 +664,10 @@ def _draw_rates(ax: Axes, points: pd.DataFrame, looks: dict[str, dict[str, Any]]
     for name, r in points.groupby("name", sort=False):
         kw = dict(looks[str(name)])
         shift = kw.pop("shift", 0.0)  # beside the curves it coincides with (in points)
-        moved = offset_copy(ax.transData, fig=ax.figure, x=shift, units="points")
+        moved = offset_copy(ax.transData, fig=ax.figure, x=shift, units="points") \
+            if shift else ax.transData
         ax.plot(r["x"], r["pct"], transform=moved, **kw)
+        ax.update_datalim(np.column_stack([r["x"], r["pct"]]))  # a moved line sets none
         bars = r[r["bar"]]
         ax.errorbar(bars["x"], bars["pct"], yerr=[bars["pct"] - bars["lo"],
                                                   bars["hi"] - bars["pct"]],
