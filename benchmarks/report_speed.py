@@ -9,7 +9,8 @@ prints, on a copy of the folder:
   as wall time and as this process's CPU time (CPU time is what the work costs on an idle
   core; wall time grows when other jobs share the machine);
 * a per-figure breakdown: the time to draw each figure (the report module's ``figures``) and
-  to save it in each format, the time of ``tables`` and of reading ``trials.csv``.
+  to save it in each format (wall), in the style the report uses, the CPU time of all of
+  them together, the time of ``tables`` and of reading ``trials.csv``.
 
 To compare two versions of the code on the same folder under the same load, run this script
 with each checkout on ``PYTHONPATH``, one right after the other.
@@ -73,20 +74,34 @@ def breakdown(folder: Path) -> None:
     module.tables(run)
     print(f"  tables                   {time.perf_counter() - start:6.2f} s")
     formats = (run.config.get("outputs") or {}).get("formats") or ["png", "pdf"]
+    total = 0.0
     for name in run.experiment.figures:
-        start = time.perf_counter()
-        made = module.figures(run, [name])
-        drawn = time.perf_counter() - start
-        fig = made.get(name)
-        if not hasattr(fig, "savefig"):
-            print(f"  {name:<32} not drawn: {fig}")
-            continue
-        saves = []
-        for fmt in formats:
-            start = time.perf_counter()
-            reports.save_figure(fig, folder / "figures", name, [fmt])
-            saves.append(f"{fmt} {time.perf_counter() - start:5.2f} s")
+        with _house_style():  # drawn and saved as the report does
+            start, cpu = time.perf_counter(), time.process_time()
+            made = module.figures(run, [name])
+            drawn, total = time.perf_counter() - start, total + time.process_time() - cpu
+            fig = made.get(name)
+            if not hasattr(fig, "savefig"):
+                print(f"  {name:<32} not drawn: {fig}")
+                continue
+            saves = []
+            for fmt in formats:
+                start, cpu = time.perf_counter(), time.process_time()
+                reports.save_figure(fig, folder / "figures", name, [fmt])
+                saves.append(f"{fmt} {time.perf_counter() - start:5.2f} s")
+                total += time.process_time() - cpu
         print(f"  {name:<32} draw {drawn:5.2f} s, save " + ", ".join(saves))
+    print(f"  every figure drawn and saved   {total:6.2f} s CPU (this process, one at a time)")
+
+
+def _house_style():
+    """The style context the report draws and saves in (the report kit's, or before it
+    existed the plots package's), so that this script times either version of the code."""
+    try:
+        from trackfuse.reportkit.style import context
+    except ImportError:
+        from trackfuse.plots.style import context
+    return context()
 
 
 def main() -> None:

@@ -1,5 +1,9 @@
 """Figure checks for the tests (not the package's: nothing draws with them).
 
+:func:`journal_problems` judges a figure as a journal would print it: its width one of
+the slots (3.5 in, 7.16 in), at most 8.5 in tall, every text inside the canvas, none below
+7 pt, legends of at most 6 entries, the saved PDF's fonts TrueType, no host-dependent text.
+
 :func:`text_overlaps` finds texts that overlap or run off the figure,
 :func:`alike_legend_entries` legend entries a reader cannot tell apart, and
 :func:`inside_canvas` whether everything drawn lies inside the saved figure, and
@@ -8,6 +12,8 @@
 
 from __future__ import annotations
 
+import io
+import re
 from unittest import mock
 
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -18,6 +24,8 @@ from matplotlib.patches import Patch
 from matplotlib.text import Text
 
 from trackfuse.plots.style import PAGE_WIDTH_IN
+from trackfuse.reportkit.spec import MAX_ENTRIES, SLOTS
+from trackfuse.reportkit.style import MAX_HEIGHT_IN, MIN_POINTS, context
 
 OUTSIDE = "<outside the figure>"
 """The partner :func:`text_overlaps` gives a text that runs off the figure."""
@@ -112,3 +120,68 @@ def smallest_printed_text(fig: Figure, width_in: float = PAGE_WIDTH_IN) -> tuple
     scale = min(1.0, width_in / fig.get_figwidth())
     return min((t.get_fontsize() * scale, t.get_text()) for t in _rendered_texts(fig))
 
+
+
+#: Words that only a host could put in a figure: a CPU model, a core or worker count.
+HOST_WORDS = re.compile(r"\b(Intel|AMD|Xeon|EPYC|Ryzen|CPU|cores?|workers?)\b")
+
+
+def pdf_font_types(pdf: bytes) -> set[str]:
+    """The ``/Subtype`` of every font object of a PDF file (``Type3``, ``TrueType``,
+    ``Type0``/``CIDFontType2`` for TrueType as Type 42, ``Type1``)."""
+    found = (re.findall(rb"/Type\s*/Font\b[^>]*?/Subtype\s*/(\w+)", pdf)
+             + re.findall(rb"/Subtype\s*/(\w+)[^>]*?/Type\s*/Font\b", pdf))
+    return {name.decode() for name in found}
+
+
+def saved_pdf(fig: Figure) -> bytes:
+    """``fig`` saved as a PDF the way the report saves it (in the journal style)."""
+    out = io.BytesIO()
+    with context():
+        fig.savefig(out, format="pdf")
+    return out.getvalue()
+
+
+def journal_problems(fig: Figure, pdf: bytes | None = None) -> list[str]:
+    """What a journal would reject in ``fig`` (empty when nothing): a width other than a
+    slot, taller than a page, text off the canvas or overlapping, text below 7 pt at its
+    printed size (its own: it is drawn at a slot's width), a legend of more than 6
+    entries, a Type 3 font in its PDF (``pdf``: the saved bytes, else saved here), text
+    naming the host."""
+    problems = []
+    width, height = fig.get_size_inches()
+    if not any(abs(width - slot) < 0.005 for slot in SLOTS.values()):
+        problems.append(f"width {width:.2f} in is not a slot {sorted(SLOTS.values())}")
+    if height > MAX_HEIGHT_IN + 0.005:
+        problems.append(f"height {height:.2f} in > {MAX_HEIGHT_IN}")
+    texts = _rendered_texts(fig)
+    problems += [f"text {t.get_text()!r} at {t.get_fontsize():g} pt" for t in texts
+                 if t.get_fontsize() < MIN_POINTS - 1e-9]
+    problems += [f"text {a!r} {'off the canvas' if b == OUTSIDE else f'over {b!r}'}"
+                 for a, b in text_overlaps(fig)]
+    if not inside_canvas(fig):
+        problems.append("something drawn off the canvas")
+    legends = [*fig.legends, *(ax.get_legend() for ax in fig.axes if ax.get_legend())]
+    problems += [f"legend of {len(lg.get_texts())} entries" for lg in legends
+                 if len(lg.get_texts()) > MAX_ENTRIES]
+    problems += [f"host text {t.get_text()!r}" for t in texts if HOST_WORDS.search(t.get_text())]
+    types = pdf_font_types(saved_pdf(fig) if pdf is None else pdf)
+    if "Type3" in types or not types & {"TrueType", "CIDFontType2"}:
+        problems.append(f"PDF font types {sorted(types)}, not TrueType")
+    return problems
+
+
+def internal_names(fig: Figure, experiment) -> list[str]:
+    """Texts of ``fig`` that show a reader an internal name: a parameter key
+    (``baseline.spread``), an algorithm id (``paper_approx/mgekf``, ``nis_tdoa``) or a
+    plain-ASCII unit (``m^2``, ``(1)``)."""
+    ids = {*experiment.schema, *experiment.algorithms,
+           *(str(c) for p in experiment.params if p.choices and p.kind is str for c in p.choices)}
+    words = {i for i in ids if "." in i or "_" in i or "/" in i}
+    found = []
+    for text in (t.get_text() for t in _rendered_texts(fig)):
+        plain = re.sub(r"\$[^$]*\$", "", text)  # mathtext symbols (p_m) are typeset
+        if any(re.search(rf"(?<![\w.]){re.escape(w)}(?![\w.])", plain) for w in words) \
+                or re.search(r"\^\d|\(1\)", plain):
+            found.append(text)
+    return found

@@ -9,7 +9,7 @@ from trackfuse import harness
 from trackfuse.association.track_likelihood import abstaining_decision, ml_track_decision
 from trackfuse.compare import compare_runs
 from trackfuse.experiments import get
-from trackfuse.experiments.esm_radar import EXPERIMENT, report
+from trackfuse.experiments.esm_radar import EXPERIMENT, LOOKS, report
 from trackfuse.experiments.esm_radar.model import (
     ALGORITHMS,
     SCAN_SERIES,
@@ -267,15 +267,15 @@ def test_the_chosen_track_is_a_label_counted_by_table3_never_averaged(tmp_path):
         compare_runs(run, other, tolerance={"chosen": 1.0})
 
 
-def test_categorical_sweep_draws_one_row_per_method(tmp_path):
+def test_categorical_sweep_draws_one_category_per_setting(tmp_path):
     base = params(algorithms=["traditional", "improved", "chi2"])
     run = mini_run(tmp_path, base, {"radar.factor_model": ["table", "derived"]}, 8)
     fig = report.figures(run, ["correct_rate"])["correct_rate"]
-    panels = [a for a in fig.axes if a.has_data()]
-    assert len(panels) == 2
-    ticks = sorted((t.get_position()[1], t.get_text()) for t in panels[0].get_yticklabels())
-    assert [text for _, text in ticks] == ["traditional fuzzy decision (paper's baseline)",
-                                           "improved fuzzy evaluation (paper)"]  # chi2 elsewhere
+    (panel,) = [a for a in fig.axes if a.has_data()]
+    assert [t.get_text() for t in panel.get_xticklabels()] == ["'table' (own noise)",
+                                                               "'derived' (from position)"]
+    drawn = {ln.get_label() for ln in panel.get_lines()}
+    assert LOOKS["improved"].label in drawn and LOOKS["chi2"].label not in drawn  # elsewhere
     t3 = report.tables(run)["table3"]
     assert set(t3["radar.factor_model"]) == {"table", "derived"}
 

@@ -17,7 +17,7 @@ from PIL import Image
 
 from trackfuse import reports
 from trackfuse.harness import run_data
-from trackfuse.plots.style import RC
+from trackfuse.reportkit.style import RC
 from trackfuse.reports import (
     VERDICTS,
     display_table,
@@ -297,7 +297,7 @@ def test_every_figure_file_names_what_produced_it(toy_run):
 
 def test_text_a_figure_adds_after_its_axes_takes_the_house_sizes(toy_run, monkeypatch):
     """The toy report's legend (made after ``new_figure`` returned, as the esm and passive
-    figures' legends and titles were) came out in matplotlib's 10 pt, not the house 8 pt."""
+    figures' legends and titles were) came out in matplotlib's 10 pt, not the house size."""
     sizes = []
     save = reports.save_figure
 

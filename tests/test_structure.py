@@ -76,7 +76,7 @@ LAZY_IMPORTS = {("trackfuse.experiments.twin_sensor.model",
                  "trackfuse.association.sd_assignment"),
                 ("trackfuse.experiments.passive_sd.model",
                  "trackfuse.association.sd_costs"),
-                ("trackfuse.reports", "trackfuse.plots.style")}
+                ("trackfuse.reports", "trackfuse.reportkit.style")}
 
 
 def test_no_function_level_import_between_our_modules():

@@ -31,7 +31,7 @@ sit beside it in ``figures/``.
 
 This module imports matplotlib only when it draws (the style's warm-up before forking the
 drawing processes, or ahead of drawing: :func:`load_drawing`): report modules draw on
-:class:`matplotlib.figure.Figure` objects (:func:`trackfuse.plots.style.new_figure`, not
+:class:`matplotlib.figure.Figure` objects (:func:`trackfuse.reportkit.style.panels`, not
 registered with pyplot, freed with their last reference), and the runner, which imports
 this module, stays free of it until it draws.
 """
@@ -292,7 +292,7 @@ def _draw(run: RunData, module: ModuleType, names: Sequence[str],
           formats: Sequence[str]) -> Report:
     """Draw and save the figures ``names``, one at a time (the report's ``figures``,
     ``errors`` and ``not_drawn`` parts for them)."""
-    from trackfuse.plots.style import context  # matplotlib: see the module docstring
+    from trackfuse.reportkit.style import context  # matplotlib: see the module docstring
 
     part, source = Report(), provenance(run)
     for name in names:
@@ -306,7 +306,8 @@ def _draw(run: RunData, module: ModuleType, names: Sequence[str],
             part.not_drawn[name] = fig or "the experiment's report drew nothing for this config"
             continue
         try:
-            part.figures += save_figure(fig, run.path / "figures", name, formats, source)
+            with context():  # the journal style's PDF font type (TrueType) at save time
+                part.figures += save_figure(fig, run.path / "figures", name, formats, source)
         except OSError:  # the disk (full, unwritable), not the figure: the run stops, resumable
             raise
         except Exception as err:  # noqa: BLE001 - one figure's bug must not lose the others
@@ -344,7 +345,7 @@ def _write_figures(run: RunData, module: ModuleType, wanted: Sequence[str],
         meanwhile()
         parts = [_draw(run, module, wanted, formats)]
     else:
-        from trackfuse.plots.style import warm_up  # matplotlib: see the module docstring
+        from trackfuse.reportkit.style import warm_up  # matplotlib: see the module docstring
 
         run.trials, run.summary  # noqa: B018 - read once here, inherited by the forks
         warm_up(tuple(formats), PNG_DPI)
@@ -391,7 +392,7 @@ def load_drawing(report_module: str | None, formats: Sequence[str],
         module = importlib.import_module(report_module)
     except Exception:  # noqa: BLE001 - write_report imports it again and says why it fails
         return
-    from trackfuse.plots.style import warm_up  # matplotlib: see the module docstring
+    from trackfuse.reportkit.style import warm_up  # matplotlib: see the module docstring
 
     warm_up(tuple(formats), PNG_DPI)
     if folder is not None and hasattr(module, "prepare"):

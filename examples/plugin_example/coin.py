@@ -11,6 +11,8 @@ See ``docs/plugins.md`` for the contract.
 from __future__ import annotations
 
 from trackfuse.experiments.base import Experiment, FigureSpec, Metric, Param
+from trackfuse.reportkit.looks import GREEN, Look
+from trackfuse.reportkit.spec import Plot, Reference
 from trackfuse.seeding import TrialStreams
 
 
@@ -29,15 +31,27 @@ EXPERIMENT = Experiment(
     name="coin",
     title="Coin bias by the sample mean (plugin example)",
     params=(
-        Param("p", 0.3, "probability of heads", "1", low=0.0, high=1.0),
-        Param("tosses", 50, "tosses per trial", "tosses", kind=int, low=1, high=10**6),
+        Param("p", 0.3, "probability of heads", "1", low=0.0, high=1.0, label="true bias p"),
+        Param("tosses", 50, "tosses per trial", "tosses", kind=int, low=1, high=10**6,
+              label="tosses", symbol="n"),
     ),
     run_trial=run_trial,
     metrics=(
-        Metric("abs_error", "1", "absolute error of the estimated bias", better="lower"),
+        Metric("abs_error", "1", "absolute error of the estimated bias", better="lower",
+               label="mean absolute error"),
         Metric("covered", "1", "the 95 % Wald interval covers p", binary=True,
-               better="higher"),
+               better="higher", label="Wald interval covers p"),
     ),
     report="coin_report",
-    figures={"error": FigureSpec("mean absolute error against the true bias, 95 % t band")},
+    # The figures as data: the report kit draws them (no matplotlib in this plugin).
+    figures={
+        "error": FigureSpec("Mean absolute error of the sample mean against the true bias, "
+                            "95 % Student-t band",
+                            plot=Plot(("abs_error",), "p")),
+        "coverage": FigureSpec("Coverage of the 95 % Wald interval against the true bias, "
+                               "95 % Wilson band; dashed: the nominal 95 %",
+                               plot=Plot(("covered",), "p",
+                                         references=(Reference(y=0.95, label="nominal"),))),
+    },
+    looks={"sample_mean": Look("sample mean", GREEN, "o", "ours")},
 )

@@ -51,6 +51,8 @@ from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
 
+from trackfuse.reportkit.looks import Look
+from trackfuse.reportkit.spec import Plot
 from trackfuse.results import RUNNER_COLUMNS, TIME_SUFFIX
 
 if TYPE_CHECKING:  # only for annotations: declaring an experiment loads no numpy
@@ -94,6 +96,13 @@ class Param:
     length: int | None = None
     item_kind: type = float
     draws: bool = True
+    #: What figures and tables call it (``"false returns per scan"``); ``""``: its key.
+    label: str = ""
+    #: Its short name in panel titles (``"N"``, ``"$p_m$"``); ``""``: the label.
+    symbol: str = ""
+    #: ``((value, word), ...)``: what figures call some of its values (``("table", "radar
+    #: factors from their own noise")``); a value without a word is printed as it is.
+    words: tuple[tuple[Any, str], ...] = ()
 
     def __post_init__(self) -> None:
         if problem := self._declaration_problem():
@@ -161,6 +170,13 @@ class Metric:
     categorical: bool = False
     bounds: tuple[float, float] | None = None
     aggregate: Aggregate = "mean"
+    #: What figures and tables call it (``"tracks lost"``); ``""``: its name.
+    label: str = ""
+
+    @property
+    def percent(self) -> bool:
+        """Shown in % (a 0/1 rate or a fraction): figures and tables alike."""
+        return self.binary or self.bounds == FRACTION
 
     def __post_init__(self) -> None:
         if problem := column_name_problem(self.name):
@@ -192,10 +208,13 @@ FRACTION, NON_NEGATIVE = (0.0, 1.0), (0.0, math.inf)
 @dataclass(frozen=True)
 class FigureSpec:
     """One figure of an experiment's report: a one-line ``caption`` and the ``paper``
-    figure or table it stands for (``""`` for an extension or a diagnostic)."""
+    figure or table it stands for (``""`` for an extension or a diagnostic); ``plot``: the
+    figure as data, drawn by :mod:`trackfuse.reportkit.render` (``None``: the report
+    module draws it itself)."""
 
     caption: str
     paper: str = ""
+    plot: Plot | None = None
 
 
 @dataclass(frozen=True)
@@ -219,6 +238,10 @@ class Experiment:
     #: Modules the process pool's fork server imports before it forks workers (a module
     #: that loads a compiled kernel, say), so every worker starts with them in memory.
     preload: tuple[str, ...] = ()
+    #: Algorithm name -> how figures draw it and call it (:class:`Look`).
+    looks: Mapping[str, Look] = field(default_factory=dict, compare=False)
+    #: Row key -> ``(label, unit)`` in figures (``{"ops": ("genetic operations", "count")}``).
+    row_labels: Mapping[str, tuple[str, str]] = field(default_factory=dict, compare=False)
     schema: dict[str, Param] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:

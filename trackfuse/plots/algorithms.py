@@ -55,8 +55,8 @@ class Look:
 
 LOOKS: dict[str, Look] = {
     # paper 000 (twin_sensor): association variants
-    "paper_approx": Look("paper's fused-gate PDA (reconstruction)", VERMILLION, "s", "paper"),
-    "mspda_parallel": Look("parallel PDA (corrected; PDAF with one sensor)", GREEN, "o", "ours"),
+    "paper_approx": Look("paper's fused-gate PDA", VERMILLION, "s", "paper"),
+    "mspda_parallel": Look("parallel PDA (corrected)", GREEN, "o", "ours"),
     "mspda_sequential": Look("sequential PDA", BLUE, "^", "variant"),
     "nn": Look("nearest neighbour", GREYS[0], "h", "variant"),
     # paper 001 (esm_radar)

@@ -10,30 +10,50 @@ from __future__ import annotations
 from trackfuse.experiments.base import Experiment, FigureSpec
 from trackfuse.experiments.esm_radar.checks import config_problem
 from trackfuse.experiments.esm_radar.model import PARAMS, ROW_METRICS, run_batch, run_trial
+from trackfuse.reportkit.looks import BLACK, BLUE, GREEN, GREYS, VERMILLION, Look
+from trackfuse.reportkit.spec import Plot
+
+LOOKS = {
+    "improved": Look("improved fuzzy (paper)", VERMILLION, "s", "paper"),
+    "traditional": Look("traditional fuzzy (paper)", BLUE, "o", "paper_baseline"),
+    "improved_gauss": Look("improved, Gaussian (ours)", GREEN, "D", "ours"),
+    "traditional_5f": Look("traditional, 5 factors", BLUE, "v"),
+    "improved_static": Look("improved, static weights", GREYS[0], "^"),
+    "improved_3f": Look("improved, 3 factors", GREYS[1], "<"),
+    "improved_no_range": Look("improved, no range", GREYS[2], "P"),
+    "improved_l2": Look("improved, L2 membership", GREYS[2], ">"),
+    "chi2": Look("χ² ML reference", BLACK, "o", "reference", open=True),
+    "chi2_lrt": Look("χ² reference, may abstain", GREYS[0], "X", "reference"),
+    "chi2_5f": Look("χ², 5 factors", GREYS[1], "d", "reference", open=True),
+    "counting": Look("counting test, track history", GREYS[0], "v"),
+    "sprt": Look("sequential test (SPRT)", GREYS[1], "X"),
+}
+#: The x of a rate figure is chosen per run (the report): the first numeric swept key of
+#: more than two values as a curve, else the first swept key as categories.
+_RATE = Plot(("correct",), "target.separation", max_columns=3)
 
 FIGURES = {
     "correct_rate": FigureSpec(
-        "correct-association rate (%) of the paper's method, its baseline and ours (those "
-        "run) with 95 % Wilson intervals, against separation (Fig. 3) or radar range error "
-        "(Fig. 4), as categories for a sweep of two settings, or one row per method, beside "
-        "the paper's values (open stars, just right of their setting); the titles name the "
-        "radar-factor model of the rates beside the stars",
-        "Table 3, Figs. 3-4"),
+        "Correct-association rate (%) of the paper's method, its baseline and ours (those "
+        "run), 95 % Wilson intervals (bands on a curve, bars in categories), against "
+        "separation (Fig. 3), radar range error (Fig. 4) or the swept setting; open stars: "
+        "the paper's Table 3 values at the points at its setting, right of our markers; "
+        "dotted: chance (50 %)", "Table 3, Figs. 3-4", _RATE),
     "correct_rate_ablations": FigureSpec(
-        "the same for the ablations of the paper's method that the config runs (each one "
-        "change to it, named in the legend) beside the paper's method", ""),
+        "The same for the ablations of the paper's method that the config runs (each one "
+        "change to it, named in the legend) beside the paper's method", "", _RATE),
     "correct_rate_references": FigureSpec(
-        "the same for the chi-square maximum-likelihood references beside the paper's two "
-        "methods", ""),
+        "The same for the chi-square maximum-likelihood references beside the paper's two "
+        "methods", "", _RATE),
     "trajectory": FigureSpec(
-        "true tracks and the ESM TDOA-DF location of one saved trial, its manoeuvre index "
+        "True tracks and the ESM TDOA-DF location of one saved trial, its manoeuvre index "
         "and (where a dynamic-weight algorithm ran) range weight per scan, and the ESM range "
         "error per scan over all trials",
         "Figs. 1-2"),
     "manoeuvre": FigureSpec(
-        "mean manoeuvre index per scan and, where a dynamic-weight algorithm ran, the mean "
-        "range weight of the paper's method, 95 % t bands, one curve per setting of the ESM "
-        "track", ""),
+        "Mean manoeuvre index per scan and, where a dynamic-weight algorithm ran, the mean "
+        "range weight of the paper's method (dotted: its static AHP weight), 95 % t bands, one "
+        "curve per setting of the ESM track", ""),
 }
 
 EXPERIMENT = Experiment(
@@ -48,6 +68,7 @@ EXPERIMENT = Experiment(
     row_keys=("algorithm",),
     batch_size=100,
     check=config_problem,
+    looks=LOOKS,
 )
 
-__all__ = ["EXPERIMENT", "FIGURES"]
+__all__ = ["EXPERIMENT", "FIGURES", "LOOKS"]

@@ -206,20 +206,27 @@ PARAMS = (
           "latest radar sample", kind=bool, draws=False),
     Param("geometry.baseline", 10_000.0, "A2 - A1 along x (A1 at the origin)", "m", low=1.0,
           high=1e6),
-    Param("target.separation", 200.0, "T2 - T1 along x", "m", low=0.0, high=1e5),
-    Param("snake.amplitude", 1000.0, "snake manoeuvre amplitude A", "m", low=0.0, high=1e5),
+    Param("target.separation", 200.0, "T2 - T1 along x", "m", low=0.0, high=1e5,
+          label="T1–T2 separation", symbol="separation"),
+    Param("snake.amplitude", 1000.0, "snake manoeuvre amplitude A", "m", low=0.0, high=1e5,
+          label="snake amplitude", symbol="A",
+          words=((0.0, "no weave"), (1000.0, "1 km weave"))),
     Param("snake.period", 40.0, "snake manoeuvre period P_w", "s", low=1.0, high=1e4),
     Param("snake.speed", 200.0, "T1/T2 speed toward the own aircraft V", "m/s", low=0.0,
           high=3000.0),
     Param("crossing.time", 30.0, "time t_c at which T3 crosses the T1/T2 centre line", "s", low=1.0,
           high=1e4),
     Param("phase.d_over_lambda", 0.5, "interferometer spacing over wavelength", "1", low=0.01,
-          high=100.0),
+          high=100.0,
+          label="interferometer spacing d/λ", symbol="d/λ"),
     Param("radar.factor_model", "table",
           "radar TDOA/phase: 'table' = own noise (Table 2), 'derived' = from radar position",
-          kind=str, choices=("table", "derived")),
+          kind=str, choices=("table", "derived"),
+          label="radar factors",
+          words=(("table", "'table' (own noise)"), ("derived", "'derived' (from position)"))),
     Param("radar.sigma_range_coef", 0.01, "radar range sd as a fraction of range", "1/R", low=0.0,
-          high=1.0),
+          high=1.0,
+          label="radar range sd / range", symbol="$\\sigma_R/R$"),
     Param("radar.sigma_speed", 10.0, "radar speed sd", "m/s", low=0.0, high=1e4),
     Param("radar.sigma_angle", 8e-3, "radar bearing sd", "rad", low=0.0, high=3.0),
     Param("radar.sigma_tdoa", 3e-8, "radar TDOA sd ('table' model)", "s", low=0.0, high=1e-3),
@@ -244,19 +251,24 @@ PARAMS = (
           "manoeuvre index: 'nis_tdoa' = windowed NIS of a constant-acceleration filter on the "
           "ESM range difference c*dt (default), 'literal' = paper eq. 8-13, residual of a CV "
           "filter on the TDOA-DF range over its measurement variance (needs alpha.max_mode "
-          "'fixed' or 'running_max')", kind=str, choices=("nis_tdoa", "literal"), draws=False),
+          "'fixed' or 'running_max')", kind=str, choices=("nis_tdoa", "literal"), draws=False,
+          label="manoeuvre index",
+          words=(("nis_tdoa", "NIS index"), ("literal", "literal index"))),
     Param("alpha.window", 5, "scans N averaged in the manoeuvre index", "samples", kind=int, low=1,
           high=10_000, draws=False),
     Param("alpha.max_mode", "chi2",
           "alpha_max of eq. 14: 'chi2' = quantile 1 - alpha.false_alarm of chi2(N)/N, the "
           "no-manoeuvre distribution of the 'nis_tdoa' index (so only with alpha.index "
           "'nis_tdoa'); 'fixed' = alpha.max; 'running_max' = running maximum of alpha",
-          kind=str, choices=("chi2", "fixed", "running_max"), draws=False),
+          kind=str, choices=("chi2", "fixed", "running_max"), draws=False,
+          label="α_max mode", words=(("chi2", "α_max chi-square"), ("fixed", "α_max fixed"),
+                                          ("running_max", "α_max running max"))),
     Param("alpha.false_alarm", 0.01, "'chi2' mode: probability that the index of a "
           "non-manoeuvring target exceeds alpha_max in a window", "1", low=1e-9, high=0.5,
           draws=False),
     Param("alpha.max", 10.0, "alpha_max of eq. 14 in 'fixed' mode", "1", low=1e-6, high=1e9,
-          draws=False),
+          draws=False,
+          label="α_max"),
     Param("alpha.accel_change_sd", 0.05,
           "'nis_tdoa': sd of the range-difference acceleration change over one period "
           "(DWPA process noise)", "m/s^2", low=0.0, high=1e4, draws=False),
@@ -290,7 +302,10 @@ PARAMS = (
           "per-trial time mean of the sd from the measured values (static); 'per_sample' = "
           "sd recomputed at every scan from the measured bearing/TDOA/range (handicapped: "
           "sharp when the ESM range falls short)", kind=str,
-          choices=("nominal", "trial_mean", "per_sample"), draws=False),
+          choices=("nominal", "trial_mean", "per_sample"), draws=False,
+          label="spread", words=(("nominal", "spread nominal"),
+                                     ("trial_mean", "spread trial mean"),
+                                     ("per_sample", "spread per sample"))),
     Param("baseline.decision", "mean", "'traditional' decision: mean membership or majority "
           "vote of per-scan decisions", kind=str, choices=("mean", "vote"), draws=False),
 )
@@ -741,7 +756,7 @@ ROW_METRICS = (
     Metric("chosen", "track", "radar track chosen, 1..3, or 0 for no decision",
            categorical=True),
     Metric("correct", "1", "the ESM track was associated with its radar track", binary=True,
-           better="higher"),
+           better="higher", label="correct association rate"),
     Metric("decided", "1", "a radar track was chosen (always 1 except for chi2_lrt, "
            "counting and sprt)",
            binary=True),

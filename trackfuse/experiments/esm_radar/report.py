@@ -46,21 +46,19 @@ index and range weight of ``improved`` per point, 95 % t intervals) and ``paper_
 
 from __future__ import annotations
 
-import textwrap
 from collections.abc import Callable, Collection, Mapping, Sequence
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 import matplotlib
 import numpy as np
 import pandas as pd
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.lines import Line2D
-from matplotlib.patches import Patch
+from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
-from matplotlib.transforms import offset_copy
 
 from trackfuse.association import ahp
 from trackfuse.association.esm_scenario import FACTORS
+from trackfuse.experiments.esm_radar import EXPERIMENT, FIGURES, LOOKS
 from trackfuse.experiments.esm_radar.model import (
     ALGORITHMS,
     N_TRACKS,
@@ -73,18 +71,11 @@ from trackfuse.experiments.esm_radar.model import (
     scenario,
     static_weights,
 )
-from trackfuse.plots.algorithms import line_kwargs, look
-from trackfuse.plots.style import (
-    PAGE_WIDTH_IN,
-    band,
-    legend_below,
-    legend_entries,
-    mosaic_figure,
-    new_figure,
-    reference_line,
-    wants_log_axis,
-)
 from trackfuse.reported import ESM_RADAR, ESM_RADAR_WEIGHTS
+from trackfuse.reportkit import render
+from trackfuse.reportkit.render import BAND_ALPHA
+from trackfuse.reportkit.spec import SLOTS, Reference
+from trackfuse.reportkit.style import context, legend_below, legend_entries, panels
 from trackfuse.reportkit.verdicts import (
     AGREES,
     ALPHA,
@@ -549,41 +540,6 @@ WORDS = {("radar.factor_model", "table"): "radar TDOA/phase with their own noise
          ("alpha.index", "nis_tdoa"): "NIS index", ("alpha.index", "literal"): "literal index",
          ("alpha.max_mode", "chi2"): "α_max chi-square", ("alpha.max_mode", "fixed"): "α_max fixed",
          ("alpha.max_mode", "running_max"): "α_max running maximum"}
-#: Words of the figures' panel titles and category labels for categorical keys (the tables
-#: keep :data:`WORDS`): the radar-factor model named by its config value, what it means below.
-TITLE_WORDS = {("radar.factor_model", "table"):
-               "radar factors 'table'\n(own TDOA/phase noise)",
-               ("radar.factor_model", "derived"):
-               "radar factors 'derived'\n(TDOA/phase from position)",
-               ("baseline.spread", "nominal"): "spread static, nominal geometry",
-               ("baseline.spread", "trial_mean"): "spread static, trial mean",
-               ("baseline.spread", "per_sample"): "spread recomputed per sample"}
-#: Swept keys whose value the paper does not give, by their symbol: the paper's Table 3
-#: values drawn at every value of such a key say so.
-PAPER_GIVES_NO = {"phase.d_over_lambda": "d/λ"}
-#: Paper figure drawn by ``correct_rate`` for each numeric swept key.
-PAPER_FIGURE = {"target.separation": "Fig. 3", "radar.sigma_range_coef": "Fig. 4"}
-#: The algorithms of each correct-rate figure: the paper's pair and ours, the ablations
-#: (beside the paper's method), the chi-square references (beside the paper's pair).
-GROUPS = {"correct_rate": ("improved", "traditional", "improved_gauss"),
-          "correct_rate_ablations": ("improved", "traditional_5f", "improved_static",
-                                     "improved_no_range", "improved_3f", "improved_l2"),
-          "correct_rate_references": ("improved", "traditional", "chi2", "chi2_lrt", "chi2_5f")}
-#: What the other groups draw, in their titles (``correct_rate``: :func:`_methods_words`).
-GROUP_TITLES = {"correct_rate_ablations": "ablations",
-                "correct_rate_references": "chi-square ML references"}
-CHANCE = 0.5  # T1 or T2 at random: track 3 is never chosen
-#: How chance is drawn: dotted grey, apart from the dashed chi-square references.
-CHANCE_STYLE = {"color": "0.5", "linestyle": ":", "linewidth": 1.2}
-#: Marker and line style of each chi-square reference (their looks have no marker), in both
-#: layouts, so that the references stay apart from each other and from chance.
-REFERENCE_STYLES = {"chi2": ("o", "--"), "chi2_lrt": ("X", "-."),
-                    "chi2_5f": ("d", (0, (4, 1, 1, 1, 1, 1)))}
-#: End of the rate axis (%): a line at 100 % stays clear of the spine (markers there are
-#: drawn unclipped, whole, however short the axes).
-RATE_TOP = 104.0
-
-
 def _value_words(key: str, value: Any) -> str:
     """A swept value in words (``separation 200 m``, ``radar range sd 1 %``)."""
     if (key, value) in WORDS:
@@ -597,475 +553,70 @@ def _value_words(key: str, value: Any) -> str:
     return f"{key} = {value}"
 
 
-def _numeric_axis(config: Mapping[str, Any], summary: pd.DataFrame) -> str | None:
-    """The first numeric swept key with at least two values, else None."""
-    for key in swept_keys(config):
-        if pd.api.types.is_numeric_dtype(summary[key]) and len(config["sweep"][key]) > 1:
-            return key
-    return None
-
-
-#: Grids up to this many values get a labelled tick at every value.
-MAX_LABELLED = 9
-
-
-def _set_x_axis(ax: Axes, key: str, values: np.ndarray) -> None:
-    """Label the x axis; a log axis (its label says so) only for a wide grid
-    (:func:`~trackfuse.plots.style.wants_log_axis`), ticked with plain numbers, else
-    linear. Up to :data:`MAX_LABELLED` values every grid value is ticked and labelled; a
-    longer log grid is ticked at 1, 2, 5 x 10^k."""
-    label, _ = AXES.get(key, (key, 1.0))
-    values = np.unique(values)
-    log = wants_log_axis(values)
-    if log:
-        label = f"{label[:-1]}, log scale)" if label.endswith(")") else f"{label} (log scale)"
-    ax.set_xlabel(label)
-    if log:
-        ax.set_xscale("log")
-        ticks = values if len(values) <= MAX_LABELLED else [
-            v for m in (1, 2, 5) for v in m * 10.0 ** np.arange(-3, 7)
-            if values.min() <= v <= values.max()]
-        ax.set_xticks(sorted(ticks))
-        ax.xaxis.set_minor_formatter(NullFormatter())
-    elif len(values) <= MAX_LABELLED:
-        ax.set_xticks(values)
-    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-
-
-def _title_words(key: str, value: Any) -> str:
-    """A swept value in a panel title (:data:`TITLE_WORDS`, else :func:`_value_words`)."""
-    return TITLE_WORDS.get((key, value)) or _value_words(key, value)
-
-
-def _panels(summary: pd.DataFrame, keys: Sequence[str]) -> list[tuple[str, pd.DataFrame]]:
-    """(title, rows) per combination of ``keys`` in the summary (one panel each)."""
-    if not keys:
-        return [("", summary)]
-    return [("; ".join(_title_words(k, v) for k, v in zip(keys, np.atleast_1d(key),
-                                                          strict=True)), g)
-            for key, g in summary.groupby(list(keys), sort=False)]
-
-
-def _paper_xs(run: RunData, rows: pd.DataFrame, x: str | None) -> list[float]:
-    """The x values (scaled; 0 with no x) of the points in ``rows`` at the paper's setting
-    (:func:`at_paper_setting`): where its Table 3 values belong."""
-    scale = AXES.get(x, (x, 1.0))[1]
-    points = (run.point_params(int(p)) for p in rows["point"].unique())
-    return sorted({scale * float(p[x]) if x else 0.0 for p in points if at_paper_setting(p)})
-
-
-#: How far right of their setting the paper's values are drawn on a curve panel (points),
-#: so that our marker at that setting stays in sight beside the paper's.
-PAPER_DODGE_PT = 9.0
-#: Drawing order of the paper's values: above our bands (1), below our curves, markers and
-#: error bars (2 and 3, :func:`trackfuse.plots.algorithms.line_kwargs`).
-PAPER_ZORDER = 1.5
-#: Sideways offsets (points) of the curves drawn with error bars (variants, references), by
-#: their order in the figure: beside the banded curves' markers and each other's, so that
-#: equal rates stay in sight; their data stay at the grid values. Constant on the page:
-#: 3 points is about 6 % of x on the separation axis (50 m to 2 km in a panel 2.8 in wide),
-#: so that a cluster stays at its setting, well apart from 750 m and 1000 m.
-BAR_DODGE_PT = (-3.0, 3.0, -6.0, 6.0, -9.0, 9.0)
-#: Drawing order of the curves with error bars: thin, above the thick banded ones (3).
-BAR_ZORDER = 3.5
-#: Room (fraction of the data range) each side of a curve panel's x data, for the markers
-#: drawn aside (:data:`PAPER_DODGE_PT`, :data:`BAR_DODGE_PT`).
-X_MARGIN = 0.08
+#: The algorithms of each correct-rate figure: the paper's pair and ours, the ablations
+#: (beside the paper's method), the chi-square references (beside the paper's pair).
+GROUPS = {"correct_rate": ("improved", "traditional", "improved_gauss"),
+          "correct_rate_ablations": ("improved", "traditional_5f", "improved_static",
+                                     "improved_no_range", "improved_3f", "improved_l2"),
+          "correct_rate_references": ("improved", "traditional", "chi2", "chi2_lrt", "chi2_5f")}
+#: What each figure draws, in its title.
+GROUP_TITLES = {"correct_rate": "the paper's methods and ours",
+                "correct_rate_ablations": "ablations of the paper's method",
+                "correct_rate_references": "chi-square ML references"}
+#: Paper figure drawn by ``correct_rate`` for each numeric swept key.
+PAPER_FIGURE = {"target.separation": "Fig. 3", "radar.sigma_range_coef": "Fig. 4"}
+CHANCE = 0.5  # T1 or T2 at random: track 3 is never chosen
 #: A numeric swept key with at most this many values is drawn as categories, not as a
 #: curve: two settings ("no weave" and "weave") joined by a line would suggest a trend.
 MAX_CATEGORIES = 2
-#: Sideways step (in categories) between the methods drawn side by side in one category.
-CATEGORY_STEP = 0.13
-#: Marker size (points) of a rate drawn with its error bar alone (categories, rows).
-DOT_MARKER = 6.0
 
 
-def _paper_markers(ax: Axes, names: Sequence[str],
-                   place: Callable[[float, str], tuple[list[float], list[float]]],
-                   where: str = "", dodge_pt: float = 0.0) -> None:
-    """The paper's Table 3 rates (%) as open stars in each method's colour, under our
-    markers, where ``place(value, name)`` puts them (data ``(xs, ys)``), drawn ``dodge_pt``
-    points to the right; ``where`` ends the legend label."""
-    transform = offset_copy(ax.transData, fig=ax.figure, x=dodge_pt, units="points")
-    for name in (n for n in PAPER_PAIR if n in names):
-        value = 100 * ESM_RADAR.result(f"{name}: correct rate").value
-        xs, ys = place(value, name)
-        if not xs:
-            continue
-        ax.plot(xs, ys, linestyle="none", marker="*", markersize=11, markerfacecolor="white",
-                markeredgecolor=look(name).colour, markeredgewidth=1.4, zorder=PAPER_ZORDER,
-                transform=transform, label=f"paper's Table 3: {name} {value:.1f} %{where}")
+def rate_axis(run: RunData) -> tuple[str, bool]:
+    """``(x, categories)`` of a rate figure: the first numeric swept key of more than
+    :data:`MAX_CATEGORIES` values as a curve, else the first swept key as categories, else
+    (nothing swept) the radar-factor model every rate depends on, one category."""
+    keys = [k for k in swept_keys(run.config) if k != "algorithms"]
+    for key in keys:
+        values = run.sweep[key]
+        if all(isinstance(v, int | float) for v in values) and len(set(values)) > MAX_CATEGORIES:
+            return key, False
+    return (keys[0] if keys else "radar.factor_model"), True
 
 
-def _rate_arrays(rows: pd.DataFrame, name: str, x: str) -> tuple[pd.DataFrame, np.ndarray,
-                                                                  np.ndarray, np.ndarray]:
-    """The rows of ``name`` sorted by ``x`` and its rate, interval low and high (%)."""
-    g = rows[rows["algorithm"] == name].sort_values(x)
-    return g, *(100 * g[c].to_numpy(float) for c in ("mean", "ci_low", "ci_high"))
+def _paper_points(run: RunData) -> tuple[int, ...]:
+    """The sweep points at the paper's Table 3 setting (:func:`at_paper_setting`)."""
+    return tuple(i for i in range(len(run.points)) if at_paper_setting(run.point_params(i)))
 
 
-def _curve_panel(ax: Axes, rows: pd.DataFrame, x: str, names: Sequence[str],
-                 paper_xs: Sequence[float]) -> None:
-    """Correct rate (%) of ``names`` against ``x`` with 95 % Wilson intervals: bands for
-    the emphasised methods, error bars for the others (:data:`BAR_DODGE_PT` aside); the
-    paper's values at ``paper_xs``."""
-    scale = AXES.get(x, (x, 1.0))[1]
-    barred = [n for n in names if not look(n).emphasised]
-    for name in names:
-        g, mean, lo, hi = _rate_arrays(rows, name, x)
-        xs = scale * g[x].to_numpy(float)
-        kw = {**line_kwargs(name), "clip_on": False}  # a marker at 100 % is drawn whole
-        if look(name).role == "paper":  # on top of ours where both reach 100 %
-            kw["zorder"] += 0.1
-        if name not in barred:
-            band(ax, xs, mean, lo, hi, **kw)
-            continue
-        marker, style = REFERENCE_STYLES.get(name, (kw["marker"], kw["linestyle"]))
-        aside = offset_copy(ax.transData, fig=ax.figure,
-                            x=BAR_DODGE_PT[barred.index(name)], units="points")
-        ax.errorbar(xs, mean, yerr=[mean - lo, hi - mean], transform=aside, capsize=1.5,
-                    elinewidth=0.8, **{**kw, "marker": marker, "linestyle": style,
-                                       "zorder": BAR_ZORDER})
-    _paper_markers(ax, names, lambda v, _: (list(paper_xs), [v] * len(paper_xs)),
-                   ", drawn just right of its setting", PAPER_DODGE_PT)
-    _set_x_axis(ax, x, scale * rows[x].to_numpy(float))
-    ax.margins(x=X_MARGIN)
-    _rate_axis_lines(ax)
-
-
-def _rate_axis_lines(ax: Axes) -> None:
-    """Chance (dotted) and the y label of a panel with the rate on y."""
-    reference_line(ax, 100 * CHANCE, "chance between T1 and T2 (50 %)", **CHANCE_STYLE)
-    ax.set_ylabel("correct association\nrate (%)")
-
-
-def _category_words(x: str, value: float) -> str:
-    """A category's tick label: ``no weave (0 m)`` / ``weave (1000 m)`` for the snake
-    amplitude, else the axis symbol and value (``d/λ = 0.5``, ``separation = 200 m``)."""
-    if x == "snake.amplitude":
-        return f"{'weave' if value > 0 else 'no weave'} ({value:g} m)"
-    label, scale = AXES.get(x, (x, 1.0))
-    name, _, unit = label.rpartition(" (")
-    unit = unit.rstrip(")")
-    return f"{name.split()[-1]} = {scale * value:g}" + ("" if unit == "1" else f" {unit}")
-
-
-def _category_panel(ax: Axes, rows: pd.DataFrame, x: str, names: Sequence[str],
-                    paper_xs: Sequence[float]) -> None:
-    """Correct rate (%) of ``names`` at each value of ``x`` drawn as a category: markers
-    with 95 % Wilson error bars side by side (:data:`CATEGORY_STEP`), no line joining the
-    categories; the paper's values right of the methods at ``paper_xs`` (scaled x)."""
-    scale = AXES.get(x, (x, 1.0))[1]
-    values = sorted(rows[x].unique())
-    shifts = CATEGORY_STEP * (np.arange(len(names)) - (len(names) - 1) / 2)
-    for name, shift in zip(names, shifts, strict=True):
-        g, mean, lo, hi = _rate_arrays(rows, name, x)
-        kw = {**line_kwargs(name), "clip_on": False}
-        slots = [values.index(v) + shift for v in g[x]]
-        ax.errorbar(slots, mean, yerr=[mean - lo, hi - mean], capsize=2, **{
-            **kw, "marker": REFERENCE_STYLES.get(name, (kw["marker"],))[0],
-            "linestyle": "none", "markersize": DOT_MARKER})
-    at = [i + shifts[-1] + CATEGORY_STEP for i, v in enumerate(values)
-          if any(np.isclose(scale * v, p) for p in paper_xs)]
-    _paper_markers(ax, names, lambda v, _: (at, [v] * len(at)), ", drawn right of our rates")
-    ax.set_xticks(range(len(values)), [_category_words(x, v) for v in values])
-    ax.set_xlim(-0.5, len(values) - 0.5)
-    ax.grid(False, axis="x")
-    ax.set_xlabel(AXES.get(x, (x,))[0])
-    _rate_axis_lines(ax)
-
-
-def _interval_entries(names: Sequence[str], layout: str) -> tuple[list, list[str]]:
-    """Legend entries saying what the intervals of a curve or category figure of ``names``
-    are: the emphasised methods' shaded bands and the others' error bars on curves, every
-    method's error bars in categories."""
-    handles, labels = [], []
-    if layout == "curves" and any(look(n).emphasised for n in names):
-        handles.append(Patch(facecolor="0.5", alpha=0.3))
-        labels.append("shaded band: 95 % Wilson interval")
-    if layout == "categories" or not all(look(n).emphasised for n in names):
-        handles.append(Line2D([], [], color="0.3", marker="|", markersize=10, linestyle="none"))
-        labels.append("error bar: 95 % Wilson interval"
-                      + (", shifted sideways" if layout == "curves" else ""))
-    return handles, labels
-
-
-def _place(i: int, n: int, ncols: int) -> str:
-    """Panel ``i`` of ``n`` (``ncols`` a row, row-major) in words."""
-    if n <= ncols:
-        return (("left", "right") if n == 2 else ("left", "middle", "right"))[i] + " panel"
-    return f"panel in row {i // ncols + 1}, column {i % ncols + 1}"
-
-
-def _coincidences(panels: Sequence[tuple[str, pd.DataFrame]], x: str, names: Sequence[str],
-                  ncols: int) -> list[str]:
-    """A sentence for each curve of ``names`` equal to an earlier one at every x of a panel
-    (their lines lie on each other there), naming the panels unless it is all of them."""
-    found: dict[tuple[str, str], list[int]] = {}
-    for i, (_, rows) in enumerate(panels):
-        means = {n: rows[rows["algorithm"] == n].sort_values(x)["mean"].to_numpy()
-                 for n in names}
-        for j, b in enumerate(names):
-            same = [a for a in names[:j] if len(means[b]) and np.array_equal(means[a],
-                                                                             means[b])]
-            if same:
-                found.setdefault((b, same[0]), []).append(i)
-    return [("" if len(at) == len(panels) else
-             " and ".join(_place(i, len(panels), ncols) for i in at) + ": ")
-            + f"{look(b).label} coincides with {look(a).label}" for (b, a), at in found.items()]
-
-
-def _star_rows(entries: Sequence[tuple[str, str, pd.Series, bool]], ys: Sequence[float]
-               ) -> dict[str, list[float]]:
-    """Per algorithm, the y of the paper's value (0.3 below the row) in every row of
-    ``entries`` at the paper's setting (:func:`_dot_rows`)."""
-    out: dict[str, list[float]] = {}
-    for (_, name, _, at), y in zip(entries, ys, strict=True):
-        if at:
-            out.setdefault(name, []).append(y - 0.3)
-    return out
-
-
-def _dot_rows(ax: Axes, entries: Sequence[tuple[str, str, pd.Series, bool]]) -> None:
-    """Table 3 layout: one row per entry ``(tick label, algorithm, its summary row, at the
-    paper's setting)``, top down, our rate (%) with its Wilson interval and, at the paper's
-    setting, the paper's value (open star) just below it."""
-    ys = np.arange(len(entries), dtype=float)[::-1]
-    for (_, name, g, _), y in zip(entries, ys, strict=True):
-        lk = look(name)
-        ax.errorbar(100 * g["mean"], y, xerr=[[100 * (g["mean"] - g["ci_low"])],
-                                              [100 * (g["ci_high"] - g["mean"])]],
-                    fmt=REFERENCE_STYLES.get(name, (lk.marker or "o",))[0], color=lk.colour,
-                    markersize=DOT_MARKER + 1, capsize=4, clip_on=False,
-                    linewidth=2.0 if lk.emphasised else 1.0)
-    ax.plot([], [], marker="o", color="k", label="this run: rate, 95 % Wilson interval")
-    stars = _star_rows(entries, ys)
-    _paper_markers(ax, list(stars), lambda v, name: ([v] * len(stars[name]), stars[name]))
-    ax.axvline(100 * CHANCE, label="chance between T1 and T2 (50 %)", **CHANCE_STYLE)
-    ax.set_yticks(list(ys), [label for label, *_ in entries])
-    ax.set_ylim(-0.8, len(entries) - 0.4)
-    ax.set_xlabel("correct association rate (%)")
-
-
-def _rate_legend(axes: Sequence[Axes], names: Sequence[str], layout: str
-                 ) -> tuple[list, list[str]]:
-    """Legend entries of a rate figure: the methods in the order of ``names``, then (curves,
-    categories) what the intervals are, then the rest (the paper's values, chance)."""
-    handles, labels = legend_entries(axes)
-    order = [look(n).label for n in names]
-    if layout in ("curves", "categories"):
-        extra = _interval_entries(names, layout)
-        handles, labels, order = handles + extra[0], labels + extra[1], order + extra[1]
-    ranked = sorted(zip(handles, labels, strict=True),
-                    key=lambda e: order.index(e[1]) if e[1] in order else len(order))
-    return [h for h, _ in ranked], [lab for _, lab in ranked]
-
-
-def _methods_words(names: Collection[str]) -> str:
-    """The ``correct_rate`` methods among ``names`` in words ("the paper's methods and
-    ours", "the paper's baseline", ...)."""
-    pair = tuple(n for n in PAPER_PAIR if n in names)
-    words = {PAPER_PAIR: "the paper's methods", ("improved",): "the paper's method",
-             ("traditional",): "the paper's baseline", (): ""}[pair]
-    if "improved_gauss" in names:
-        words = f"{words} and ours" if words else "ours"
-    return words
-
-
-def _rate_title(run: RunData, group: str, x: str | None, names: Sequence[str],
-                at_setting: bool) -> str:
-    """Two-line suptitle: the paper item redrawn (both of the paper's methods drawn, Table 3
-    only at its setting) or in its layout with what is drawn, else what is drawn; the trials
-    and fixed settings."""
-    what = "correct association rate" + (f" vs {AXES.get(x, (x,))[0].split(' (')[0]}"
-                                         if x else "")
-    item = PAPER_FIGURE.get(x, "Table 3" if x is None else "")
-    paper = group == "correct_rate" and item and (x is not None or at_setting)
-    drawn = _methods_words(names) if group == "correct_rate" else GROUP_TITLES[group]
-    if paper and set(PAPER_PAIR) <= set(names):
-        head, tail = f"Paper 001 {item} redrawn: {what}", ""
-    elif paper:
-        head, tail = f"Paper 001 {item} layout: {what}", f"{drawn.capitalize()} only; "
-    else:
-        head, tail = f"Paper 001, {drawn}: {what}", ""
-    fixed = [_value_words(k, run.params[k]) for k in PAPER_TABLE3_SETTING if k not in run.sweep]
-    if "radar.factor_model" not in run.sweep:  # the setting every rate here depends on
-        fixed.append(f"radar factors '{run.params['radar.factor_model']}'")
-    return (f"{head}\n{tail}{run.config['trials']} trials per point; " + "; ".join(fixed)
-            + ("" if paper else "; not a figure of the paper"))
-
-
-#: Width (in) of a figure printed across a two-column page: a rate figure of several panels
-#: is drawn at it, so that its text prints at its own size.
-#: wide a character of it is (in ems), to wrap a suptitle to the figure's width.
-SUPTITLE_PT, CHAR_EM = 10.8, 0.53
-
-
-def _layout(x: str | None, summary: pd.DataFrame, names: Sequence[str], n_panels: int
-            ) -> str:
-    """How a rate figure is laid out: ``curves`` against a numeric ``x`` of more than
-    :data:`MAX_CATEGORIES` values, ``categories`` for fewer; without ``x`` one row per
-    method in each panel (``rows``), or for one method one panel with a row per setting of
-    the other swept keys (``settings``: three panels of one dot each filled a 2 x 2 grid)."""
-    if x is not None:
-        return "categories" if summary[x].nunique() <= MAX_CATEGORIES else "curves"
-    return "settings" if len(names) == 1 and n_panels > 1 else "rows"
-
-
-def _rate_columns(layout: str, n_panels: int) -> int:
-    """Panels a row: up to 3 on x (curves, categories), up to 2 in the rows layout."""
-    return 1 if layout == "settings" else min(n_panels, 3 if layout in (
-        "curves", "categories") else 2)
-
-
-def _rate_axes(layout: str, n_panels: int, n_rows: int) -> tuple[Figure, np.ndarray]:
-    """The figure and one axes per panel (row-major) of a rate figure: several panels at
-    :data:`PAGE_WIDTH_IN` wide, one narrower; a rows layout ``n_rows`` rows tall."""
-    ncols = _rate_columns(layout, n_panels)
-    n_axes = 1 if layout == "settings" else n_panels
-    across = layout in ("curves", "categories")
-    width = PAGE_WIDTH_IN / ncols if ncols > 1 else (4.8 if across else 6.0)
-    fig, axes = new_figure(ncols=ncols, nrows=-(-n_axes // ncols), width=width,
-                           height=CURVE_ROW_IN if across else 0.55 * n_rows + 2.0)
-    axes = np.atleast_1d(axes)
-    for ax in axes[n_axes:]:
-        ax.set_visible(False)
-    return fig, axes[:n_axes]
-
-
-def _algorithm_row(rows: pd.DataFrame, name: str) -> pd.Series:
-    """The summary row of ``name`` in a one-point ``rows``."""
-    return rows[rows["algorithm"] == name].iloc[0]
-
-
-def _draw_rate_panels(axes: Sequence[Axes], layout: str,
-                      panels: Sequence[tuple[str, pd.DataFrame]], names: Sequence[str],
-                      x: str | None, paper_xs: Sequence[Sequence[float]]) -> None:
-    """Draw every panel of a rate figure in its ``layout`` (:func:`_layout`), titled."""
-    row = _algorithm_row
-    if layout == "settings":
-        (name,) = names
-        _dot_rows(axes[0], [(title, name, row(rows, name), bool(at))
-                            for (title, rows), at in zip(panels, paper_xs, strict=True)])
-        axes[0].set_title(look(name).label)
-        return
-    for ax, (title, rows), at in zip(axes, panels, paper_xs, strict=True):
-        if layout == "rows":
-            _dot_rows(ax, [(look(n).label, n, row(rows, n), bool(at)) for n in names])
-        else:
-            (_curve_panel if layout == "curves" else _category_panel)(ax, rows, x, names, at)
-        ax.set_title(title)
-
-
-def _star_notes(run: RunData, drawn: bool) -> list[str]:
-    """When the paper's Table 3 values are drawn: a sentence for each swept key the paper
-    gives no value of (:data:`PAPER_GIVES_NO`), at every value of which they are drawn."""
-    return [f"paper's Table 3 values drawn at every {symbol}: the paper gives no {symbol}"
-            for key, symbol in PAPER_GIVES_NO.items() if drawn and key in run.sweep]
-
-
-def _balanced(text: str, chars: int) -> int:
-    """A line width for wrapping ``text`` into as few lines of at most ``chars`` as
-    :func:`textwrap.wrap` needs, about equally long (not a last line of one word)."""
-    lines = len(textwrap.wrap(text, chars))
-    return min(chars, -(-len(text) // lines) + 12) if lines > 1 else chars
-
-
-def _wrap_suptitle(fig: Figure, title: str) -> None:
-    """``title`` as ``fig``'s suptitle, each line wrapped to the figure's width between its
-    ``; ``-separated parts, a part longer than a line between its words."""
-    chars = int(fig.get_figwidth() * 72 / (SUPTITLE_PT * CHAR_EM))
-    lines: list[str] = []
-    for line in title.split("\n"):
-        lines.append("")
-        pieces = [(k == 0, piece) for whole in line.split("; ")
-                  for k, piece in enumerate(textwrap.wrap(whole, _balanced(whole, chars)))]
-        for first, piece in pieces:
-            sep = ";" if first else ""
-            joined = f"{lines[-1]}{sep} {piece}" if lines[-1] else piece
-            if len(joined) > chars and lines[-1]:
-                lines[-1] += sep
-                lines.append(piece)
-            else:
-                lines[-1] = joined
-    fig.suptitle("\n".join(lines))
+def _rate_title(group: str, x: str, categories: bool, paper: bool) -> str:
+    """The figure's title: the paper item redrawn (``correct_rate`` against the paper's
+    axis, or Table 3 at its setting), else what is drawn."""
+    item = PAPER_FIGURE.get(x) if not categories else ("Table 3" if paper else "")
+    if group == "correct_rate" and item:
+        return f"Paper 001 {item} redrawn: correct association rate"
+    return f"Correct association rate, {GROUP_TITLES[group]} (no paper figure)"
 
 
 def _rate_figure(run: RunData, group: str) -> Figure | str:
-    """One correct-rate figure (``group`` of :data:`GROUPS`), from ``summary.csv``."""
-    s = run.summary[run.summary["metric"] == "correct"]
-    names = [n for n in GROUPS[group] if n in set(s["algorithm"])]
-    if group != "correct_rate":
-        names = names if set(names) - set(PAPER_PAIR) else []
+    """One correct-rate figure (``group`` of :data:`GROUPS`), from ``summary.csv`` by the
+    report kit: chance dotted, the paper's Table 3 values as open stars (``correct_rate``)."""
+    present = set(run.summary.loc[run.summary["metric"] == "correct", "algorithm"])
+    names = tuple(n for n in GROUPS[group] if n in present)
+    if group != "correct_rate" and not set(names) - set(PAPER_PAIR):
+        names = ()
     if not names:
-        return (f"none of {', '.join(GROUPS[group])} was run"
-                if group == "correct_rate" else
-                f"no algorithm of this group ({', '.join(GROUPS[group][1:])}) was run")
-    x = _numeric_axis(run.config, s)
-    panels = _panels(s, [k for k in swept_keys(run.config) if k != x])
-    if len(panels) > 9:
-        return f"{len(panels)} panels (more than 9 combinations of the other swept keys)"
-    layout = _layout(x, s, names, len(panels))
-    fig, axes = _rate_axes(layout, len(panels),
-                           len(panels) if layout == "settings" else len(names))
-    paper_xs = [_paper_xs(run, rows, x) if group == "correct_rate" else [] for _, rows in panels]
-    _draw_rate_panels(axes, layout, panels, names, x, paper_xs)
-    _share_rate_axis(axes, "y" if x else "x", s)
-    legend_below(fig, *_rate_legend(axes, names, layout))
-    notes = _star_notes(run, any(paper_xs)) + (  # said above the legend's entries
-        _coincidences(panels, x, names, _rate_columns(layout, len(panels)))
-        if layout == "curves" else [])
-    if notes:
-        fig.legends[-1].set_title("\n".join(notes))
-    _wrap_suptitle(fig, _rate_title(run, group, x, names, any(paper_xs)))
-    if x:
-        _grow_for_legend(fig)
-        _upright_crowded_ticks(fig, axes)
-    return fig
-
-
-#: Height (inches) of a row of curve panels with their titles and tick labels; the figure
-#: gets its legend's height on top (:func:`_grow_for_legend`).
-CURVE_ROW_IN = 3.0
-
-
-def _grow_for_legend(fig: Figure) -> None:
-    """Make ``fig`` taller by its legend's height (inches), so that a long legend (many
-    entries, a note on coinciding curves) leaves its panels the height of a short one's,
-    taller than their y labels."""
-    if not hasattr(fig.canvas, "get_renderer"):
-        FigureCanvasAgg(fig)
-    legend = fig.legends[-1].get_window_extent(fig.canvas.get_renderer())
-    fig.set_figheight(fig.get_figheight() + legend.height / fig.dpi)
-
-
-def _upright_crowded_ticks(fig: Figure, axes: Sequence[Axes]) -> None:
-    """Turn the x tick labels of ``axes`` upright when two neighbours would touch
-    (every grid value is labelled: 750 / 1000 / 1500 / 2000 m on a log axis).
-
-    Only the layout is computed to measure them (the panels placed where drawing places
-    them), not a full draw: saving lays the figure out again from there, as after a draw.
-    """
-    if not hasattr(fig.canvas, "get_renderer"):
-        FigureCanvasAgg(fig)
-    renderer = fig.canvas.get_renderer()
-    if (engine := fig.get_layout_engine()) is not None:
-        engine.execute(fig)
-    for ax in axes:
-        boxes = sorted((t.get_window_extent(renderer) for t in ax.get_xticklabels()
-                        if t.get_visible() and t.get_text()), key=lambda b: b.x0)
-        if any(a.x1 + 2 > b.x0 for a, b in zip(boxes, boxes[1:], strict=False)):
-            ax.tick_params(axis="x", labelrotation=90)
-
-
-def _share_rate_axis(axes: Sequence[Axes], which: str, summary: pd.DataFrame) -> None:
-    """One rate range (%) for every panel, from just below the lowest interval (and below
-    chance) to :data:`RATE_TOP`; with shared y the inner panels drop their tick labels."""
-    low = min(40.0, 10 * np.floor((100 * summary["ci_low"].min() - 2) / 10))
-    for i, ax in enumerate(axes):
-        (ax.set_ylim if which == "y" else ax.set_xlim)(low, RATE_TOP)
-        if which == "x" and i % 2:
-            ax.tick_params(labelleft=False)
+        return (f"none of {', '.join(GROUPS[group])} was run" if group == "correct_rate"
+                else f"no algorithm of this group ({', '.join(GROUPS[group][1:])}) was run")
+    x, categories = rate_axis(run)
+    points = _paper_points(run) if group == "correct_rate" else ()
+    stars = tuple((n, ESM_RADAR.result(f"{n}: correct rate").value) for n in PAPER_PAIR
+                  if n in names)
+    references = (Reference(y=CHANCE),) + ((Reference(values=stars, points=points,
+                                                      label="paper's Table 3"),)
+                                           if points and stars else ())
+    plot = replace(FIGURES[group].plot, x=x, categories=categories, algorithms=names,
+                   references=references)
+    return render.draw(run, plot, _rate_title(group, x, categories, bool(points)))
 
 
 # --------------------------------------------------------------------------- per-scan figures
@@ -1124,34 +675,36 @@ def _tracks_panel(ax: Axes, params: Mapping[str, Any], row: pd.Series) -> None:
             markersize=4, label=f"ESM TDOA-DF location (trial {int(row['trial'])})")
     ax.set_xlabel("x (km)")
     ax.set_ylabel("y (km)")
-    ax.set_title(f"one trial; separation {params['target.separation']:g} m;\nsensors at "
-                 f"(0, 0) and ({params['geometry.baseline'] / 1e3:g} km, 0)")
+    ax.set_title(f"one trial, separation {params['target.separation']:g} m")
+    ax.legend(loc="best", fontsize=7)
 
 
 def _index_panel(ax: Axes, run: RunData, row: pd.Series, params: Mapping[str, Any]) -> None:
     """One trial's manoeuvre index (log) and, on a twin axis, its range weight per scan."""
     t = esm_times(params)
     ax.plot(t, decode_series([row["alpha_per_scan"]])[0], color="0.2",
-            label=f"manoeuvre index α(k) ({params['alpha.index']})")
+            label=f"manoeuvre index α(k), "
+            f"{render.quantity(EXPERIMENT, 'alpha.index').word(params['alpha.index'])}")
     a_max, mode = alpha_max(params)
     if mode == "fixed":
         ax.axhline(a_max, color="0.2", linestyle=":", linewidth=1.0, label="α_max")
     ax.set_yscale("log")
     ax.set_xlabel("time (s)")
-    ax.set_ylabel("manoeuvre index α\n(1, log scale)")
+    ax.set_ylabel("manoeuvre index α\n(log scale)")
     weights = _weight_series(run.trials, int(row["point"]), [int(row["trial"])])
     if weights is not None:
         name, a1 = weights
         twin = ax.twinx()
-        twin.plot(t, a1[0], color=look(name).colour, linewidth=2.0,
+        twin.plot(t, a1[0], color=LOOKS[name].colour, linewidth=2.0,
                   label=f"range weight a₁(k), {name}")
-        twin.axhline(static_weights(FACTORS, params["weights"])[0], color=look(name).colour,
+        twin.axhline(static_weights(FACTORS, params["weights"])[0], color=LOOKS[name].colour,
                      linestyle=":", linewidth=1.0, label="static AHP range weight")
         twin.set_ylim(0, 0.7)
-        twin.set_ylabel("range weight a₁ (1)")
+        twin.set_ylabel("range weight a₁")
         twin.grid(False)
-    ax.set_title("one trial: index" + (" and range weight" if weights else "") + " per scan"
-                 + ("" if weights else "\n(no dynamic-weight algorithm run)"))
+    ax.set_title("one trial: index" + (" and range weight" if weights else "") + " per scan")
+    top = twin if weights is not None else ax  # the legend over both axes' lines
+    top.legend(*legend_entries([ax, top]), loc="best", fontsize=7)
 
 
 def _range_error_panel(ax: Axes, esm: pd.DataFrame, params: Mapping[str, Any]) -> None:
@@ -1171,19 +724,15 @@ def _range_error_panel(ax: Axes, esm: pd.DataFrame, params: Mapping[str, Any]) -
     ax.set_xlabel("time (s)")
     ax.set_ylabel("ESM range error\n(m, log scale)")
     ax.set_title(f"all {len(esm)} trials of this point")
+    ax.legend(loc="best", fontsize=7)
 
 
 #: Characters per line of a panel title at the house title size in a panel of half the
 #: page's width (about 3 in).
 PANEL_TITLE_CHARS = 36
 
-TRAJECTORY_SIZE = (8.6, 6.4)
-"""Width and height (in) of the trajectory figure: readable at a page's 7 in (it was 12.9 in
-wide, its tick labels under 5 pt there)."""
-
-TRAJECTORY_TITLE_CHARS = 88
-"""Characters per title line of the trajectory figure (about 10 per inch at the title's
-size)."""
+TRAJECTORY_SIZE = (SLOTS["double"], 5.4)
+"""Width and height (in) of the trajectory figure: a double-column slot."""
 
 
 def _trajectory_figure(run: RunData) -> Figure | str:
@@ -1198,20 +747,19 @@ def _trajectory_figure(run: RunData) -> Figure | str:
     row = esm[esm["point"] == weave[0]].iloc[0] if weave else esm.iloc[0]
     point = int(row["point"])
     params = run.point_params(point)
-    fig, axes = mosaic_figure([["tracks", "index"], ["tracks", "error"]], *TRAJECTORY_SIZE,
-                              width_ratios=(1.0, 1.15))  # the map over two rows
-    _tracks_panel(axes["tracks"], params, row)
-    _index_panel(axes["index"], run, row, params)
-    _range_error_panel(axes["error"], esm[esm["point"] == point], params)
-    axes["tracks"].set_aspect("equal", adjustable="datalim")
-    legend_below(fig, *legend_entries(fig.axes))
-    where = _setting_words(params, swept_keys(run.config))
-    amplitude = params["snake.amplitude"]
-    head = ("Paper 001 Figs. 1-2 redrawn" if np.isclose(amplitude, PAPER_SCENARIO[
-        "snake.amplitude"]) else f"Paper 001 Figs. 1-2 layout, snake amplitude {amplitude:g} m"
-            f" (not the paper's {PAPER_SCENARIO['snake.amplitude']:g} m weave)")
-    fig.suptitle(textwrap.fill(f"{head}: true tracks and the ESM TDOA-DF location of target 2",
-                               TRAJECTORY_TITLE_CHARS) + (f"\n{where}" if where else ""))
+    with context():
+        fig = Figure(figsize=TRAJECTORY_SIZE, layout="constrained")
+        axes = fig.subplot_mosaic([["tracks", "index"], ["tracks", "error"]],
+                                  width_ratios=(1.0, 1.15))  # the map over two rows
+        _tracks_panel(axes["tracks"], params, row)
+        _index_panel(axes["index"], run, row, params)
+        _range_error_panel(axes["error"], esm[esm["point"] == point], params)
+        axes["tracks"].set_aspect("equal", adjustable="datalim")
+        amplitude = params["snake.amplitude"]
+        head = ("Paper 001 Figs. 1-2 redrawn" if np.isclose(
+            amplitude, PAPER_SCENARIO["snake.amplitude"]) else
+            f"Paper 001 Figs. 1-2 layout, snake amplitude {amplitude:g} m")
+        fig.suptitle(f"{head}: true tracks and the ESM location of T2")
     return fig
 
 
@@ -1224,7 +772,8 @@ def _series_band(ax: Axes, t: np.ndarray, values: np.ndarray, label: str, colour
     mean = v.mean(axis=0)
     if shade and len(v) > 1:
         lo, hi = t_interval(mean, v.std(axis=0, ddof=1), len(v))
-        band(ax, t[ok], mean, lo, hi, label=label, marker="", color=colour)
+        ax.plot(t[ok], mean, label=label, color=colour)
+        ax.fill_between(t[ok], lo, hi, color=colour, alpha=BAND_ALPHA, linewidth=0)
     else:
         ax.plot(t[ok], mean, label=label, color=colour)
 
@@ -1252,39 +801,53 @@ def _manoeuvre_figure(run: RunData) -> Figure | str:
         return f"{len(groups)} settings of the ESM track (more than 9 curves per panel)"
     weights = [_weight_series(run.trials, p, rows["trial"].tolist()) for _, p, rows in groups]
     weight_name = next((w[0] for w in weights if w is not None), "")
-    fig, axes = new_figure(ncols=2 if weight_name else 1,
-                           width=PAGE_WIDTH_IN / 2 if weight_name else 4.8,
-                           height=CURVE_ROW_IN + 0.3)
-    axes = np.atleast_1d(axes)
+    fig, grid = panels(1, 2 if weight_name else 1, panel_height=2.4)
+    axes = grid.ravel()
     ax = axes[0]
     colours = ["0.2"] if len(groups) == 1 else [
         matplotlib.colormaps["viridis"](i / (len(groups) - 1) * 0.9) for i in range(len(groups))]
+    keyed = len(groups) > MAX_KEYED  # the settings on a colour bar, not in the legend
     for (words, point, rows), colour, w in zip(groups, colours, weights, strict=True):
         t, shade = esm_times(run.point_params(point)), len(groups) <= 3
+        words = f"_{words}" if keyed else words
         _series_band(ax, t, decode_series(rows["alpha_per_scan"]), words, colour, shade)
         if w is not None:
             _series_band(axes[1], t, w[1], words, colour, shade)
     indices = _index_references(ax, [run.point_params(p) for _, p, _ in groups])
     ax.set_yscale("log")
-    panels = [(ax, "manoeuvre index α\n(1, log scale)", "manoeuvre index" + (
-        "" if weight_name else " (no range weight: no dynamic-weight algorithm was run)"))]
+    labelled = [(ax, "manoeuvre index α\n(log scale)", "manoeuvre index")]
     if weight_name:
         static = static_weights(FACTORS, run.point_params(groups[0][1])["weights"])[0]
-        axes[1].axhline(static, color=look(weight_name).colour, linestyle=":",
-                        linewidth=1.0, label="static AHP range weight")  # not α_max's black
+        axes[1].axhline(static, color=LOOKS[weight_name].colour, linestyle=":",
+                        linewidth=1.0)  # the static AHP range weight (in the caption)
         axes[1].set_ylim(0, 0.7)
-        panels.append((axes[1], "range weight a₁ (1)",
-                       f"range weight of {look(weight_name).label}"))
-    for a, ylabel, title in panels:
-        a.set_xlabel("time (s)")
-        a.set_ylabel(ylabel)
-        a.set_title(textwrap.fill(title, PANEL_TITLE_CHARS))
-    legend_below(fig, *legend_entries(axes))  # one legend for both panels, below them
-    _grow_for_legend(fig)
-    fig.suptitle(f"Manoeuvre index ({' and '.join(indices)})"
-                 + (" and range weight" if weight_name else "") + " per scan (no paper figure)"
-                 f"\nmean over {len(groups[0][2])} trials with 95 % t bands")
+        labelled.append((axes[1], "range weight a₁", f"range weight, {LOOKS[weight_name].label}"))
+    with context():
+        if keyed:
+            _settings_bar(fig, axes, [words for words, _, _ in groups])
+        for a, ylabel, title in labelled:
+            a.set_xlabel("time (s)")
+            a.set_ylabel(ylabel)
+            a.set_title(title)
+        legend_below(fig, axes)  # one legend for both panels, below them
+        words = render.quantity(EXPERIMENT, "alpha.index")
+        fig.suptitle(f"Manoeuvre index ({', '.join(words.word(i) for i in indices)})"
+                     + (" and range weight" if weight_name else "") + " per scan")
     return fig
+
+
+#: The most settings of the ESM track named in the legend; more go on a colour bar.
+MAX_KEYED = 3
+
+
+def _settings_bar(fig: Figure, axes: Sequence[Axes], words: Sequence[str]) -> None:
+    """A colour bar beside ``axes`` naming each setting's colour (``words``, in order)."""
+    steps = matplotlib.colors.BoundaryNorm(np.arange(len(words) + 1) - 0.5, len(words))
+    colours = matplotlib.colors.ListedColormap(
+        [matplotlib.colormaps["viridis"](i / (len(words) - 1) * 0.9) for i in range(len(words))])
+    bar = fig.colorbar(matplotlib.cm.ScalarMappable(steps, colours), ax=list(axes),
+                       ticks=range(len(words)), aspect=30)
+    bar.ax.set_yticklabels(words)
 
 
 def _index_references(ax: Axes, settings: Sequence[Mapping[str, Any]]) -> list[str]:
@@ -1294,22 +857,20 @@ def _index_references(ax: Axes, settings: Sequence[Mapping[str, Any]]) -> list[s
     if "nis_tdoa" in indices:
         ax.axhline(1.0, color="0.5", linestyle="--", linewidth=1.0,
                    label="no-manoeuvre expectation E[α] = 1")
-    limits = dict.fromkeys((*alpha_max(p), p["alpha.index"]) for p in settings)
-    for (a_max, mode, index), style in zip(limits, (":", "-.", (0, (1, 3))) * 3,
-                                           strict=False):
+    limits = dict.fromkeys(alpha_max(p) for p in settings)
+    for (a_max, mode), style in zip(limits, (":", "-.", (0, (1, 3))) * 3, strict=False):
         if mode == "fixed":
-            ax.axhline(a_max, color="k", linestyle=style, linewidth=1.0,
-                       label="α_max" if len(indices) == 1 else
-                       f"α_max, {_value_words('alpha.index', index)}")
+            ax.axhline(a_max, color="k", linestyle=style, linewidth=1.0, label="α_max")
     return indices
 
 
 def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure | str]:
-    """The ``wanted`` figures among :data:`GROUPS` (from ``summary.csv``), ``trajectory``
-    and ``manoeuvre`` (from the per-scan columns of ``trials.csv``); a one-line reason
-    string for a wanted figure this run cannot draw."""
+    """The ``wanted`` figures among :data:`GROUPS` (from ``summary.csv``, drawn by the
+    report kit), ``trajectory`` and ``manoeuvre`` (from the per-scan columns of
+    ``trials.csv``); a one-line reason string for a wanted figure this run cannot draw."""
     drawers: dict[str, Callable[[], Figure | str]] = {
         **{g: (lambda g=g: _rate_figure(run, g)) for g in GROUPS},
         "trajectory": lambda: _trajectory_figure(run),
         "manoeuvre": lambda: _manoeuvre_figure(run)}
-    return {name: draw() for name, draw in drawers.items() if name in wanted}
+    with context():
+        return {name: draw() for name, draw in drawers.items() if name in wanted}

@@ -89,17 +89,17 @@ PARAMS = (
     Param("scene.mode", "paper", "target set: the paper's M1..Mn, or n uniform in their box",
           kind=str, choices=("paper", "random")),
     Param("targets.n", 10, "number of targets (paper scene: first n of M1-M10)", "count", kind=int,
-          low=1, high=2000),
+          low=1, high=2000, label="targets", symbol="N"),
     Param("noise.sigma", 0.005, "the paper's angle-error figure (azimuth and elevation, both "
           "sensors), read as a standard deviation or a variance per noise.reading", "rad", low=1e-7,
-          high=1.0, draws=False),
+          high=1.0, draws=False, label="angle noise", symbol="σ"),
     Param("noise.reading", "std", "reading of noise.sigma: 'std' (sigma = value) or "
           "'variance' (sigma = sqrt(value), in rad^2)", kind=str, choices=("std", "variance"),
           draws=False),
     Param("sensor.p_d", 0.95, "detection probability of each sensor", "1", low=1e-3, high=1.0,
-          draws=False),
+          draws=False, label="detection probability", symbol="$P_D$"),
     Param("clutter.p_f", 0.05, "false alarms per sensor: Poisson(p_f N) or Binomial(N, p_f)", "1",
-          low=0.0, high=1.0),
+          low=0.0, high=1.0, label="false-alarm rate", symbol="$p_f$"),
     Param("clutter.model", "poisson", "false-alarm count model", kind=str,
           choices=("poisson", "binomial")),
     Param("clutter.margin", 0.1, "FOV box margin around the true target angles", "rad", low=0.0,
@@ -116,12 +116,12 @@ PARAMS = (
     Param("algorithms", ["exact", "pga_paper", "pga_evict"], "solvers reported per trial",
           kind=list, choices=ALGORITHMS, draws=False),
     Param("pga.ops", 1000, "genetic operations per PGA run", "count", kind=int, low=0, high=10**7,
-          draws=False),
+          draws=False, label="genetic operations"),
     Param("pga.checkpoints", list(CHECKPOINTS), "operation counts at which the best "
           "solution is scored (values above pga.ops are ignored; pga.ops itself is always "
           "scored)", "count", kind=list, item_kind=int, low=0, high=10**7, draws=False),
     Param("pga.p_m", 0.2, "mutation probability per genetic operation", "1", low=0.0, high=1.0,
-          draws=False),
+          draws=False, label="mutation probability", symbol="$p_m$"),
     Param("pga.init", "random_B", "initial individual: random injection or identity "
           "(paper eq. 31)", kind=str, choices=("random_B", "standard"), draws=False),
     Param("pga.roulette", "worse", "roulette direction: badly placed columns swapped more "
@@ -234,18 +234,22 @@ def run_trial(params: dict[str, Any], streams: TrialStreams) -> list[dict[str, A
 
 ROW_METRICS = (
     Metric("accuracy", "1", "measurement-level accuracy: measurements given their true "
-           "partner (or the dummy)", better="higher", bounds=FRACTION),
+           "partner (or the dummy)", better="higher", bounds=FRACTION,
+           label="correct association rate"),
     Metric("precision", "1", "declared pairs that are true pairs", better="higher",
-           bounds=FRACTION),
-    Metric("recall", "1", "true pairs that are declared", better="higher", bounds=FRACTION),
-    Metric("correct", "1", "the whole assignment is right", binary=True, better="higher"),
-    Metric("pairs", "pairs", "declared pairs", bounds=NON_NEGATIVE),
+           bounds=FRACTION, label="pair precision"),
+    Metric("recall", "1", "true pairs that are declared", better="higher", bounds=FRACTION,
+           label="pair recall"),
+    Metric("correct", "1", "the whole assignment is right", binary=True, better="higher",
+           label="whole solution correct"),
+    Metric("pairs", "pairs", "declared pairs", bounds=NON_NEGATIVE, label="declared pairs"),
     Metric("at_opt", "1", "the solution reaches the exact optimum J*", binary=True,
-           better="higher"),
+           better="higher", label="runs at the exact optimum"),
     Metric("gap", "nat", "J* - J, the objective gap to the exact optimum (log-likelihood "
-           "ratio)", better="lower", bounds=NON_NEGATIVE),
-    Metric("objective", "nat", "the objective J of the solution (log-likelihood ratio)"),
-    Metric("solve_time_s", "s", "wall seconds of the solver"),
+           "ratio)", better="lower", bounds=NON_NEGATIVE, label="objective gap J* − J"),
+    Metric("objective", "nat", "the objective J of the solution (log-likelihood ratio)",
+           label="objective J"),
+    Metric("solve_time_s", "s", "wall seconds of the solver", label="solve time per scan"),
     Metric("weights_time_s", "s", "wall seconds of the pair weights"),
 )
 """Every metric column of the rows (see the module docstring)."""

@@ -6,34 +6,61 @@ are :mod:`.report`, which reads saved runs only. See ``docs/papers/twin_sensor.m
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from trackfuse.experiments.base import Experiment, FigureSpec
 from trackfuse.experiments.twin_sensor.checks import config_problem
 from trackfuse.experiments.twin_sensor.model import PARAMS, ROW_METRICS, run_batch, run_trial
+from trackfuse.reportkit.looks import BLUE, GREEN, GREYS, ORANGE, SKY, VERMILLION, WINE, Look
+from trackfuse.reportkit.spec import Plot, Reference
+
+_ASSOCIATIONS = {
+    "paper_approx": Look("paper's fused-gate PDA", VERMILLION, "s", "paper"),
+    "mspda_parallel": Look("parallel PDA (corrected)", GREEN, "o", "ours"),
+    "mspda_sequential": Look("sequential PDA", BLUE, "^"),
+    "nn": Look("nearest neighbour", GREYS[0], "h"),
+}
+#: Every association with each filter: the MGEKF solid, the EKF dashed with open markers.
+LOOKS = {
+    **{f"{name}/mgekf": replace(look, label=f"{look.label}, MGEKF")
+       for name, look in _ASSOCIATIONS.items()},
+    **{f"{name}/ekf": replace(look, label=f"{look.label}, EKF", open=True, dashed=True)
+       for name, look in _ASSOCIATIONS.items()},
+    "stonesoup_pda/ekf": Look("Stone Soup EKF + PDA", SKY, "v", "paper_baseline"),
+    "stonesoup_pda/ukf": Look("Stone Soup UKF + PDA", ORANGE, "D", "paper_baseline"),
+    "stonesoup_pda/pf": Look("Stone Soup particle filter + PDA", WINE, "P", "paper_baseline"),
+}
+#: Paper 000's Fig. 1 as the report kit draws it: tracks lost (angle rule, last scan)
+#: against clutter, the paper's pair, the paper's claim shaded.
+FIG1 = Plot(("lost_angle",), "clutter.mean", ("paper_approx/mgekf", "mspda_parallel/mgekf"),
+            (Reference(band=(0.0, 0.05), label="paper: < 5 % up to 9"),), at={"scan": "last"})
 
 FIGURES = {
     "loss_vs_clutter": FigureSpec(
         "Fig. 1 (redrawn at the paper's scenario, else an analogue): tracks lost (angle "
         "rule: azimuth or elevation off the truth by more than 3 sigma for 3 scans) against "
         "the mean number of false returns, the paper's fused-gate PDA (reconstruction) and "
-        "our corrected parallel PDA with the MGEKF, 95 % Wilson error bars, the paper's "
-        "claim (< 5 % up to 9) shaded at the paper's scenario", "Fig. 1"),
+        "our corrected parallel PDA (PDAF with one sensor), MGEKF, 95 % Wilson error "
+        "bars (a triangle at the top: one past the axis), the paper's claim shaded", "Fig. 1"),
     "loss_vs_clutter_ablation": FigureSpec(
         "Fig. 1 ablation: tracks lost (angle rule) against false returns for every algorithm "
         "run (EKF, sequential PDA, nearest neighbour), 95 % Wilson error bars; a curve "
-        "equal to one drawn over it at every level is drawn wider around it"),
+        "equal to another at every level is shifted a little sideways; with more curves than "
+        "six the legend names associations by colour and filters by line style"),
     "loss_gate_and_nees_vs_clutter": FigureSpec(
         "Diagnostic: the filter-dependent flags against false returns, tracks lost by the "
         "gate rule (target outside every gate for 3 scans) and filters whose final position "
         "NEES exceeds its chi-square quantile (inconsistent, not lost)"),
     "loss_vs_manoeuvring_index": FigureSpec(
         "Extension: tracks lost (angle and gate rules) against the manoeuvring index "
-        "sqrt(q) T^2 / (r sigma) of the truth, with clutter; crosses: without clutter"),
+        "√q T²/(rσ) of the truth, with clutter; crosses: without clutter"),
     "range_error_vs_time": FigureSpec(
         "Fig. 2 (the paper's scenario and method, else an analogue): range RMSE "
-        "against time with 95 % bands (a second filter's as dashed edges; coinciding curves "
-        "show a filled marker in an open one), the square-root PCRLB of the truth and filter "
-        "models, five single runs; errors are correlated across scans, so a curve below the "
-        "bound at every scan is one sample of runs, not a filter beating the bound", "Fig. 2"),
+        "against time with 95 % bootstrap-t bands (shaded; a second filter's as dashed "
+        "edges; a triangle at the top: past the axis), the √PCRLB of the truth and filter "
+        "models, five single runs (grey); errors are correlated across scans, so a curve "
+        "below the bound at every scan is one sample of runs, not a filter beating it",
+        "Fig. 2"),
     "anees_vs_time": FigureSpec(
         "Diagnostic: 6-state ANEES against time with its 95 % chi-square band (above it: "
         "overconfident; below it: conservative), every panel on one log axis"),
@@ -41,7 +68,8 @@ FIGURES = {
         "Range RMSE at the last scan against the swept axis with 95 % bootstrap intervals "
         "beside the square-root PCRLB of the truth and filter models; every point runs the "
         "same targets and noise, so the points' errors move together; a point whose RMSE a "
-        "few flagged runs carry is not joined to its neighbours"),
+        "few flagged runs carry is not joined to its neighbours; a triangle at the top: an "
+        "interval past the axis"),
 }
 
 EXPERIMENT = Experiment(
@@ -57,6 +85,7 @@ EXPERIMENT = Experiment(
     batch_size=100,
     check=config_problem,
     preload=("trackfuse.experiments.twin_sensor.preload",),
+    looks=LOOKS,
 )
 
-__all__ = ["EXPERIMENT", "FIGURES"]
+__all__ = ["EXPERIMENT", "FIG1", "FIGURES", "LOOKS"]

@@ -159,7 +159,8 @@ PARAMS = (
     Param("clutter.model", "in_gate", "Clutter model: uniform in each filter's gate, or in a "
           "fixed window about the true line of sight", kind=str, choices=("in_gate", "window")),
     Param("clutter.mean", 0.0, "Mean number of false returns per sensor and scan (in the gate "
-          "or window)", "returns/scan", low=0.0, high=200.0),
+          "or window)", "returns/scan", low=0.0, high=200.0,
+          label="mean false returns per sensor and scan", symbol="clutter"),
     Param("clutter.window", 0.1, "Half-width of the window clutter box in azimuth and elevation",
           "rad", low=1e-4, high=1.0),
     Param("init.range_cue", "absolute", "How the radar range cue's standard deviation is "
@@ -434,7 +435,7 @@ ROW_METRICS = (
            bounds=NON_NEGATIVE),
     Metric("lost_gate", "1", "lost by the gate rule (permanent)", binary=True, better="lower"),
     Metric("lost_angle", "1", "lost by the angle rule (permanent)", binary=True,
-           better="lower"),
+           better="lower", label="tracks lost"),
     Metric("inconsistent_nees", "1", "position NEES above its chi-square quantile",
            binary=True, better="lower"),
     Metric("cpu_time_s", "s", "CPU seconds per trial and scan of this algorithm, one value "

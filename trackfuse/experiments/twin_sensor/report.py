@@ -66,6 +66,7 @@ from __future__ import annotations
 import math
 import textwrap
 from collections.abc import Callable, Collection, Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -75,12 +76,12 @@ from matplotlib.figure import Figure
 from matplotlib.legend import Legend
 from matplotlib.legend_handler import HandlerTuple
 from matplotlib.lines import Line2D
-from matplotlib.patheffects import withStroke
 from matplotlib.scale import SymmetricalLogTransform
 from matplotlib.ticker import FixedLocator, FuncFormatter, MaxNLocator, NullLocator
-from matplotlib.transforms import IdentityTransform, Transform
+from matplotlib.transforms import IdentityTransform, Transform, offset_copy
 from pandas.api.typing import SeriesGroupBy
 
+from trackfuse.experiments.twin_sensor import FIG1
 from trackfuse.experiments.twin_sensor.model import PARAMS, bounds, build_scenario
 from trackfuse.plots.algorithms import FILTER_LABELS, GREYS, VERMILLION, line_kwargs, look
 from trackfuse.plots.style import (
@@ -92,6 +93,11 @@ from trackfuse.plots.style import (
     trim_bottom,
 )
 from trackfuse.reported import TWIN_SENSOR
+from trackfuse.reportkit import render
+from trackfuse.reportkit.render import LABEL_CHAR_IN
+from trackfuse.reportkit.spec import MAX_ENTRIES, SLOTS
+from trackfuse.reportkit.style import MAX_HEIGHT_IN
+from trackfuse.reportkit.typography import unit_text
 from trackfuse.reportkit.verdicts import NOT_COMPARABLE, at_least, below_paper_bound
 from trackfuse.reports import HEADLINE_COLUMNS, headline_row
 from trackfuse.rundata import RunData, succeeded_rows, swept_keys
@@ -117,9 +123,8 @@ MAIN_RULE = "lost_angle"
 SINGLE_PANEL, PANEL, TIME_PANEL = (5.6, 2.9), (3.9, 2.7), (3.1, 2.3)
 """Panel sizes (width, height) in inches: a figure of one panel, of several, against time;
 narrowed by :func:`_printable` where a row of them would be too wide to print."""
-MAX_WIDTH_IN = 8.7
-"""Widest figure (in): printed 7.16 in wide (a two-column page), its smallest text, 8 pt
-(legend and notes), prints at 6.5 pt or more."""
+SLOT_IN = SLOTS["double"]
+"""Width (in) of every figure: a double-column slot, where it prints at its own size."""
 MAX_FACETS = 4
 NOTE_PT = 8
 """Font size (pt) of the notes inside panels: the legend's, the smallest text of a figure."""
@@ -164,11 +169,11 @@ def _value_text(key: str, value: Any) -> str:
         what = "baseline" if key == "sensors.baseline" else "range cue sd"
         return f"{what} {float(value) / 1e3:g} km"
     if key in ("target.q", "filter.q"):
-        return f"{key.split('.')[0]} q {float(value):g} m^2/s^4"
+        return f"{key.split('.')[0]} q {float(value):g} {unit_text('m^2/s^4')}"
     param = SCHEMA.get(key)
     words = param.doc.split("(")[0].strip().lower() if param else key
     text = f"{value:g}" if isinstance(value, (int, float, np.number)) else str(value)
-    unit = param.unit if param and param.unit not in ("", "1") else ""
+    unit = unit_text(param.unit) if param else ""
     return f"{words} {text} {unit}".strip()
 
 
@@ -181,12 +186,13 @@ def _clutter_where(params: dict[str, Any]) -> str:
 def _axis_label(key: str, params: dict[str, Any]) -> str:
     """x-axis label of a swept ``key``, with its unit."""
     if key == "clutter.mean":
-        return "mean false returns per sensor and scan (count)"
+        return "false returns per sensor and scan (mean)"
     if key in ("sensors.baseline", "init.sigma_range"):
         return ("sensor baseline (km)" if key == "sensors.baseline"
                 else "range cue standard deviation (km)")
     param = SCHEMA[key]
-    return f"{param.doc.split('(')[0].strip()} ({param.unit or '1'})"
+    unit = unit_text(param.unit)
+    return f"{param.doc.split('(')[0].strip()}" + (f" ({unit})" if unit else "")
 
 
 def _scale_key(threshold: float | None, scale: float = 1.0) -> dict[str, Line2D]:
@@ -358,11 +364,14 @@ def _frame(n_panels: int, ncols: int, panel: tuple[float, float], title_lines: l
     for the suptitle lines, panel titles of ``panel_titles`` lines and a legend of
     ``legend_entries`` entries."""
     nrows = -(-n_panels // ncols)
+    panel = _printable(panel, ncols)
     width = 0.85 + ncols * panel[0] + (ncols - 1) * 0.55
     legend_cols = max(1, min(legend_entries, int(width / LEGEND_COLUMN_IN)))
     strip = LEGEND_ROW_IN * -(-legend_entries // legend_cols) + 0.1
     margins = Margins(top=0.15 + 0.19 * len(title_lines) + 0.18 * panel_titles + 0.07,
                       hspace=0.55 + 0.18 * panel_titles, strip=strip)
+    around = margins.top + margins.bottom + strip + (nrows - 1) * margins.hspace
+    panel = (panel[0], min(panel[1], (MAX_HEIGHT_IN - around) / nrows))  # fits a page
     fig, axes = fixed_figure(ncols, nrows, panel, margins)
     for ax in axes[n_panels:]:
         ax.set_visible(False)
@@ -370,10 +379,9 @@ def _frame(n_panels: int, ncols: int, panel: tuple[float, float], title_lines: l
 
 
 def _printable(panel: tuple[float, float], ncols: int) -> tuple[float, float]:
-    """``panel`` (width, height; in) narrowed so that a row of ``ncols`` of them, with the
-    margins of :func:`_frame`, is at most :data:`MAX_WIDTH_IN` wide."""
-    fits = (MAX_WIDTH_IN - 0.85 - (ncols - 1) * 0.55) / ncols
-    return (min(panel[0], round(fits, 2)), panel[1])
+    """``panel`` (width, height; in) sized so that a row of ``ncols`` of them, with the
+    margins of :func:`_frame`, fills a double-column slot (:data:`SLOT_IN`) exactly."""
+    return ((SLOT_IN - 0.85 - (ncols - 1) * 0.55) / ncols, panel[1])
 
 
 def _title_lines(fig_width_in: float, *lines: str) -> list[str]:
@@ -385,8 +393,7 @@ def _title_lines(fig_width_in: float, *lines: str) -> list[str]:
 def _figure(n_panels: int, ncols: int, panel: tuple[float, float], title: Sequence[str],
             legend_entries: int, panel_titles: int) -> tuple[Figure, np.ndarray, int]:
     """:func:`_frame` with the suptitle ``title`` (lines wrapped to the figure width)."""
-    width = 0.85 + ncols * panel[0] + (ncols - 1) * 0.55
-    lines = _title_lines(width, *title)
+    lines = _title_lines(SLOT_IN, *title)
     fig, axes, cols = _frame(n_panels, ncols, panel, lines, legend_entries, panel_titles)
     fig.suptitle("\n".join(lines), y=1 - 0.08 / fig.get_figheight(), va="top")
     return fig, axes, cols
@@ -396,7 +403,7 @@ def _wrapped(titles: Sequence[str], panel_width_in: float) -> list[str]:
     """Panel ``titles`` wrapped to the panel width (about 13 characters per inch): a title
     that does not fit breaks after its commas (between the phrases of its parts), words
     only where a part is itself too long."""
-    width = max(30, int(panel_width_in * 13))
+    width = max(18, int(panel_width_in * 13))
     return [_wrap_at_commas(t, width) for t in titles]
 
 
@@ -460,8 +467,15 @@ def _finish(fig: Figure, axes: Sequence[Axes], legend_cols: int,
         for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
             if ax in axes or label in everywhere:
                 entries.setdefault(label, handle)
-    entries = {label: _legend_scale(handle) for label, handle in entries.items()}
-    entries.update(extra or {})
+    entries = {label: _legend_scale(handle) for label, handle in entries.items()
+               if not label.startswith(IN_THE_CAPTION)}
+    entries.update({k: v for k, v in (extra or {}).items() if not k.startswith(IN_THE_CAPTION)})
+    if len(entries) > MAX_ENTRIES:
+        entries = _by_filter(entries)
+    for ax in fig.axes:  # a label wider than its panel: its unit on a second line
+        label, room = ax.get_xlabel(), ax.get_position().width * fig.get_figwidth()
+        if len(label) * LABEL_CHAR_IN > room and " (" in label and "\n" not in label:
+            ax.set_xlabel(label.replace(" (", "\n(", 1))
     unused = -(-reserved // legend_cols) - -(-len(entries) // legend_cols)
     if unused > 0:
         trim_bottom(fig, LEGEND_ROW_IN * unused)
@@ -469,6 +483,34 @@ def _finish(fig: Figure, axes: Sequence[Axes], legend_cols: int,
     return fig
 
 
+FILTER_KEYS = {"MGEKF": Line2D([], [], color="0.3", marker="o"),
+               "EKF (dashed, open markers)": Line2D([], [], color="0.3", marker="o",
+                                                    linestyle="--", markerfacecolor="white")}
+"""Legend entries of the two filters' line styles, when the legend names associations."""
+
+
+def _by_filter(entries: dict[str, Any]) -> dict[str, Any]:
+    """Legend ``entries`` of more curves than a legend holds, each association once in its
+    colour and marker and the filters by line style (:data:`FILTER_KEYS`): eight curves of
+    four associations and two filters become six entries."""
+    out: dict[str, Any] = {}
+    for label, handle in entries.items():
+        base, _, filt = label.rpartition(", ")
+        if filt in FILTER_LABELS.values() and isinstance(handle, Line2D):
+            out.setdefault(base, Line2D([], [], color=handle.get_color(),
+                                        marker=handle.get_marker(), linestyle="-"))
+        else:
+            out[label] = handle
+    return {**out, **FILTER_KEYS}
+
+
+COINCIDING_SHIFT = 4.0
+"""Sideways shift (points) of a curve equal at every swept value to one drawn after it
+(fig1_claim: both at 0 % everywhere), so that both show; more for each further one."""
+IN_THE_CAPTION = ("95 % band", "95 % Wilson interval", "95 % interval runs past the top",
+                  "upper 95 % bound when", "point not joined")
+"""Legend entries that explain a mark rather than name a curve: said in the caption, so that
+a legend names at most six curves and bounds."""
 LEGEND_LINE_PT = (3.0, 7.0)
 """The widest line and the largest marker (pt) a legend entry draws: a curve drawn wide
 around the curves it lies on (:func:`_curve_kwargs`: up to 6.4 pt, 11 pt markers) showed as
@@ -600,10 +642,9 @@ def _with_bars(points: pd.DataFrame, every_bar: bool) -> pd.DataFrame:
 def _curve_kwargs(panels: Sequence[pd.DataFrame]) -> dict[str, dict[str, Any]]:
     """Line keyword arguments of each curve of the :func:`_rate_points` ``panels`` of one
     figure, in drawing order; a curve equal at every swept value to curves drawn after it
-    in some panel (fig1_claim: both at 0 % everywhere) is wider than the widest of them and
-    has larger open markers, so that it shows around them (nested when several coincide).
-    A curve has that look in every panel of the figure, so that its one legend entry is
-    true for each."""
+    in some panel (fig1_claim: both at 0 % everywhere) is shifted sideways by
+    :data:`COINCIDING_SHIFT` points (``shift``), one step more for each such curve, so that
+    both show; it is shifted in every panel, so that the figure reads alike throughout."""
     order = list(dict.fromkeys(str(n) for points in panels for n in points["name"]))
     over: dict[str, set[str]] = {name: set() for name in order}
     for points in panels:
@@ -612,27 +653,26 @@ def _curve_kwargs(panels: Sequence[pd.DataFrame]) -> dict[str, dict[str, Any]]:
             over[name] |= {later for later, p in curves[i + 1:]
                            if len(p) == len(pct) and np.array_equal(p, pct)}
     kwargs: dict[str, dict[str, Any]] = {}
-    for name in reversed(order):
-        kw = line_kwargs(name)
-        under = [kwargs.get(later, line_kwargs(later)) for later in over[name]]
-        if under:
-            kw.update(linewidth=max(k["linewidth"] for k in under) + 2.2,
-                      markersize=max(k.get("markersize", 4.0) for k in under) + 3.5,
-                      markerfacecolor="none", markeredgewidth=1.3)
-        kwargs[name] = kw
-    return {name: kwargs[name] for name in order}
+    for shift, name in enumerate(n for n in order if over[n]):
+        kwargs[name] = {**line_kwargs(name), "shift": COINCIDING_SHIFT * (shift + 1)}
+    return {name: kwargs.get(name, line_kwargs(name)) for name in order}
 
 
 def _draw_rates(ax: Axes, points: pd.DataFrame, looks: dict[str, dict[str, Any]]) -> None:
     """The curves of :func:`_rate_points` (with :func:`_with_bars`; ``looks`` of
     :func:`_curve_kwargs`), each with its 95 % Wilson error bars where ``bar``."""
     for name, r in points.groupby("name", sort=False):
-        kw = looks[str(name)]
-        ax.plot(r["x"], r["pct"], **kw)
+        kw = dict(looks[str(name)])
+        shift = kw.pop("shift", 0.0)  # beside the curves it coincides with (in points)
+        moved = offset_copy(ax.transData, fig=ax.figure, x=shift, units="points") \
+            if shift else ax.transData
+        ax.plot(r["x"], r["pct"], transform=moved, **kw)
+        ax.update_datalim(np.column_stack([r["x"], r["pct"]]))  # a moved line sets none
         bars = r[r["bar"]]
         ax.errorbar(bars["x"], bars["pct"], yerr=[bars["pct"] - bars["lo"],
                                                   bars["hi"] - bars["pct"]],
                     fmt="none", ecolor=kw["color"], capsize=1.5, zorder=kw["zorder"],
+                    transform=moved,
                     elinewidth=0.8 if look(str(name)).emphasised else 0.6)
 
 
@@ -854,7 +894,7 @@ def _index_figure(run: RunData) -> Figure | str:
             ax.plot(worst.index, 100 * worst, "x", color=GREYS[0], markersize=6,
                     label="no clutter (worst algorithm)", zorder=4)
         _set_x_scale(ax, last["index"], threshold)
-        ax.set_xlabel("manoeuvring index sqrt(q) T^2 / (r sigma) (1)")
+        ax.set_xlabel("manoeuvring index √q T²/(rσ)")
         ax.set_ylabel(RULES[rule][0])
         ax.set_title(_rule_text(rule, run.params, swept_keys(run.config)))
     _y_labels_once_per_row(axes, 2)
@@ -1008,9 +1048,9 @@ def _fit_range_axis(ax: Axes, top: float, single_runs: np.ndarray,
     _mark_past_top(ax, [(name, t[~(hi <= top)]) for name, t, hi in bands], top)
 
 
-PCRLB_TRUTH = "sqrt PCRLB (truth model, clutter-aware)"
-PCRLB_FILTER = "sqrt PCRLB (filter's q)"
-PCRLB_BOTH = "sqrt PCRLB (truth and filter's q, clutter-aware)"
+PCRLB_TRUTH = "√PCRLB (truth model, clutter-aware)"
+PCRLB_FILTER = "√PCRLB (filter's q)"
+PCRLB_BOTH = "√PCRLB (truth and filter's q, clutter-aware)"
 """Legend labels of the bounds against time: apart, or drawn once where they coincide."""
 
 
@@ -1028,12 +1068,11 @@ def _pcrlb_curves(params: dict[str, Any]) -> list[tuple[np.ndarray, str, str]]:
 
 
 def _draw_bands(ax: Axes, frame: pd.DataFrame, period: float, names: Sequence[str],
-                beside: Sequence[str]) -> tuple[float, list[tuple[str, np.ndarray, np.ndarray]],
-                                                pd.DataFrame]:
+                beside: Sequence[str]) -> tuple[float, list[tuple[str, np.ndarray, np.ndarray]]]:
     """The RMSE curves of :func:`_draw_range`: ``(highest RMSE (km), [(algorithm, t (s),
-    band's upper end (km))], the first algorithm's band (per scan: rmse, lo, hi, km))``."""
+    band's upper end (km))])``."""
     top = 0.0
-    bands, first = [], pd.DataFrame()
+    bands = []
     for name in beside:
         rmse = np.sqrt(frame[frame["algorithm"] == name].groupby("scan")["range_sq_err_m2"]
                        .mean()) / 1e3
@@ -1044,7 +1083,6 @@ def _draw_bands(ax: Axes, frame: pd.DataFrame, period: float, names: Sequence[st
     for i, name in enumerate(names):
         rows = frame[frame["algorithm"] == name]
         band = _rmse_band(rows.groupby("scan")["range_sq_err_m2"]) / 1e3
-        first = band if i == 0 else first
         top = max(top, float(band["rmse"].max()))
         t = band.index.to_numpy(float) * period
         bands.append((name, t, band["hi"].to_numpy()))
@@ -1058,38 +1096,7 @@ def _draw_bands(ax: Axes, frame: pd.DataFrame, period: float, names: Sequence[st
             ax.plot(t, band["lo"], color=kw["color"], lw=0.6, ls="--",
                     label=f"{label} (dashed edges)")
             ax.plot(t, band["hi"], color=kw["color"], lw=0.6, ls="--")
-    return top, bands, first
-
-
-def _below_bound_everywhere(band: pd.DataFrame, bound: np.ndarray) -> bool:
-    """Whether the RMSE of ``band`` (per scan: rmse, lo, hi, km) is below ``bound`` (km, per
-    scan) at every scan while the bound lies inside the 95 % band at every scan: one
-    sample of runs below the bound, which the runs do not show to be beaten."""
-    rmse, lo, hi = (band[c].to_numpy() for c in ("rmse", "lo", "hi"))
-    return bool(len(rmse) == len(bound) and np.all(rmse < bound)
-                and np.all((lo <= bound) & (bound <= hi)))
-
-
-NOTE_HALO = [withStroke(linewidth=2.0, foreground="white")]
-"""A note over curves: a white outline around its letters keeps it readable over the grey
-single runs and hides no more of the curves beneath (a white box hid the sqrt PCRLB)."""
-CORRELATED = 0.5
-"""A range panel's note calls the errors of its first and last scan correlated when the
-magnitude of their correlation across runs is at least this, else weakly correlated."""
-
-
-def _range_note(band: pd.DataFrame, bound: np.ndarray, runs: int, scans: int,
-                corr: float) -> str:
-    """The note of a range panel: the correlation of the errors between the first and the
-    last scan, said (as correlated or weakly so: :data:`CORRELATED`) where the RMSE lies
-    below the bound at every scan while the bound lies inside the band
-    (:func:`_below_bound_everywhere`): one sample of runs."""
-    if not _below_bound_everywhere(band, bound):
-        return f"corr. of errors, scan 1 vs {scans}: {corr:.2f}"
-    errors = (f"errors{'' if abs(corr) >= CORRELATED else ' weakly'}\ncorrelated across "
-              f"scans ({corr:.2f})")
-    return (f"below the bound at all {scans} scans:\none sample of {runs} runs, {errors};\n"
-            "the bound lies inside the 95 % band")
+    return top, bands
 
 
 def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
@@ -1097,11 +1104,10 @@ def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
     """Range RMSE (km) with 95 % bootstrap-t bands per scan (the first algorithm's filled,
     the second's as dashed edges, each band in the legend), the RMSE of the ``beside``
     algorithms as thin curves on top without bands, five single runs of the first algorithm, the
-    square-root PCRLBs, and a note (:func:`_range_note`) with the correlation of the first
-    algorithm's errors between the first and the last scan; returns the panel's
+    square-root PCRLBs; returns the panel's
     :data:`PanelDraw` pair."""
     period = float(params["scan.period"])
-    top, bands, first = _draw_bands(ax, frame, period, names, beside)
+    top, bands = _draw_bands(ax, frame, period, names, beside)
     errors = frame[frame["algorithm"] == names[0]].pivot(index="trial", columns="scan",
                                                          values="range_err_m")
     single = errors.to_numpy()[:SINGLE_RUNS] / 1e3
@@ -1113,11 +1119,6 @@ def _draw_range(ax: Axes, frame: pd.DataFrame, params: dict[str, Any],
     times = np.arange(1, int(params["scan.count"]) + 1) * period
     for bound, style, label in _pcrlb_curves(params):
         ax.plot(times, bound, color="k", ls=style, lw=1.0, label=label)
-    corr = float(np.corrcoef(errors.iloc[:, 0], errors.iloc[:, -1])[0, 1])
-    note = _range_note(first, bounds(params)[0] / 1e3, len(errors), int(errors.columns[-1]),
-                       corr)
-    ax.text(0.03, 0.04, note, transform=ax.transAxes, fontsize=NOTE_PT, va="bottom",
-            zorder=7, linespacing=1.1, path_effects=NOTE_HALO)
     needed = _range_top(max(top, float(np.max(bounds(params)[0])) / 1e3), np.abs(single))
     return needed, lambda top: _fit_range_axis(ax, top, np.abs(single), bands)
 
@@ -1217,7 +1218,7 @@ def _nees_figure(run: RunData) -> Figure:
 
     title = [f"Diagnostic: average NEES (6 states) against time ({_per_point(run, points)})",
              _context(run, "a consistent filter stays inside the band")]
-    return _time_figure(run, points, draw, title, "ANEES (1)", len(names) + 1)
+    return _time_figure(run, points, draw, title, "ANEES", len(names) + 1)
 
 
 # --------------------------------------------------------------------------------------------
@@ -1444,6 +1445,18 @@ def _drawers(run: RunData) -> dict[str, Callable[[], Figure | str]]:
 
 def _with_hint(drawn: Figure | str, hint: str) -> Figure | str:
     return drawn + hint if isinstance(drawn, str) else drawn
+
+
+def fig1_headline(paper: RunData, analogue: RunData) -> Figure | str:
+    """Paper 000's Fig. 1 told whole, for the reproduction report: tracks lost against
+    clutter at the paper's scenario (``twin_sensor_fig1_claim``: flat at 0 %, the true
+    result there) beside the close geometry where loss rises (``twin_sensor_close``, two
+    sensors), one y axis (:data:`~trackfuse.experiments.twin_sensor.FIG1`)."""
+    plot = replace(FIG1, at={**FIG1.at, "sensors.count": 2})
+    return render.draw_beside([(paper, "paper's scenario"),
+                               (analogue, "close geometry (analogue)")], plot,
+                              "Paper 000 Fig. 1 redrawn (left) beside an analogue where loss "
+                              "rises with clutter")
 
 
 def prepare(run: RunData) -> None:

@@ -1,0 +1,37 @@
+"""Units and labels as a reader expects them in print: ``m²/s⁴``, ``√q T²/(rσ)``, ``%``.
+
+Declarations write units in plain ASCII (``"m^2/s^4"``, ``"1"`` for dimensionless);
+:func:`unit_text` turns them into print. Pure string work: no matplotlib.
+"""
+
+from __future__ import annotations
+
+import re
+
+SUPERSCRIPTS = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")
+#: Plain-ASCII unit spellings and their printed form, applied before the exponents.
+WORDS = {"sqrt": "√", "sigma": "σ", "deg": "°"}
+
+
+def unit_text(unit: str) -> str:
+    """The printed form of a declared unit: ``"1"`` and ``""`` print as nothing,
+    ``^2`` as a superscript, ``sqrt``/``sigma`` as symbols (``"m^2/s^4"`` -> ``"m²/s⁴"``)."""
+    if unit in ("", "1"):
+        return ""
+    text = re.sub(r"\^(-?\d+)", lambda m: m.group(1).translate(SUPERSCRIPTS), unit)
+    for word, symbol in WORDS.items():
+        text = re.sub(rf"\b{word}\b\s*", symbol, text)
+    return text
+
+
+def axis_label(label: str, unit: str, percent: bool = False, scale: str = "") -> str:
+    """``label (unit)`` for an axis: ``percent`` writes ``%``, a ``scale`` other than linear
+    is named after the unit (``targets (count, log scale)``)."""
+    shown = "%" if percent else unit_text(unit)
+    inside = ", ".join(part for part in (shown, f"{scale} scale" if scale else "") if part)
+    return f"{label} ({inside})" if inside else label
+
+
+def number(value: float) -> str:
+    """A tick or title number: ``g`` format, a minus sign rather than a hyphen."""
+    return f"{value:g}".replace("-", "−")
