@@ -11,7 +11,7 @@ from browser import broken_links, chromium, decoded_images
 
 from trackfuse.config import load
 from trackfuse.harness import run_data
-from trackfuse.reported import ESM_RADAR, Answer, Paper, Reported
+from trackfuse.reported import ESM_RADAR, Answer, Beside, Paper, Reported
 from trackfuse.reproduction import (
     REPORT_HTML,
     REPORT_MD,
@@ -171,3 +171,25 @@ def test_another_config_is_shown_by_its_declared_main_figure():
         "loss_vs_manoeuvring_index"]
     # the paper's own config: every drawn paper figure, in the wanted order
     assert main_figure_names(declared, drawn, paper_items, own=True) == ["range_error_vs_time"]
+
+
+def toy_beside(paper_run, analogue_run):
+    """Two panels, one per run: each run's mean of ``estimate`` (a figure for the test)."""
+    from matplotlib.figure import Figure
+    fig = Figure(figsize=(7.16, 2.5))
+    for ax, run in zip(fig.subplots(1, 2), (paper_run, analogue_run), strict=True):
+        ax.bar([0], [run.summary["mean"].iloc[0]])
+    return fig
+
+
+def test_a_paper_figure_told_whole_is_drawn_and_shown_for_its_item(runs, tmp_path):
+    """A paper whose figure is told whole (its scenario beside an analogue, paper 000's
+    Fig. 1) shows that figure for the item, and links the paper config's own."""
+    root, folders = runs
+    paper = {"toy_gaussian": TOY_PAPER["toy_gaussian"].__class__(
+        **{**vars(TOY_PAPER["toy_gaussian"]),
+           "beside": Beside("Fig. 1", "paper", "extension", "test_reproduction:toy_beside")})}
+    html_path = write_reproduction_report(folders, tmp_path, paper)
+    assert (tmp_path / "figures" / "toy_gaussian_fig_1.png").exists()
+    page = html_path.read_text()
+    assert "figures/toy_gaussian_fig_1.png" in page and "paper + extension" in page

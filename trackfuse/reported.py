@@ -30,6 +30,18 @@ class Answer:
 
 
 @dataclass(frozen=True)
+class Beside:
+    """A paper figure told whole in the reproduction report: the figure of the paper's own
+    scenario (config ``paper``) beside an ``analogue`` config where the effect shows, drawn
+    by ``draw`` (``"module:function"`` taking the two runs) for the paper item ``item``."""
+
+    item: str
+    paper: str
+    analogue: str
+    draw: str
+
+
+@dataclass(frozen=True)
 class Reported:
     """One reported result of a paper.
 
@@ -63,6 +75,7 @@ class Paper:
     citation: str
     results: tuple[Reported, ...]
     configs: tuple[str, ...] = ()
+    beside: Beside | None = None
 
     def result(self, quantity: str) -> Reported:
         """The reported result whose ``quantity`` is ``quantity``."""
@@ -82,6 +95,8 @@ TWIN_SENSOR = Paper(
               "twin-sensor synchronous angle-only tracking\", Control and Decision 20(10), "
               "2005, 1143-1146"),
     configs=("twin_sensor_orbit", "twin_sensor_fig1_claim", "twin_sensor_rmse_vs_bound"),
+    beside=Beside("Fig. 1", "twin_sensor_fig1_claim", "twin_sensor_close",
+                  "trackfuse.experiments.twin_sensor.report:fig1_headline"),
     results=(
         Reported("Fig. 1", "loss rate up to 9 false returns", 0.05, "fraction", 50,
                  "fused-gate PDAF: with a mean number of false returns within 9 the "

@@ -20,6 +20,7 @@ run folders' PNG files, linked by relative paths.
 from __future__ import annotations
 
 import html
+import importlib
 import os
 import re
 from collections.abc import Collection, Mapping, Sequence
@@ -34,7 +35,7 @@ from trackfuse.reportkit.headline import text as _text
 from trackfuse.reportkit.htmltable import TABLE_CSS, html_table
 from trackfuse.reportkit.notes import note_href, write_notes
 from trackfuse.reportkit.verdicts import Line, bottom_line
-from trackfuse.reports import HEADLINE_COLUMNS, HEADLINE_TABLE, wanted_figures
+from trackfuse.reports import HEADLINE_COLUMNS, HEADLINE_TABLE, save_figure, wanted_figures
 from trackfuse.results import INDEX_HTML, atomic_write
 from trackfuse.rundata import RunData, load
 
@@ -431,12 +432,40 @@ def report_html(sections: Sequence[PaperSection], out: Path,
     return "\n".join(parts) + "\n"
 
 
+def _draw_beside(section: PaperSection, out: Path) -> None:
+    """Draw the paper's :class:`~trackfuse.reported.Beside` figure into ``out/figures/``
+    when both of its runs are in ``section``, and show it for its paper item in place of
+    the paper config's own figure (which is then linked)."""
+    beside = section.paper.beside
+    if beside is None or not {beside.paper, beside.analogue} <= section.runs.keys():
+        return
+    module, function = beside.draw.split(":")
+    fig = getattr(importlib.import_module(module), function)(
+        load(section.runs[beside.paper]), load(section.runs[beside.analogue]))
+    if isinstance(fig, str):
+        section.problems.append(f"{beside.item} beside {beside.analogue}: {fig}")
+        return
+    (out / "figures").mkdir(exist_ok=True)
+    name = re.sub(r"[^a-z0-9]+", "_", f"{section.key} {beside.item}".lower())
+    png = save_figure(fig, out / "figures", name, ["png"])[0]
+    caption = (f"left, the paper's scenario ({beside.paper}); right, the analogue "
+               f"({beside.analogue}) where the effect shows; 95 % intervals")
+    shown = MainFigure(png, caption, beside.item, f"{beside.paper} + {beside.analogue}")
+    replaced = [f for f in section.figures if f.paper_item == beside.item]
+    section.figures = [shown if f.paper_item == beside.item else f for f in section.figures]
+    if not replaced:
+        section.figures.append(shown)
+    section.linked = replaced + section.linked
+
+
 def write_reproduction_report(folders: Sequence[Path], out: Path,
                               papers: Mapping[str, Paper] = PAPERS) -> Path:
     """Write ``out/REPORT.md`` and ``out/report.html`` for the runs in ``folders``, with the
     notes of ``docs/papers/`` rendered into ``out/notes/``; returns the HTML path."""
     out.mkdir(parents=True, exist_ok=True)
     sections = collect(folders, papers)
+    for section in sections:
+        _draw_beside(section, out)
     notes = write_notes(out, f"../{REPORT_HTML}")
     atomic_write(out / REPORT_MD, report_markdown(sections, out, notes))
     atomic_write(out / REPORT_HTML, report_html(sections, out, notes))
