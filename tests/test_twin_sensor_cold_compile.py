@@ -101,7 +101,7 @@ def test_a_cold_two_core_compile_loads_the_pair_update_and_equals_the_reference(
     (numpy reference to 1e-9)."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
     probe = ("import trackfuse.experiments.twin_sensor.preload; "
-             "from trackfuse.experiments.twin_sensor import kernel as k; "
+             "from trackfuse.tracking import pda as k; "
              "s = k._pair_update.stats; assert s.cache_hits and not s.cache_misses, s")
     subprocess.run([sys.executable, "-c", probe], env=env, check=True)
     subprocess.run([sys.executable, "-m", "pytest", "-q", "--all", "-p", "no:cacheprovider",
