@@ -23,7 +23,8 @@ from trackfuse.rundata import RunData
 from trackfuse.stats import bootstrap_t_mean_intervals
 
 ROOT = Path(__file__).resolve().parents[1]
-CONFIGS = sorted(ROOT.glob("configs/passive_*.yaml"))
+CONFIGS = sorted(p for p in ROOT.glob("configs/passive_*.yaml")  # passive_sd's are not ours
+                 if "\nexperiment: passive_assoc\n" in f"\n{p.read_text()}")
 UNIT = re.compile(r"\(.+\)", re.S)  # a unit in brackets, over 1 or 2 lines
 #: Small versions of the shipped configs: fewer runs, a smaller operation budget (checkpoints
 #: above it are ignored, the budget itself is scored), and the scale study's points above
