@@ -2,57 +2,10 @@
 trials: the same equations in array form, which the kernel tests pin the filter to (1e-9).
 
 One call updates ``N`` independent filters (one per Monte Carlo trial) with the validated
-returns of one scan. Hypotheses ``theta_ij`` (``i = 0..m_1``, ``j = 0..m_2``; index 0 means
-"no target return from that sensor") are weighted in log space
-(``docs/papers/twin_sensor.md``, Algorithms):
-
-    w_00 = f_1(0) f_2(0)
-    w_i0 = P_D1 N(nu_1i; 0, S_1) f_2(0),     w_0j = f_1(0) P_D2 N(nu_2j; 0, S_2)
-    w_ij = P_D1 P_D2 N([nu_1i; nu_2j]; 0, S_12)                  (joint_cov = "full")
-    f_s(0) = (1 - P_Ds P_G) lambda_s   if m_s > 0, else 1
-
-with ``S_12 = H Pp H' + blkdiag(R_1, R_2)`` (cross blocks ``H_1 Pp H_2'``). This is the
-parallel multisensor PDA (Bar-Shalom & Li 1995; Pao & Frei 1995). For one sensor it is the
-PDAF of Bar-Shalom & Fortmann (1988). ``f_s(0) = 1`` when sensor ``s`` has no validated
-return is the same constant for every hypothesis, so it changes nothing when
-``lambda_s > 0`` and keeps the weights defined when ``lambda_s = 0``.
-
-Association variants (``method``):
-
-* ``"mspda_parallel"``: the weights above.
-* ``"mspda_sequential"``: the single-sensor PDAF with sensor 1, then sensor 2 re-linearized
-  and re-gated at the sensor-1 posterior (Pao & Frei's sequential MSPDA).
-* ``"nn"``: the single most likely hypothesis ``argmax w_ij`` (all weight on it).
-* ``"paper_approx"``: a *reconstruction* of paper 000's eq. 26-28 (W000-1), kept only as an
-  ablation: OR-combined ``P_D = 1 - (1 - P_D1)(1 - P_D2)`` and ``P_G``; every non-null
-  combination has prior ``1/(m_k - 1)`` with ``m_k = (m_1 + 1)(m_2 + 1)``; likelihoods are made
-  dimensionally consistent by giving a missing sensor ``1/V_s`` and the fused volume
-  ``V_f = V_1 V_2``; the null gets ``(1 - P_D P_G) mu`` with the Poisson ratio
-  ``mu = Lambda / m_f``, ``Lambda = lambda_1 V_1 + lambda_2 V_2`` and ``m_f = m_1 + m_2``.
-  For one sensor it equals the PDAF algebraically.
-
-State update: the exact collapse of the Gaussian mixture of per-hypothesis updates,
-
-    X = sum beta_h X_h,   P = sum beta_h [P_h + (X_h - X)(X_h - X)'],
-    X_h = Xp + K_h nu_h,  P_h = (I - K_h G_h) Pp (I - K_h G_h)' + K_h R_h K_h',
-
-where ``K_h`` is the EKF gain of the sensors used by ``h`` and ``G_h`` stacks the modified
-rows evaluated at *that hypothesis's own* measurements (``covariance = "mgekf"``, W000-4) or
-the Jacobian ``H`` (``"ekf_joseph"``). The sums are evaluated in closed form from weighted
-moments of ``nu`` and ``G``: expanding the Joseph form, ``sum beta_h P_h`` only needs
-``sum beta_h G_h``, ``sum beta_h G_h Pp G_h'`` and ``sum beta_h nu_h nu_h'``, which cost
-``O(m_1 m_2)`` scalar products instead of ``(m_1 + 1)(m_2 + 1)`` full 6x6 updates.
-
-Clutter density ``lambda_s`` (1/rad^2): ``density = "parametric"`` uses the value supplied
-by the caller (the true simulated density); ``"nonparametric"`` uses ``m_s / V_s``.
-
-References
-----------
-Y. Bar-Shalom and T. E. Fortmann, *Tracking and Data Association*, Academic Press, 1988.
-Y. Bar-Shalom and X. R. Li, *Multitarget-Multisensor Tracking: Principles and Techniques*,
-YBS, 1995, ch. 8.
-L. Y. Pao and C. W. Frei, "A comparison of parallel and sequential implementations of a
-multisensor multitarget tracking algorithm", Proc. ACC, 1995.
+returns of one scan. The hypothesis weights, the association variants (``method``), the
+state update and the clutter density are those of :mod:`trackfuse.tracking.pda`'s module
+docstring (``docs/papers/twin_sensor.md``, Algorithms); only the evaluation differs: arrays
+over trials here, scalar loops per trial there.
 """
 
 from __future__ import annotations

@@ -262,7 +262,7 @@ def _setting_words(point: Mapping[str, Any], keys: Sequence[str]) -> str:
 
 def _headline_words(point: Mapping[str, Any], keys: Sequence[str]) -> str:
     """The swept settings of a point for the headline table: as :func:`_setting_words`, but
-    the radar-factor model named by its value (``radar factors 'derived': ...``), so a row
+    the radar-factor model, named by its value (``radar factors 'derived': ...``), so a row
     says which model it judges."""
     return "; ".join(f"radar factors '{point[k]}': "
                      + _value_words(k, point[k]).removeprefix("radar ")
