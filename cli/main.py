@@ -264,8 +264,17 @@ def _plan_line(runner: Runner) -> str:
     except RunFolderError as err:
         fail(str(err))
     return (f"# {config.source}: {_count(len(runner.points), 'point')} x "
-            f"{_count(config.trials, 'trial')} = {_count(runner.total_trials, 'trial')} in "
+            f"{_trials_text(config)} = {'at most ' if config.sequential else ''}"
+            f"{_count(len(runner.points) * config.trials, 'trial')} in "
             f"batches of {config.batch_size}; output: {runner.folder.path} ({start})")
+
+
+def _trials_text(config: Config) -> str:
+    """``50 trials``, or ``100 to 20000 trials (sequential: correct +-0.01)``."""
+    rule = config.sequential
+    if rule is None:
+        return _count(config.trials, "trial")
+    return f"{rule.min} to {rule.max} trials (sequential: {rule.metric} +-{rule.half_width:g})"
 
 
 # ---------------------------------------------------------------------------- run
@@ -794,7 +803,7 @@ def validate(
         warn(f"{config.source}: {problem}: `run` refuses it unless --no-plots")
     points = count_points(config.sweep, config.sweep_mode)
     print(f"ok: {config.source}: {config.experiment.name}, {_count(points, 'point')} x "
-          f"{_count(config.trials, 'trial')}")
+          f"{_trials_text(config)}")
 
 
 @app.command("list")

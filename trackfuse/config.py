@@ -25,11 +25,13 @@ from trackfuse.experiments.base import Experiment, Param
 from trackfuse.regular_files import NotARegularFile
 from trackfuse.results import MANIFEST
 from trackfuse.safe_yaml import YamlInputError, read_yaml_file
+from trackfuse.sequential import SequentialRule
+from trackfuse.store import STORES, parquet_problem
 from trackfuse.sweep import MAX_POINTS, SweepError, count_points, parse_axis_values
 
 TOP_LEVEL = ("experiment", "title", "trials", "seed", "batch_size", "params", "sweep",
              "sweep_mode", "outputs", "trial_timeout")
-OUTPUT_KEYS = ("figures", "formats")
+OUTPUT_KEYS = ("figures", "formats", "store")
 FORMATS = ("png", "pdf", "svg")
 MAX_TRIALS = 10**9
 
@@ -75,6 +77,10 @@ class Config:
     #: Seconds a trial may run before it is failed (``None``: no limit); not part of the
     #: run id: it decides only whether a hung trial ends the run or fails.
     trial_timeout: float | None = None
+    #: Where the trial rows are kept: ``"csv"`` or ``"parquet"`` (:mod:`trackfuse.store`).
+    store: str = STORES[0]
+    #: The sequential rule when ``trials`` is one (``trials`` is then its ``max``).
+    sequential: SequentialRule | None = None
 
     @property
     def experiment_ref(self) -> str:
@@ -86,13 +92,15 @@ class Config:
         return {
             "experiment": self.experiment_ref,
             "title": self.title,
-            "trials": self.trials,
+            "trials": self.sequential.as_config() if self.sequential else self.trials,
             "seed": self.seed,
             "batch_size": self.batch_size,
             "params": dict(self.params),
             "sweep": {k: list(v) for k, v in self.sweep.items()},
             "sweep_mode": self.sweep_mode,
-            "outputs": {"figures": self.figures, "formats": list(self.formats)},
+            "outputs": {"figures": self.figures, "formats": list(self.formats),
+                        # only when not the default: a CSV run keeps the run id it had
+                        **({"store": self.store} if self.store != STORES[0] else {})},
             **({} if self.trial_timeout is None else {"trial_timeout": self.trial_timeout}),
         }
 
@@ -274,6 +282,43 @@ def _int(source: str, key: str, value: Any, low: int, high: int = MAX_TRIALS) ->
     return value
 
 
+SEQUENTIAL_KEYS, UNTIL_KEYS = ("min", "max", "until"), ("metric", "half_width")
+
+
+def _trials(source: str, exp: Experiment, value: Any) -> tuple[int, SequentialRule | None]:
+    """``trials``: a count, or a sequential rule (:mod:`trackfuse.sequential`) whose ``max``
+    is the count planned."""
+    if not isinstance(value, Mapping):
+        return _int(source, "trials", value, 1), None
+    _known_keys(source, "trials", value, SEQUENTIAL_KEYS)
+    until = value.get("until")
+    if not isinstance(until, Mapping):
+        raise ConfigError(source, "trials.until", f"got {_describe(until)}; allowed: a mapping "
+                                                  "{metric: NAME, half_width: NUMBER}")
+    _known_keys(source, "trials.until", until, UNTIL_KEYS)
+    low = _int(source, "trials.min", value.get("min"), 2)
+    high = _int(source, "trials.max", value.get("max"), low)
+    names = [m.name for m in exp.metrics if not m.categorical]
+    metric = until.get("metric")
+    if metric not in names:
+        raise ConfigError(source, "trials.until.metric", f"got {_describe(metric)}"
+                          f"{did_you_mean(metric, names)}; allowed: "
+                          f"{', '.join(names) or 'none (the experiment declares no metric)'}")
+    width = until.get("half_width")
+    if isinstance(width, bool) or not isinstance(width, (int, float)) \
+            or not 0 < width < math.inf:
+        raise ConfigError(source, "trials.until.half_width", f"got {_describe(width)}; "
+                          "allowed: a number > 0 (in the metric's unit)")
+    return high, SequentialRule(low, high, str(metric), float(width))
+
+
+def _known_keys(source: str, key: str, mapping: Mapping, allowed: tuple[str, ...]) -> None:
+    for name in mapping:
+        if name not in allowed:
+            raise ConfigError(source, f"{key}.{name}", f"unknown key{did_you_mean(name, allowed)}"
+                                                       f"; allowed: {', '.join(allowed)}")
+
+
 SET, SWEEP = "--set", "--sweep"
 """The source named by errors in command-line overrides (not the YAML file they override)."""
 OVERRIDABLE_TOP_LEVEL = ("trials", "seed", "batch_size", "title", "sweep_mode", "trial_timeout")
@@ -311,7 +356,7 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
     title = raw.get("title", exp.title)
     if not isinstance(title, str):
         raise ConfigError(origin["title"], "title", f"got {_describe(title)}; allowed: a string")
-    trials = _int(origin["trials"], "trials", raw.get("trials", 1), 1)
+    trials, sequential = _trials(origin["trials"], exp, raw.get("trials", 1))
     seed = _int(origin["seed"], "seed", raw.get("seed", 0), 0, 2**63 - 1)
     batch_size = _int(origin["batch_size"], "batch_size", raw.get("batch_size", exp.batch_size),
                       1, 10**6)
@@ -329,9 +374,11 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
         raise ConfigError(source, "sweep", f"the {mode} has {count_points(sweep, mode)} points;"
                                            f" allowed: at most {MAX_POINTS}")
     figures, formats = _outputs(source, exp, raw.get("outputs") or {})
+    store = _store(source, (raw.get("outputs") or {}).get("store", STORES[0]))
     _check_experiment(exp, params, sweep, mode, source, set(sets), set(sweeps or {}))
     return Config(source, exp, title, trials, seed, batch_size, params, sweep, mode, figures,
-                  formats, name, _trial_timeout(origin["trial_timeout"], raw.get("trial_timeout")))
+                  formats, name, _trial_timeout(origin["trial_timeout"], raw.get("trial_timeout")),
+                  store, sequential)
 
 
 def _trial_timeout(source: str, value: Any) -> float | None:
@@ -505,7 +552,8 @@ def _outputs(source: str, exp: Experiment, outputs: Any) -> tuple[list[str] | st
     for key in outputs:
         if key not in OUTPUT_KEYS:
             raise ConfigError(source, f"outputs.{key}", "unknown key"
-                              f"{did_you_mean(key, OUTPUT_KEYS)}; allowed: figures, formats")
+                              f"{did_you_mean(key, OUTPUT_KEYS)}; allowed: "
+                              f"{', '.join(OUTPUT_KEYS)}")
     figures = outputs.get("figures", "all")
     if figures != "all" and not (isinstance(figures, list)
                                  and all(isinstance(f, str) for f in figures)):
@@ -523,6 +571,16 @@ def _outputs(source: str, exp: Experiment, outputs: Any) -> tuple[list[str] | st
         raise ConfigError(source, "outputs.formats",
                           f"got {_describe(formats)}; allowed: a list of {', '.join(FORMATS)}")
     return figures, formats
+
+
+def _store(source: str, store: Any) -> str:
+    """``outputs.store``: one of :data:`~trackfuse.store.STORES`, Parquet only with pyarrow."""
+    if store not in STORES:
+        raise ConfigError(source, "outputs.store", f"got {_describe(store)}; allowed: "
+                                                   f"{', '.join(STORES)}")
+    if store == "parquet" and (problem := parquet_problem()):
+        raise ConfigError(source, "outputs.store", f"{problem}; allowed without it: csv")
+    return store
 
 
 def read_yaml(path: str | Path) -> Any:

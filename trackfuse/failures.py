@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from trackfuse import store
 from trackfuse.results import FAILED_ROW
 from trackfuse.summary import CHUNK_ROWS
 
@@ -31,11 +32,14 @@ def _describe(row: pd.Series, swept: Sequence[str]) -> str:
 
 def first_failure(source: Path | pd.DataFrame, swept: Sequence[str]) -> str | None:
     """The first failed trial of ``trials.csv`` (its path, or the file read) in words
-    (:func:`_describe`), or ``None`` when no trial failed. A path is read in chunks,
-    its columns as written."""
+    (:func:`_describe`), or ``None`` when no trial failed. A path (``trials.csv`` or
+    ``trials.parquet``) is read in chunks, its columns as written."""
     chunks: Iterable[pd.DataFrame]
     if isinstance(source, pd.DataFrame):
         chunks = [source]
+    elif Path(source).suffix == ".parquet":
+        chunks = store.chunks(Path(source), CHUNK_ROWS, {"point", "trial", "status", "error",
+                                                          *swept})
     else:
         wanted = {"point", "trial", "status", "error", *swept}
         chunks = pd.read_csv(source, chunksize=CHUNK_ROWS, dtype=str, keep_default_na=False,

@@ -69,7 +69,6 @@ from trackfuse.results import (
     INDEX_HTML,
     INDEX_MD,
     REPORT_FILES,
-    TRIALS,
     RunFolder,
     RunFolderError,
     atomic_write,
@@ -77,6 +76,7 @@ from trackfuse.results import (
 )
 from trackfuse.rowtable import frame_csv
 from trackfuse.rundata import RunData, load, swept_keys
+from trackfuse.store import trials_file
 from trackfuse.trial_guard import PLUGIN_FAILURES, guarded
 
 PNG_DPI = 200
@@ -125,6 +125,7 @@ FILES = {
     "manifest.json": "status, versions, git repository and commit, code fingerprint, "
                      "command, times, trial counts, checksums of the final files",
     "trials.csv": "one row per sweep point, trial and row key: swept values and metrics",
+    "trials.parquet": "trials.csv in Parquet (outputs.store: parquet)",
     "timings.csv": "wall and CPU time columns, kept out of trials.csv",
     "summary.csv": "per point, row key and metric: n, mean, std, 95 % interval",
     "timings_summary.csv": "the summary of the timing columns",
@@ -223,8 +224,15 @@ def provenance(run: RunData) -> str:
     per point and run id (embedded in every figure file: :func:`save_figure`)."""
     source = Path(str(run.manifest.get("config_file") or "")).name or "(no file)"
     return (f"trackfuse {run.config.get('experiment')}, config {source}, seed "
-            f"{run.config.get('seed')}, {run.config.get('trials')} runs per point, run "
+            f"{run.config.get('seed')}, {_runs_per_point(run.config.get('trials'))}, run "
             f"{run.manifest.get('run_id')}")
+
+
+def _runs_per_point(trials: Any) -> str:
+    """``50 runs per point``, or ``up to 20000 runs per point (sequential)``."""
+    if isinstance(trials, dict):
+        return f"up to {trials.get('max')} runs per point (sequential)"
+    return f"{trials} runs per point"
 
 
 def save_figure(fig, folder: Path, name: str, formats: Sequence[str],
@@ -411,7 +419,7 @@ def wanted_figures(run: RunData) -> list[str]:
 def undrawable(run: RunData) -> str | None:
     """Why no report can be drawn from ``run``'s ``trials.csv`` (unreadable, no rows, a
     column the runner writes in every row missing, every trial failed), or ``None``."""
-    where = run.path / TRIALS
+    where = trials_file(run.path)
     try:
         trials = run.trials
     except RunFolderError as err:
@@ -492,7 +500,7 @@ def _run_facts(run: RunData) -> list[tuple[str, str]]:
         ("config", str(m.get("config_file", ""))),
         ("command", " ".join(m.get("command") or [])),
         ("sweep", sweep or "none (one point)"),
-        ("trials", f"{c.get('trials')} per point, {m.get('trials_total')} in all, "
+        ("trials", f"{_per_point_text(run)}, {m.get('trials_total')} in all, "
                    f"{m.get('trials_failed', 0)} failed{_first_failure_text(run)}"),
         ("root seed", str(c.get("seed"))),
         ("run id", str(m.get("run_id", run.path.name))),
@@ -503,6 +511,21 @@ def _run_facts(run: RunData) -> list[tuple[str, str]]:
         # the runner writes the report before it records the finishing time
         *([("finished", str(m["finished"]))] if m.get("finished") else []),
     ]
+
+
+def _per_point_text(run: RunData) -> str:
+    """``50 per point``, or for a sequential run its rule, each point's count and the
+    points stopped at ``max`` (from the manifest's ``sequential``)."""
+    trials, record = run.config.get("trials"), run.manifest.get("sequential")
+    if not isinstance(trials, dict) or not isinstance(record, dict):
+        return f"{trials} per point"
+    until = trials.get("until") or {}
+    at_max = record.get("stopped_at_max") or []
+    return (f"sequential, until the 95 % interval of {until.get('metric')} is within "
+            f"+-{until.get('half_width')} in every cell ({trials.get('min')} to "
+            f"{trials.get('max')} per point, looks at {record.get('looks')}): per point "
+            f"{record.get('trials')}; stopped at max without meeting it: "
+            + (f"points {at_max}" if at_max else "none"))
 
 
 def _first_failure_text(run: RunData) -> str:

@@ -7,6 +7,7 @@ Layout of ``<out>/<config-stem>/<run-id>/``::
                        complete, the size and SHA-256 of every final file
     parts/             one trials part and one timings part per finished batch (resume state)
     trials.csv         tidy rows, merged from the parts in (point, batch) order
+                       (trials.parquet instead with outputs.store: parquet, trackfuse.store)
     timings.csv        wall/CPU-time columns (``*_time_s``), kept out of trials.csv
     summary.csv        per point x row keys x metric: n, mean, std, 95 % CI
     tables/, figures/  experiment reports
@@ -51,7 +52,9 @@ from trackfuse.regular_files import NotARegularFile, open_regular
 TRIALS, TIMINGS, SUMMARY, MANIFEST, CONFIG = (
     "trials.csv", "timings.csv", "summary.csv", "manifest.json", "config.yaml")
 TIMING_SUMMARY = "timings_summary.csv"
-FINAL_FILES = (CONFIG, TRIALS, TIMINGS, SUMMARY, TIMING_SUMMARY)
+#: ``trials.csv`` in Parquet, which a run with ``outputs.store: parquet`` keeps instead.
+TRIALS_PARQUET = "trials.parquet"
+FINAL_FILES = (CONFIG, TRIALS, TRIALS_PARQUET, TIMINGS, SUMMARY, TIMING_SUMMARY)
 REPORT_DIRS = ("figures", "tables", "notes")
 INDEX_MD, INDEX_HTML = "index.md", "index.html"
 INDEX_FILES = (INDEX_MD, INDEX_HTML)
@@ -613,7 +616,7 @@ class RunFolder:
         else one line saying what does not. ``checksums=False`` compares sizes only (no file
         is read)."""
         files = manifest.get("files")
-        if not isinstance(files, dict) or TRIALS not in files:
+        if not isinstance(files, dict) or (TRIALS not in files and TRIALS_PARQUET not in files):
             return f"{self.path / MANIFEST}: no checksums of the final files"
         for name, record in files.items():
             path = self.path / str(name)

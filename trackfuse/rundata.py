@@ -39,7 +39,6 @@ from trackfuse.results import (
     SUMMARY,
     TIMING_SUMMARY,
     TIMINGS,
-    TRIALS,
     RunFolder,
     RunFolderError,
     RunStatus,
@@ -47,6 +46,7 @@ from trackfuse.results import (
 from trackfuse.runstate import DAMAGED, STOPPED, run_state
 from trackfuse.safe_yaml import YamlInputError, read_yaml_file
 from trackfuse.seeding import draw_points
+from trackfuse.store import parquet_problem, read_trials, trials_file
 from trackfuse.sweep import expand
 
 
@@ -91,8 +91,16 @@ class RunData:
 
     @cached_property
     def trials(self) -> pd.DataFrame:
-        """``trials.csv``: one row per point, trial and row key."""
-        return _read_csv(self.path / TRIALS)
+        """``trials.csv`` (or ``trials.parquet``): one row per point, trial and row key."""
+        path = trials_file(self.path)
+        if path.suffix == ".csv":
+            return _read_csv(path)
+        try:
+            return read_trials(path)
+        except ImportError:
+            raise RunFolderError(f"{path}: {parquet_problem()}") from None
+        except (OSError, ValueError) as err:  # pyarrow's errors are either
+            raise RunFolderError(f"{path}: unreadable ({type(err).__name__})") from None
 
     @cached_property
     def timings(self) -> pd.DataFrame:

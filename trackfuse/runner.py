@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import contextlib
 import importlib
+import io
 import math
 import platform
 import subprocess
@@ -35,6 +36,8 @@ from datetime import UTC, datetime
 from functools import partial
 from pathlib import Path
 from typing import Any
+
+import pandas as pd
 
 import trackfuse
 from trackfuse.batch import BatchTask, execute_batch, watch_sigint
@@ -66,6 +69,7 @@ from trackfuse.results import (
     TIMING_SUMMARY,
     TIMINGS,
     TRIALS,
+    TRIALS_PARQUET,
     BatchSpan,
     PartDamaged,
     PartScan,
@@ -74,6 +78,8 @@ from trackfuse.results import (
     RunStatus,
     atomic_write,
     config_hash,
+    csv_line,
+    read_part,
     removed_words,
     run_id,
     sha256_file,
@@ -84,6 +90,8 @@ from trackfuse.rundata import RunData, load
 from trackfuse.runlock import RunLock, busy_problem, creation_problem
 from trackfuse.runstate import has_report
 from trackfuse.seeding import draw_points
+from trackfuse.sequential import SequentialCounts, widest_half_width
+from trackfuse.store import trials_file, write_parquet
 from trackfuse.summary import CHUNK_ROWS, summarize
 from trackfuse.sweep import expand
 
@@ -206,7 +214,9 @@ class Runner:
         self.folder = RunFolder(self.out / folder_name(self.config_file) / self.run_id)
         self.points = expand(config.sweep, config.sweep_mode)
         self.draw_points = draw_points(self.points, config.experiment.drawing)
-        self.batches_per_point = math.ceil(config.trials / config.batch_size)
+        self.batches_per_point = math.ceil(config.trials / config.batch_size)  # at most
+        #: Where a sequential run stands (``None`` for a fixed count, or before it starts).
+        self.sequential: SequentialCounts | None = None
         self.workers, self.executor_kind = workers, executor
         self.executor_used: str | None = None
         self.scheduler, self.scheduler_file = scheduler, scheduler_file
@@ -223,8 +233,15 @@ class Runner:
         return self.executor_kind == "dask" or bool(self.scheduler or self.scheduler_file)
 
     @property
+    def counts(self) -> list[int]:
+        """Trials planned per point: the fixed count, or a sequential run's current plan."""
+        if self.sequential is not None:
+            return self.sequential.counts
+        return [self.config.trials] * len(self.points)
+
+    @property
     def total_trials(self) -> int:
-        return len(self.points) * self.config.trials
+        return sum(self.counts)
 
     def span(self, point: int, batch: int) -> BatchSpan | None:
         """Batch ``batch`` of sweep point ``point``, or ``None`` if the plan has no such batch."""
@@ -235,9 +252,9 @@ class Runner:
                                                   self.config.trials))
 
     def spans(self) -> Iterator[BatchSpan]:
-        """Every batch of the run, lazily, in output order."""
-        for point in range(len(self.points)):
-            for batch in range(self.batches_per_point):
+        """Every batch of the run's plan (:attr:`counts`), lazily, in output order."""
+        for point, count in enumerate(self.counts):
+            for batch in range(math.ceil(count / self.config.batch_size)):
                 yield self.span(point, batch)
 
     def _tasks(self, todo: Iterator[BatchSpan]) -> Iterator[BatchTask]:
@@ -285,6 +302,7 @@ class Runner:
             "per_point_wall_s": {str(k): round(v, 6)
                                  for k, v in sorted(session.per_point.items())},
             REPORT_FILES: previous.get(REPORT_FILES, []),  # until drawn anew: ours to delete
+            **({"sequential": self.sequential.manifest_entry()} if self.sequential else {}),
         }
 
     def _check_output_root(self) -> None:
@@ -394,11 +412,15 @@ class Runner:
     def _already_complete(self, previous: dict[str, Any]) -> RunOutcome:
         """The outcome of a run found complete; its report drawn if it has none (it finished
         with --no-plots, or its report files were removed)."""
+        recorded = (previous.get("sequential") or {}).get("trials")
+        if self.config.sequential is not None and isinstance(recorded, list):
+            self.sequential = SequentialCounts.recorded(self.config.sequential,
+                                                        self.config.batch_size, recorded)
         failed = int_or(previous.get("trials_failed"), 0)
         outcome = RunOutcome(self.folder.path, RunStatus.ALREADY_COMPLETE, self.total_trials,
                              0, failed, rows=int_or(previous.get("rows"), 0))
         if failed:
-            outcome.first_failure = first_failure(self.folder.path / TRIALS,
+            outcome.first_failure = first_failure(trials_file(self.folder.path),
                                                   list(self.config.sweep))
         if has_report(self.folder.path, previous):
             outcome.report = self.folder.path / INDEX_HTML
@@ -487,13 +509,44 @@ class Runner:
                       "recomputed too")
 
     def _compute_missing(self, session: _Session) -> None:
-        """Verify the parts on disk, then compute every batch that has no whole part."""
+        """Verify the parts on disk, then compute every batch of the plan that has no whole
+        part; a sequential run look by look (:mod:`trackfuse.sequential`)."""
         scan = self.folder.scan_parts(self.span)
         self._report(scan)
-        session.done = sum(span.trials for span in scan.finished)
+        finished = set(scan.finished)
+        rule = self.config.sequential
+        if rule is None:
+            self._compute(session, finished)
+            return
+        self.sequential = SequentialCounts.start(rule, len(self.points),
+                                                 self.config.batch_size)
+        while not self.sequential.done:
+            self._compute(session, finished)
+            for point in self.sequential.open_points():
+                self.sequential.decide(point, self._widest_half_width(point))
+
+    def _widest_half_width(self, point: int) -> float:
+        """The widest half-width of the rule's metric over the cells of ``point``, from the
+        saved parts of its planned batches (:func:`trackfuse.sequential.widest_half_width`)."""
+        frames = []
+        for span in self.spans():
+            if span.point == point:
+                part = read_part(self.folder.part_path(span, "trials"), span, "trials")
+                frames.append(pd.read_csv(io.StringIO(csv_line(part.columns) + part.data),
+                                          low_memory=False))
+        experiment = self.config.experiment
+        summary, _ = summarize(pd.concat(frames, ignore_index=True),
+                               ["point", *experiment.row_keys], experiment.binary_metrics,
+                               skip=experiment.categorical_metrics,
+                               bounds=experiment.metric_bounds, rms=experiment.rms_metrics)
+        return widest_half_width(summary, self.config.sequential)
+
+    def _compute(self, session: _Session, finished: set[BatchSpan]) -> None:
+        """Compute every batch of the plan not in ``finished``, adding each to it."""
+        session.done = sum(span.trials for span in self.spans() if span in finished)
         if session.done == self.total_trials:
             return
-        todo = (span for span in self.spans() if span not in scan.finished)
+        todo = (span for span in self.spans() if span not in finished)
         executor = make_executor(self.executor_kind, self.workers, self.scheduler,
                                  self.scheduler_file, self.config.experiment.preload)
         self.workers, self.executor_used = executor.workers, executor.kind
@@ -510,6 +563,7 @@ class Runner:
                 for res in executor.imap_unordered(execute_batch, self._tasks(todo)):
                     self.folder.write_part(res.span, res.trials_csv, res.trial_rows,
                                            res.timings_csv, res.timing_rows)
+                    finished.add(res.span)
                     point = res.span.point
                     session.per_point[point] = session.per_point.get(point, 0.0) + res.wall_s
                     session.done += res.span.trials
@@ -570,6 +624,11 @@ class Runner:
         self.on_phase("merging parts into trials.csv")
         files = {CONFIG: session.config_file,
                  TRIALS: self.folder.merge(self.spans, "trials", TRIALS)}
+        if self.config.store == "parquet":
+            self.on_phase("writing trials.parquet")
+            files[TRIALS_PARQUET] = write_parquet(path / TRIALS, path / TRIALS_PARQUET)
+            del files[TRIALS]
+        rows = files.get(TRIALS, files.get(TRIALS_PARQUET))["rows"]
         timings = self.folder.merge(self.spans, "timings", TIMINGS)
         if timings["rows"]:
             files[TIMINGS] = timings
@@ -579,13 +638,14 @@ class Runner:
         self.on_phase("summarising into summary.csv")
         run = self._open_for_report(session) if self.plots else None
         # a trials.csv of one summary chunk is read once, for the summary and the report
-        source = run.trials if run is not None and files[TRIALS]["rows"] <= CHUNK_ROWS \
-            else path / TRIALS
+        source = run.trials if run is not None and rows <= CHUNK_ROWS else trials_file(path)
         experiment = self.config.experiment
         summary, failed_rows = summarize(source, keys, experiment.binary_metrics,
                                          skip=experiment.categorical_metrics,
                                          bounds=experiment.metric_bounds,
                                          rms=experiment.rms_metrics)
+        if self.sequential is not None:  # each interval with the rule that stopped it
+            summary["stopping"] = summary["point"].map(self.sequential.stopping)
         files[SUMMARY] = _write_record(path / SUMMARY, frame_csv(summary))
         if timings["rows"]:
             timing_summary, _ = summarize(path / TIMINGS, keys, suffix=TIME_SUFFIX,
@@ -595,7 +655,7 @@ class Runner:
         else:
             (path / TIMING_SUMMARY).unlink(missing_ok=True)
         outcome = RunOutcome(path, RunStatus.COMPLETE, self.total_trials, session.computed,
-                             failed_rows, rows=files[TRIALS]["rows"])
+                             failed_rows, rows=rows)
         if failed_rows:
             outcome.first_failure = first_failure(source, list(self.config.sweep))
         drawn: dict[str, Any] = {"figure_errors": []}

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from trackfuse import store
 from trackfuse.results import FAILED_ROW, RUNNER_COLUMNS
 from trackfuse.stats import rmse_intervals, t_interval, wilson_interval
 
@@ -97,13 +98,11 @@ def summarize(source: Path | pd.DataFrame, keys: Sequence[str], binary: Sequence
 
 
 def _chunks(source: Path | pd.DataFrame, chunk_rows: int) -> Iterable[pd.DataFrame]:
-    """``source`` (a CSV file, or a frame already read) in chunks of ``chunk_rows`` rows."""
+    """``source`` (a CSV or Parquet file, or a frame already read) in chunks of
+    ``chunk_rows`` rows."""
     if isinstance(source, pd.DataFrame):
         return (source.iloc[i:i + chunk_rows] for i in range(0, len(source), chunk_rows))
-    try:
-        return pd.read_csv(source, chunksize=chunk_rows, low_memory=False)
-    except pd.errors.EmptyDataError:
-        return []
+    return store.chunks(Path(source), chunk_rows)
 
 
 def _keep_squares(chunk: pd.DataFrame, group: list[str], metrics: list[str],

@@ -1,0 +1,141 @@
+"""Where a run keeps its trial rows: ``trials.csv`` (the default) or ``trials.parquet``.
+
+A config's ``outputs.store: parquet`` keeps the rows in Apache Parquet (columnar, zstd
+compressed; needs pyarrow, the ``parquet`` extra) instead of CSV. The runner always merges
+its verified parts into ``trials.csv`` first; :func:`write_parquet` then converts that file
+in fixed chunks of :data:`CHUNK_ROWS` rows and removes it, so the Parquet file holds the
+same rows in the same order, and since the CSV is byte-identical for any worker count,
+executor and resume, so is the Parquet file (pyarrow writes no time stamp).
+
+Types: each column gets the type ``pandas.read_csv(path, low_memory=False)`` gives it when
+reading the whole CSV (an integer column with a missing value is float, a text column is
+text), found in a first pass over the chunks, so :func:`read_trials` returns the same frame
+from either file. Every reader of a run's rows (``trackfuse.load``, the summary, ``plot``,
+``compare``) goes through :func:`trials_file`, :func:`read_trials` and :func:`chunks`.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from trackfuse.results import TRIALS, TRIALS_PARQUET, sha256_file
+
+if TYPE_CHECKING:  # validating a config (which names the store) loads no pandas
+    import pandas as pd
+
+#: The values ``outputs.store`` may take, the default first.
+STORES = ("csv", "parquet")
+#: Rows per chunk when converting and reading (the summary's chunk, and a row group).
+CHUNK_ROWS = 200_000
+#: The compression of ``trials.parquet``: zstd at its default level.
+COMPRESSION = "zstd"
+
+
+def parquet_problem() -> str | None:
+    """Why ``outputs.store: parquet`` cannot be used here (pyarrow missing), else ``None``."""
+    if importlib.util.find_spec("pyarrow") is None:
+        return "parquet needs pyarrow: pip install 'trackfuse[parquet]'"
+    return None
+
+
+def trials_file(folder: Path) -> Path:
+    """The file holding the run's rows in ``folder``: ``trials.parquet`` when there is one,
+    else ``trials.csv`` (which may be missing: the reader says so)."""
+    parquet = Path(folder) / TRIALS_PARQUET
+    return parquet if parquet.is_file() else Path(folder) / TRIALS
+
+
+def read_trials(path: Path) -> pd.DataFrame:
+    """The whole of ``trials.csv`` or ``trials.parquet`` at ``path``, with the types
+    ``pandas.read_csv(low_memory=False)`` gives the CSV."""
+    import pandas as pd
+    if path.suffix == ".parquet":
+        return pd.read_parquet(path)
+    return pd.read_csv(path, low_memory=False)
+
+
+def chunks(path: Path, chunk_rows: int = CHUNK_ROWS,
+           columns: Iterable[str] | None = None) -> Iterator[pd.DataFrame]:
+    """``path`` (CSV or Parquet) in consecutive chunks of at most ``chunk_rows`` rows,
+    only ``columns`` when given (those present); a CSV with no text yields nothing."""
+    import pandas as pd
+    wanted = None if columns is None else set(columns)
+    if path.suffix == ".parquet":
+        import pyarrow.parquet as pq
+        reader = pq.ParquetFile(path)
+        names = [c for c in reader.schema_arrow.names if wanted is None or c in wanted]
+        for batch in reader.iter_batches(batch_size=chunk_rows, columns=names):
+            yield batch.to_pandas()
+        return
+    try:
+        yield from pd.read_csv(path, chunksize=chunk_rows, low_memory=False,
+                               usecols=None if wanted is None else (lambda c: c in wanted))
+    except pd.errors.EmptyDataError:
+        return
+
+
+def _common_dtype(kinds: set[str]) -> str:
+    """The type of a column whose chunks read as ``kinds`` (numpy kind letters, ``O`` for
+    text), as reading the whole CSV types it: one kind stays, integers with floats are
+    float, anything else (text beside missing values, booleans beside numbers) is text or
+    object."""
+    if len(kinds) == 1:
+        return next(iter(kinds))
+    if kinds <= {"i", "f"}:
+        return "f"
+    return "O"
+
+
+def _column_kinds(csv_path: Path) -> tuple[dict[str, str], dict[str, Any]]:
+    """For each column of ``csv_path``: its common kind over all chunks and the dtype of a
+    chunk where it has that kind (the whole-file type)."""
+    kinds: dict[str, set[str]] = {}
+    example: dict[str, Any] = {}
+    for chunk in chunks(csv_path):
+        for column, dtype in chunk.dtypes.items():
+            kind = dtype.kind  # "O" for text (object or pandas' string type)
+            kinds.setdefault(column, set()).add(kind)
+            example.setdefault((column, kind), dtype)
+    common = {column: _common_dtype(found) for column, found in kinds.items()}
+    dtypes = {column: example.get((column, kind), object)
+              for column, kind in common.items()}
+    return common, dtypes
+
+
+def write_parquet(csv_path: Path, target: Path) -> dict[str, Any]:
+    """Convert the CSV at ``csv_path`` to Parquet at ``target`` (atomically) and remove the
+    CSV; return ``{"rows", "bytes", "sha256"}`` of the Parquet file for the manifest."""
+    import pandas as pd
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+    kinds, dtypes = _column_kinds(csv_path)
+    wanted = {c: ("float64" if kinds[c] == "f" else dtypes[c]) for c in kinds}
+    tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
+    rows, writer = 0, None
+    try:
+        for chunk in chunks(csv_path):
+            table = pa.Table.from_pandas(chunk.astype(wanted), preserve_index=False)
+            if writer is None:
+                writer = pq.ParquetWriter(tmp, table.schema, compression=COMPRESSION)
+            writer.write_table(table.cast(writer.schema), row_group_size=CHUNK_ROWS)
+            rows += len(chunk)
+        if writer is None:  # no rows: keep the header's columns
+            empty = pd.read_csv(csv_path, nrows=0)
+            pq.write_table(pa.Table.from_pandas(empty, preserve_index=False), tmp,
+                           compression=COMPRESSION)
+        else:
+            writer.close()
+        with open(tmp, "rb") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp, target)
+    except BaseException:
+        if writer is not None:
+            writer.close()
+        tmp.unlink(missing_ok=True)
+        raise
+    csv_path.unlink()
+    return {"rows": rows, "bytes": target.stat().st_size, "sha256": sha256_file(target)}
