@@ -28,6 +28,7 @@ import typer
 import trackfuse
 from trackfuse_cli.options import (
     Cfg,
+    ClusterOpt,
     DryRun,
     Executor,
     ExecutorOpt,
@@ -170,6 +171,7 @@ class RunOptions:
     progress: bool = True
     force: bool = False
     name: str | None = None
+    cluster: str | None = None
 
     def check(self) -> None:
         """Refuse an empty ``--scheduler`` or ``--scheduler-file`` (an unset shell variable:
@@ -187,8 +189,11 @@ class RunOptions:
             except ExecutorError as err:
                 fail(str(err))
         cores = default_workers()
+        if self.cluster and (self.scheduler or self.scheduler_file):
+            fail("--cluster starts its own scheduler; allowed: --cluster, or --scheduler / "
+                 "--scheduler-file, not both")
         if self.workers > cores and self.executor != "serial" and not self.scheduler \
-                and not self.scheduler_file:
+                and not self.scheduler_file and not self.cluster:
             warn(f"--workers {self.workers}: more than the {cores} cores this process may use; "
                  "the extra workers share them and only add memory")
 
@@ -206,7 +211,8 @@ class RunOptions:
         experiments' code while this process builds the runners (runs that turn out to be
         complete already leave it unused)."""
         from trackfuse.executors import default_workers, start_fork_server
-        if self.executor == "process" and not (self.scheduler or self.scheduler_file) and \
+        if self.executor == "process" and not (self.scheduler or self.scheduler_file
+                                               or self.cluster) and \
                 (self.workers or default_workers()) > 1:
             start_fork_server(list(dict.fromkeys(module for config in configs
                                                  for module in config.experiment.preload)))
@@ -219,7 +225,7 @@ class RunOptions:
                       executor=self.executor, scheduler=self.scheduler,
                       scheduler_file=self.scheduler_file, plots=self.plots,
                       progress=self.progress, command=sys.argv, warn=warn, force=self.force,
-                      name=self.name,
+                      name=self.name, cluster=self.cluster,
                       on_phase=PhaseLog(folder_name(config.source), self.progress))
 
 
@@ -295,6 +301,7 @@ def run(
     executor: ExecutorOpt = Executor.process,
     scheduler: Scheduler = None,
     scheduler_file: SchedulerFile = None,
+    cluster: ClusterOpt = None,
     dry_run: DryRun = False,
     no_plots: NoPlots = False,
     no_progress: NoProgress = False,
@@ -315,7 +322,8 @@ def run(
     if config.source != str(cfg) and not dry_run:  # a name: say which file it found
         print(f"config: {config.source}")
     options = RunOptions(out_folder(out_dir), workers, executor.value, scheduler,
-                         scheduler_file, not no_plots, not no_progress, force, name)
+                         scheduler_file, not no_plots, not no_progress, force, name,
+                         cluster.value if cluster else None)
     options.check()
     options.check_reports([config])
     if not dry_run:
@@ -326,10 +334,24 @@ def run(
         plan = _plan_line(runner)
         print(yaml.safe_dump(config.to_dict(), sort_keys=False), end="")
         print(plan)
+        if cluster:
+            _print_job_script(cluster.value, config)
         return
     outcome = _execute(runner)
     _closing_lines(outcome, config)
     raise typer.Exit(exit_status([outcome]))
+
+
+def _print_job_script(kind: str, config: Config) -> None:
+    """The job script ``--cluster kind`` would submit (``--dry-run``), as comments."""
+    from trackfuse.cluster import job_script
+    from trackfuse.executors import ExecutorError
+    try:
+        script = job_script(kind, config.cluster)
+    except ExecutorError as err:
+        fail(str(err))
+    print(f"# job script (--cluster {kind}; the scheduler's address is filled in at the run):")
+    print("".join(f"#   {line}\n" for line in script.strip().splitlines()), end="")
 
 
 def warn_not_drawn(source: str, wanted: Any, not_drawn: dict[str, str]) -> None:
@@ -453,6 +475,7 @@ def reproduce(
     executor: ExecutorOpt = Executor.process,
     scheduler: Scheduler = None,
     scheduler_file: SchedulerFile = None,
+    cluster: ClusterOpt = None,
     dry_run: DryRun = False,
     no_plots: NoPlots = False,
     no_progress: NoProgress = False,
@@ -464,7 +487,8 @@ def reproduce(
     out = out_folder(out_dir)
     configs = _load_all(_config_paths(folder), _overrides(sets, None))
     options = RunOptions(out, workers, executor.value, scheduler, scheduler_file,
-                         not no_plots, not no_progress)
+                         not no_plots, not no_progress,
+                         cluster=cluster.value if cluster else None)
     options.check()
     options.check_reports(configs)
     if dry_run:

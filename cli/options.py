@@ -147,6 +147,15 @@ class Executor(StrEnum):
     dask = "dask"
 
 
+class ClusterKind(StrEnum):
+    """The batch systems ``--cluster`` starts workers through
+    (``trackfuse.cluster_settings.CLUSTER_KINDS``)."""
+
+    slurm = "slurm"
+    pbs = "pbs"
+    local = "local"
+
+
 class Format(StrEnum):
     """Output of ``trackfuse list [EXPERIMENT]``."""
 
@@ -229,6 +238,10 @@ ExecutorOpt = Annotated[Executor, typer.Option(help="Where batches run.")]
 Scheduler = Annotated[str | None, typer.Option(metavar="ADDRESS", help="dask scheduler "
                                                "address, e.g. tcp://host:8786.")]
 SchedulerFile = Annotated[str | None, typer.Option(metavar="FILE", help="dask scheduler file.")]
+ClusterOpt = Annotated[ClusterKind | None, typer.Option(
+    show_default=False, help="Start dask workers as batch jobs (dask-jobqueue; the config's "
+    "cluster section or dask's jobqueue config: queue, cores, memory, walltime, min_jobs, "
+    "max_jobs); local runs the same jobs here. See docs/cluster.md.")]
 DryRun = Annotated[bool, typer.Option("--dry-run", metavar="", help="Print the resolved "
                                       "config and the work; run nothing.")]
 NoPlots = Annotated[bool, typer.Option(

@@ -21,6 +21,8 @@ from pathlib import Path
 from typing import Any
 
 from trackfuse import experiments
+from trackfuse.cluster_settings import SETTING_KEYS, ClusterSettings, settings_problem
+from trackfuse.cluster_settings import settings as cluster_settings
 from trackfuse.experiments.base import Experiment, Param
 from trackfuse.regular_files import NotARegularFile
 from trackfuse.results import MANIFEST
@@ -30,7 +32,7 @@ from trackfuse.store import STORES, parquet_problem
 from trackfuse.sweep import MAX_POINTS, SweepError, count_points, parse_axis_values
 
 TOP_LEVEL = ("experiment", "title", "trials", "seed", "batch_size", "params", "sweep",
-             "sweep_mode", "outputs", "trial_timeout")
+             "sweep_mode", "outputs", "trial_timeout", "cluster")
 OUTPUT_KEYS = ("figures", "formats", "store")
 FORMATS = ("png", "pdf", "svg")
 MAX_TRIALS = 10**9
@@ -81,6 +83,8 @@ class Config:
     store: str = STORES[0]
     #: The sequential rule when ``trials`` is one (``trials`` is then its ``max``).
     sequential: SequentialRule | None = None
+    #: The ``cluster`` section (``--cluster``); where a run computes is not in its run id.
+    cluster: ClusterSettings = field(default_factory=ClusterSettings)
 
     @property
     def experiment_ref(self) -> str:
@@ -375,10 +379,11 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
                                            f" allowed: at most {MAX_POINTS}")
     figures, formats = _outputs(source, exp, raw.get("outputs") or {})
     store = _store(source, (raw.get("outputs") or {}).get("store", STORES[0]))
+    cluster = _cluster(source, raw.get("cluster") or {})
     _check_experiment(exp, params, sweep, mode, source, set(sets), set(sweeps or {}))
     return Config(source, exp, title, trials, seed, batch_size, params, sweep, mode, figures,
                   formats, name, _trial_timeout(origin["trial_timeout"], raw.get("trial_timeout")),
-                  store, sequential)
+                  store, sequential, cluster)
 
 
 def _trial_timeout(source: str, value: Any) -> float | None:
@@ -571,6 +576,19 @@ def _outputs(source: str, exp: Experiment, outputs: Any) -> tuple[list[str] | st
         raise ConfigError(source, "outputs.formats",
                           f"got {_describe(formats)}; allowed: a list of {', '.join(FORMATS)}")
     return figures, formats
+
+
+def _cluster(source: str, section: Any) -> ClusterSettings:
+    """The ``cluster`` section (:mod:`trackfuse.cluster_settings`), checked."""
+    if not isinstance(section, Mapping):
+        raise ConfigError(source, "cluster", f"got {_describe(section)}; allowed: a mapping of "
+                                             f"{', '.join(SETTING_KEYS)}")
+    if problem := settings_problem(dict(section)):
+        key, allowed = problem
+        got = "" if allowed.startswith("unknown") else \
+            f"got {_describe(section.get(key))}; allowed: "
+        raise ConfigError(source, f"cluster.{key}", got + allowed)
+    return cluster_settings(dict(section))
 
 
 def _store(source: str, store: Any) -> str:

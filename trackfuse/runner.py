@@ -22,6 +22,7 @@ plan is lazy: batches are generated as they are submitted, never listed whole.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import importlib
 import io
 import math
@@ -41,6 +42,7 @@ import pandas as pd
 
 import trackfuse
 from trackfuse.batch import BatchTask, execute_batch, watch_sigint
+from trackfuse.cluster import JobqueueExecutor
 from trackfuse.coerce import int_or
 from trackfuse.config import Config
 from trackfuse.environment import (
@@ -201,7 +203,8 @@ class Runner:
                  scheduler_file: str | None = None, plots: bool = True,
                  progress: bool = True, command: list[str] | None = None,
                  warn: Callable[[str], None] = _print_warning, force: bool = False,
-                 name: str | None = None, on_phase: Callable[[str], None] | None = None):
+                 name: str | None = None, on_phase: Callable[[str], None] | None = None,
+                 cluster: str | None = None):
         self.config = config
         self.resolved = config.to_dict()
         self.code = code_fingerprint(config.experiment)
@@ -220,6 +223,7 @@ class Runner:
         self.workers, self.executor_kind = workers, executor
         self.executor_used: str | None = None
         self.scheduler, self.scheduler_file = scheduler, scheduler_file
+        self.cluster = cluster  # a batch system (trackfuse.cluster), or None
         self.plots, self.progress = plots, progress
         self.command = command if command is not None else sys.argv
         self.warn = warn
@@ -230,7 +234,8 @@ class Runner:
     @property
     def _on_dask(self) -> bool:
         """Whether the batches run on dask workers (see :func:`make_executor`)."""
-        return self.executor_kind == "dask" or bool(self.scheduler or self.scheduler_file)
+        return self.executor_kind == "dask" or bool(self.scheduler or self.scheduler_file
+                                                    or self.cluster)
 
     @property
     def counts(self) -> list[int]:
@@ -287,6 +292,8 @@ class Runner:
             "root_seed": self.config.seed,
             "executor": self.executor_used or previous.get("executor") or self.executor_kind,
             "executor_requested": self.executor_kind,
+            **({"cluster": {"kind": self.cluster, **dataclasses.asdict(self.config.cluster)}}
+               if self.cluster else {}),
             "workers": self.workers,
             "points": len(self.points),
             "draw_points": list(self.draw_points),
@@ -547,8 +554,9 @@ class Runner:
         if session.done == self.total_trials:
             return
         todo = (span for span in self.spans() if span not in finished)
-        executor = make_executor(self.executor_kind, self.workers, self.scheduler,
-                                 self.scheduler_file, self.config.experiment.preload)
+        executor = JobqueueExecutor(self.cluster, self.config.cluster) if self.cluster \
+            else make_executor(self.executor_kind, self.workers, self.scheduler,
+                               self.scheduler_file, self.config.experiment.preload)
         self.workers, self.executor_used = executor.workers, executor.kind
         if executor.kind == "dask":
             self._check_dask_workers(executor, session)
