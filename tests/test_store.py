@@ -51,6 +51,12 @@ def test_parquet_is_byte_identical_for_any_worker_count(write_config, tmp_path):
     two = _run(write_config, tmp_path, "parquet", workers=2, executor="process")
     assert (one / "trials.parquet").read_bytes() == (two / "trials.parquet").read_bytes()
     assert one.name == two.name
+    cfg = write_config(CONFIG + "outputs: {store: parquet}\n", name="g_parquet")
+    again = Runner(load(cfg), tmp_path / "out1", executor="serial", progress=False,
+                   plots=False).run()  # found complete: its checksums verified, not rewritten
+    assert again.status == "already complete" and again.computed_trials == 0
+    assert (again.folder / "trials.parquet").read_bytes() == \
+        (two / "trials.parquet").read_bytes()
 
 
 def test_plot_and_compare_read_a_parquet_run(write_config, tmp_path):

@@ -550,7 +550,9 @@ class Runner:
 
     def _compute(self, session: _Session, finished: set[BatchSpan]) -> None:
         """Compute every batch of the plan not in ``finished``, adding each to it."""
-        session.done = sum(span.trials for span in self.spans() if span in finished)
+        size = self.config.batch_size
+        session.done = sum(span.trials for span in finished  # never the whole plan: lazy
+                           if span.batch < math.ceil(self.counts[span.point] / size))
         if session.done == self.total_trials:
             return
         todo = (span for span in self.spans() if span not in finished)
