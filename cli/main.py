@@ -585,8 +585,11 @@ def _print_runs(runs) -> None:
     from rich.table import Table
 
     from trackfuse.catalog import differences
-    table = Table("run folder", "experiment", "name", "status", "trials", "started", "wall",
+    table = Table("run folder", "experiment", "status", "trials", "started", "wall",
                   "differs in")
+    names = [_cell(r.name) for r in runs]  # whole, never wrapped: a name is looked for
+    table.add_column("name", min_width=min(max(map(len, names), default=4), 60))
+    table.columns.insert(2, table.columns.pop())
     for r, differs in zip(runs, differences(runs), strict=True):
         wall = f"{r.wall_s:.0f} s" if r.wall_s is not None else ""
         table.add_row(*map(_cell, (r.path, r.experiment, r.name, r.status,
