@@ -386,18 +386,6 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
                   store, sequential, cluster)
 
 
-def _check_top_level(source: str, raw: dict[Any, Any]) -> None:
-    """Refuse a top-level key that is not one of :data:`TOP_LEVEL`."""
-    for key in raw:
-        if key not in TOP_LEVEL and not (isinstance(key, str) and _KEY_NAME.match(key)):
-            # not a config (a password file parses as a mapping): never echo its text
-            raise ConfigError(source, "", "not a trackfuse config: a top-level key is not a "
-                              f"key name; allowed: a YAML mapping of {', '.join(TOP_LEVEL)}")
-        if key not in TOP_LEVEL:
-            raise ConfigError(source, str(key), "unknown top-level key"
-                              f"{did_you_mean(key, TOP_LEVEL)}; allowed: {', '.join(TOP_LEVEL)}")
-
-
 def _trial_timeout(source: str, value: Any) -> float | None:
     """The trial time limit (s) given as ``trial_timeout``, ``None`` when not given."""
     if value is None:
