@@ -361,7 +361,7 @@ def test_reproduce_runs_every_config_of_a_folder_and_resumes(tmp_path):
                       "--no-progress")
     assert first.returncode == 0, first.stderr
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["REPORT.md", "a", "b",
-                                                                   "report.html"]
+                                                                   "notes", "report.html"]
     assert first.stdout.splitlines()[-1] == f"report: {tmp_path / 'out' / 'report.html'}"
     again = trackfuse("reproduce", configs, "--out", tmp_path / "out", "--no-progress")
     assert again.returncode == 0 and again.stdout.count("(0 of 92 trials computed now") == 2
