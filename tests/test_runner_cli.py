@@ -108,7 +108,8 @@ def test_plot_of_a_run_with_failed_trials_draws_from_the_others_and_says_so(writ
                                     "trials.csv); first: point ")
     assert result.stderr.strip().endswith(f"; the report shows the other {24 - failed}")
     assert (folder / "figures" / "estimate.png").exists()
-    facts = (folder / "index.md").read_text().split("\n## ")[0]
+    facts = next(part for part in (folder / "index.md").read_text().split("\n## ")
+                 if part.startswith("Run\n"))
     assert f"{failed} failed; first: point " in facts and "synthetic divergence" in facts
 
 

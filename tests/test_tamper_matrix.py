@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import signal
 from collections.abc import Callable, Iterator
@@ -247,7 +248,8 @@ def test_force_names_what_it_removed_and_keeps_the_users_files(scene):
     Runner(load(scene.cfg), scene.out, executor="serial", progress=False, plots=False,
            force=True, warn=said.append).run()
     removed = next(line for line in said if "--force removed" in line)
-    assert "tables/paper_vs_reproduced.csv" in removed and "10 files trackfuse wrote" in removed
+    count = re.search(r"--force removed (\d+) files trackfuse wrote", removed)
+    assert "tables/paper_vs_reproduced.csv" in removed and count and int(count[1]) >= 10
     assert (scene.run / "tables" / "my_notes.md").read_text() == "mine\n"
     assert (scene.run / "parts" / "mine.txt").read_text() == "mine\n"
     assert not (scene.run / "tables" / "paper_vs_reproduced.csv").exists()
