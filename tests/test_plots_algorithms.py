@@ -2,7 +2,8 @@
 
 import pytest
 
-from trackfuse.plots.algorithms import BLACK, LOOKS, ROLES, Look
+from trackfuse.plots.algorithms import BLACK, LOOKS, Look
+from trackfuse.reportkit.looks import ROLES
 
 
 def test_a_look_takes_only_a_known_role():

@@ -20,37 +20,22 @@ line style (MGEKF solid, EKF dashed, with open markers).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from trackfuse.reportkit.looks import (
+    BLACK,
+    BLUE,
+    GREEN,
+    GREYS,
+    ORANGE,
+    PURPLE,
+    SKY,
+    VERMILLION,
+    Look,
+)
 
-VERMILLION, BLUE, GREEN, PURPLE = "#D55E00", "#0072B2", "#009E73", "#CC79A7"
-ORANGE, SKY, BLACK = "#E69F00", "#56B4E9", "#000000"
-GREYS = ("#555555", "#888888", "#AAAAAA")
-#: Every role a :class:`Look` may have (see the module docstring).
-ROLES = ("paper", "paper_baseline", "ours", "reference", "variant")
 PAPER_ROLES = ("paper", "paper_baseline")
 """The roles of what the paper ran (its method and its baseline)."""
 OUR_ROLES = ("ours", "variant")
 """The roles of what this project adds (its methods and other variants)."""
-EMPHASISED = (*PAPER_ROLES, "ours")
-
-
-@dataclass(frozen=True)
-class Look:
-    """How one algorithm is drawn. ``label``: legend text; ``role``: one of :data:`ROLES`."""
-
-    label: str
-    colour: str
-    marker: str
-    role: str
-
-    def __post_init__(self) -> None:
-        if self.role not in ROLES:
-            raise ValueError(f"{self.label!r}: role {self.role!r} is not one of {ROLES}")
-
-    @property
-    def emphasised(self) -> bool:
-        """Paper, paper-baseline and our methods get thick lines and interval bands."""
-        return self.role in EMPHASISED
 
 
 LOOKS: dict[str, Look] = {
