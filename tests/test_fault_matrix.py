@@ -14,6 +14,7 @@ tests of their own below: they need a subprocess.
 from __future__ import annotations
 
 import json
+import signal
 from pathlib import Path
 
 import pandas as pd
@@ -123,6 +124,18 @@ def _check_failed_rows(folder: Path, expected: str | None) -> None:
 @pytest.mark.parametrize("fault", list(FAULTS))
 def test_a_fault_is_a_failed_row_in_serial(fault, serial_runs):
     _check_failed_rows(serial_runs(fault), FAULTS[fault][2])
+
+
+def test_a_trials_keyboard_interrupt_is_a_failed_row_under_a_callers_sigint_handler(tmp_path):
+    """A caller that installed its own Ctrl-C handler (dask's cluster does) keeps a trial's
+    own KeyboardInterrupt a failed row: only a real Ctrl-C stops the run."""
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: None)
+    try:
+        folder = _run("KeyboardInterrupt", tmp_path, executor="serial", workers=1)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    _check_failed_rows(folder, FAULTS["KeyboardInterrupt"][2])
+    assert signal.getsignal(signal.SIGINT) is previous
 
 
 @pytest.mark.parametrize("fault", list(FAULTS))

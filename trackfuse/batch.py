@@ -92,10 +92,15 @@ def watch_sigint() -> Iterator[None]:
         return
     _user_interrupt.clear()
     restore: dict[int, Any] = {}
-    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
-        restore[signal.SIGINT] = signal.default_int_handler
+    sigint = signal.getsignal(signal.SIGINT)
+    if sigint is signal.default_int_handler:
+        restore[signal.SIGINT] = sigint
         _sigint_watched.set()
         signal.signal(signal.SIGINT, _on_sigint)
+    elif callable(sigint):  # a handler of the caller's (dask's, a notebook's) still marks
+        restore[signal.SIGINT] = sigint
+        _sigint_watched.set()
+        signal.signal(signal.SIGINT, _marking(sigint))
     term = signal.getsignal(signal.SIGTERM)
     if callable(term):
         restore[signal.SIGTERM] = term
