@@ -159,7 +159,9 @@ class Metric:
     (each trial's value is an error ``e`` in ``unit``: the root mean square
     ``sqrt(mean(e^2))`` with the expanded bootstrap-t interval of
     :func:`trackfuse.stats.rmse_intervals`, the built-in reports' RMSE interval; ``compare``
-    compares its mean square).
+    compares its mean square); ``optional``: a column only the runs of some algorithms
+    write (a track-existence filter's), NaN on the rows of the others; a run without those
+    algorithms leaves it out.
     """
 
     name: str
@@ -172,6 +174,7 @@ class Metric:
     aggregate: Aggregate = "mean"
     #: What figures and tables call it (``"tracks lost"``); ``""``: its name.
     label: str = ""
+    optional: bool = False
 
     @property
     def percent(self) -> bool:
@@ -311,9 +314,10 @@ class Experiment:
     def missing_metrics(self, columns: Collection[str]) -> list[str]:
         """The declared metrics not among ``columns``, the keys of a trial's (or a batch's)
         rows: they carry every declared metric, NaN where one does not apply, but for
-        timings (``*_time_s``), which a batch may measure for all its trials at once."""
-        return [m.name for m in self.metrics
-                if m.name not in columns and not m.name.endswith(TIME_SUFFIX)]
+        timings (``*_time_s``), which a batch may measure for all its trials at once, and
+        the :attr:`Metric.optional` ones."""
+        return [m.name for m in self.metrics if m.name not in columns
+                and not m.name.endswith(TIME_SUFFIX) and not m.optional]
 
     def defaults(self) -> dict[str, Any]:
         """Every parameter at its default value, keyed by dotted name."""

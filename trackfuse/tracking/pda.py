@@ -414,7 +414,8 @@ def _beats(value, best):
 @njit(**INNER)
 def _single_update(X, P, R, P_D, P_G, nearest, mg_combined, lin, s, mom):
     """Single-sensor PDA update of ``(X, P)`` in place with sensor ``s``, linearized at them
-    (oracle: ``pda_reference._single_update``)."""
+    (oracle: ``pda_reference._single_update``); returns the null hypothesis's weight (the
+    existence update of :mod:`trackfuse.tracking.ipda` reads it)."""
     ok, w, m = lin.ok[s], lin.w[s], lin.m[s]
     log0 = _log_null(lin, s, P_D, P_G)
     log_pd = _log(P_D)
@@ -448,6 +449,7 @@ def _single_update(X, P, R, P_D, P_G, nearest, mg_combined, lin, s, mom):
     bsum = _single_moments(lin, s, w, P, mom, _FIRST_ROWS)
     _class_terms(lin.Kg[s], R, P, bsum, mom)
     _collapse(X, P, b0, mom)
+    return b0
 
 
 _Mom = namedtuple("_Mom", "nub NN Gbar C dx dP GP KR KA")
@@ -551,7 +553,9 @@ def _collapse(X, P, b0, mom):
 def _pair_update(Xp, Pp, R, P_D, P_G, method, joint_full, mg_combined, lin, mom, X, P):
     """Two-sensor (parallel, nearest-neighbour or paper-reconstruction) PDA update of the
     prediction ``(Xp, Pp)`` into ``(X, P)``, both sensors linearized at the prediction
-    (oracle: ``pda_reference._pair_update``)."""
+    (oracle: ``pda_reference._pair_update``); returns the weight of the hypothesis that
+    neither sensor saw the target (the existence update of :mod:`trackfuse.tracking.ipda`
+    reads it)."""
     H, PHt = lin.H, lin.PHt
     Cx = np.empty((2, 2))  # H1 P H2'
     for i in range(2):
@@ -582,6 +586,7 @@ def _pair_update(Xp, Pp, R, P_D, P_G, method, joint_full, mg_combined, lin, mom,
     _class_terms(K12, R12, Pp, bsum, mom)
     _copy_state(Xp, Pp, X, P)
     _collapse(X, P, b00, mom)
+    return b00
 
 
 @njit(**INNER)

@@ -11,7 +11,17 @@ from dataclasses import replace
 from trackfuse.experiments.base import Experiment, FigureSpec
 from trackfuse.experiments.twin_sensor.checks import config_problem
 from trackfuse.experiments.twin_sensor.model import PARAMS, ROW_METRICS, run_batch, run_trial
-from trackfuse.reportkit.looks import BLUE, GREEN, GREYS, ORANGE, SKY, VERMILLION, WINE, Look
+from trackfuse.reportkit.looks import (
+    BLUE,
+    GREEN,
+    GREYS,
+    ORANGE,
+    PURPLE,
+    SKY,
+    VERMILLION,
+    WINE,
+    Look,
+)
 from trackfuse.reportkit.spec import Plot, Reference
 
 _ASSOCIATIONS = {
@@ -19,6 +29,7 @@ _ASSOCIATIONS = {
     "mspda_parallel": Look("parallel PDA (corrected)", GREEN, "o", "ours"),
     "mspda_sequential": Look("sequential PDA", BLUE, "^"),
     "nn": Look("nearest neighbour", GREYS[0], "h"),
+    "ipda": Look("IPDA (parallel, with existence)", PURPLE, "*", "ours"),
 }
 #: Every association with each filter: the MGEKF solid, the EKF dashed with open markers.
 LOOKS = {

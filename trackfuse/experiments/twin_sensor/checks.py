@@ -1,8 +1,9 @@
 """Last checks of a ``twin_sensor`` config: what the schema's per-key limits cannot see.
 
 A config is refused before any trial runs when it asks for Stone Soup on a machine without
-it, or when its geometry has no bearing to measure: a target on a sensor (zero range) or an
-orbit started on the target's vertical (zero radius). Only the noise-free truth is checked;
+it, when its geometry has no bearing to measure: a target on a sensor (zero range) or an
+orbit started on the target's vertical (zero radius), or when an IPDA termination
+threshold is not below its confirmation threshold. Only the noise-free truth is checked;
 truth process noise (``target.q``) can still bring a rare trial closer.
 """
 
@@ -32,7 +33,25 @@ DEFAULTS = {p.key: p.default for p in PARAMS}
 def config_problem(params: Mapping[str, Any], sweep: Mapping[str, list[Any]],
                    mode: str) -> tuple[str, str] | None:
     """``(key, problem)`` for the first thing this config cannot run, else ``None``."""
-    return missing_stonesoup(params, sweep) or geometry_problem(params, sweep, mode)
+    return (missing_stonesoup(params, sweep) or geometry_problem(params, sweep, mode)
+            or threshold_problem(params, sweep, mode))
+
+
+def threshold_problem(params: Mapping[str, Any], sweep: Mapping[str, list[Any]],
+                      mode: str) -> tuple[str, str] | None:
+    """``(key, problem)`` when some sweep point's ``ipda.terminate`` is not below its
+    ``ipda.confirm`` (a track would be confirmed and terminated at once), else ``None``."""
+    keys = ("ipda.terminate", "ipda.confirm")
+    for point in expand({k: v for k, v in sweep.items() if k in keys}, mode):
+        values = {**params, **point.values}
+        terminate, confirm = float(values[keys[0]]), float(values[keys[1]])
+        if terminate >= confirm:
+            where = ", ".join(f"{k}={v}" for k, v in point.values.items())
+            return _blamed(keys, params, sweep), (
+                f"ipda.terminate={terminate:g} is not below ipda.confirm={confirm:g}"
+                + (f" (at the sweep point {where})" if where else "")
+                + "; allowed: ipda.terminate < ipda.confirm")
+    return None
 
 
 def geometry_problem(params: Mapping[str, Any], sweep: Mapping[str, list[Any]],

@@ -87,7 +87,7 @@ from typing import Any
 import numpy as np
 
 from trackfuse.chi2 import chi2_quantile
-from trackfuse.experiments.base import NON_NEGATIVE, Metric, Param
+from trackfuse.experiments.base import FRACTION, NON_NEGATIVE, Metric, Param
 from trackfuse.experiments.twin_sensor.stonesoup import (
     STONESOUP_ALGORITHMS,
     STONESOUP_PARAMS,
@@ -97,6 +97,7 @@ from trackfuse.experiments.twin_sensor.stonesoup import (
 from trackfuse.rowtable import RowTable
 from trackfuse.seeding import TrialStreams
 from trackfuse.tracking.initialization import los_prior_covariance, range_cue_sd
+from trackfuse.tracking.ipda_options import ExistenceModel, track_decisions
 from trackfuse.tracking.models import cv_process_noise, cv_transition, wrap
 from trackfuse.tracking.pcrlb import (
     information_recursion,
@@ -118,6 +119,9 @@ from trackfuse.tracking.sensors import (
 FILTERS = {"mgekf": "mgekf", "ekf": "ekf_joseph"}
 MAX_SENSORS = 2
 ALGORITHMS = tuple(f"{a}/{f}" for a, f in product(METHODS, FILTERS))
+#: Integrated PDA (track existence beside the parallel PDA's estimate), with each filter;
+#: not in the default list (``docs/papers/twin_sensor.md``, Track existence).
+IPDA_ALGORITHMS = tuple(f"ipda/{f}" for f in FILTERS)
 
 PARAMS = (
     Param("scan.period", 1.0, "Sampling period T", "s", low=1e-3, high=100.0),
@@ -186,7 +190,18 @@ PARAMS = (
     Param("pda.density", "parametric", "Clutter density: true value or m_s / V_s", kind=str,
           choices=("parametric", "nonparametric"), draws=False),
     Param("algorithms", list(ALGORITHMS), "Algorithm variants run on the same data, as "
-          "association/filter", kind=list, choices=ALGORITHMS + STONESOUP_ALGORITHMS, draws=False),
+          "association/filter", kind=list,
+          choices=ALGORITHMS + IPDA_ALGORITHMS + STONESOUP_ALGORITHMS, draws=False),
+    Param("ipda.persistence", 0.98, "IPDA: probability that an existing target still exists "
+          "at the next scan (Markov chain of existence, no birth)", "1", low=1e-6, high=1.0,
+          draws=False),
+    Param("ipda.initial", 0.5, "IPDA: existence probability of the track at t = 0", "1",
+          low=1e-6, high=0.999999, draws=False),
+    Param("ipda.confirm", 0.95, "IPDA: a track is confirmed when its existence probability "
+          "reaches this (above ipda.terminate)", "1", low=1e-6, high=0.999999, draws=False),
+    Param("ipda.terminate", 0.05, "IPDA: a track is terminated when its existence "
+          "probability falls below this (below ipda.confirm)", "1", low=1e-6, high=0.999999,
+          draws=False),
     Param("loss.window", 3, "Consecutive scans with the target outside every gate that mean "
           "a lost track (gate rule)", "scans", kind=int, low=1, high=1000, draws=False),
     Param("loss.angle_sigmas", 3.0, "Angle rule: a scan counts as off-target when the "
@@ -438,12 +453,24 @@ ROW_METRICS = (
            better="lower", label="tracks lost"),
     Metric("inconsistent_nees", "1", "position NEES above its chi-square quantile",
            binary=True, better="lower"),
+    Metric("existence", "1", "IPDA's probability that the target exists, after the scan's "
+           "update (NaN for the other algorithms)", bounds=FRACTION, optional=True),
+    Metric("confirmed", "1", "IPDA track confirmed by this scan (existence reached "
+           "ipda.confirm before any termination; permanent)", binary=True, better="higher",
+           optional=True, label="tracks confirmed"),
+    Metric("lost_existence", "1", "IPDA track terminated by this scan (existence below "
+           "ipda.terminate; permanent): the target exists throughout, so a loss",
+           binary=True, better="lower", optional=True, label="tracks terminated"),
     Metric("cpu_time_s", "s", "CPU seconds per trial and scan of this algorithm, one value "
            "per batch (timings.csv)"),
 )
 """Every metric column of the rows (see the module docstring)."""
-METRICS = tuple(m.name for m in ROW_METRICS if not m.name.endswith("_time_s"))
-"""Per-scan metric columns of a trial's rows (:func:`score_estimates`)."""
+METRICS = tuple(m.name for m in ROW_METRICS
+                if not m.name.endswith("_time_s") and not m.optional)
+"""Per-scan metric columns of every trial's rows (:func:`score_estimates`)."""
+EXISTENCE_METRICS = tuple(m.name for m in ROW_METRICS if m.optional)
+"""Per-scan columns of the runs with an IPDA algorithm (:func:`score_existence`), NaN on
+the other algorithms' rows."""
 BINARY_METRICS = tuple(m.name for m in ROW_METRICS if m.binary)
 """The 0/1 columns among :data:`METRICS` (Wilson intervals in the summary)."""
 
@@ -535,10 +562,9 @@ def run_batch(params: dict[str, Any], streams: Sequence[TrialStreams]) -> RowTab
     """Run a batch of trials; each trial's data comes from its own streams only.
 
     Rows are trial-major, then algorithm, then scan; the CPU time of each algorithm over
-    the whole batch, per trial and scan, is the batch's timing table.
+    the whole batch, per trial and scan, is the batch's timing table. A run with an IPDA
+    algorithm also has the :data:`EXISTENCE_METRICS` columns (NaN for the others).
     """
-    from trackfuse.tracking.pda import run_filter  # numba: on use
-
     sc = build_scenario(params)
     batch = simulate(sc, streams)
     N, K = len(streams), sc.K
@@ -546,27 +572,52 @@ def run_batch(params: dict[str, Any], streams: Sequence[TrialStreams]) -> RowTab
     names = list(params["algorithms"])
     results, cpu = [], []
     for name in names:
-        assoc, filt = name.split("/")
         t0 = time.process_time()
-        if is_stonesoup(name):  # Stone Soup's filters, scored by our metrics
-            results.append(score_estimates(
-                sc, batch, run_stonesoup(name, params, sc, batch, streams), rules))
-        else:
-            options = PDAOptions(assoc, FILTERS[filt], str(params["pda.joint_cov"]),
-                                 str(params["pda.density"]), str(params["filter.mg_at"]),
-                                 sc.P_G)
-            results.append(score_estimates(sc, batch, run_filter(sc, batch, options),
-                                           rules))
+        results.append(_run_algorithm(name, params, sc, batch, streams, rules))
         cpu.append((time.process_time() - t0) / (N * K))
     A = len(names)
     columns: dict[str, np.ndarray] = {
         "algorithm": np.tile(np.repeat(np.array(names, dtype=object), K), N),
         "scan": np.tile(np.arange(1, K + 1), N * A)}
-    for key in METRICS:  # (N, A, K) -> rows in trial, algorithm, scan order
-        values = np.stack([res[key] for res in results], axis=1).reshape(-1)
-        columns[key] = values.astype(int) if key in BINARY_METRICS else values
+    keys = METRICS + (EXISTENCE_METRICS if set(names) & set(IPDA_ALGORITHMS) else ())
+    for key in keys:  # (N, A, K) -> rows in trial, algorithm, scan order
+        values = np.stack([res.get(key, np.full((N, K), np.nan)) for res in results],
+                          axis=1).reshape(-1)
+        columns[key] = values.astype(int) if key in METRICS and key in BINARY_METRICS \
+            else values
     return RowTable(np.repeat(np.arange(N), A * K), columns,
                     {"algorithm": np.array(names, dtype=object), "cpu_time_s": np.array(cpu)})
+
+
+def _run_algorithm(name: str, params: dict[str, Any], sc: Scenario, batch: Batch,
+                   streams: Sequence[TrialStreams], rules: LossRules) -> dict[str, np.ndarray]:
+    """Every metric, ``(N, K)`` each, of algorithm ``name`` (``association/filter``) on
+    ``batch``: :data:`METRICS`, and :data:`EXISTENCE_METRICS` for IPDA."""
+    from trackfuse.tracking.ipda import run_ipda  # numba: on use
+    from trackfuse.tracking.pda import run_filter
+
+    if is_stonesoup(name):  # Stone Soup's filters, scored by our metrics
+        return score_estimates(sc, batch, run_stonesoup(name, params, sc, batch, streams),
+                               rules)
+    assoc, filt = name.split("/")
+    options = PDAOptions("mspda_parallel" if assoc == "ipda" else assoc, FILTERS[filt],
+                         str(params["pda.joint_cov"]), str(params["pda.density"]),
+                         str(params["filter.mg_at"]), sc.P_G)
+    if assoc != "ipda":
+        return score_estimates(sc, batch, run_filter(sc, batch, options), rules)
+    model = ExistenceModel.from_params(params)
+    est, existence = run_ipda(sc, batch, options, model)
+    return {**score_estimates(sc, batch, est, rules), **score_existence(existence, model)}
+
+
+def score_existence(existence: np.ndarray, model: ExistenceModel) -> dict[str, np.ndarray]:
+    """The :data:`EXISTENCE_METRICS` as ``(N, K)`` from IPDA's existence probabilities
+    ``existence: (N, K)``: the probability itself and the confirmation and termination
+    flags (:func:`trackfuse.tracking.ipda_options.track_decisions`; the target exists at
+    every scan, so a termination is a lost track)."""
+    confirmed, terminated = track_decisions(existence, model)
+    return {"existence": existence, "confirmed": confirmed.astype(float),
+            "lost_existence": terminated.astype(float)}
 
 
 def run_trial(params: dict[str, Any], streams: TrialStreams) -> list[dict]:
