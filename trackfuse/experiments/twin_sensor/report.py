@@ -81,8 +81,13 @@ from matplotlib.ticker import FixedLocator, FuncFormatter, MaxNLocator, NullLoca
 from matplotlib.transforms import IdentityTransform, Transform, offset_copy
 from pandas.api.typing import SeriesGroupBy
 
-from trackfuse.experiments.twin_sensor import FIG1
-from trackfuse.experiments.twin_sensor.model import PARAMS, bounds, build_scenario
+from trackfuse.experiments.twin_sensor import EXISTENCE, FIG1
+from trackfuse.experiments.twin_sensor.model import (
+    IPDA_ALGORITHMS,
+    PARAMS,
+    bounds,
+    build_scenario,
+)
 from trackfuse.plots.algorithms import FILTER_LABELS, GREYS, VERMILLION, line_kwargs, look
 from trackfuse.plots.style import (
     LEGEND_ROW_IN,
@@ -1431,6 +1436,9 @@ def _drawers(run: RunData) -> dict[str, Callable[[], Figure | str]]:
                                          "Fig. 1 ablation: every algorithm")
         if set(algorithms) - set(_main_algorithms(algorithms))
         else (lambda: "no algorithm beyond loss_vs_clutter's was run"),
+        "existence_vs_clutter": (lambda: render.draw(run, EXISTENCE))
+        if "clutter.mean" in swept and set(algorithms) & set(IPDA_ALGORITHMS)
+        else (lambda: no_clutter if "clutter.mean" not in swept else "no IPDA algorithm was run"),
         "loss_gate_and_nees_vs_clutter": loss(
             [("lost", algorithms, "lost_gate"),
              ("inconsistent", algorithms, "inconsistent_nees")],
