@@ -8,7 +8,7 @@ from trackfuse.association import pga_search
 from trackfuse.experiments import get
 from trackfuse.experiments.passive_assoc.model import run_trial as passive_trial
 from trackfuse.seeding import trial_streams
-from trackfuse.tracking import pda
+from trackfuse.tracking import ipda, pda
 
 
 def argument_types(monkeypatch, module, name, call) -> set:
@@ -34,6 +34,19 @@ def test_the_pda_filter_is_precompiled_for_the_types_a_run_passes(monkeypatch):
         runs |= argument_types(monkeypatch, pda, "_filter_batch",
                                lambda p=params, s=streams: experiment.run_batch(p, s))
     ahead = argument_types(monkeypatch, pda, "_filter_batch", precompile.load_pda_filter)
+    assert len(ahead) == 1 and runs == ahead
+
+
+def test_the_ipda_filter_is_precompiled_for_the_types_a_run_passes(monkeypatch):
+    experiment = get("twin_sensor")
+    runs = set()
+    for overrides in ({}, {"sensors.count": 1, "clutter.model": "window"}):
+        params = {**experiment.defaults(), "clutter.mean": 3.0, "algorithms": ["ipda/ekf"],
+                  **overrides}
+        streams = [trial_streams(0, 0, t) for t in range(2)]
+        runs |= argument_types(monkeypatch, ipda, "_ipda_batch",
+                               lambda p=params, s=streams: experiment.run_batch(p, s))
+    ahead = argument_types(monkeypatch, ipda, "_ipda_batch", precompile.load_ipda_filter)
     assert len(ahead) == 1 and runs == ahead
 
 

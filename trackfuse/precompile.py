@@ -23,12 +23,14 @@ from trackfuse.association.assignment import PairWeights
 from trackfuse.association.pga_search import pga
 from trackfuse.association.sd_assignment import solve_sd
 from trackfuse.association.sd_costs import tuple_costs
+from trackfuse.tracking.ipda import run_ipda
 from trackfuse.tracking.pda import run_filter
 
 
-def load_pda_filter() -> None:
-    """Run the PDA filter (:mod:`trackfuse.tracking.pda`) on one trial of two scans, two
-    sensors and one clutter slot, with the arrays typed as a simulated batch is."""
+def _tiny_batch() -> tuple[SimpleNamespace, SimpleNamespace, SimpleNamespace]:
+    """``(scenario, batch, options)`` of one trial of two scans, two sensors and one
+    clutter slot, with the arrays typed as a simulated batch is (PDAOptions would need
+    scipy, for its gate threshold)."""
     N, K, S, C = 1, 2, 2, 1
     angles = np.full((N, K, S, 2), 0.1)
     scenario = SimpleNamespace(
@@ -41,7 +43,17 @@ def load_pda_filter() -> None:
         clutter_ok=np.ones((N, K, S, C), bool))
     options = SimpleNamespace(method="mspda_parallel", covariance="mgekf", joint_cov="full",
                               density="parametric", mg_at="hypothesis", P_G=0.99)
-    run_filter(scenario, batch, options)  # PDAOptions would need scipy (its gate threshold)
+    return scenario, batch, options
+
+
+def load_pda_filter() -> None:
+    """Run the PDA filter (:mod:`trackfuse.tracking.pda`) on a tiny batch."""
+    run_filter(*_tiny_batch())
+
+
+def load_ipda_filter() -> None:
+    """Run the IPDA filter (:mod:`trackfuse.tracking.ipda`) on a tiny batch."""
+    run_ipda(*_tiny_batch(), SimpleNamespace(persistence=0.98, initial=0.5))
 
 
 def load_pga() -> None:
@@ -66,7 +78,7 @@ def main() -> int:
     needs scipy, which the wheel's build environment lacks) is named on stderr and left to
     compile on first use. Returns the number of such kernels."""
     failed = 0
-    for load in (load_pda_filter, load_pga, load_sd_kernels):
+    for load in (load_pda_filter, load_ipda_filter, load_pga, load_sd_kernels):
         try:
             load()
         except ImportError as error:
