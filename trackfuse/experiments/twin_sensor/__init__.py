@@ -49,7 +49,7 @@ FIG1 = Plot(("lost_angle",), "clutter.mean", ("paper_approx/mgekf", "mspda_paral
 #: Track existence against clutter: tracks lost by the angle rule (every algorithm), IPDA's
 #: tracks terminated and confirmed (last scan).
 EXISTENCE = Plot(("lost_angle", "lost_existence", "confirmed"), "clutter.mean",
-                 at={"scan": "last"})
+                 at={"scan": "last"}, xscale="linear")
 
 FIGURES = {
     "loss_vs_clutter": FigureSpec(
