@@ -1436,7 +1436,8 @@ def _drawers(run: RunData) -> dict[str, Callable[[], Figure | str]]:
                                          "Fig. 1 ablation: every algorithm")
         if set(algorithms) - set(_main_algorithms(algorithms))
         else (lambda: "no algorithm beyond loss_vs_clutter's was run"),
-        "existence_vs_clutter": (lambda: render.draw(run, EXISTENCE))
+        "existence_vs_clutter": (lambda: render.draw(
+            run, EXISTENCE, f"Track existence ({_runs(_last(run.trials))} runs per point)"))
         if "clutter.mean" in swept and set(algorithms) & set(IPDA_ALGORITHMS)
         else (lambda: no_clutter if "clutter.mean" not in swept else "no IPDA algorithm was run"),
         "loss_gate_and_nees_vs_clutter": loss(
