@@ -24,6 +24,8 @@ from trackfuse.experiments.twin_sensor.model import (
     score_existence,
 )
 from trackfuse.seeding import trial_streams
+from trackfuse.tracking import ipda as ipda_kernel
+from trackfuse.tracking import pda as pda_kernel
 from trackfuse.tracking.ipda import run_ipda
 from trackfuse.tracking.ipda_options import ExistenceModel, track_decisions
 from trackfuse.tracking.pda_options import PDAOptions
@@ -68,6 +70,28 @@ def test_compiled_ipda_equals_the_numpy_reference(algorithm, overrides):
         assert (existence == 1).all()  # where no clutter is expected: Lambda infinite
     else:
         assert np.nanmin(existence) < 0.5 < np.nanmax(existence)  # it moved both ways
+
+
+@pytest.fixture
+def python_kernel(monkeypatch):
+    """The kernels' pure-Python path, what ``NUMBA_DISABLE_JIT=1`` runs: every compiled
+    function of the PDA and IPDA modules replaced by its Python source."""
+    for module in (pda_kernel, ipda_kernel):
+        for name, value in vars(module).items():
+            if hasattr(value, "py_func"):
+                monkeypatch.setattr(module, name, value.py_func)
+
+
+@pytest.mark.parametrize("overrides", [{"clutter.mean": 0.0}, {"sensors.count": 1}])
+def test_the_python_path_equals_the_reference(python_kernel, overrides):
+    """Without clutter the null hypothesis's weight is zero once a return is validated:
+    the existence update must not divide by it (Python raises where compiled code gives
+    inf)."""
+    p, sc, batch, rules = pinned.setup(overrides, trials=2)
+    options, model = _options(p, sc, "ipda/mgekf"), ExistenceModel.from_params(p)
+    est, existence = ipda_kernel.run_ipda(sc, batch, options, model)
+    got = {**score_estimates(sc, batch, est, rules), **score_existence(existence, model)}
+    pinned.assert_pinned(got, reference.run_ipda(sc, batch, options, model, rules))
 
 
 def test_a_diverged_trial_has_no_existence_and_is_terminated():
