@@ -49,6 +49,9 @@ Rows
 * ``inconsistent_nees``: 1 if the position NEES at this scan exceeds
   ``chi2_3^-1(loss.nees_quantile)``. This flags an overconfident covariance, not a lost
   track: a filter can be on the target and inconsistent, or off it and consistent;
+* ``existence``, ``confirmed``, ``lost_existence`` (only in runs with an IPDA algorithm, NaN
+  on the other algorithms' rows): IPDA's existence probability, and whether the track has
+  been confirmed and terminated by its thresholds (:mod:`trackfuse.tracking.ipda`);
 * ``cpu_time_s``: CPU seconds per trial and scan of this algorithm, measured over the whole
   batch: one value per batch and algorithm, written to ``timings.csv`` (not a row column).
 
@@ -472,7 +475,7 @@ EXISTENCE_METRICS = tuple(m.name for m in ROW_METRICS if m.optional)
 """Per-scan columns of the runs with an IPDA algorithm (:func:`score_existence`), NaN on
 the other algorithms' rows."""
 BINARY_METRICS = tuple(m.name for m in ROW_METRICS if m.binary)
-"""The 0/1 columns among :data:`METRICS` (Wilson intervals in the summary)."""
+"""The 0/1 metric columns (Wilson intervals in the summary)."""
 
 
 def angle_off_target(X: np.ndarray, sensor: np.ndarray, los_true: np.ndarray,
