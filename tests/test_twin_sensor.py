@@ -102,7 +102,8 @@ def test_registered_schema_is_complete():
         assert p.doc, p.key
         if p.kind in (int, float) and p.choices is None:
             assert p.low is not None and p.high is not None and p.low <= p.default <= p.high
-    assert set(EXPERIMENT.binary_metrics) == {"lost_gate", "lost_angle", "inconsistent_nees"}
+    assert set(EXPERIMENT.binary_metrics) == {"lost_gate", "lost_angle", "inconsistent_nees",
+                                              "confirmed", "lost_existence"}
 
 
 def test_rows_are_tidy_and_reproducible():
