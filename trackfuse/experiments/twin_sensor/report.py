@@ -81,7 +81,7 @@ from matplotlib.ticker import FixedLocator, FuncFormatter, MaxNLocator, NullLoca
 from matplotlib.transforms import IdentityTransform, Transform, offset_copy
 from pandas.api.typing import SeriesGroupBy
 
-from trackfuse.experiments.twin_sensor import EXISTENCE, FIG1
+from trackfuse.experiments.twin_sensor import FIG1, FIGURES
 from trackfuse.experiments.twin_sensor.model import (
     IPDA_ALGORITHMS,
     PARAMS,
@@ -1437,7 +1437,8 @@ def _drawers(run: RunData) -> dict[str, Callable[[], Figure | str]]:
         if set(algorithms) - set(_main_algorithms(algorithms))
         else (lambda: "no algorithm beyond loss_vs_clutter's was run"),
         "existence_vs_clutter": (lambda: render.draw(
-            run, EXISTENCE, f"Track existence ({_runs(_last(run.trials))} runs per point)"))
+            run, FIGURES["existence_vs_clutter"].plot,
+            f"Track existence ({_runs(_last(run.trials))} runs per point)"))
         if "clutter.mean" in swept and set(algorithms) & set(IPDA_ALGORITHMS)
         else (lambda: no_clutter if "clutter.mean" not in swept else "no IPDA algorithm was run"),
         "loss_gate_and_nees_vs_clutter": loss(
