@@ -120,6 +120,8 @@ def test_fingerprint_covers_the_experiment_its_imports_and_the_numbers_path():
     assert "trackfuse.association.pga" in modules  # imported by the experiment
     assert set(NUMBERS_PATH) <= set(modules)
     assert "toy_experiments" in code_fingerprint(GAUSSIAN).modules
+    # Every CSV cell of every run is written by the row format, whatever the experiment imports.
+    assert "trackfuse.rowformat" in code_fingerprint(GAUSSIAN).modules
 
 
 def test_fingerprinting_runs_none_of_the_modules_it_hashes():

@@ -149,6 +149,95 @@ def test_reports_import_the_science_never_the_reverse():
             assert not any(m.startswith("trackfuse.plots") for m in graph[module]), module
 
 
+# The layers of the house, bottom first. A module may import its own group and any group of
+# a lower layer; groups side by side in one layer import none of each other. A name ending
+# in "." is a package prefix; "*" stands for any one experiment. Every module must be placed.
+LAYERS: list[dict[str, tuple[str, ...]]] = [
+    {"foundation": ("trackfuse", "trackfuse.coerce", "trackfuse.regular_files",
+                    "trackfuse.safe_yaml", "trackfuse.chi2", "trackfuse.stats",
+                    "trackfuse.sweep", "trackfuse.seeding", "trackfuse.rowformat",
+                    "trackfuse.sequential", "trackfuse.trial_guard", "trackfuse.progress",
+                    "trackfuse.child_processes", "trackfuse.cluster_settings",
+                    "trackfuse.forkserver_freeze", "trackfuse.shipped")},
+    {"disk format": ("trackfuse.results", "trackfuse.store", "trackfuse.runlock",
+                     "trackfuse.runstate", "trackfuse.runfiles", "trackfuse.catalog",
+                     "trackfuse.summary", "trackfuse.failures"),
+     "experiment contract": ("trackfuse.experiments", "trackfuse.experiments.base",
+                             "trackfuse.rowtable", "trackfuse.trial_rows",
+                             "trackfuse.reportkit.looks", "trackfuse.reportkit.spec"),
+     "science": ("trackfuse.tracking.", "trackfuse.association.", "trackfuse.interop.",
+                 "trackfuse.precompile")},
+    {"experiments": ("trackfuse.experiments.*.",),
+     "set-up": ("trackfuse.config", "trackfuse.fingerprint", "trackfuse.environment")},
+    {"reports": ("trackfuse.experiments.*.report", "trackfuse.reportkit.", "trackfuse.plots.",
+                 "trackfuse.reported", "trackfuse.rundata", "trackfuse.reports",
+                 "trackfuse.reproduction", "trackfuse.compare")},
+    {"runner": ("trackfuse.runner", "trackfuse.batch", "trackfuse.executors",
+                "trackfuse.cluster", "trackfuse.harness")},
+    {"command line": ("trackfuse_cli.", "trackfuse.__main__")},
+]
+
+
+def _pattern_fits(pattern: str, module: str) -> int:
+    """How closely ``pattern`` names ``module`` (0: not at all; longer patterns win)."""
+    regex = re.escape(pattern.rstrip(".")).replace(r"\*", r"[^.]+")
+    regex += r"(\..+)?" if pattern.endswith(".") else ""
+    return len(pattern) if re.fullmatch(regex, module) else 0
+
+
+def _place(module: str, layers: list[dict[str, tuple[str, ...]]]) -> tuple[int, str] | None:
+    """(layer, group) of ``module``: the group whose pattern names it most closely."""
+    fits = [(_pattern_fits(p, module), level, group) for level, groups in enumerate(layers)
+            for group, patterns in groups.items() for p in patterns]
+    score, level, group = max(fits)
+    return (level, group) if score else None
+
+
+def _all_imports() -> dict[str, set[str]]:
+    """Every import between our modules, wherever it stands (in a function, or only for
+    type checking: a type named is a dependence too)."""
+    graph = {}
+    for module, path in MODULES.items():
+        edges: set[str] = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import | ast.ImportFrom):
+                edges |= {m.replace("cli.", "trackfuse_cli.", 1) for m in _imported(node, module)}
+        graph[module] = {e for e in edges if e in MODULES and e != module}
+    return graph
+
+
+def _layer_breaches(graph: dict[str, set[str]],
+                    layers: list[dict[str, tuple[str, ...]]]) -> list[str]:
+    """Each import that points up a layer or across to a side-by-side group, and each module
+    placed in no group."""
+    found = [f"{m}: in no layer" for m in sorted(graph) if _place(m, layers) is None]
+    for module, imports in sorted(graph.items()):
+        here = _place(module, layers)
+        for imported in sorted(imports):
+            there = _place(imported, layers)
+            if here and there and (there[0] > here[0]
+                                   or there[0] == here[0] and there[1] != here[1]):
+                found.append(f"{module} ({here[1]}) imports {imported} ({there[1]})")
+    return found
+
+
+def test_imports_point_down_the_layers():
+    assert not _layer_breaches(_all_imports(), LAYERS), "\n".join(
+        _layer_breaches(_all_imports(), LAYERS))
+    stale = [p for groups in LAYERS for patterns in groups.values() for p in patterns
+             if not p.endswith(".") and "*" not in p and p not in MODULES]
+    assert not stale, f"layers name modules that do not exist: {stale}"
+
+
+def test_the_layer_check_finds_an_upward_and_a_sideways_import():
+    layers = [{"low": ("p.a",)}, {"left": ("p.b.",), "right": ("p.*.c",)}, {"top": ("p.d",)}]
+    graph = {"p.a": {"p.d"}, "p.b.x": {"p.a"}, "p.q.c": {"p.b.x"}, "p.d": {"p.q.c"},
+             "p.e": set()}
+    assert _layer_breaches(graph, layers) == [
+        "p.e: in no layer", "p.a (low) imports p.d (top)",
+        "p.q.c (right) imports p.b.x (left)"]
+
+
 @pytest.mark.parametrize("module", ["trackfuse.runner", "trackfuse_cli.main",
                                     "trackfuse.experiments.twin_sensor",
                                     "trackfuse.experiments.esm_radar",

@@ -24,7 +24,8 @@ import numpy as np
 
 from trackfuse.coerce import one_line
 from trackfuse.experiments.base import Experiment
-from trackfuse.results import FAILED_ROW, TIME_SUFFIX, BatchSpan, rows_to_csv, split_timings
+from trackfuse.results import BatchSpan, rows_to_csv, split_timings
+from trackfuse.rowformat import FAILED_ROW, TIME_SUFFIX
 from trackfuse.rowtable import Constant, RowTable, columns_csv
 from trackfuse.seeding import batch_streams, seed_numpy_global, trial_streams
 from trackfuse.trial_guard import guarded, timeouts

@@ -42,7 +42,7 @@ import numpy as np
 import pandas as pd
 
 from trackfuse.config import did_you_mean
-from trackfuse.results import RUNNER_COLUMNS
+from trackfuse.rowformat import RUNNER_COLUMNS
 from trackfuse.rundata import RunData, succeeded_rows
 from trackfuse.stats import (
     PairedBinary,

@@ -10,7 +10,7 @@ from pathlib import Path
 import pandas as pd
 
 from trackfuse import store
-from trackfuse.results import FAILED_ROW
+from trackfuse.rowformat import FAILED_ROW
 from trackfuse.summary import CHUNK_ROWS
 
 

@@ -35,7 +35,8 @@ from trackfuse.experiments.base import Experiment
 #: trackfuse modules every run's numbers pass through (trial seeding, batch execution,
 #: CSV cells, summary statistics).
 NUMBERS_PATH = ("trackfuse.seeding", "trackfuse.batch", "trackfuse.runner",
-                "trackfuse.results", "trackfuse.summary", "trackfuse.stats")
+                "trackfuse.results", "trackfuse.rowformat", "trackfuse.summary",
+                "trackfuse.stats")
 
 
 @dataclass(frozen=True)

@@ -16,6 +16,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
+from trackfuse.association.ahp import PAPER_001_WEIGHTS
+
 
 @dataclass(frozen=True)
 class Answer:
@@ -171,8 +173,9 @@ ESM_RADAR = Paper(
     ),
 )
 
-#: Paper 001's printed AHP weights for (range, speed, angle, TDOA, phase).
-ESM_RADAR_WEIGHTS = (0.51, 0.26, 0.13, 0.07, 0.03)
+#: Paper 001's printed AHP weights for (range, speed, angle, TDOA, phase): the science's
+#: constant, which the model also offers as an input (``paper_rounded``).
+ESM_RADAR_WEIGHTS = PAPER_001_WEIGHTS
 
 PASSIVE_ASSOC = Paper(
     key="passive_assoc",

@@ -64,7 +64,6 @@ from trackfuse.reportkit.notes import NOTES, note_href, write_notes
 from trackfuse.reportkit.numberformat import interval_text
 from trackfuse.reportkit.verdicts import VERDICTS
 from trackfuse.results import (
-    FAILED_ROW,
     INDEX_FILES,
     INDEX_HTML,
     INDEX_MD,
@@ -74,6 +73,7 @@ from trackfuse.results import (
     atomic_write,
     removed_words,
 )
+from trackfuse.rowformat import FAILED_ROW
 from trackfuse.rowtable import frame_csv
 from trackfuse.rundata import RunData, load, swept_keys
 from trackfuse.store import trials_file

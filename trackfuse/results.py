@@ -35,7 +35,6 @@ import csv
 import hashlib
 import io
 import json
-import math
 import os
 import re
 from collections.abc import Callable, Iterable, Iterator, Sequence
@@ -48,6 +47,7 @@ from typing import Any, BinaryIO
 import yaml
 
 from trackfuse.regular_files import NotARegularFile, open_regular
+from trackfuse.rowformat import TIME_SUFFIX, csv_cell, format_value
 
 TRIALS, TIMINGS, SUMMARY, MANIFEST, CONFIG = (
     "trials.csv", "timings.csv", "summary.csv", "manifest.json", "config.yaml")
@@ -61,7 +61,6 @@ INDEX_FILES = (INDEX_MD, INDEX_HTML)
 #: Manifest key: the report's files, relative to the run folder (written with the report);
 #: the only files of ``figures/`` and ``tables/`` trackfuse ever deletes.
 REPORT_FILES = "report_files"
-TIME_SUFFIX = "_time_s"
 PART_KINDS = ("trials", "timings")
 PART_MAGIC = "#trackfuse-part 1"
 MAX_MANIFEST_BYTES = 10_000_000
@@ -79,13 +78,6 @@ class RunStatus(StrEnum):
     INTERRUPTED = "interrupted"
     COMPLETE = "complete"
     ALREADY_COMPLETE = "already complete"
-
-
-FAILED_ROW = "failed"
-"""``status`` of the one row a contained trial failure leaves in ``trials.csv``."""
-RUNNER_COLUMNS = ("point", "trial", "status", "error")
-"""Row columns the runner writes itself (a failed trial's row carries ``status`` and
-``error``); never metrics, so an experiment may not name a metric after them."""
 
 
 class RunFolderError(ValueError):
@@ -126,29 +118,6 @@ def run_id(resolved: dict[str, Any], version: str, code: str,
     blob = json.dumps({"config": config_hash(resolved), "version": version, "code": code,
                        "libraries": libraries}, sort_keys=True)
     return f"seed{resolved['seed']}-{hashlib.sha256(blob.encode()).hexdigest()[:10]}"
-
-
-def format_value(value: Any) -> str:
-    """One CSV cell: shortest round-trip repr for floats, ints as ints, bools as 0/1."""
-    if hasattr(value, "dtype") and hasattr(value, "item"):
-        value = value.item()  # numpy scalar -> Python scalar
-    if value is None:
-        return ""
-    if isinstance(value, bool):
-        return "1" if value else "0"
-    if isinstance(value, float):
-        return "nan" if math.isnan(value) else repr(value)
-    if isinstance(value, (list, tuple)):
-        return ";".join(format_value(v) for v in value)
-    return str(value)
-
-
-def csv_cell(text: str) -> str:
-    """``text`` as one CSV field: quoted where it holds a comma, a quote or a line break
-    (``\\r`` too, which :mod:`csv`'s writer leaves bare with a ``\\n`` line terminator)."""
-    if "," in text or '"' in text or "\n" in text or "\r" in text:
-        return '"' + text.replace('"', '""') + '"'
-    return text
 
 
 def csv_line(cells: Iterable[str]) -> str:

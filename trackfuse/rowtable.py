@@ -4,7 +4,7 @@ A batch of 50 twin-sensor trials has 8,000 rows (8 algorithms x 20 scans per tri
 one dict per row and written cell by cell through :func:`trackfuse.results.rows_to_csv`, those
 rows cost more than the filters that computed them. A :class:`RowTable` keeps them as one
 array per column and writes the CSV text column by column, with exactly the cells
-:func:`~trackfuse.results.format_value` writes (shortest round-trip ``repr`` for floats,
+:func:`~trackfuse.rowformat.format_value` writes (shortest round-trip ``repr`` for floats,
 ``nan``, integers as integers, booleans as 0/1), so ``trials.csv`` is byte-identical to the
 one the dict rows give.
 
@@ -24,11 +24,11 @@ from typing import Any
 
 import numpy as np
 
-from trackfuse.results import csv_cell, format_value
+from trackfuse.rowformat import csv_cell, format_value
 
 
 def column_cells(values: np.ndarray | Sequence[Any]) -> list[str]:
-    """The CSV fields ``(R,)`` of one column, as :func:`~trackfuse.results.format_value`
+    """The CSV fields ``(R,)`` of one column, as :func:`~trackfuse.rowformat.format_value`
     formats each value (floats by ``repr``, which writes NaN as ``nan`` too)."""
     a = np.asarray(values)
     if a.dtype.kind == "b":

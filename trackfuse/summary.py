@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 
 from trackfuse import store
-from trackfuse.results import FAILED_ROW, RUNNER_COLUMNS
+from trackfuse.rowformat import FAILED_ROW, RUNNER_COLUMNS
 from trackfuse.stats import rmse_intervals, t_interval, wilson_interval
 
 CHUNK_ROWS = 200_000

@@ -3,7 +3,7 @@
 A trial's rows (``run_trial``'s list of dicts, or its rows in a batch's
 :class:`~trackfuse.rowtable.RowTable`) must be a non-empty list of plain dicts whose column
 names are strings, carry every declared metric and row key, name no parameter and no runner
-column (:data:`~trackfuse.results.RUNNER_COLUMNS`), give every declared metric as a real
+column (:data:`~trackfuse.rowformat.RUNNER_COLUMNS`), give every declared metric as a real
 number, hold one row per combination of row keys (two rows of one algorithm were pooled as
 two trials, and the intervals came out too narrow), and write as UTF-8 text. Anything else
 fails the trial with a :class:`TypeError` saying what and naming the column: it becomes the
@@ -24,7 +24,7 @@ import numpy as np
 
 from trackfuse.coerce import one_line
 from trackfuse.experiments.base import Experiment
-from trackfuse.results import RUNNER_COLUMNS, TIME_SUFFIX, format_value
+from trackfuse.rowformat import RUNNER_COLUMNS, TIME_SUFFIX, format_value
 from trackfuse.rowtable import RowTable, column_cells
 
 #: Plain numbers a metric may be given as (``None`` too: an empty cell).

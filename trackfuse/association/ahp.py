@@ -39,6 +39,10 @@ PAPER_001_JUDGEMENT = np.array([
     [1 / 9, 1 / 7, 1 / 5, 1 / 3, 1.0],
 ])
 
+#: Paper 001's printed (rounded) weights for the same five factors: a model input (the AHP
+#: method ``paper_rounded``) and the value the report compares the computed weights with.
+PAPER_001_WEIGHTS = (0.51, 0.26, 0.13, 0.07, 0.03)
+
 #: Saaty's random consistency index RI(n), n = 1..10 (index 0 unused).
 RANDOM_INDEX = (0.0, 0.0, 0.0, 0.58, 0.90, 1.12, 1.24, 1.32, 1.41, 1.45, 1.49)
 

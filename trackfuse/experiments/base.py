@@ -53,7 +53,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 from trackfuse.reportkit.looks import Look
 from trackfuse.reportkit.spec import Plot
-from trackfuse.results import RUNNER_COLUMNS, TIME_SUFFIX
+from trackfuse.rowformat import RUNNER_COLUMNS, TIME_SUFFIX
 
 if TYPE_CHECKING:  # only for annotations: declaring an experiment loads no numpy
     from trackfuse.seeding import TrialStreams

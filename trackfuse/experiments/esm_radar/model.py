@@ -130,7 +130,6 @@ from trackfuse.association.track_likelihood import (
 )
 from trackfuse.chi2 import chi2_quantile
 from trackfuse.experiments.base import NON_NEGATIVE, Metric, Param
-from trackfuse.reported import ESM_RADAR_WEIGHTS
 from trackfuse.rowtable import RowTable
 from trackfuse.seeding import TrialStreams
 from trackfuse.tracking.models import wrap
@@ -455,7 +454,7 @@ def static_weights(factors: Sequence[str], method: str) -> np.ndarray:
     """
     idx = [FACTORS.index(f) for f in factors]
     if method == "paper_rounded" and len(idx) == len(FACTORS):
-        return np.array(ESM_RADAR_WEIGHTS)
+        return np.array(ahp.PAPER_001_WEIGHTS)
     sub = ahp.PAPER_001_JUDGEMENT[np.ix_(idx, idx)]
     return ahp.weights(sub, "eigen" if method == "eigen" else "root")
 
