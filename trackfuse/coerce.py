@@ -1,5 +1,6 @@
 """Plain values from loose ones: a count read from a manifest that may be damaged or older
-than this version, and an exception as one line of text of bounded length."""
+than this version, and an exception as one line of text of bounded length.
+"""
 
 from __future__ import annotations
 

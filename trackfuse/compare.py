@@ -1,34 +1,13 @@
 """Compare two runs of one experiment cell by cell, and gate regressions for CI.
 
-A *cell* is one sweep point (matched by its swept values, not its index), one value of the
-experiment's row keys (algorithm, scan, ...) and one metric. For every cell present in both
-runs the comparison gives both means, the difference ``new - base`` with its 95 % interval,
-a two-sided p-value and the test used:
-
-* **paired** (both runs share the root seed, so trial ``t`` drew the same common random
-  numbers in both: :mod:`trackfuse.seeding` makes them a function of the root seed and the
-  trial index alone, whatever the trial count, batch size or worker): paired t interval and
-  test on the per-trial differences over the trials both runs have (trials 0-49 of a 50-
-  and a 100-trial run); for 0/1 metrics Newcombe's paired hybrid score interval and the
-  exact McNemar test.
-* **unpaired** (different seeds): Welch interval and test; for 0/1 metrics Newcombe's hybrid
-  score interval and the 'N-1' chi-square test.
-
-Regression gate. A metric with a declared direction (``"lower"`` or ``"higher"`` is better)
-is a *regression* in a cell when the new run is worse by more than the tolerance with
-confidence: the one-sided bound of the difference on the good side lies beyond the
-tolerance. The bounds are Bonferroni-adjusted over the gated cells, so the chance that any
-cell of two runs of the same code is flagged stays below ``alpha`` (family-wise). An
-*improvement* is the mirror image. Metrics without a direction are reported, never gated.
-:meth:`Comparison.gate_failure` says why a gate fails: a regression, a cell of the base run
-that the new run lacks (a sweep point, row key or metric it no longer produces, or whose
-every trial failed), no cell compared at all, or no gated cell. Cells only the new run has
-are reported and never fail it.
-
-:func:`compare_runs` compares two run folders and takes the 0/1 metrics and the directions
-from the experiment's declared :class:`~trackfuse.experiments.base.Metric` list; it also
-says how the trials were paired and which config values differ between the runs
-(:func:`config_differences`).
+A cell is one sweep point (matched by its swept values), one value of the row keys and one
+metric; for each cell both runs have: both means, ``new - base`` with its 95 % interval, a
+p-value and the test. Runs of one root seed are paired by trial index (paired t; Newcombe's
+paired score interval and exact McNemar for 0/1 metrics), others unpaired (Welch; Newcombe's
+hybrid score interval and 'N-1' chi-square). A metric with a declared direction regresses
+when its one-sided, Bonferroni-adjusted bound lies beyond the tolerance on the bad side;
+:meth:`Comparison.gate_failure` says why a gate fails (a regression, a base cell the new run
+lacks, nothing compared). Users' view: ``docs/statistics.md`` and ``docs/outputs.md``.
 """
 
 from __future__ import annotations
@@ -70,8 +49,7 @@ class Comparison:
     ``paired``: whether trials were paired. ``gated``: number of gated cells.
     ``alpha``: the family-wise false-alarm level of the gate. ``only_base_cells``,
     ``only_new_cells``: the key columns and ``metric`` of the cells of one run that were not
-    compared (a sweep point, row key or metric the other run lacks).
-    """
+    compared (a sweep point, row key or metric the other run lacks)."""
 
     cells: pd.DataFrame
     paired: bool
@@ -103,8 +81,7 @@ class Comparison:
         """Why the regression gate fails, in one line, or ``None`` when it passes.
 
         It fails on a regression, on any cell of the base run left out (the new run no
-        longer produces it), when no cell was compared and when no compared cell is gated.
-        """
+        longer produces it), when no cell was compared and when no compared cell is gated."""
         names = list(self.only_base_cells.columns)
         reasons = []
         if self.cells.empty:
@@ -239,20 +216,16 @@ def compare_trials(base: pd.DataFrame, new: pd.DataFrame, keys: Sequence[str],
                    family_wise: bool = True, skip: Sequence[str] = ()) -> Comparison:
     """Compare the trial rows of two runs (see the module docstring).
 
-    Parameters
-    ----------
-    base, new : ``trials.csv`` frames of the two runs.
-    keys : columns that identify a cell besides the metric: the swept keys and the
-        experiment's row keys (not ``point``: points are matched by their swept values).
-    binary : 0/1 metrics. better : metric -> ``"lower"`` or ``"higher"`` (gated metrics).
-    paired : pair trials by index (same root seed) or treat the runs as independent.
-    tolerance : metric -> the worsening (in the metric's unit) that is accepted; default 0.
-    alpha : family-wise false-alarm level of the regression gate.
-    metrics : compare only these metrics (default: every metric present in both runs).
-    family_wise : Bonferroni-adjust the gate over the gated cells (default); ``False`` gates
-        every cell at ``alpha`` on its own.
-    skip : columns that are labels, not quantities (categorical metrics): never compared.
-    """
+    Parameters: ``base``, ``new`` ``trials.csv`` frames of the two runs. ``keys`` columns that
+    identify a cell besides the metric: the swept keys and the experiment's row keys (not ``point``:
+    points are matched by their swept values). ``binary`` 0/1 metrics. ``better`` metric ->
+    ``"lower"`` or ``"higher"`` (gated metrics). ``paired`` pair trials by index (same root seed) or
+    treat the runs as independent. ``tolerance`` metric -> the worsening (in the metric's unit) that
+    is accepted; default 0. ``alpha`` family-wise false-alarm level of the regression gate.
+    ``metrics`` compare only these metrics (default: every metric present in both runs).
+    ``family_wise`` Bonferroni-adjust the gate over the gated cells (default); ``False`` gates every
+    cell at ``alpha`` on its own. ``skip`` columns that are labels, not quantities (categorical
+    metrics): never compared."""
     keys, binary, better = list(keys), set(binary), dict(better or {})
     tolerance = dict(tolerance or {})
     wanted = None if metrics is None else set(metrics)
@@ -311,8 +284,7 @@ def compare_runs(base: RunData, new: RunData, tolerance: Mapping[str, float] | N
     trial indices both have (:func:`_pairing`). ``metrics``, ``algorithms``: compare only
     these (default all); the gate's family is then the cells kept. Raises ``ValueError`` for
     runs of different experiments, a key one run sweeps that the other fixes to a list or a
-    mapping, or a metric or algorithm neither run has.
-    """
+    mapping, or a metric or algorithm neither run has."""
     if base.config["experiment"] != new.config["experiment"]:
         raise ValueError(f"different experiments: {base.config['experiment']!r} and "
                          f"{new.config['experiment']!r}")
@@ -404,8 +376,7 @@ def _pairing(base: Mapping, new: Mapping) -> tuple[bool, str]:
     (clutter) is the same only where both sweeps give the point the same draw point
     (:func:`trackfuse.seeding.draw_points`: the same sweep, or one that differs only in
     values of non-drawing parameters after the drawing ones); the pairs stay independent
-    from trial to trial either way, so the paired tests hold, and gain most where it is.
-    """
+    from trial to trial either way, so the paired tests hold, and gain most where it is."""
     seeds, trials = (base.get("seed"), new.get("seed")), (base.get("trials"), new.get("trials"))
     if seeds[0] != seeds[1]:
         return False, f"(the seeds differ, {seeds[0]} and {seeds[1]}: no trial is shared)"

@@ -1,39 +1,19 @@
 """A finished run's report: tables, figures, ``index.md`` and ``index.html``.
 
-The report layer reads only the run folder (through :mod:`trackfuse.rundata`) and the
-experiment's report module (``Experiment.report``, a module path), which provides::
+Reads only the run folder (:mod:`trackfuse.rundata`) and the experiment's report module
+(``Experiment.report``), which provides::
 
     figures(run: RunData, wanted: Collection[str]) -> dict[str, matplotlib.figure.Figure]
     tables(run: RunData) -> dict[str, pandas.DataFrame | str]
-    prepare(run: RunData) -> None    # optional
+    prepare(run: RunData) -> None    # optional: fills the module's caches ahead
 
-A figure or table that the run's config cannot give is returned as a one-line reason
-(``str``) and listed under "Not drawn" or "Not tabulated"; a table without rows is never
-written as if it were a result (it is listed too). Each figure is drawn on its own, so a
-figure that raises costs only itself (one line naming it). A redraw removes the figures
-and tables of an earlier draw that it did not write again (those the manifest's
-``report_files`` lists: never a file of the user's), so the folder never shows an
-old result beside the new index. The failed trials' rows are left to the report modules
-(they carry no metrics); a run the report cannot be drawn from at all (no rows, every trial
-failed, a column the runner writes missing) is refused with :class:`NothingToDraw` and its
-earlier report removed.
-
-``prepare`` computes ahead, into the module's own caches, what both the tables and the
-figures derive from the config alone (the twin-sensor bounds at every sweep point): the
-runner calls it while its workers compute (:func:`load_drawing`), and the drawing processes
-it forks later inherit the caches, so nothing is computed twice.
-
-Nothing is recomputed except what a report module derives from the config alone (bounds,
-noise-free geometry). Every file is written under a temporary name and renamed into place;
-PNG files at :data:`PNG_DPI` dpi, PDF files as vectors, both without timestamps so that
-redrawing gives the same bytes. ``index.html`` needs no network and no JavaScript: its images
-sit beside it in ``figures/``.
-
-This module imports matplotlib only when it draws (the style's warm-up before forking the
-drawing processes, or ahead of drawing: :func:`load_drawing`): report modules draw on
-:class:`matplotlib.figure.Figure` objects (:func:`trackfuse.reportkit.style.panels`, not
-registered with pyplot, freed with their last reference), and the runner, which imports
-this module, stays free of it until it draws.
+A figure or table the run cannot give is a one-line reason (``str``), listed under "Not
+drawn"; each figure is drawn on its own, so one that raises costs only itself. A redraw
+removes the earlier report files it did not write again (the manifest's ``report_files``). A
+run nothing can be drawn from raises :class:`NothingToDraw`. Files are written atomically,
+PNG at :data:`PNG_DPI` dpi and PDF without timestamps (a redraw gives the same bytes).
+matplotlib is imported only to draw, so the runner, which imports this module, stays free of
+it. Users' view: ``docs/outputs.md``.
 """
 
 from __future__ import annotations
@@ -456,8 +436,7 @@ def write_report(run: RunData, wanted: Collection[str] | None = None,
     redraw removes only what this draw wrote. Raises
     :class:`~trackfuse.results.RunFolderError` for a ``figures/`` or ``tables/`` that is a
     link or not a folder, :class:`NothingToDraw` (having removed any earlier report) for a
-    run :func:`undrawable` names a reason for.
-    """
+    run :func:`undrawable` names a reason for."""
     RunFolder(run.path).check_layout()  # never write or delete through a link
     why = undrawable(run)
     if why is not None:

@@ -1,6 +1,7 @@
 """The row format: the columns the runner adds to every trial row and how one value is
 written as one CSV cell. Shared by the experiment contract, a trial's row table and the run
-folder's files, so none of them imports another for it."""
+folder's files, so none of them imports another for it.
+"""
 
 from __future__ import annotations
 

@@ -115,16 +115,12 @@ def _plain_texts(texts) -> bool:
 class RowTable(Sequence[list[dict[str, Any]]]):
     """Rows of a batch of ``N`` trials as columns.
 
-    Attributes
-    ----------
-    trial : (R,) int, the position in the batch (``0..N-1``) of each row's trial,
-        non-decreasing, every trial with at least one row.
-    columns : name -> (R,) values (float, int, bool or str arrays), in column order: the
-        experiment's row keys (``algorithm``, ...) and metrics, never runner columns or
-        ``*_time_s`` columns.
-    timings : name -> (T,) values: the batch's timing table (e.g. ``algorithm`` and
-        ``cpu_time_s``), one row per timed unit of the whole batch; may be empty.
-    """
+    Attributes: ``trial`` (R,) int, the position in the batch (``0..N-1``) of each row's trial,
+    non-decreasing, every trial with at least one row. ``columns`` name -> (R,) values (float, int,
+    bool or str arrays), in column order: the experiment's row keys (``algorithm``, ...) and
+    metrics, never runner columns or ``*_time_s`` columns. ``timings`` name -> (T,) values: the
+    batch's timing table (e.g. ``algorithm`` and ``cpu_time_s``), one row per timed unit of the
+    whole batch; may be empty."""
 
     trial: np.ndarray
     columns: dict[str, np.ndarray]

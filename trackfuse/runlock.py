@@ -56,8 +56,7 @@ class RunLock:
 
     ``warn`` receives a one-line message when a lock left by a killed process is taken over.
     Raises :class:`RunFolderBusy` if another process holds it, :class:`RunFolderError` if the
-    folder cannot be created or locked.
-    """
+    folder cannot be created or locked."""
 
     def __init__(self, path: Path, warn: Callable[[str], None]):
         self.path, self.warn = Path(path), warn

@@ -36,8 +36,7 @@ def wilson_interval(successes: ArrayLike, n: ArrayLike,
     """Wilson score interval for a binomial proportion.
 
     ``successes`` and ``n`` broadcast to ``S``; returns ``(low, high)``, each ``S``, in
-    [0, 1]. Where ``n == 0`` both bounds are NaN.
-    """
+    [0, 1]. Where ``n == 0`` both bounds are NaN."""
     from scipy.special import ndtri  # on first use: see the module docstring
 
     k = np.asarray(successes, dtype=float)
@@ -73,8 +72,7 @@ def nees_band(dim: int, n_runs: int, level: float = 0.95) -> tuple[float, float]
     """Band for the average NEES of ``n_runs`` independent runs of a ``dim``-state filter.
 
     ``n_runs * ANEES ~ chi2(n_runs * dim)`` for a consistent filter, so the band is
-    ``chi2.ppf([a/2, 1-a/2], n_runs*dim) / n_runs``.
-    """
+    ``chi2.ppf([a/2, 1-a/2], n_runs*dim) / n_runs``."""
     dof = dim * n_runs
     alpha = 1 - level
     return chi2_quantile(alpha / 2, dof) / n_runs, chi2_quantile(1 - alpha / 2, dof) / n_runs
@@ -87,8 +85,7 @@ def welch_interval(m1: ArrayLike, s1: ArrayLike, n1: ArrayLike, m2: ArrayLike,
     """Welch interval for ``m2 - m1`` from two independent samples' means, standard
     deviations and sizes (all broadcast to ``S``). Returns ``(low, high, p_value)``, each
     ``S``; the p-value is
-    the two-sided Welch t test of equal means. NaN where a sample has fewer than two values.
-    """
+    the two-sided Welch t test of equal means. NaN where a sample has fewer than two values."""
     from scipy import stats  # on first use: see the module docstring
 
     m1, s1, n1, m2, s2, n2 = (np.asarray(v, dtype=float) for v in (m1, s1, n1, m2, s2, n2))
@@ -151,8 +148,7 @@ def proportion_difference_interval(k1: ArrayLike, n1: ArrayLike, k2: ArrayLike,
     method 10). Paired samples (the same trials, ``n1 == n2``) when ``both`` gives the number
     of trials that are 1 in both (Newcombe 1998, Stat. Med. 17, 2635-2650, method 10): the
     Wilson intervals of the two proportions are combined with the continuity-corrected
-    correlation ``phi`` of the 2x2 table. NaN where a sample is empty.
-    """
+    correlation ``phi`` of the 2x2 table. NaN where a sample is empty."""
     k1, n1, k2, n2 = (np.asarray(v, dtype=float) for v in (k1, n1, k2, n2))
     with np.errstate(invalid="ignore", divide="ignore"):
         p1, p2 = k1 / n1, k2 / n2
@@ -324,8 +320,7 @@ def bootstrap_t_mean_intervals(groups: Sequence[ArrayLike], level: float = 0.95,
     the population, 1000 samples each, Monte Carlo s.e. 0.005-0.013) of the RMSE interval
     :func:`rmse_intervals` built on it: 0.961-0.975 at n = 8 and 0.951-0.954 at n = 50,
     where the percentile bootstrap covers 0.782-0.809 and 0.906-0.924 (``docs/statistics.md``
-    gives the command).
-    """
+    gives the command)."""
     from scipy.special import ndtr, stdtrit  # on first use: see the module docstring
 
     clean = [np.asarray(g, dtype=float)[np.isfinite(np.asarray(g, dtype=float))]
@@ -388,7 +383,6 @@ def rmse_intervals(squared_errors: Sequence[ArrayLike], level: float = 0.95,
     array ``(n_i,)`` of ``squared_errors`` (in the square of the error's unit):
     :func:`bootstrap_t_mean_intervals` of the mean square, lower bound clipped at 0, then
     square-rooted. Assumes neither zero-mean nor Gaussian errors. Returns
-    ``(len(squared_errors), 2)`` (low, high) in the error's unit; coverage as measured there.
-    """
+    ``(len(squared_errors), 2)`` (low, high) in the error's unit; coverage as measured there."""
     mse = bootstrap_t_mean_intervals(squared_errors, level, resamples, seed)
     return np.sqrt(np.clip(mse, 0.0, None))

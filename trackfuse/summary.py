@@ -52,8 +52,7 @@ def summarize(source: Path | pd.DataFrame, keys: Sequence[str], binary: Sequence
     such as a chosen track's index) is a metric. ``binary`` metrics get Wilson intervals, the
     rest Student-t intervals, clipped to a metric's ``bounds`` ``(low, high)`` if given
     (one pair: every metric's); ``rms`` metrics their root mean square with a bootstrap-t
-    interval (``std`` NaN, ``interval`` ``"bootstrap-t rms"``).
-    """
+    interval (``std`` NaN, ``interval`` ``"bootstrap-t rms"``)."""
     partial: list[pd.DataFrame] = []
     squares: dict[tuple, list[np.ndarray]] = {}
     failed = 0

@@ -57,14 +57,8 @@ def _check(B: np.ndarray) -> np.ndarray:
 def root_weights(B: np.ndarray) -> np.ndarray:
     """Root (geometric-mean) method weights.
 
-    Parameters
-    ----------
-    B : (n, n) positive reciprocal judgement matrix.
-
-    Returns
-    -------
-    a : (n,) weights summing to 1.
-    """
+    Parameters: ``B`` (n, n) positive reciprocal judgement matrix.
+    Returns ``a`` (n,) weights summing to 1."""
     B = _check(B)
     g = np.exp(np.mean(np.log(B), axis=1))
     return g / g.sum()
@@ -73,14 +67,8 @@ def root_weights(B: np.ndarray) -> np.ndarray:
 def eigen_weights(B: np.ndarray) -> np.ndarray:
     """Principal-eigenvector weights (Saaty 1977), scaled to sum to 1.
 
-    Parameters
-    ----------
-    B : (n, n) positive reciprocal judgement matrix.
-
-    Returns
-    -------
-    a : (n,) positive weights summing to 1.
-    """
+    Parameters: ``B`` (n, n) positive reciprocal judgement matrix.
+    Returns ``a`` (n,) positive weights summing to 1."""
     B = _check(B)
     values, vectors = np.linalg.eig(B)
     v = np.real(vectors[:, np.argmax(np.real(values))])
@@ -90,17 +78,10 @@ def eigen_weights(B: np.ndarray) -> np.ndarray:
 def lambda_max(B: np.ndarray, a: np.ndarray | None = None) -> float:
     """Principal eigenvalue of ``B``, or its textbook estimate from a weight vector.
 
-    Parameters
-    ----------
-    B : (n, n) judgement matrix.
-    a : (n,) weights, optional. If given, returns the hand-calculation estimate
-        ``(1/n) sum_i (B a)_i / a_i``, which equals the principal eigenvalue exactly when ``a``
-        is the principal eigenvector.
-
-    Returns
-    -------
-    float
-    """
+    Parameters: ``B`` (n, n) judgement matrix. ``a`` (n,) weights, optional. If given, returns the
+    hand-calculation estimate ``(1/n) sum_i (B a)_i / a_i``, which equals the principal eigenvalue
+    exactly when ``a`` is the principal eigenvector.
+    Returns float"""
     B = _check(B)
     if a is None:
         return float(np.max(np.real(np.linalg.eigvals(B))))
@@ -116,10 +97,7 @@ def consistency_index(lam: float, n: int) -> float:
 def consistency_ratio(B: np.ndarray) -> float:
     """``CR = CI / RI(n)`` with Saaty's random index; 0 for ``n <= 2``.
 
-    Parameters
-    ----------
-    B : (n, n) judgement matrix, ``3 <= n <= 10`` for a non-trivial ratio.
-    """
+    Parameters: ``B`` (n, n) judgement matrix, ``3 <= n <= 10`` for a non-trivial ratio."""
     B = _check(B)
     n = B.shape[0]
     if n <= 2:

@@ -30,18 +30,11 @@ def dynamic_weights(a1: np.ndarray, alpha: np.ndarray, alpha_max: float = 10.0,
                     mode: str = "fixed") -> np.ndarray:
     """Per-scan factor weights from the manoeuvre index.
 
-    Parameters
-    ----------
-    a1 : (F,) static weights ``a(1)``, range first, summing to 1.
-    alpha : (..., K) manoeuvre index per scan (dimensionless, >= 0). The weights applied at
-        scan ``k`` use ``alpha(k-1)``; scan 0 uses ``a(1)``.
-    alpha_max : normalizing constant for ``mode="fixed"`` (> 0).
-    mode : ``"fixed"`` or ``"running_max"``.
-
-    Returns
-    -------
-    a : (..., K, F) weights, each row summing to 1.
-    """
+    Parameters: ``a1`` (F,) static weights ``a(1)``, range first, summing to 1. ``alpha`` (..., K)
+    manoeuvre index per scan (dimensionless, >= 0). The weights applied at scan ``k`` use
+    ``alpha(k-1)``; scan 0 uses ``a(1)``. ``alpha_max`` normalizing constant for ``mode="fixed"`` (>
+    0). ``mode`` ``"fixed"`` or ``"running_max"``.
+    Returns ``a`` (..., K, F) weights, each row summing to 1."""
     a1 = np.asarray(a1, dtype=float)
     alpha = np.asarray(alpha, dtype=float)
     if mode == "fixed":

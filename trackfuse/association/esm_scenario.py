@@ -68,14 +68,8 @@ class SnakeCross:
     def states(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Positions and velocities of T1, T2, T3.
 
-        Parameters
-        ----------
-        t : (T,) times (s).
-
-        Returns
-        -------
-        p : (T, 3, 2) positions (m); v : (T, 3, 2) velocities (m/s).
-        """
+        Parameters: ``t`` (T,) times (s).
+        Returns ``p`` (T, 3, 2) positions (m); ``v`` (T, 3, 2) velocities (m/s)."""
         t = np.asarray(t, dtype=float)
         w = 2 * np.pi / self.snake_period
         x0, y0 = self.start
@@ -95,15 +89,9 @@ def position_factors(r: np.ndarray, theta: np.ndarray, A1: np.ndarray, A2: np.nd
     """TDOA (s) and interferometer phase (rad) of the point at range ``r``, bearing ``theta``
     from A1.
 
-    Parameters
-    ----------
-    r : (...,) m; theta : (...,) rad; A1, A2 : (2,) m; d_over_lambda : antenna spacing in
-    wavelengths.
-
-    Returns
-    -------
-    tdoa : (...,) s; phase : (...,) rad.
-    """
+    Parameters: ``r`` (...,) m; ``theta`` (...,) rad; ``A1``, ``A2`` (2,) m; ``d_over_lambda``
+    antenna spacing in wavelengths.
+    Returns ``tdoa`` (...,) s; ``phase`` (...,) rad."""
     b = np.asarray(A2, dtype=float) - np.asarray(A1, dtype=float)
     rho2 = np.hypot(r * np.cos(theta) - b[0], r * np.sin(theta) - b[1])
     return (r - rho2) / C, 2 * np.pi * d_over_lambda * np.cos(theta)
@@ -113,10 +101,8 @@ def position_factor_jacobian(r: np.ndarray, theta: np.ndarray, A1: np.ndarray, A
                              d_over_lambda: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Partial derivatives of :func:`position_factors`.
 
-    Returns
-    -------
-    dtdoa_dr : (...,) s/m; dtdoa_dtheta : (...,) s/rad; dphase_dtheta : (...,) rad/rad.
-    """
+    Returns ``dtdoa_dr`` (...,) s/m; ``dtdoa_dtheta`` (...,) s/rad; ``dphase_dtheta`` (...,)
+    rad/rad."""
     b = np.asarray(A2, dtype=float) - np.asarray(A1, dtype=float)
     c, s = np.cos(theta), np.sin(theta)
     rho2 = np.hypot(r * c - b[0], r * s - b[1])
@@ -129,15 +115,9 @@ def true_factors(p: np.ndarray, v: np.ndarray, A1: np.ndarray, A2: np.ndarray,
                  d_over_lambda: float) -> np.ndarray:
     """The five factors of targets at ``p`` with velocity ``v``.
 
-    Parameters
-    ----------
-    p, v : (..., 2) position (m) and velocity (m/s).
-    A1, A2 : (2,) own-aircraft positions (m).
-
-    Returns
-    -------
-    f : (..., 5) in :data:`FACTORS` order and units.
-    """
+    Parameters: ``p``, ``v`` (..., 2) position (m) and velocity (m/s). ``A1``, ``A2`` (2,)
+    own-aircraft positions (m).
+    Returns ``f`` (..., 5) in :data:`FACTORS` order and units."""
     dp = p - np.asarray(A1, dtype=float)
     r = np.hypot(dp[..., 0], dp[..., 1])
     theta = np.arctan2(dp[..., 1], dp[..., 0])
@@ -170,20 +150,12 @@ def esm_factors(f_true: np.ndarray, z: np.ndarray, noise: ESMNoise, A1: np.ndarr
                 A2: np.ndarray, min_denominator: float = 1.0):
     """ESM factor measurements of one target and their covariance.
 
-    Parameters
-    ----------
-    f_true : (K, 5) true factors of the target at the ESM times.
-    z : (N, K, 4) standard-normal draws for (angle, tdoa, speed, phase), already multiplied by
-        any noise scale.
-    noise : ESM standard deviations.
-    A1, A2 : (2,) m. min_denominator : TDOA-DF guard (m).
-
-    Returns
-    -------
-    x : (N, K, 5) measured factors (range from TDOA-DF, invalid samples carried forward).
-    P : (N, K, 5, 5) covariance (range correlated with angle and tdoa).
-    valid : (N, K) bool, False where the TDOA-DF inversion failed.
-    """
+    Parameters: ``f_true`` (K, 5) true factors of the target at the ESM times. ``z`` (N, K, 4)
+    standard-normal draws for (angle, tdoa, speed, phase), already multiplied by any noise scale.
+    ``noise`` ESM standard deviations. ``A1``, ``A2`` (2,) m. ``min_denominator`` TDOA-DF guard (m).
+    Returns ``x`` (N, K, 5) measured factors (range from TDOA-DF, invalid samples carried forward).
+    ``P`` (N, K, 5, 5) covariance (range correlated with angle and tdoa). ``valid`` (N, K) bool,
+    False where the TDOA-DF inversion failed."""
     b = np.asarray(A2, dtype=float) - np.asarray(A1, dtype=float)
     theta = f_true[:, 2] + noise.angle * z[..., 0]
     tdoa = f_true[:, 3] + noise.tdoa * z[..., 1]
@@ -213,19 +185,13 @@ def radar_factors(f_true: np.ndarray, z: np.ndarray, noise: RadarNoise, model: s
                   A1: np.ndarray, A2: np.ndarray, d_over_lambda: float):
     """Radar factor measurements of every track and their covariance.
 
-    Parameters
-    ----------
-    f_true : (M, J, 5) true factors at the radar times.
-    z : (N, M, J, 5) standard-normal draws (range, speed, angle, tdoa, phase), already
-        multiplied by any noise scale; the ``"derived"`` model ignores the last two.
-    noise : radar standard deviations. model : ``"table"`` or ``"derived"``.
-    A1, A2 : (2,) m. d_over_lambda : interferometer spacing in wavelengths.
-
-    Returns
-    -------
-    x : (N, M, J, 5) measured factors; P : (N, M, J, 5, 5) covariance, evaluated at the
-    measured range and bearing (what the association algorithm knows).
-    """
+    Parameters: ``f_true`` (M, J, 5) true factors at the radar times. ``z`` (N, M, J, 5)
+    standard-normal draws (range, speed, angle, tdoa, phase), already multiplied by any noise scale;
+    the ``"derived"`` model ignores the last two. ``noise`` radar standard deviations. ``model``
+    ``"table"`` or ``"derived"``. ``A1``, ``A2`` (2,) m. ``d_over_lambda`` interferometer spacing in
+    wavelengths.
+    Returns ``x`` (N, M, J, 5) measured factors; ``P`` (N, M, J, 5, 5) covariance, evaluated at the
+    measured range and bearing (what the association algorithm knows)."""
     sig_r_true = noise.range_coef * f_true[..., 0]
     r = f_true[..., 0] + sig_r_true * z[..., 0]
     speed = f_true[..., 1] + noise.speed * z[..., 1]
@@ -266,17 +232,11 @@ def nominal_sd(f_true: np.ndarray, esm_noise: ESMNoise, radar_noise: RadarNoise,
     specifications for this engagement (for the ESM range, the TDOA-DF error at the
     geometry), and it does not depend on any trial's noise.
 
-    Parameters
-    ----------
-    f_true : (K, 5) true factors of the ESM target at the ESM times.
-    esm_noise, radar_noise : sensor standard deviations. model : radar factor model.
-    A1, A2 : (2,) m. d_over_lambda : interferometer spacing. min_denominator : TDOA-DF guard.
-
-    Returns
-    -------
-    sd_esm : (5,) ESM sd per factor; sd_radar : (5,) radar sd per factor (factor units).
-    NaN where the TDOA-DF inversion fails at every scan.
-    """
+    Parameters: ``f_true`` (K, 5) true factors of the ESM target at the ESM times. ``esm_noise``,
+    ``radar_noise`` sensor standard deviations. ``model`` radar factor model. ``A1``, ``A2`` (2,) m.
+    ``d_over_lambda`` interferometer spacing. ``min_denominator`` TDOA-DF guard.
+    Returns ``sd_esm`` (5,) ESM sd per factor; ``sd_radar`` (5,) radar sd per factor (factor units).
+    NaN where the TDOA-DF inversion fails at every scan."""
     K = f_true.shape[0]
     _, P_e, _ = esm_factors(f_true, np.zeros((1, K, 4)), esm_noise, A1, A2, min_denominator)
     _, P_r = radar_factors(f_true[:, None], np.zeros((1, K, 1, 5)), radar_noise, model, A1,

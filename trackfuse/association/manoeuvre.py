@@ -1,55 +1,21 @@
-"""Manoeuvre indices of the ESM track: the detector used by default and the paper's form.
+"""Manoeuvre indices of the ESM track (paper 001 eq. 8-13): the default detector and the paper's
+literal form. The index ``alpha(k)`` and its normalizer ``alpha_max`` cut the range weight.
 
-Paper 001 (eq. 8-13) cuts the range weight when the ESM target manoeuvres, through an index
-``alpha(k)`` and a normalizer ``alpha_max``. Two indices are implemented.
+* Windowed NIS (default; :func:`ca_innovations`, :func:`windowed_nis`): a 1-D
+  nearly-constant-acceleration Kalman filter (DWPA: ``F = [[1, T, T^2/2], [0, 1, T], [0, 0,
+  1]]``, ``Q = q G G'``, ``G = [T^2/2, T, 1]'``, ``q`` in m^2/s^4) on the ESM range difference
+  ``c dt_E(k)``; ``alpha(k) = (1/N) sum_{i=k-N+1}^{k} nu(i)^2 / S(i)``, with ``N alpha ~
+  chi2(N)`` without a manoeuvre (:func:`nis_threshold`). NaN until the window is full (first
+  innovation at scan 3, first ``alpha`` at scan ``N + 2``).
+* The paper's literal index (:func:`cv_innovations`, :func:`manoeuvre_index`): the mean square
+  of the last ``N`` residuals of a 1-D constant-velocity filter on the TDOA-DF range, over its
+  measurement variance ``R``.
 
-**Windowed NIS of the range difference** (default, :func:`ca_innovations` +
-:func:`windowed_nis`). A 1-D Kalman filter with a nearly-constant-acceleration model
-(discrete Wiener process acceleration: state ``[x, xdot, xddot]``,
-``F = [[1, T, T^2/2], [0, 1, T], [0, 0, 1]]``, ``Q = q G G'`` with ``G = [T^2/2, T, 1]'`` and
-``q`` the variance of the acceleration change over one period, m^2/s^4) runs on the ESM range
-difference ``dr_E(k) = c dt_E(k)`` with its measurement variance ``R``. Its normalized
-innovation squared ``eps(k) = nu(k)^2 / S(k)`` is chi-square with one degree of freedom while
-the model holds, so the window mean
+Why this observable and model, and what the literal index does: ``docs/papers/esm_radar.md``,
+"Manoeuvre index and dynamic weights" and W001-4.
 
-    alpha(k) = (1/N) sum_{i = k-N+1}^{k} eps(i)
-
-has expectation 1 and ``N alpha ~ chi2(N)`` without a manoeuvre (the no-manoeuvre null). It
-is NaN until the window is full: the filter starts from three measurements (three-point
-differencing, exact covariance), the first innovation is at scan 3, so the first ``alpha`` is
-at scan ``N + 2``. :func:`nis_threshold` gives the chi-square quantile used as ``alpha_max``.
-
-Why this observable and this model (see ``docs/papers/esm_radar.md``, section
-"W001-4 manoeuvre index"): at paper 001's geometry the TDOA-DF range has ~2-3 km of noise and
-the bearing 30 mrad, so a 1 km weave is buried in either; the range difference has 9 m of
-noise (30 ns) and swings by ~400 m with the weave. Its second derivative is not constant
-even for a target in straight flight (the hyperbolic geometry gives up to 1.2 m/s^2, changing
-by < 0.02 m/s^2 per second), so a constant-velocity filter fits straight flight only with
-a white-acceleration variance that absorbs most of the weave too; the constant-acceleration
-model absorbs the geometry with a small ``q``, while the weave changes the acceleration by
-~2 m/s^2 per second.
-
-**The paper's literal index** (:func:`cv_innovations` + :func:`manoeuvre_index`). Eq. 12 takes
-the mean square of the measurement residual ``V = Z - Zhat(k|k-1)`` of the ESM range as the
-manoeuvre-noise estimate, which mixes metres with accelerations (W001-4). The dimensionally
-consistent reading: a CV prediction under a constant acceleration ``a`` misses by
-``a T^2 / 2``, so ``sigma_w = 2 sigma_V / T^2`` and
-
-    alpha(k) = sigma_V(k)^2 / sigma_n(k)^2,   sigma_V(k)^2 = (1/N) sum_{last N residuals} V(i)^2,
-
-from a 1-D CV filter on the TDOA-DF range ``r_E(k)`` (state ``[r, rdot]``, white-acceleration
-``q``, measurement variance ``sigma_rE(k)^2``, two-point start, first residual at scan 2).
-It divides by ``R`` rather than by the innovation variance, so it starts high (the innovation
-variance of a two-point start is ``6 R``; the mean at scan 2 in paper 001's scenario is about
-8) and it never sees the weave through 2-3 km of noise.
-
-References
-----------
-Y. Bar-Shalom, X. R. Li, T. Kirubarajan, *Estimation with Applications to Tracking and
-Navigation*, Wiley, 2001: sec. 5.4.2 (NIS and its chi-square test), 6.3.3 (DWPA model and
-the choice of its noise), 11.2 (manoeuvre detection from the innovations).
-P. R. Kalata, "The tracking index: a generalized parameter for alpha-beta and
-alpha-beta-gamma target trackers", IEEE Trans. AES 20(2), 1984, 174-182.
+References: Bar-Shalom, Li, Kirubarajan, *Estimation with Applications to Tracking and
+Navigation*, Wiley, 2001, sec. 5.4.2, 6.3.3, 11.2; Kalata P. R., IEEE Trans. AES 20(2), 1984.
 """
 
 from __future__ import annotations
@@ -76,18 +42,11 @@ def ca_innovations(z: np.ndarray, R: np.ndarray, T: float,
                    q: float) -> tuple[np.ndarray, np.ndarray]:
     """Innovations of a 1-D nearly-constant-acceleration Kalman filter (DWPA model).
 
-    Parameters
-    ----------
-    z : (..., K) measurements (m), K >= 4.
-    R : (..., K) or scalar measurement variances (m^2), > 0.
-    T : sampling period (s).
-    q : variance of the acceleration change over one period (m^2/s^4), >= 0.
-
-    Returns
-    -------
-    nu : (..., K) innovations ``z(k) - H x(k|k-1)`` (m); NaN at scans 0-2.
-    S : (..., K) innovation variances (m^2); NaN at scans 0-2.
-    """
+    Parameters: ``z`` (..., K) measurements (m), K >= 4. ``R`` (..., K) or scalar measurement
+    variances (m^2), > 0. ``T`` sampling period (s). ``q`` variance of the acceleration change over
+    one period (m^2/s^4), >= 0.
+    Returns ``nu`` (..., K) innovations ``z(k) - H x(k|k-1)`` (m); NaN at scans 0-2. ``S`` (..., K)
+    innovation variances (m^2); NaN at scans 0-2."""
     z = np.asarray(z, dtype=float)
     R = np.broadcast_to(np.asarray(R, dtype=float), z.shape)
     F = np.array([[1.0, T, T * T / 2], [0.0, 1.0, T], [0.0, 0.0, 1.0]])
@@ -110,16 +69,10 @@ def ca_innovations(z: np.ndarray, R: np.ndarray, T: float,
 def windowed_nis(nu: np.ndarray, S: np.ndarray, window: int) -> np.ndarray:
     """Mean normalized innovation squared over the last ``window`` scans.
 
-    Parameters
-    ----------
-    nu, S : (..., K) innovations and their variances; NaN before the filter starts.
-    window : number N of NIS values averaged (>= 1).
-
-    Returns
-    -------
-    alpha : (..., K) dimensionless; NaN until N innovations exist (start-up excluded).
-    Without a manoeuvre ``N alpha ~ chi2(N)``.
-    """
+    Parameters: ``nu``, ``S`` (..., K) innovations and their variances; NaN before the filter
+    starts. ``window`` number N of NIS values averaged (>= 1).
+    Returns ``alpha`` (..., K) dimensionless; NaN until N innovations exist (start-up excluded).
+    Without a manoeuvre ``N alpha ~ chi2(N)``."""
     eps = np.square(nu) / S
     csum = np.cumsum(np.nan_to_num(eps), axis=-1)
     count = np.cumsum(~np.isnan(eps), axis=-1)
@@ -139,18 +92,10 @@ def cv_innovations(z: np.ndarray, R: np.ndarray, T: float,
                    q: float) -> tuple[np.ndarray, np.ndarray]:
     """Innovations of a 1-D CV Kalman filter (the paper's literal index uses ``nu``).
 
-    Parameters
-    ----------
-    z : (..., K) measurements (m), K >= 2.
-    R : (..., K) measurement variances (m^2), > 0.
-    T : sampling period (s).
-    q : white acceleration variance (m^2/s^4).
-
-    Returns
-    -------
-    nu : (..., K) residuals ``z(k) - H x(k|k-1)`` (m); NaN at scans 0 and 1.
-    S : (..., K) innovation variances (m^2); NaN at scans 0 and 1.
-    """
+    Parameters: ``z`` (..., K) measurements (m), K >= 2. ``R`` (..., K) measurement variances (m^2),
+    > 0. ``T`` sampling period (s). ``q`` white acceleration variance (m^2/s^4).
+    Returns ``nu`` (..., K) residuals ``z(k) - H x(k|k-1)`` (m); NaN at scans 0 and 1. ``S`` (...,
+    K) innovation variances (m^2); NaN at scans 0 and 1."""
     z = np.asarray(z, dtype=float)
     R = np.broadcast_to(np.asarray(R, dtype=float), z.shape)
     K = z.shape[-1]
@@ -181,16 +126,10 @@ def manoeuvre_index(V: np.ndarray, R: np.ndarray, window: int = 5) -> np.ndarray
     """The paper's literal ``alpha(k)``: mean square of the last ``window`` residuals over
     ``R(k)``.
 
-    Parameters
-    ----------
-    V : (..., K) residuals (m); NaN where none exists yet.
-    R : (..., K) measurement variances ``sigma_n(k)^2`` (m^2), > 0.
-    window : number N of most recent residuals averaged (fewer at the start).
-
-    Returns
-    -------
-    alpha : (..., K) dimensionless, >= 0; NaN where no residual exists yet.
-    """
+    Parameters: ``V`` (..., K) residuals (m); NaN where none exists yet. ``R`` (..., K) measurement
+    variances ``sigma_n(k)^2`` (m^2), > 0. ``window`` number N of most recent residuals averaged
+    (fewer at the start).
+    Returns ``alpha`` (..., K) dimensionless, >= 0; NaN where no residual exists yet."""
     valid = ~np.isnan(V)
     sq = np.where(valid, np.square(np.nan_to_num(V)), 0.0)
     csum = np.cumsum(sq, axis=-1)

@@ -49,15 +49,8 @@ PAPER_BOX = np.stack([PAPER_TARGETS.min(axis=0), PAPER_TARGETS.max(axis=0)])
 def los_angles(p: np.ndarray, s: np.ndarray) -> np.ndarray:
     """Azimuth and elevation of points seen from a sensor.
 
-    Parameters
-    ----------
-    p : (..., 3) target positions, m.
-    s : (3,) sensor position, m.
-
-    Returns
-    -------
-    (..., 2) array of ``[azimuth, elevation]`` in rad.
-    """
+    Parameters: ``p`` (..., 3) target positions, m. ``s`` (3,) sensor position, m.
+    Returns (..., 2) array of ``[azimuth, elevation]`` in rad."""
     return azel(np.asarray(p, dtype=float) - s)
 
 
@@ -65,14 +58,10 @@ def los_angles(p: np.ndarray, s: np.ndarray) -> np.ndarray:
 class PassiveScan:
     """One simultaneous scan of every sensor (two in paper 002, S in the S-D assignment).
 
-    Attributes
-    ----------
-    targets : (N, 3) true target positions, m.
-    sensors : (S, 3) sensor positions, m.
-    z : one (m_s, 2) array of measured ``[azimuth, elevation]`` per sensor, rad, shuffled.
-    labels : one (m_s,) int array per sensor: the target index of each measurement, -1 for
-        a false alarm (for scoring only).
-    fov : (S, 4) per-sensor box ``[a_low, a_high, b_low, b_high]``, rad.
+    Attributes: ``targets`` (N, 3) true target positions, m. ``sensors`` (S, 3) sensor positions, m.
+    ``z`` one (m_s, 2) array of measured ``[azimuth, elevation]`` per sensor, rad, shuffled.
+    ``labels`` one (m_s,) int array per sensor: the target index of each measurement, -1 for a false
+    alarm (for scoring only). ``fov`` (S, 4) per-sensor box ``[a_low, a_high, b_low, b_high]``, rad.
     """
 
     targets: np.ndarray
@@ -113,17 +102,12 @@ def simulate_scan(targets: np.ndarray, sigma_a: float, sigma_b: float, p_d: floa
     """Simulate one scan of every sensor (in sensor order, so the first two sensors' data
     do not depend on the sensors after them).
 
-    Parameters
-    ----------
-    targets : (N, 3) target positions, m.
-    sigma_a, sigma_b : azimuth / elevation noise standard deviations, rad.
-    p_d : detection probability of each sensor.
-    p_f : false-alarm parameter; the count is Poisson(p_f N) or Binomial(N, p_f).
-    rng_noise, rng_clutter, rng_shuffle : independent streams for detection and angle noise,
-        false alarms, and the shuffling of each sensor's list.
-    clutter : ``"poisson"`` or ``"binomial"``.
-    margin : FOV box margin around the true angles, rad.
-    sensors : (S, 3) sensor positions, m.
+    Parameters: ``targets`` (N, 3) target positions, m. ``sigma_a``, ``sigma_b`` azimuth / elevation
+    noise standard deviations, rad. ``p_d`` detection probability of each sensor. ``p_f``
+    false-alarm parameter; the count is Poisson(p_f N) or Binomial(N, p_f). ``rng_noise``,
+    ``rng_clutter``, ``rng_shuffle`` independent streams for detection and angle noise, false
+    alarms, and the shuffling of each sensor's list. ``clutter`` ``"poisson"`` or ``"binomial"``.
+    ``margin`` FOV box margin around the true angles, rad. ``sensors`` (S, 3) sensor positions, m.
     """
     n = len(targets)
     zs, labels, boxes = [], [], []
@@ -155,11 +139,7 @@ def true_partners(labels1: np.ndarray, labels2: np.ndarray) -> tuple[np.ndarray,
 
     The partner of a measurement of target ``t`` is the other sensor's measurement of ``t``
     if that sensor detected it, else the dummy; a false alarm's partner is the dummy.
-
-    Returns
-    -------
-    ((m1,), (m2,)) int arrays of indices into the other sensor's list, or -1.
-    """
+    Returns ((m1,), (m2,)) int arrays of indices into the other sensor's list, or -1."""
     where2 = {int(t): j for j, t in enumerate(labels2) if t >= 0}
     p1 = np.full(len(labels1), -1)
     p2 = np.full(len(labels2), -1)

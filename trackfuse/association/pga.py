@@ -1,67 +1,19 @@
 """Improved partheno-genetic algorithm (PGA) of paper 002 for the two-sensor assignment.
 
-Representation (docs/papers/passive_assoc.md, "Partheno-genetic algorithm"). The solution
-is the 0/1 matrix ``X`` of size (m1+1) x (m2+1) with
-dummy row and column 0; the smaller measurement set is put on the rows (m1 <= m2, the
-problem is transposed if needed and mapped back). It is stored as ``col_row``, a list of
-length m2 with ``col_row[j]`` in ``{0 (dummy), 1..m1}``, each real row at most once; a row
-absent from ``col_row`` sits in dummy column 0. The objective is the sum of pair gains
-``J = sum_j w[col_row[j]][j]`` with ``w[0][j] = 0`` (see
-:mod:`trackfuse.association.assignment`), so every move changes ``J`` by the gains of the
-two or three columns it touches and is evaluated in O(1).
+The solution is the 0/1 matrix ``X`` of size (m1+1) x (m2+1) with dummy row and column 0,
+the smaller measurement set on the rows, stored as ``col_row`` (length m2, ``col_row[j]`` in
+``{0 (dummy), 1..m1}``). Its objective ``J = sum_j w[col_row[j]][j]`` (``w[0][j] = 0``,
+:mod:`trackfuse.association.assignment`) changes by the gains of the two or three columns a
+move touches, so each move is evaluated in O(1). One genetic operation = crossover, then
+mutation with probability ``p_m``, then evaluation; the operators (crossover, unpairing
+mutation, re-pair, evicting re-pair), staged evaluation and the acceptance rules
+(``monotone``, ``anneal``) are in ``docs/papers/passive_assoc.md``, "Partheno-genetic
+algorithm" and W002-2. The best solution is recorded at each checkpoint of the operation
+count (Fig. 2's x-axis); the budget ``ops`` is always a checkpoint.
 
-Operators, one *genetic operation* = crossover, then mutation with probability ``p_m``,
-then evaluation:
-
-* crossover (paper eq. 21-23): swap the contents of two distinct real columns. Column ``j``
-  is drawn by roulette with weight ``num(j)``, the descending rank (1 = largest) of the
-  selected entry ``a_{i*(j), j}`` among the m1+1 entries ``a_0j, ..., a_m1j`` of its column
-  (``roulette="worse"``: badly placed columns are swapped more often; the paper's text is
-  self-contradictory, ``"better"`` gives weight ``m1 + 2 - num(j)``). The second column is
-  drawn by roulette over the remaining columns or uniformly (``second``).
-* mutation (paper sec. 3.2, one gene, k = 1): unpair a random paired row ``r`` from its
-  column ``c`` (``x_rc = 0``, ``x_r0 = x_0c = 1``).
-* re-pair (our improvement, ``repair_moves=True``): with probability 1/2 the mutation instead
-  pairs a random unpaired row with a random empty column. Without it no operator maps a
-  solution with unpaired rows back towards more pairs, so under monotone acceptance the
-  search cannot undo an unpairing and the chain is not irreducible (W002-2 in
-  docs/papers/passive_assoc.md).
-* evicting re-pair (ours, ``evict=True``): half of the re-pair moves put the unpaired row
-  into any column, sending its occupant (if any) to the dummy column (:func:`exchange`).
-  This is the single step from "row r' paired with c, row r unpaired" to the reverse, which
-  otherwise needs an unpairing followed by a re-pairing and is blocked under monotone
-  acceptance whenever the intermediate state is worse (the typical remaining gap).
-
-Staged evaluation (ours, ``staged=True``): the crossover offspring and the mutation
-offspring are evaluated and accepted one after the other within the operation. In the
-paper-like joint form a useful mutation is vetoed whenever the crossover drawn with it
-lowers ``J``; when only one column is empty every swap breaks a pair, so the last missing
-pair can then never be made (each evaluation is still O(1), at most two per operation).
-
-Acceptance: ``"monotone"`` (paper-like, reconstruction of the lost flow chart: accept the
-offspring iff ``J_new >= J``) or ``"anneal"`` (Metropolis acceptance
-``exp(dJ / T_t)`` with geometric cooling from ``t0`` to ``t1``, the best solution kept).
-
-Random numbers: each operation draws eight uniforms in one row (:class:`Draws`, drawn in
-blocks of rows so memory stays bounded and the stream does not depend on the block size),
-each with one job. ``place`` serves two decisions under ``evict``: ``place < 1/2`` picks the
-evicting re-pair and the position within the chosen column list is ``2 place`` (or
-``2 place - 1``), which is again uniform on [0, 1) given that choice and independent of it,
-so one uniform is split into a fair coin and a position without bias.
-
-The best solution so far is recorded at each checkpoint of the operation count, which is the
-x-axis of the paper's Fig. 2. The budget ``ops`` itself is always a checkpoint, so a run is
-scored at the operation count it was given, whatever checkpoint list accompanies it.
-
-References
-----------
-Liu H., Dou L., Xin B., Dong L., Control and Decision 23(4), 2008, sec. 3.
-Li M. J., Tong T. S., "A partheno-genetic algorithm and analysis on its global convergence",
-Acta Automatica Sinica 25(1), 1999.
-Rudolph G., "Convergence analysis of canonical genetic algorithms", IEEE Trans. Neural
-Networks 5(1), 1994 (elitism and irreducibility).
-Kirkpatrick S., Gelatt C. D., Vecchi M. P., "Optimization by simulated annealing", Science
-220, 1983.
+References: Liu H., Dou L., Xin B., Dong L., Control and Decision 23(4), 2008, sec. 3; Li M. J.,
+Tong T. S., Acta Automatica Sinica 25(1), 1999; Rudolph G., IEEE Trans. Neural Networks 5(1),
+1994; Kirkpatrick S. et al., Science 220, 1983.
 """
 
 from __future__ import annotations
@@ -82,13 +34,9 @@ _BLOCK = 4096  # operations per block of pre-drawn uniforms
 class PGAResult:
     """Best solutions of one PGA run at each checkpoint.
 
-    Attributes
-    ----------
-    checkpoints : (C,) operation counts.
-    partner1 : (C, m1) sensor-2 partner of each sensor-1 measurement, -1 for the dummy.
-    objective : (C,) sum of pair gains of the best solution.
-    elapsed_s : (C,) wall time from the start of the run, s.
-    """
+    Attributes: ``checkpoints`` (C,) operation counts. ``partner1`` (C, m1) sensor-2 partner of each
+    sensor-1 measurement, -1 for the dummy. ``objective`` (C,) sum of pair gains of the best
+    solution. ``elapsed_s`` (C,) wall time from the start of the run, s."""
 
     checkpoints: np.ndarray
     partner1: np.ndarray
@@ -97,14 +45,17 @@ class PGAResult:
 
 
 class Draws(NamedTuple):
-    """The eight uniforms on [0, 1) of one genetic operation, in stream order."""
+    """The eight uniforms on [0, 1) of one genetic operation, in stream order (drawn in
+    blocks of rows: memory stays bounded and the stream does not depend on the block size).
+    Under ``evict``, ``place < 1/2`` picks the evicting re-pair and ``2 place`` (or
+    ``2 place - 1``), again uniform and independent of that choice, the position."""
 
     first_column: float  # roulette position of the first crossover column
     second_column: float  # roulette (or uniform) position of the second crossover column
     mutate: float  # the operation mutates iff mutate < p_m
     repair: float  # re-pair (if enabled and a row is unpaired) iff repair < 1/2, else unpair
     pick: float  # which unpaired row is re-paired, or which paired column is unpaired
-    place: float  # the column of a re-pair (with evict: < 1/2 evicting, see module doc)
+    place: float  # the column of a re-pair (with evict: < 1/2 evicting, see above)
     accept_crossover: float  # Metropolis draw for the crossover offspring (staged)
     accept_mutation: float  # Metropolis draw for the (mutation or joint) offspring
 
@@ -112,8 +63,7 @@ class Draws(NamedTuple):
 def column_ranks(a: np.ndarray, a_0j: np.ndarray) -> np.ndarray:
     """Descending rank (1 = largest) of each entry within its column of ``[a_0j; a]``.
 
-    a : (m1, m2), a_0j : (m2,). Returns (m1+1, m2) ints; ties keep row order.
-    """
+    a : (m1, m2), a_0j : (m2,). Returns (m1+1, m2) ints; ties keep row order."""
     full = np.vstack([a_0j[None, :], a])
     order = np.argsort(-full, axis=0, kind="stable")
     ranks = np.empty_like(order)

@@ -56,26 +56,19 @@ def pga(weights: PairWeights, rng: np.random.Generator, ops: int = 1000,
         t1: float = 0.01) -> PGAResult:
     """Run the (improved) partheno-genetic algorithm on one assignment problem.
 
-    Parameters
-    ----------
-    weights : the scan's :class:`PairWeights` (m1 x m2, either orientation).
-    rng : the algorithm's own random stream.
-    ops : number of genetic operations.
-    checkpoints : operation counts at which the best solution is recorded; counts above
-        ``ops`` are ignored and ``ops`` itself is always added.
-    p_m : mutation probability per operation.
-    init : ``"random_B"`` (random injection of the rows into distinct columns) or
-        ``"standard"`` (row i in column i, paper eq. 31).
-    roulette : ``"worse"`` (weight num(j)) or ``"better"`` (weight m1 + 2 - num(j)).
-    second : second crossover column by ``"roulette"`` over the rest or ``"uniform"``.
-    repair_moves : enable the re-pair move (module docstring).
-    evict : half of the re-pair moves pick any column, whose row then goes to the dummy
-        column (:func:`exchange`); otherwise re-pair only into empty columns.
-    staged : evaluate (and accept or reject) the crossover offspring and the mutation
-        offspring separately within one operation, instead of only their combination.
-    accept : ``"monotone"`` or ``"anneal"``.
-    t0, t1 : initial and final annealing temperatures, in units of J (nats).
-    """
+    Parameters: ``weights`` the scan's :class:`PairWeights` (m1 x m2, either orientation). ``rng``
+    the algorithm's own random stream. ``ops`` number of genetic operations. ``checkpoints``
+    operation counts at which the best solution is recorded; counts above ``ops`` are ignored and
+    ``ops`` itself is always added. ``p_m`` mutation probability per operation. ``init``
+    ``"random_B"`` (random injection of the rows into distinct columns) or ``"standard"`` (row i in
+    column i, paper eq. 31). ``roulette`` ``"worse"`` (weight num(j)) or ``"better"`` (weight m1 + 2
+    - num(j)). ``second`` second crossover column by ``"roulette"`` over the rest or ``"uniform"``.
+    ``repair_moves`` enable the re-pair move (module docstring). ``evict`` half of the re-pair moves
+    pick any column, whose row then goes to the dummy column (:func:`exchange`); otherwise re-pair
+    only into empty columns. ``staged`` evaluate (and accept or reject) the crossover offspring and
+    the mutation offspring separately within one operation, instead of only their combination.
+    ``accept`` ``"monotone"`` or ``"anneal"``. ``t0``, ``t1`` initial and final annealing
+    temperatures, in units of J (nats)."""
     start = time.perf_counter()
     w, rank, transpose = orient(weights, roulette)
     marks, anneal, cool = schedule(ops, checkpoints, accept, second, t0, t1)
@@ -113,8 +106,7 @@ def _search(draws, w, rank, cur, best, q, state, p_m, roulette_second, repair_mo
     """Run the genetic operations of ``draws: (n, 8)`` from the solution ``cur: (m2,)``
     (with its roulette weights ``q``), updating ``cur``, ``q``, ``best`` and ``state``
     (``J``, best ``J``, temperature) in place; the flags are the options of
-    :func:`pga`. One iteration is ``_Search.operate`` of the oracle.
-    """
+    :func:`pga`. One iteration is ``_Search.operate`` of the oracle."""
     m1, m2 = w.shape[0] - 1, w.shape[1]
     J, J_best, T = state[J_CUR], state[J_BEST], state[TEMPERATURE]
     child, cum, touched = cur.copy(), np.cumsum(q), np.empty(3, np.int64)

@@ -1,51 +1,22 @@
 """S-dimensional assignment with a dummy index, by Lagrangian relaxation (S >= 2 sensors).
 
-Problem (``docs/papers/sd_assignment.md``). Sensor ``s`` reports ``n_s`` measurements,
-indexed ``1..n_s``; index 0 is the dummy ("this sensor saw nothing of it"). A *tuple*
-``(i_1, ..., i_S)`` says "these measurements come from one target"; its cost
-``c(i_1..i_S)`` (nats) is the negative log-likelihood ratio of that against "every real
-measurement of the tuple is a false alarm", so a tuple with at most one real index costs 0
-(:func:`trackfuse.association.sd_costs.tuple_costs`). A feasible solution is a set of
-tuples that holds every real index of every sensor exactly once (the dummy any number of
-times); the solver minimises the summed cost. A tuple costing ``>= 0`` is never better than
-its measurements apart, so costs are clipped to ``min(c, 0)`` (the S-D form of
-:func:`trackfuse.association.assignment.solve_exact`'s ``lsa_clip``) and such tuples are
-reported split into singletons, at the same cost.
-
-Relaxation (Deb et al. 1997; Poore and Rijavec 1993). The constraints of sensors 3..S get
-multipliers ``u_s(i)`` (``u_s(0) = 0``). The Lagrangian
-
-    L(u) = min_x sum (c - sum_{s>=3} u_s(i_s)) x + sum_{s>=3} sum_{i>=1} u_s(i)
-
-keeps only the constraints of sensors 1 and 2, so for each ``(i_1, i_2)`` the best tail
-``(i_3..i_S)`` is the minimum of the reduced cost over the tails, and what is left is a 2-D
-assignment with dummies, solved exactly (:func:`~trackfuse.association.assignment.
-solve_exact`); the tuples ``(0, 0, tail)`` are unconstrained and taken when their reduced
-cost is negative. ``L(u)`` is a lower bound on the optimum for every ``u``.
-
-Recovery: the 2-D pairs are fixed and sensor 3 is assigned to them (or to a new tuple
-through the dummy row) by an exact 2-D assignment whose costs are minimised over the
-remaining tail with the multipliers of sensors 4..S, then sensor 4, ... up to sensor S,
-whose costs are the true ones: a feasible solution, an upper bound. The multipliers take the
-subgradient step ``u_s(i) += theta (UB - L(u)) / |g|^2 g_s(i)`` with ``g_s(i) = 1 - (times
-the relaxed solution uses i)`` (Polyak's step towards the best upper bound UB; ``theta``
-starts at 2 and is halved whenever the dual bound has not improved for
-:data:`PATIENCE` iterations). The loop stops when the relative duality gap
-``(UB - LB) / max(|UB|, 1)`` (LB the best dual bound, 1 nat the floor of the scale) is at
-most ``max_gap``, when the relaxed solution is itself feasible (``g = 0``: it is optimal),
-or after ``max_iter`` iterations.
+Index 0 of each sensor is the dummy. A tuple ``(i_1, ..., i_S)`` costs ``c`` (nats, the
+negative log-likelihood ratio of "one target" against "all false alarms",
+:func:`trackfuse.association.sd_costs.tuple_costs`); costs are clipped to ``min(c, 0)`` and a
+tuple at 0 is reported as singletons. The constraints of sensors 3..S are relaxed with
+multipliers ``u_s(i)``: ``L(u)`` (a lower bound) is a 2-D assignment over the cheapest tails
+(:func:`~trackfuse.association.assignment.solve_exact`); recovery assigns sensors 3..S one by
+one (an upper bound); the multipliers take Polyak subgradient steps (``theta`` halved after
+:data:`PATIENCE` iterations without a better dual bound). Stops at the relative duality gap
+``max_gap``, at a feasible relaxed solution, or after ``max_iter`` iterations. Equations:
+``docs/papers/sd_assignment.md``, "Lagrangian relaxation".
 
 The minimum over the tails runs compiled (numba, cached on disk beside this module);
-``tests/sd_reference.py`` is the plain numpy version that the tests pin it to.
+``tests/sd_reference.py`` is the plain numpy version the tests pin it to.
 
-References
-----------
-Deb S., Yeddanapudi M., Pattipati K., Bar-Shalom Y., "A generalized S-D assignment algorithm
-for multisensor-multitarget state estimation", IEEE Trans. AES 33(2), 1997, 523-538.
-Poore A. B., Rijavec N., "A Lagrangian relaxation algorithm for multidimensional assignment
-problems arising from multitarget tracking", SIAM J. Optimization 3(3), 1993, 544-563.
-Held M., Wolfe P., Crowder H. P., "Validation of subgradient optimization", Math.
-Programming 6, 1974, 62-88 (the step rule).
+References: Deb S. et al., IEEE Trans. AES 33(2), 1997, 523-538; Poore A. B., Rijavec N.,
+SIAM J. Optimization 3(3), 1993, 544-563; Held M., Wolfe P., Crowder H. P., Math.
+Programming 6, 1974, 62-88.
 """
 
 from __future__ import annotations
@@ -70,15 +41,11 @@ GAP_SCALE_FLOOR = 1.0
 class SDResult:
     """A feasible S-D assignment and its bounds.
 
-    Attributes
-    ----------
-    tuples : (K, S) int, the chosen tuples (index 0 = dummy): every real index of every
-        sensor in exactly one row; a row with two or more real indices costs < 0.
-    primal : summed cost of ``tuples`` (nats): an upper bound on the optimum.
-    dual : best Lagrangian value (nats): a lower bound on the optimum.
-    gap : relative duality gap ``(primal - dual) / max(|primal|, 1)``, >= 0.
-    iterations : relaxed problems solved.
-    """
+    Attributes: ``tuples`` (K, S) int, the chosen tuples (index 0 = dummy): every real index of
+    every sensor in exactly one row; a row with two or more real indices costs < 0. ``primal``
+    summed cost of ``tuples`` (nats): an upper bound on the optimum. ``dual`` best Lagrangian value
+    (nats): a lower bound on the optimum. ``gap`` relative duality gap ``(primal - dual) /
+    max(|primal|, 1)``, >= 0. ``iterations`` relaxed problems solved."""
 
     tuples: np.ndarray
     primal: float
@@ -228,8 +195,7 @@ def solve_sd(cost: np.ndarray, max_gap: float = 0.01, max_iter: int = 100) -> SD
     """Minimise the summed tuple cost over the feasible S-D assignments (module docstring).
 
     cost : (n_1 + 1, ..., n_S + 1) tuple costs, nats, index 0 the dummy on every axis.
-    max_gap : stop at this relative duality gap; max_iter : at most this many iterations.
-    """
+    max_gap : stop at this relative duality gap; max_iter : at most this many iterations."""
     cost = checked_costs(cost)
     u = [np.zeros(n) for n in cost.shape[2:]]
     best_primal, best_dual, best = np.inf, -np.inf, None
@@ -266,8 +232,7 @@ def solve_sd_exact(cost: np.ndarray) -> SDResult:
 
     Variables are the tuples of two or more real indices with negative (clipped) cost, each
     real index in at most one of them (the rest are singletons, cost 0). Exponential in the
-    worst case; the reference for small and sparse problems. ``dual = primal``, ``gap = 0``.
-    """
+    worst case; the reference for small and sparse problems. ``dual = primal``, ``gap = 0``."""
     from scipy.optimize import LinearConstraint, milp  # on use: scipy.optimize is slow to load
     from scipy.sparse import csr_array
 

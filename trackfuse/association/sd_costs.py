@@ -1,37 +1,15 @@
 """Costs of S-tuples of passive (azimuth/elevation) measurements, for the S-D assignment.
 
-A tuple ``(i_1, ..., i_S)`` takes measurement ``i_s`` of sensor ``s`` (0: none, the dummy).
-For a tuple with ``k >= 2`` real measurements (``docs/papers/sd_assignment.md``, "Costs"):
-the target position ``p_hat`` is the least-squares intersection of its ``k`` lines of sight
-(the point of :func:`trackfuse.association.triangulation.intersect`, computed in a compiled
-loop over the combinations, cached on disk beside this module), ``chi2`` the sum of the ``2k``
-squared noise-normalised angle residuals at ``p_hat``, and the cost is the negative
-log-likelihood ratio of "one target, seen by these ``k`` sensors and missed by the other
-``S - k``" against "these ``k`` measurements are false alarms":
-
-    c = -[ sum_{s real} g_s - chi2 / 2 + (S - k) ln(1 - P_D) ]
-
-with, as the two-sensor weights of :func:`trackfuse.association.assignment.pair_weights`,
-
-``"paper"``      ``g_s = ln P_D - ln(2 pi sigma_a sigma_b) - ln p_f``
-``"pattipati"``  ``g_s = ln(P_D psi_s) - ln(2 pi sigma_a sigma_b)`` (``psi_s``: FOV area, rad^2).
-
-A tuple with at most one real measurement costs 0: a lone line of sight fixes no position,
-and it is the reference hypothesis (the measurement is a false alarm). With ``S = 2`` the
-costs are minus the pair gains ``w_ij`` of ``pair_weights`` (tested). A tuple whose lines of
-sight are parallel (no intersection) costs ``+inf``.
-
-The ratio above is *generalised*: the position is fitted, so a tuple pays nothing for its
-three free coordinates. With ``volume`` given, the position is integrated out instead over
-a uniform prior of that volume ``V`` (the *marginal* likelihood, by Laplace's
-approximation at the least-squares point), which adds to the bracket
-
-    ln((2 pi)^{3/2} |P|^{1/2} / V),   P = (sum_s H_s' R^-1 H_s)^-1
-
-(``H_s`` the Jacobian of sensor ``s``'s azimuth and elevation with respect to the position,
-``R = diag(sigma_a^2, sigma_b^2)``): each declared tuple is charged for the prior volume
-its lines of sight leave unexplained (about -12 nats for two lines of sight at 11-15 km and
-0.01 rad in a 3,650 km^3 box).
+A tuple ``(i_1, ..., i_S)`` takes measurement ``i_s`` of sensor ``s`` (0: the dummy). With
+``k >= 2`` real measurements, ``p_hat`` is the least-squares intersection of their lines of
+sight and ``chi2`` the sum of the ``2k`` squared normalised angle residuals at it; the cost
+(nats) is ``c = -[sum_{s real} g_s - chi2 / 2 + (S - k) ln(1 - P_D)]`` with ``g_s`` of the
+``paper`` or ``pattipati`` weights. A tuple with at most one real measurement costs 0,
+parallel lines of sight ``+inf``; with ``S = 2``, ``c = -w_ij`` of
+:func:`trackfuse.association.assignment.pair_weights`. With ``volume`` the position is
+integrated out over a uniform prior (Laplace), adding ``ln((2 pi)^{3/2} |P|^{1/2} / V)``.
+Equations: ``docs/papers/sd_assignment.md``, "Costs". The loop over the combinations runs
+compiled (numba, cached on disk beside this module).
 """
 
 from __future__ import annotations
@@ -174,16 +152,12 @@ def tuple_costs(z: Sequence[np.ndarray], sensors: np.ndarray, sigma_a: float,
                 ) -> np.ndarray:
     """The cost tensor (m_1 + 1, ..., m_S + 1) of a scan, nats (module docstring).
 
-    Parameters
-    ----------
-    z : S arrays (m_s, 2) of measured azimuth/elevation, rad.
-    sensors : (S, 3) sensor positions, m.
-    sigma_a, sigma_b : angle noise standard deviations, rad (every sensor).
-    p_d : detection probability (every sensor); p_f : the paper's false-alarm likelihood.
-    cost : ``"paper"`` or ``"pattipati"``; psi : (S,) FOV areas, rad^2 (``"pattipati"``).
-    volume : None for the fitted position, else the volume (m^3) over which the target
-        position is uniform a priori: the marginal likelihood (module docstring).
-    """
+    Parameters: ``z`` S arrays (m_s, 2) of measured azimuth/elevation, rad. ``sensors`` (S, 3)
+    sensor positions, m. ``sigma_a``, ``sigma_b`` angle noise standard deviations, rad (every
+    sensor). ``p_d`` detection probability (every sensor); ``p_f`` the paper's false-alarm
+    likelihood. ``cost`` ``"paper"`` or ``"pattipati"``; ``psi`` (S,) FOV areas, rad^2
+    (``"pattipati"``). ``volume`` None for the fitted position, else the volume (m^3) over which the
+    target position is uniform a priori: the marginal likelihood (module docstring)."""
     n_sensors = len(z)
     gains = sensor_gains(n_sensors, sigma_a, sigma_b, p_d, p_f, cost, psi)
     log_miss = np.log1p(-p_d) if p_d < 1.0 else -np.inf

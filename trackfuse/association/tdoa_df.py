@@ -37,18 +37,10 @@ def tdoa_df_range(theta: np.ndarray, dr: np.ndarray, b: np.ndarray,
                   min_denominator: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """Range from A1 by the TDOA-DF inversion.
 
-    Parameters
-    ----------
-    theta : (...,) bearing at A1 (rad).
-    dr : (...,) range difference ``|p - A1| - |p - A2|`` (m).
-    b : (2,) baseline ``A2 - A1`` (m).
-    min_denominator : samples with ``|2 (u'b - dr)|`` below this (m) are invalid.
-
-    Returns
-    -------
-    r : (...,) range (m); NaN where invalid.
-    valid : (...,) bool.
-    """
+    Parameters: ``theta`` (...,) bearing at A1 (rad). ``dr`` (...,) range difference ``|p - A1| - |p
+    - A2|`` (m). ``b`` (2,) baseline ``A2 - A1`` (m). ``min_denominator`` samples with ``|2 (u'b -
+    dr)|`` below this (m) are invalid.
+    Returns ``r`` (...,) range (m); NaN where invalid. ``valid`` (...,) bool."""
     theta = np.asarray(theta, dtype=float)
     dr = np.asarray(dr, dtype=float)
     D = 2.0 * (np.cos(theta) * b[0] + np.sin(theta) * b[1] - dr)
@@ -63,14 +55,9 @@ def tdoa_df_jacobian(theta: np.ndarray, dr: np.ndarray,
                      b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Partial derivatives of the TDOA-DF range.
 
-    Parameters
-    ----------
-    theta : (...,) bearing (rad); dr : (...,) range difference (m); b : (2,) baseline (m).
-
-    Returns
-    -------
-    dr_dtheta : (...,) m/rad; dr_ddr : (...,) m/m. NaN where ``r <= 0``.
-    """
+    Parameters: ``theta`` (...,) bearing (rad); ``dr`` (...,) range difference (m); ``b`` (2,)
+    baseline (m).
+    Returns ``dr_dtheta`` (...,) m/rad; ``dr_ddr`` (...,) m/m. NaN where ``r <= 0``."""
     r, _ = tdoa_df_range(theta, dr, b, min_denominator=0.0)
     D = 2.0 * (np.cos(theta) * b[0] + np.sin(theta) * b[1] - dr)
     ub_perp = -np.sin(theta) * b[0] + np.cos(theta) * b[1]
@@ -81,18 +68,13 @@ def tdoa_df_range_sigma(theta: np.ndarray, dr: np.ndarray, b: np.ndarray, sigma_
                         sigma_dr: float) -> np.ndarray:
     """First-order standard deviation of the TDOA-DF range (m).
 
-    Parameters
-    ----------
-    theta : (...,) bearing (rad); dr : (...,) range difference (m); b : (2,) baseline (m).
-    sigma_theta : bearing sd (rad). sigma_dr : range-difference sd (m), i.e. ``c sigma_dt``.
-
-    Returns
-    -------
-    sigma_r : (...,) m; NaN where the inversion is invalid.
+    Parameters: ``theta`` (...,) bearing (rad); ``dr`` (...,) range difference (m); ``b`` (2,)
+    baseline (m). ``sigma_theta`` bearing sd (rad). ``sigma_dr`` range-difference sd (m), i.e. ``c
+    sigma_dt``.
+    Returns ``sigma_r`` (...,) m; NaN where the inversion is invalid.
 
     The tests' reference for the scenario's range accuracy (tests/test_esm_radar_geometry.py);
-    the package does not call it.
-    """
+    the package does not call it."""
     d_theta, d_dr = tdoa_df_jacobian(theta, dr, b)
     return np.sqrt((d_theta * sigma_theta) ** 2 + (d_dr * sigma_dr) ** 2)
 
@@ -103,14 +85,8 @@ def carry_forward(x: np.ndarray, valid: np.ndarray) -> np.ndarray:
     Leading invalid samples take the first valid value of their row; a row with no valid
     sample stays NaN.
 
-    Parameters
-    ----------
-    x : (..., K) samples; valid : (..., K) bool.
-
-    Returns
-    -------
-    (..., K) array.
-    """
+    Parameters: ``x`` (..., K) samples; ``valid`` (..., K) bool.
+    Returns (..., K) array."""
     K = x.shape[-1]
     idx = np.where(valid, np.arange(K), -1)
     idx = np.maximum.accumulate(idx, axis=-1)

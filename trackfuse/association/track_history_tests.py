@@ -1,34 +1,15 @@
 """Track-to-track association over the track history: the counting test and Wald's SPRT.
 
-Both read one statistic per scan and radar track: whether the squared Mahalanobis distance
-``m2_k = d_k' S_k^-1 d_k`` of the factor difference falls inside the chi-square gate
-``m2_k <= gamma``, ``gamma`` the ``p_gate`` quantile of chi-square with ``F`` degrees of
-freedom (``docs/papers/esm_radar.md``, "Tests over the track history"). If the ESM and the
-radar track see the same target, the scans are inside the gate independently with
-probability ``p_gate`` (H0); if they see different targets, with a smaller probability
-``p_false`` that the designer declares (H1: it depends on how close the targets are).
+Both read, per scan and radar track, whether ``m2_k = d_k' S_k^-1 d_k`` falls inside the
+chi-square gate ``gamma`` (the ``p_gate`` quantile, ``F`` degrees of freedom): probability
+``p_gate`` for the same target (H0), a declared ``p_false`` for another (H1). Counting: at
+least ``M`` of the last ``n`` scans inside, ``M`` the smallest with ``P(Binomial(n, p_false)
+>= M) <= alpha``. SPRT: the log-likelihood ratio accepts at ``ln((1 - beta) / alpha)`` and
+rejects at ``ln(beta / (1 - alpha))``. Several associated tracks compete (largest count,
+earliest acceptance; ties to the smallest summed ``m2``); none is "no decision" (-1). See
+``docs/papers/esm_radar.md``, "Tests over the track history".
 
-**Counting test** (the counting technique of Sagild, Hem and Brekke, FUSION 2021): count the
-scans inside the gate among the last ``n`` and associate when the count is at least ``M``,
-the smallest integer with ``P(Binomial(n, p_false) >= M) <= alpha``: the false-association
-rate is then at most ``alpha`` by design, and the missed-association rate is
-``P(Binomial(n, p_gate) < M)``.
-
-**Sequential test** (Wald 1945): the log-likelihood ratio of H0 against H1 grows by
-``ln(p_gate / p_false)`` for a scan inside the gate and by ``ln((1 - p_gate) / (1 -
-p_false))`` for one outside; the track is associated when it reaches
-``ln((1 - beta) / alpha)``, rejected when it reaches ``ln(beta / (1 - alpha))``, and left
-undecided if the history ends first. Wald's bounds give false-association rate
-``<= alpha / (1 - beta)`` and missed rate ``<= beta / (1 - alpha)``.
-
-With several radar tracks, the associated tracks compete: the counting test picks the
-largest count, the sequential test the earliest acceptance, both breaking ties by the
-smallest summed ``m2``; no associated track is "no decision" (-1).
-
-References
-----------
-Sagild, Hem, Brekke, FUSION 2021: the counting technique for track-to-track association.
-Wald A., "Sequential tests of statistical hypotheses", Ann. Math. Statist. 16(2), 1945.
+References: Sagild, Hem, Brekke, FUSION 2021; Wald A., Ann. Math. Statist. 16(2), 1945.
 """
 
 from __future__ import annotations

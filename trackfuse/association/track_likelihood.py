@@ -40,14 +40,9 @@ def gaussian_nll_terms(d: np.ndarray, S: np.ndarray) -> tuple[np.ndarray, np.nda
     1e17 in paper 001's geometry), where Cholesky fails. Without the range the condition
     number is below 2.
 
-    Parameters
-    ----------
-    d : (..., F) differences; S : (..., F, F) symmetric positive definite covariances.
-
-    Returns
-    -------
-    m2 : (...,) ``d' S^-1 d``; logdet : (...,) ``log |S|``.
-    """
+    Parameters: ``d`` (..., F) differences; ``S`` (..., F, F) symmetric positive definite
+    covariances.
+    Returns ``m2`` (...,) ``d' S^-1 d``; ``logdet`` (...,) ``log |S|``."""
     s = np.sqrt(np.diagonal(S, axis1=-2, axis2=-1))
     Cn = S / (s[..., :, None] * s[..., None, :])
     e = d / s
@@ -59,16 +54,10 @@ def gaussian_nll_terms(d: np.ndarray, S: np.ndarray) -> tuple[np.ndarray, np.nda
 def ml_track_decision(d: np.ndarray, S: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """ML choice of radar track from per-scan factor differences.
 
-    Parameters
-    ----------
-    d : (..., K, J, F) factor differences (wrapped where angular).
-    S : (..., K, J, F, F) difference covariances.
-
-    Returns
-    -------
-    j : (...,) chosen track index (0-based).
-    log_lr : (...,) log-likelihood ratio of the best over the second-best track (>= 0).
-    D : (..., J) chi-square distances ``sum_k d' S^-1 d``.
+    Parameters: ``d`` (..., K, J, F) factor differences (wrapped where angular). ``S`` (..., K, J,
+    F, F) difference covariances.
+    Returns ``j`` (...,) chosen track index (0-based). ``log_lr`` (...,) log-likelihood ratio of the
+    best over the second-best track (>= 0). ``D`` (..., J) chi-square distances ``sum_k d' S^-1 d``.
     """
     m2, logdet = gaussian_nll_terms(d, S)
     D = m2.sum(axis=-2)
@@ -92,16 +81,10 @@ def abstaining_decision(j: np.ndarray, log_lr: np.ndarray, D_best: np.ndarray, d
       probability between the two with equal priors. Near-identical tracks (T1 and T2 of
       paper 001 at small separation) then yield "no decision" instead of a coin flip.
 
-    Parameters
-    ----------
-    j : (...,) ML choice (0-based). log_lr : (...,) best-vs-second log-likelihood ratio.
-    D_best : (...,) chi-square distance of the chosen track. dof : degrees of freedom.
-    lr_threshold : >= 0. gate_alpha : gate false-rejection probability in [0, 1).
-
-    Returns
-    -------
-    (...,) int: ``j`` where both tests pass, else -1.
-    """
+    Parameters: ``j`` (...,) ML choice (0-based). ``log_lr`` (...,) best-vs-second log-likelihood
+    ratio. ``D_best`` (...,) chi-square distance of the chosen track. ``dof`` degrees of freedom.
+    ``lr_threshold`` >= 0. ``gate_alpha`` gate false-rejection probability in [0, 1).
+    Returns (...,) int: ``j`` where both tests pass, else -1."""
     ok = log_lr >= lr_threshold
     if gate_alpha > 0:
         ok &= D_best <= chi2_quantile(1.0 - gate_alpha, dof)

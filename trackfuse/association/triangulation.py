@@ -1,43 +1,18 @@
 """Triangulation of a 3-D point from one azimuth/elevation line of sight (LOS) per sensor.
 
-Each LOS from sensor ``s`` at ``p_s`` with azimuth ``a`` and elevation ``b`` (rad) gives two
-linear equations ``A_s p = B_s`` in the target position ``p = [x, y, z]'`` (m); stacking both
-sensors gives the over-determined 4 x 3 system that paper 002 (eq. 4-7) solves by least
-squares, ``p_hat = (A'A)^-1 A'B``. Four forms are offered (``docs/papers/passive_assoc.md``,
-"Triangulation"):
+Each LOS (sensor at ``p_s``, azimuth ``a``, elevation ``b``, rad) gives two linear equations
+``A_s p = B_s`` in the position ``p`` (m); paper 002 (eq. 4-7) solves the stacked system by
+least squares, ``p_hat = (A'A)^-1 A'B``. Forms (:data:`METHODS`): ``paper`` (its elimination
+rows, corrected; W002-8), ``unit_normal`` (default: the LOS's unit normals, the midpoint of
+the common perpendicular), ``wls`` (unit normals weighted by ``1/(rho_s sigma_a)`` and
+``1/(r_s sigma_b)``) and ``ml`` (Gauss-Newton on the four normalised angle residuals).
+Equations: ``docs/papers/passive_assoc.md``, "Triangulation". Vectorized over ``K`` candidate
+pairs; :func:`intersect` and :func:`los_residuals` take any ``S' >= 2`` lines of sight
+(``docs/papers/sd_assignment.md``).
 
-``"paper"``
-    The paper's elimination rows, with the OCR errors corrected (row 2 needs ``sin b``):
-    ``[sin a, -cos a, 0] p = x_s sin a - y_s cos a`` and
-    ``[sin b, 0, -cos a cos b] p = x_s sin b - z_s cos a cos b``. The second row loses all
-    ``z`` information as ``cos a -> 0`` (weakness W002-8) and weights the rows unevenly.
-``"unit_normal"`` (default)
-    The two unit normals of the LOS, ``n_az = [sin a, -cos a, 0]`` and
-    ``n_el = [-cos a sin b, -sin a sin b, cos b]``, rows ``n' p = n' p_s``. The residuals are
-    perpendicular distances to the LOS, and the unweighted solution is exactly the midpoint
-    of the common perpendicular of the two lines.
-``"wls"``
-    Unit-normal rows weighted by the inverse of their predicted distance error: an azimuth
-    error ``da`` moves the point ``rho_s da`` off the azimuth plane (``rho_s``: horizontal
-    range) and an elevation error ``db`` moves it ``r_s db`` off the elevation plane
-    (``r_s``: slant range). The weights are ``1/(rho_s sigma_a)`` and ``1/(r_s sigma_b)``
-    with the ranges from a first unit-normal pass. A simpler reading weights both rows by
-    ``1/(r_s sigma)``; the horizontal range is the exact first-order factor for the azimuth row.
-``"ml"``
-    Gauss-Newton on the four noise-normalised angle residuals, started at the unit-normal
-    point (3 iterations by default): the maximum-likelihood point for Gaussian angle noise.
-
-All functions are vectorized over ``K`` candidate pairs. :func:`intersect` and
-:func:`los_residuals` take any number ``S' >= 2`` of lines of sight per candidate (the S-D
-assignment, ``docs/papers/sd_assignment.md``): the ``2 S'`` unit-normal rows stacked.
-
-References
-----------
-Liu H. et al., Control and Decision 23(4), 2008, eq. 4-8.
-Bar-Shalom Y., Li X. R., Kirubarajan T., *Estimation with Applications to Tracking and
-Navigation*, Wiley 2001, ch. 3 (LS and ML estimation of a static parameter).
-Hartley R., Zisserman A., *Multiple View Geometry*, 2nd ed., 2003, ch. 12 (triangulation,
-midpoint method).
+References: Liu H. et al., Control and Decision 23(4), 2008, eq. 4-8; Bar-Shalom, Li,
+Kirubarajan, *Estimation with Applications to Tracking and Navigation*, 2001, ch. 3; Hartley,
+Zisserman, *Multiple View Geometry*, 2nd ed., 2003, ch. 12.
 """
 
 from __future__ import annotations
@@ -57,16 +32,9 @@ def los_rows(z: np.ndarray, s: np.ndarray, form: str = "unit_normal"
              ) -> tuple[np.ndarray, np.ndarray]:
     """The two linear equations ``A p = B`` that one LOS puts on the target position.
 
-    Parameters
-    ----------
-    z : (K, 2) azimuth and elevation, rad.
-    s : (3,) sensor position, m.
-    form : ``"paper"`` (corrected elimination rows) or ``"unit_normal"``.
-
-    Returns
-    -------
-    A : (K, 2, 3), B : (K, 2) in m.
-    """
+    Parameters: ``z`` (K, 2) azimuth and elevation, rad. ``s`` (3,) sensor position, m. ``form``
+    ``"paper"`` (corrected elimination rows) or ``"unit_normal"``.
+    Returns ``A`` (K, 2, 3), B : (K, 2) in m."""
     a, b = z[:, 0], z[:, 1]
     ca, sa, cb, sb = np.cos(a), np.sin(a), np.cos(b), np.sin(b)
     zero = np.zeros_like(a)
@@ -84,8 +52,7 @@ def _solve_normal(A: np.ndarray, B: np.ndarray) -> np.ndarray:
 
     The 3 x 3 normal equations are solved by Cramer's rule (inverse = adjugate / det, the
     adjugate rows being cross products of the columns), which vectorizes far better than
-    ``numpy.linalg.solve`` on many tiny systems.
-    """
+    ``numpy.linalg.solve`` on many tiny systems."""
     M = np.einsum("kri,krj->kij", A, A)
     v = np.einsum("kri,kr->ki", A, B)
     c0, c1, c2 = M[:, :, 0], M[:, :, 1], M[:, :, 2]
@@ -104,8 +71,7 @@ def least_squares(z1: np.ndarray, z2: np.ndarray, s1: np.ndarray, s2: np.ndarray
                   form: str = "unit_normal") -> np.ndarray:
     """Unweighted LS solution ``(A'A)^-1 A'B`` of the stacked 4 x 3 system (paper eq. 4-7).
 
-    z1, z2 : (K, 2) rad; s1, s2 : (3,) m; form as in :func:`los_rows`. Returns (K, 3) m.
-    """
+    z1, z2 : (K, 2) rad; s1, s2 : (3,) m; form as in :func:`los_rows`. Returns (K, 3) m."""
     return _solve_normal(*_stack(np.atleast_2d(z1), np.atleast_2d(z2), s1, s2, form))
 
 
@@ -114,8 +80,7 @@ def intersect(z: Sequence[np.ndarray], sensors: np.ndarray) -> np.ndarray:
 
     The unit-normal rows of every LOS are stacked (``2 S'`` x 3) and solved by
     ``(A'A)^-1 A'B``; with two LOS this is :func:`common_perpendicular_midpoint`.
-    z : S' arrays (K, 2) of azimuth/elevation, rad; sensors : (S', 3) m. Returns (K, 3) m.
-    """
+    z : S' arrays (K, 2) of azimuth/elevation, rad; sensors : (S', 3) m. Returns (K, 3) m."""
     rows = [los_rows(np.atleast_2d(zs), s) for zs, s in zip(z, sensors, strict=True)]
     return _solve_normal(np.concatenate([A for A, _ in rows], 1),
                          np.concatenate([B for _, B in rows], 1))
@@ -132,8 +97,7 @@ def los_residuals(p: np.ndarray, z: Sequence[np.ndarray], sensors: np.ndarray) -
 def angle_jacobian(p: np.ndarray, s: np.ndarray) -> np.ndarray:
     """Jacobian of ``[az, el]`` with respect to ``p``: (K, 2, 3) in rad/m for p (K, 3).
 
-    The position columns of :func:`trackfuse.tracking.sensors.azel_jacobian`.
-    """
+    The position columns of :func:`trackfuse.tracking.sensors.azel_jacobian`."""
     return azel_jacobian(p - s)[..., :3]
 
 
@@ -141,8 +105,7 @@ def angle_residuals(p: np.ndarray, z1: np.ndarray, z2: np.ndarray, s1: np.ndarra
                     s2: np.ndarray) -> np.ndarray:
     """Measured minus predicted angles (paper eq. 8), wrapped: (K, 4) rad.
 
-    Columns are ``[a_1, b_1, a_2, b_2]`` residuals for p (K, 3) and z1, z2 (K, 2).
-    """
+    Columns are ``[a_1, b_1, a_2, b_2]`` residuals for p (K, 3) and z1, z2 (K, 2)."""
     r = np.concatenate([z1 - los_angles(p, s1), z2 - los_angles(p, s2)], axis=1)
     r[:, [0, 2]] = wrap(r[:, [0, 2]])
     return r
@@ -153,18 +116,11 @@ def triangulate(z1: np.ndarray, z2: np.ndarray, s1: np.ndarray, s2: np.ndarray,
                 iterations: int = 3) -> np.ndarray:
     """Estimate the target position of each candidate pair of lines of sight.
 
-    Parameters
-    ----------
-    z1, z2 : (K, 2) azimuth/elevation measured by sensors 1 and 2, rad.
-    s1, s2 : (3,) sensor positions, m.
-    method : one of ``"paper"``, ``"unit_normal"``, ``"wls"``, ``"ml"`` (module docstring).
-    sigma : ``(sigma_a, sigma_b)`` angle noise standard deviations, rad (``wls``, ``ml``).
-    iterations : Gauss-Newton iterations for ``ml``.
-
-    Returns
-    -------
-    p_hat : (K, 3) positions, m.
-    """
+    Parameters: ``z1``, ``z2`` (K, 2) azimuth/elevation measured by sensors 1 and 2, rad. ``s1``,
+    ``s2`` (3,) sensor positions, m. ``method`` one of ``"paper"``, ``"unit_normal"``, ``"wls"``,
+    ``"ml"`` (module docstring). ``sigma`` ``(sigma_a, sigma_b)`` angle noise standard deviations,
+    rad (``wls``, ``ml``). ``iterations`` Gauss-Newton iterations for ``ml``.
+    Returns ``p_hat`` (K, 3) positions, m."""
     z1 = np.atleast_2d(np.asarray(z1, dtype=float))
     z2 = np.atleast_2d(np.asarray(z2, dtype=float))
     if method not in METHODS:
@@ -203,8 +159,7 @@ def common_perpendicular_midpoint(z1: np.ndarray, z2: np.ndarray, s1: np.ndarray
     For lines ``s1 + t u`` and ``s2 + v w`` with unit directions ``u``, ``w``,
     ``d = s1 - s2``, ``c = u.w``: minimising ``|d + t u - v w|^2`` gives
     ``t = (c w.d - u.d) / (1 - c^2)`` and ``v = (w.d - c u.d) / (1 - c^2)``.
-    z1, z2 : (K, 2) rad; s1, s2 : (3,) m.
-    """
+    z1, z2 : (K, 2) rad; s1, s2 : (3,) m."""
     def direction(z):
         a, b = z[:, 0], z[:, 1]
         return np.stack([np.cos(b) * np.cos(a), np.cos(b) * np.sin(a), np.sin(b)], -1)

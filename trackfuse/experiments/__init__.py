@@ -76,8 +76,7 @@ class Listed:
     """One experiment as ``trackfuse list`` shows it, found without importing it.
 
     ``origin``: ``"built-in"``, ``"registered"`` or ``"plugin <distribution> <version>"``;
-    ``reference``: the module (built-in) or ``module:ATTRIBUTE`` (plugin) it comes from.
-    """
+    ``reference``: the module (built-in) or ``module:ATTRIBUTE`` (plugin) it comes from."""
 
     name: str
     origin: str
@@ -157,8 +156,7 @@ def get(name: str) -> Experiment:
     entry-point name, or ``module:ATTRIBUTE``).
 
     Raises :class:`UnknownExperiment` for an unknown plain name and :class:`PluginError` for
-    a plugin reference that is refused or fails to import.
-    """
+    a plugin reference that is refused or fails to import."""
     if name in _registered:
         return _registered[name]
     if name in BUILTIN:

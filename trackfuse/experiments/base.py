@@ -1,47 +1,13 @@
-"""The contract between the runner and an experiment.
+"""The contract between the runner and an experiment: :class:`Experiment` and what it declares.
 
-An experiment module is the only place that knows its science. It exposes one module-level
-``EXPERIMENT = Experiment(...)`` that declares:
-
-* ``params``: its parameter schema (flat dotted keys such as ``"clutter.mean"``) with
-  defaults, units, bounds and choices. The runner validates configs against it and passes the
-  resolved values to the trial functions as a flat ``dict[str, Any]``.
-* ``run_trial(params, streams) -> list[dict]``: one Monte Carlo trial. ``streams`` is a
-  :class:`~trackfuse.seeding.TrialStreams`: ``streams.common`` is the same generator at every
-  sweep point (draw truth, initial estimates, measurement noise and algorithm randomness
-  from it: common random numbers), ``streams.point`` is specific to the sweep point's values
-  of the parameters that change what is simulated (:attr:`Param.draws`; draw what a swept
-  parameter changes, such as clutter). The trial returns tidy rows, one per
-  algorithm (and per value of any extra key in ``row_keys``, e.g. a scan index). Every
-  algorithm in a trial sees the same simulated data (paired comparisons). A trial is a pure
-  function of ``params`` and ``streams``.
-* ``run_batch(params, streams) -> list[list[dict]]`` (optional): the same for a batch of
-  trials, returning one row list per :class:`~trackfuse.seeding.TrialStreams`, in order.
-  Each trial must draw its data from its own streams only, so the rows are identical to
-  ``[run_trial(params, s) for s in streams]`` up to floating-point reassociation inside
-  vectorized algebra.
-* ``metrics``: every metric column a trial returns (:class:`Metric`: unit, whether it is
-  0/1, and whether lower or higher is better); a trial whose rows lack one (but a
-  ``*_time_s`` timing) fails. 0/1 metrics get Wilson intervals in the summary;
-  ``trackfuse.compare`` gates regressions in the declared direction.
-* ``report``: the module path of the experiment's report module, which provides
-  ``figures(run, wanted) -> dict[str, Figure]``, ``tables(run) -> dict[str, DataFrame]``
-  and optionally ``prepare(run)`` (:mod:`trackfuse.reports`), and reads saved results only
-  through :class:`trackfuse.rundata.RunData` (no trial is recomputed). The report module
-  imports the experiment's science, never the reverse, and is imported only when a report
-  is drawn (so workers and the runner load no matplotlib).
-* ``figures``: name -> :class:`FigureSpec` for every figure the report can draw (the names
-  a config may list in ``outputs.figures``).
-* the algorithms it compares: by convention the ``choices`` of a list parameter called
-  ``algorithms`` (:attr:`Experiment.algorithms`; ``trackfuse list`` prints them).
-
-Row columns: the runner adds ``point``, ``trial`` and the swept parameter values; the
-experiment supplies ``algorithm``, the keys listed in ``row_keys`` and numeric metric columns.
-Metrics declared binary are 0/1 and get Wilson intervals in the summary; every other numeric
-column gets a mean with a Student-t interval, clipped to the metric's bounds if it declares
-them. Columns whose name ends in
-``_time_s`` are wall/CPU-time measurements: the runner keeps them out of ``trials.csv`` (which
-must be byte-identical for any worker count) and writes them to ``timings.csv`` instead.
+An experiment module exposes ``EXPERIMENT = Experiment(...)``: its parameter schema
+(:class:`Param`), ``run_trial(params, streams) -> list[dict]`` (one trial, a pure function of
+the resolved params and its :class:`~trackfuse.seeding.TrialStreams`; every algorithm sees
+the same data), optionally ``run_batch`` (a batch of trials, each drawing from its own
+streams only; row lists or a :class:`~trackfuse.rowtable.RowTable`), its ``row_keys``, its
+metrics (:class:`Metric`), its report module and figures (:class:`FigureSpec`). The runner
+adds ``point``, ``trial`` and the swept values to each row; ``*_time_s`` columns go to
+``timings.csv``. The whole contract: ``docs/runner.md``, "The experiment contract".
 """
 
 from __future__ import annotations
@@ -82,8 +48,7 @@ class Param:
     returns, the clutter) rather than only what is computed from it (an algorithm or its
     settings, a filter's model or prior, the scoring). Sweep points that differ only in
     parameters with ``draws=False`` share their point stream (``docs/runner.md``, seeding);
-    ``True``, the default, keeps a point's own stream (the safe choice for a plugin).
-    """
+    ``True``, the default, keeps a point's own stream (the safe choice for a plugin)."""
 
     key: str
     default: Any

@@ -76,8 +76,7 @@ def stonesoup_types() -> SimpleNamespace:
         ``1e8 * numpy.spacing(x)``, floored at ``1e-8``: for a negative or near-zero
         coordinate the step is 1e-8 m, and at 100 km ranges the angle difference it makes is
         about a hundred floating-point spacings, so that column is about 1 % wrong
-        (``docs/stonesoup.md``).
-        """
+        (``docs/stonesoup.md``)."""
 
         def jacobian(self, state, **kwargs) -> np.ndarray:
             """``H: (2, 6)`` (rad/m), rows (elevation, bearing), Stone Soup state order."""
@@ -157,8 +156,7 @@ def transition_model(F: np.ndarray, Q: np.ndarray,
                      random_state: np.random.RandomState | None = None):
     """Stone Soup linear-Gaussian transition with our ``F, Q: (6, 6)`` for one scan period.
 
-    Time-invariant: every prediction applies one period, so predict only at scan times.
-    """
+    Time-invariant: every prediction applies one period, so predict only at scan times."""
     T = stonesoup_types()
     model = T.LinearGaussianTimeInvariantTransitionModel(
         transition_matrix=F[np.ix_(TO_STONESOUP, TO_STONESOUP)],
@@ -204,8 +202,7 @@ def algorithm_random_state(common: np.random.Generator, algorithm: str) -> np.ra
 
     A child of the stream's seed sequence under a fixed spawn-key branch and the algorithm's
     name: a function of (root seed, trial, algorithm) only, independent of how often the
-    stream has been used or spawned, and it leaves the trial's own draws unchanged.
-    """
+    stream has been used or spawned, and it leaves the trial's own draws unchanged."""
     seq = common.bit_generator.seed_seq
     key = (*seq.spawn_key, _STREAM_KEY, zlib.crc32(algorithm.encode()))
     return np.random.RandomState(np.random.PCG64(np.random.SeedSequence(seq.entropy,
@@ -218,8 +215,7 @@ class SeededSystematicResampler:
     A drop-in for ``stonesoup.resampler.particle.SystematicResampler`` (same
     ``resample(particles, nparts=None)`` call), which draws its offset from the global
     ``numpy.random`` state. Resamples only when the effective sample size ``1 / sum w^2``
-    falls below ``ess_fraction`` times the particle count (``ess_fraction = 1``: always).
-    """
+    falls below ``ess_fraction`` times the particle count (``ess_fraction = 1``: always)."""
 
     def __init__(self, random_state: np.random.RandomState, ess_fraction: float = 0.5):
         self.random_state = random_state
@@ -250,8 +246,7 @@ def gaussian_pda_update(hypotheses: Sequence, updater):
     as ``stonesoup.updater.probability.PDAUpdater(gm_method=True)`` does, for any updater
     (EKF, UKF). :func:`collapse` evaluates ``stonesoup.functions.gm_reduce_single``'s sums in
     floats: fed ``Probability`` weights, Stone Soup's own sums run on Python objects and took
-    half the time of a Stone Soup EKF + PDA scan.
-    """
+    half the time of a Stone Soup EKF + PDA scan."""
     T = stonesoup_types()
     states = [updater.update(h) if h else h.prediction for h in hypotheses]
     beta = np.array([float(h.probability) for h in hypotheses])

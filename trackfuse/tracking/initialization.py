@@ -20,13 +20,9 @@ RANGE_CUES = ("absolute", "relative")
 def range_cue_sd(cue: str, d: np.ndarray, sigma_range: float, fraction: float) -> float:
     """Range standard deviation (m) of the radar cue for target-minus-sensor ``d: (3,)`` (m).
 
-    Parameters
-    ----------
-    cue : ``"absolute"`` (return ``sigma_range``) or ``"relative"`` (return
-        ``fraction * |d|``).
-    sigma_range : absolute standard deviation (m).
-    fraction : standard deviation as a fraction of the range ``|d|`` (dimensionless).
-    """
+    Parameters: ``cue`` ``"absolute"`` (return ``sigma_range``) or ``"relative"`` (return ``fraction
+    * |d|``). ``sigma_range`` absolute standard deviation (m). ``fraction`` standard deviation as a
+    fraction of the range ``|d|`` (dimensionless)."""
     if cue == "absolute":
         return float(sigma_range)
     if cue == "relative":
@@ -38,12 +34,9 @@ def los_prior_covariance(d: np.ndarray, sigma_range: float, sigma_angle: float,
                          sigma_velocity: float) -> np.ndarray:
     """Prior covariance ``P0: (6, 6)`` for target-minus-sensor position ``d: (3,)`` (m).
 
-    Parameters
-    ----------
-    sigma_range : range standard deviation (m).
-    sigma_angle : cross-range standard deviation per axis as an angle (rad).
-    sigma_velocity : velocity standard deviation per axis (m/s).
-    """
+    Parameters: ``sigma_range`` range standard deviation (m). ``sigma_angle`` cross-range standard
+    deviation per axis as an angle (rad). ``sigma_velocity`` velocity standard deviation per axis
+    (m/s)."""
     r = float(np.linalg.norm(d))
     u = d / r
     az = np.arctan2(d[1], d[0])

@@ -1,34 +1,15 @@
 """Posterior Cramer-Rao lower bound (PCRLB) for angle-only tracking from moving platforms.
 
-Information recursion for linear-Gaussian dynamics (Tichavsky, Muravchik & Nehorai 1998),
-written so that a singular (or zero) process noise ``Q = G q G'`` is allowed:
+Information recursion (Tichavsky et al. 1998), allowing a singular process noise
+``Q = G q G'``: ``J_0 = P_0^-1``, ``J_{k+1} = (Q + F J_k^-1 F')^-1 + sum_s q2_s(k)
+E[H_s' R_s^-1 H_s]`` with ``H_s`` the az/el Jacobian at the true state. Clutter and missed
+detections enter through the information-reduction factor ``q2`` (Niu et al. 2001),
+computed by Monte Carlo in whitened coordinates with clutter density ``lambda |R|^(1/2)``.
+Bounds: range ``sqrt(u' [J^-1]_pos u)`` along the true line of sight ``u``, position
+``sqrt(trace [J^-1]_pos)``. See ``docs/papers/twin_sensor.md``, "PCRLB".
 
-    J_0     = P_0^-1
-    J_{k+1} = (Q + F J_k^-1 F')^-1 + J_z(k+1)
-    J_z(k)  = sum_s q2_s(k) E[H_s(x_k)' R_s^-1 H_s(x_k)]
-
-``H_s`` is the az/el Jacobian at the *true* state (for a deterministic truth the expectation
-is an evaluation, for a random CV truth a Monte Carlo average over truth samples). With
-``Q = 0`` the first term is ``F^-T J_k F^-1``, the information of a stationary target.
-
-Clutter and missed detections enter through the information-reduction factor ``q2`` (Niu,
-Willett & Bar-Shalom 2001; Zhang, Willett & Bar-Shalom 2005), computed by Monte Carlo in
-whitened measurement coordinates with clutter density ``lambda_w = lambda |R|^(1/2)``:
-
-    s(Z) = sum_i a_i z_i / ((1 - P_D) + sum_i a_i),   a_i = (P_D / lambda_w) phi(z_i)
-    q2   = E[s_1^2]
-
-Bounds: ``RMSE_range(k) >= sqrt(u_k' [J_k^-1]_pos u_k)`` along the true line of sight ``u_k``
-and ``RMSE_pos(k) >= sqrt(trace [J_k^-1]_pos)``.
-
-References
-----------
-P. Tichavsky, C. H. Muravchik and A. Nehorai, "Posterior Cramer-Rao bounds for discrete-time
-nonlinear filtering", IEEE TSP 46(5), 1998.
-R. Niu, P. Willett and Y. Bar-Shalom, "Matrix CRLB scaling due to measurements of uncertain
-origin", IEEE TSP 49(7), 2001.
-X. Zhang, P. Willett and Y. Bar-Shalom, "Dynamic Cramer-Rao bound for target tracking in
-clutter", IEEE TAES 41(4), 2005.
+References: Tichavsky, Muravchik, Nehorai, IEEE TSP 46(5), 1998; Niu, Willett, Bar-Shalom,
+IEEE TSP 49(7), 2001; Zhang, Willett, Bar-Shalom, IEEE TAES 41(4), 2005.
 """
 
 from __future__ import annotations
@@ -50,12 +31,9 @@ def measurement_information(x_true: np.ndarray, sensor_pos: np.ndarray,
                             R: np.ndarray) -> np.ndarray:
     """Expected clutter-free measurement information per sensor, ``(K, S, 6, 6)``.
 
-    Parameters
-    ----------
-    x_true : (K, 6) true states, or (M, K, 6) Monte Carlo truth samples (averaged).
-    sensor_pos : (K, S, 3) sensor positions (m).
-    R : (S, 2, 2) measurement noise covariances (rad^2).
-    """
+    Parameters: ``x_true`` (K, 6) true states, or (M, K, 6) Monte Carlo truth samples (averaged).
+    ``sensor_pos`` (K, S, 3) sensor positions (m). ``R`` (S, 2, 2) measurement noise covariances
+    (rad^2)."""
     x = x_true if x_true.ndim == 3 else x_true[None]
     d = x[:, :, None, :3] - sensor_pos[None]  # (M, K, S, 3)
     H = azel_jacobian(d)  # (M, K, S, 2, 6)
@@ -68,15 +46,11 @@ def information_recursion(J0: np.ndarray, F: np.ndarray, Q: np.ndarray, Jz: np.n
                           ) -> np.ndarray:
     """Bound covariances ``J_k^-1: (K+1, 6, 6)`` for ``k = 0..K`` from ``J0: (6, 6)``.
 
-    Parameters
-    ----------
-    J0 : (6, 6) prior information.
-    F, Q : (6, 6) truth-model transition and process noise.
-    Jz : (K, S, 6, 6) per-sensor information from :func:`measurement_information`.
-    q2 : information-reduction factors, ``(K, S)``, or a function ``q2(k, Pp) -> (S,)`` of
-        the scan ``k = 1..K`` and the bound's predicted covariance ``Pp: (6, 6)`` (for
-        clutter whose density depends on the gate); ``None`` means no clutter, ``P_D = 1``.
-    """
+    Parameters: ``J0`` (6, 6) prior information. ``F``, ``Q`` (6, 6) truth-model transition and
+    process noise. ``Jz`` (K, S, 6, 6) per-sensor information from :func:`measurement_information`.
+    ``q2`` information-reduction factors, ``(K, S)``, or a function ``q2(k, Pp) -> (S,)`` of the
+    scan ``k = 1..K`` and the bound's predicted covariance ``Pp: (6, 6)`` (for clutter whose density
+    depends on the gate); ``None`` means no clutter, ``P_D = 1``."""
     out = np.empty((Jz.shape[0] + 1,) + J0.shape)
     Jinv = np.linalg.inv(J0)
     out[0] = Jinv
@@ -97,8 +71,7 @@ def information_recursion(J0: np.ndarray, F: np.ndarray, Q: np.ndarray, Jz: np.n
 def range_bound(Jinv: np.ndarray, x_true: np.ndarray, platform_pos: np.ndarray) -> np.ndarray:
     """``sqrt(u' [J^-1]_pos u)``: ``(K,)`` (m) along the true lines of sight.
 
-    ``Jinv: (K, 6, 6)``, ``x_true: (K, 6)``, ``platform_pos: (K, 3)``.
-    """
+    ``Jinv: (K, 6, 6)``, ``x_true: (K, 6)``, ``platform_pos: (K, 3)``."""
     u = x_true[:, :3] - platform_pos
     u = u / np.linalg.norm(u, axis=1, keepdims=True)
     return np.sqrt(np.einsum("ka,kab,kb->k", u, Jinv[:, :3, :3], u))
@@ -129,8 +102,7 @@ def irf_q2(lam_w: float, P_D: float = 1.0, n_samples: int = 1_000_000,
     ``c = |z_t|^2 / 2`` if detected, else 0, has the known mean ``P_D`` and equals ``g``
     without clutter when ``P_D = 1``: the estimate is ``mean(g) - beta (mean(c) - P_D)``,
     ``beta`` fitted on the same samples. The target measurements have a stream of their
-    own, the same at every ``lam_w`` (common random numbers).
-    """
+    own, the same at every ``lam_w`` (common random numbers)."""
     if lam_w <= 0.0 or P_D <= 0.0:  # no clutter, or no detection: nothing to estimate
         return float(P_D), 0.0
     mu = lam_w * (2.0 * half_width) ** 2
@@ -238,8 +210,7 @@ def irf_q2_interp(lam_w: ArrayLike, P_D: float = 1.0) -> np.ndarray:
     :func:`irf_q2`), any shape ``S``; ``P_D`` in ``(0, 1]``. Returns ``q2`` (dimensionless),
     shape ``S``. Interpolation is linear in ``log lam_w`` on ``[1e-4, 3]``; below the table
     ``q2`` goes linearly to its clutter-free value ``P_D`` at 0, and above it stays at the
-    table's last value.
-    """
+    table's last value."""
     grid, table = _q2_table(float(P_D))
     lam = np.clip(np.asarray(lam_w, dtype=float), 0.0, grid[-1])
     log_grid = np.log(grid[1:])

@@ -19,14 +19,9 @@ def orbit_positions(t: np.ndarray, start: np.ndarray, centre_xy: np.ndarray, spe
                     climb: float, direction: int = 1) -> np.ndarray:
     """Positions ``(K, 3)`` (m) on a climbing horizontal orbit at times ``t: (K,)`` (s).
 
-    Parameters
-    ----------
-    start : (3,) position at ``t = 0`` (m).
-    centre_xy : (2,) horizontal centre of the circle (m).
-    speed : horizontal speed along the arc (m/s).
-    climb : vertical rate (m/s).
-    direction : +1 counter-clockwise, -1 clockwise (seen from above).
-    """
+    Parameters: ``start`` (3,) position at ``t = 0`` (m). ``centre_xy`` (2,) horizontal centre of
+    the circle (m). ``speed`` horizontal speed along the arc (m/s). ``climb`` vertical rate (m/s).
+    ``direction`` +1 counter-clockwise, -1 clockwise (seen from above)."""
     t = np.asarray(t, dtype=float)
     rel = np.asarray(start[:2], dtype=float) - np.asarray(centre_xy, dtype=float)
     radius = float(np.hypot(rel[0], rel[1]))
@@ -40,8 +35,7 @@ def straight_positions(t: np.ndarray, start: np.ndarray, speed: float, heading: 
     """Positions ``(K, 3)`` (m) of constant-velocity flight.
 
     ``heading`` (rad) is the horizontal course from +x towards +y, ``speed`` the horizontal
-    speed (m/s), ``climb`` the vertical rate (m/s).
-    """
+    speed (m/s), ``climb`` the vertical rate (m/s)."""
     t = np.asarray(t, dtype=float)[:, None]
     v = np.array([speed * np.cos(heading), speed * np.sin(heading), climb])
     return np.asarray(start, dtype=float) + t * v
@@ -52,7 +46,6 @@ def baseline_offset(los_azimuth: float, baseline: float, angle: float) -> np.nda
 
     The offset has length ``baseline`` (m) and points at ``angle`` (rad) from the line-of-sight
     azimuth ``los_azimuth`` (rad); ``angle = pi/2`` is broadside, the best triangulation
-    geometry.
-    """
+    geometry."""
     a = los_azimuth + angle
     return np.array([baseline * np.cos(a), baseline * np.sin(a), 0.0])

@@ -65,14 +65,11 @@ def azel_jacobian(d: np.ndarray) -> np.ndarray:
 def modified_rows(z: np.ndarray, d_bar: np.ndarray) -> np.ndarray:
     """Song-Speyer modified measurement matrix ``(..., 2, 6)`` (rad/m).
 
-    Parameters
-    ----------
-    z : (..., 2) measured azimuth and elevation (rad).
-    d_bar : (..., 3) predicted target-minus-sensor position (m); broadcasts against ``z``.
+    Parameters: ``z`` (..., 2) measured azimuth and elevation (rad). ``d_bar`` (..., 3) predicted
+    target-minus-sensor position (m); broadcasts against ``z``.
 
     The tests' reference (the textbook MGEKF update in tests/test_tracking_pda.py): the
-    package uses :func:`modified_position_rows`, the nonzero columns.
-    """
+    package uses :func:`modified_position_rows`, the nonzero columns."""
     g3 = modified_position_rows(z, d_bar)
     return np.concatenate([g3, np.zeros(g3.shape)], axis=-1)
 
@@ -111,8 +108,7 @@ def _gamma(x: float) -> float:
 def gate_volume(S: np.ndarray, gamma: float) -> np.ndarray:
     """Volume ``(...,)`` of the ellipsoidal gate ``nu' S^-1 nu <= gamma`` for ``S: (..., n, n)``.
 
-    ``c_n gamma^(n/2) |S|^(1/2)`` with the unit-ball volume ``c_n = pi^(n/2) / Gamma(n/2 + 1)``.
-    """
+    ``c_n gamma^(n/2) |S|^(1/2)`` with the unit-ball volume ``c_n = pi^(n/2) / Gamma(n/2 + 1)``."""
     n = S.shape[-1]
     c_n = np.pi ** (n / 2) / _gamma(n / 2 + 1)
     det = inv2(S)[1] if n == 2 else np.linalg.det(S)
@@ -140,8 +136,7 @@ def inv2(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Inverse and determinant of 2x2 matrices ``S: (..., 2, 2)`` in closed form.
 
     Never raises: a singular or non-finite ``S`` gives non-finite entries, so one diverged
-    trial of a batch cannot stop the others.
-    """
+    trial of a batch cannot stop the others."""
     a, b, c, d = S[..., 0, 0], S[..., 0, 1], S[..., 1, 0], S[..., 1, 1]
     det = a * d - b * c
     inv = np.empty(S.shape)
@@ -168,7 +163,6 @@ def ellipse_points(u: np.ndarray, centre: np.ndarray, S: np.ndarray, gamma: floa
     """Map unit-disk points to the gate ellipse ``{centre + nu : nu' S^-1 nu <= gamma}``.
 
     A linear map keeps uniformity, so uniform ``u: (N, M, 2)`` become uniform in the gates of
-    ``centre: (N, 2)``, ``S: (N, 2, 2)``; returns ``(N, M, 2)`` (rad).
-    """
+    ``centre: (N, 2)``, ``S: (N, 2, 2)``; returns ``(N, M, 2)`` (rad)."""
     L = chol2(S)
     return centre[:, None, :] + np.sqrt(gamma) * (u @ L.transpose(0, 2, 1))

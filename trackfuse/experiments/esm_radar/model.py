@@ -1,83 +1,11 @@
 """Experiment ``esm_radar``: paper 001, ESM-to-radar track association.
 
-Zhang Xiaoqiang et al., "An ESM-radar track correlation algorithm based on improved fuzzy
-comprehensive evaluation", J. Air Force Eng. Univ. (Nat. Sci.) 18(1), 2017, 44-49, with the
-corrections written up in ``docs/papers/esm_radar.md``.
-
 One trial simulates the snake/crossing scenario (:mod:`trackfuse.association.esm_scenario`):
-an ESM track of target 2 (TDOA-DF range, bearing, speed, TDOA, phase) and three radar tracks,
-then runs every requested association algorithm on the same data and reports which radar
-track each picked. The truth is radar track 2.
-
-Algorithms (``algorithms`` param, one row each):
-
-=================  ===========================================================================
-traditional        multi-factor fuzzy decision (docs section "Traditional baseline"):
-                   ``baseline.factors`` (range, speed, angle), Gaussian grade with a static
-                   spread (``baseline.spread``), static AHP root weights, ``baseline.decision``
-traditional_5f     the same with all five factors (ablation)
-improved           paper 001 (docs section "Improved fuzzy evaluation"): five factors,
-                   inverse-distance membership (``membership_norm``), AHP weights
-                   (``weights``) made dynamic by the manoeuvre index (``alpha.*``), weighted
-                   average, mean-membership decision
-improved_static    improved with the static AHP weights (ablation: dynamic weights)
-improved_no_range  improved without the range factor, static weights: the five-factor AHP
-                   weights of the other four rescaled to sum to 1, which is where the
-                   dynamic weights go when the range weight is cut to 0 (ablation: cutting
-                   the range weight always instead of on a manoeuvre)
-improved_3f        improved on range, speed, angle only (ablation: 3 vs 5 factors)
-improved_l2        improved with the L2 inverse-distance membership (ablation)
-improved_gauss     improved with the Gaussian posterior membership (ablation, W001-1)
-chi2               ML track-to-track reference (:mod:`trackfuse.association.track_likelihood`)
-                   on speed, angle, TDOA, phase with the full covariance; the ESM range is
-                   excluded because it is a function of the ESM angle and TDOA
-chi2_lrt           ``chi2`` that may answer "no decision" (W001-6): a likelihood-ratio
-                   threshold between the two best tracks and a chi-square gate on the best
-                   (:func:`~trackfuse.association.track_likelihood.abstaining_decision`)
-chi2_5f            ``chi2`` on all five factors, the TDOA-DF range entering with its
-                   first-order covariance. Kept as a diagnostic: the range error is skewed
-                   (the inversion divides by a noisy denominator), so the Gaussian model is
-                   wrong for it and this variant falls far below ``chi2``
-counting           counting test over the last ``counting.window`` scans on the ``chi2``
-                   factors: scans inside the ``history.p_gate`` chi-square gate, associated
-                   at a count whose binomial false-association rate is ``history.alpha``
-                   (:mod:`trackfuse.association.track_history_tests`); may answer "no
-                   decision"
-sprt               Wald's sequential test on the same gate indicators over the whole
-                   history (design rates ``history.alpha`` and ``sprt.beta``); may answer
-                   "no decision"
-=================  ===========================================================================
-
-The traditional baseline's Gaussian grade uses a *static* spread by default
-(``baseline.spread = nominal``, W001-8): the sensor accuracies at the scenario's noise-free
-geometry. ``per_sample`` keeps the earlier, handicapped variant whose TDOA-DF spread is
-recomputed at each noisy sample. The manoeuvre index defaults to the windowed NIS of a
-constant-acceleration filter on the ESM range difference, with ``alpha_max`` its chi-square
-quantile (W001-4); ``alpha.index = literal`` is the paper's form.
-
-Row metrics: ``chosen`` (radar track 1..3, or 0 for "no decision"), ``correct`` (0/1, Wilson
-interval), ``decided`` (0/1; always 1 except for ``chi2_lrt``, ``counting`` and ``sprt``),
-``margin`` (the decision statistic's lead of the winner over the runner-up: mean membership
-for ``mean`` decisions, vote share for ``vote``, log-likelihood ratio for ``chi2*`` and
-``sprt``, count for ``counting``), and diagnostics shared
-by all algorithms or specific to one: ``range_weight_mean``/``range_weight_min`` (the range
-factor's weight over the scans; 0 if the algorithm does not weight range), ``alpha_mean`` and
-``alpha_peak`` (the manoeuvre index over the scans where it is defined), ``esm_invalid``
-(TDOA-DF samples carried forward) and ``esm_range_sigma_m`` (mean 1-sigma of the TDOA-DF
-range).
-
-Per-scan columns (text: one value per ESM scan joined by ``;``, ``nan`` where undefined;
-:data:`SCAN_SERIES`, read back with :func:`decode_series`): on the first row of each trial,
-the ESM track's ``alpha_per_scan`` (manoeuvre index), ``esm_range_error_per_scan_m`` and
-``esm_bearing_error_per_scan_mrad`` (TDOA-DF location of target 2, measured minus true);
-on the rows of the dynamic-weight algorithms, ``range_weight_per_scan``. Empty elsewhere.
-They let the report draw the per-scan figures from ``trials.csv`` without re-simulating.
-
-Figures (``correct_rate``: the paper's Table 3 and Figs. 3-4, with ``correct_rate_ablations``
-and ``correct_rate_references`` beside them; ``trajectory``: its Figs. 1-2; ``manoeuvre``:
-the index and range weight per scan) and tables (``table3``: its Table 3; ``ahp``: its
-Table 1; ``ablation``; ``paper_vs_reproduced``) are built by
-:mod:`trackfuse.experiments.esm_radar.report`.
+an ESM track of target 2 and three radar tracks; every requested algorithm
+(:data:`ALGORITHMS`) picks a radar track from the same data (the truth is track 2). The model,
+the algorithms and their ablations, the row metrics and the per-scan text columns
+(:data:`SCAN_SERIES`, read back by :func:`decode_series`): ``docs/papers/esm_radar.md``.
+Figures and tables: :mod:`trackfuse.experiments.esm_radar.report`.
 """
 
 from __future__ import annotations
@@ -151,8 +79,7 @@ class Variant:
     ``mean``, ``vote`` or ``"param"`` (``baseline.decision``). ``summary``: one line for the
     ablation table. ``subset_weights``: static weights of a factor subset, ``ahp`` (the AHP
     of the judgement matrix's sub-block) or ``rescaled`` (the five-factor weights of the
-    subset, rescaled to sum to 1).
-    """
+    subset, rescaled to sum to 1)."""
 
     factors: tuple[str, ...] | str
     membership: str
@@ -338,15 +265,9 @@ def manoeuvre_alpha(params: Mapping[str, Any], x_esm: np.ndarray, P_esm: np.ndar
                     index: str) -> np.ndarray:
     """Manoeuvre index ``alpha(k)`` of the ESM track (:mod:`trackfuse.association.manoeuvre`).
 
-    Parameters
-    ----------
-    params : resolved params (``esm.period``, ``alpha.*``). x_esm : (N, K, 5) ESM factors.
-    P_esm : (N, K, 5, 5) their covariance. index : ``"nis_tdoa"`` or ``"literal"``.
-
-    Returns
-    -------
-    alpha : (N, K), NaN where the index is not defined (start-up, or no ESM range).
-    """
+    Parameters: ``params`` resolved params (``esm.period``, ``alpha.*``). ``x_esm`` (N, K, 5) ESM
+    factors. ``P_esm`` (N, K, 5, 5) their covariance. ``index`` ``"nis_tdoa"`` or ``"literal"``.
+    Returns ``alpha`` (N, K), NaN where the index is not defined (start-up, or no ESM range)."""
     T, window = params["esm.period"], params["alpha.window"]
     if index == "nis_tdoa":
         nu, S = ca_innovations(C * x_esm[..., 3], C**2 * P_esm[..., 3, 3], T,
@@ -407,8 +328,7 @@ def simulate(params: Mapping[str, Any], streams: Sequence[TrialStreams]) -> Simu
     Each trial's common stream (the same at every sweep point) spawns an ESM-noise and a
     radar-noise stream of standard normals, scaled by the sensor accuracies afterwards; the
     draws have fixed shapes, so the data never depend on the algorithms run, and sweep
-    points of separation or sensor accuracy compare on the same noise.
-    """
+    points of separation or sensor accuracy compare on the same noise."""
     scen = scenario(params)
     A1 = np.zeros(2)
     A2 = np.array([params["geometry.baseline"], 0.0])
@@ -450,8 +370,7 @@ def static_weights(factors: Sequence[str], method: str) -> np.ndarray:
     """AHP weights of a factor subset (in the given order) from paper 001 Table 1.
 
     ``method``: ``root_exact`` or ``eigen`` on the sub-matrix, or ``paper_rounded`` (the
-    printed weights; only for the full set, subsets fall back to the root method).
-    """
+    printed weights; only for the full set, subsets fall back to the root method)."""
     idx = [FACTORS.index(f) for f in factors]
     if method == "paper_rounded" and len(idx) == len(FACTORS):
         return np.array(ahp.PAPER_001_WEIGHTS)
@@ -483,8 +402,7 @@ class Differences:
 
     ``var`` holds the per-scan summed variances (from the measured values); the two static
     spreads of the traditional Gaussian grade are ``var_nominal`` and ``var_trial_mean``
-    (see :func:`baseline_variance`).
-    """
+    (see :func:`baseline_variance`)."""
 
     d: np.ndarray               # (N, K, J, 5) differences, angle and phase wrapped
     var: np.ndarray             # (N, K, J, 5) summed ESM + radar variances, per scan
@@ -507,11 +425,7 @@ def static_spreads(sim: Simulated) -> tuple[np.ndarray, np.ndarray]:
     scans (one constant per factor for the whole run). ``trial_mean``: the time mean over
     the trial (and the radar tracks) of the sd computed from the measured values, one
     constant per factor and trial; it uses no truth.
-
-    Returns
-    -------
-    var_nominal : (5,); var_trial_mean : (N, 1, 1, 5).
-    """
+    Returns ``var_nominal`` (5,); ``var_trial_mean`` (N, 1, 1, 5)."""
     var_nominal = _summed_variance(sim.sd_nominal[0], sim.sd_nominal[1])
     # Invalid TDOA-DF samples are carried forward, so a trial's ESM range sd is NaN at
     # every scan or at none: its time mean is NaN exactly when the trial has no ESM range.
@@ -546,11 +460,7 @@ def baseline_variance(diff: Differences, rule: str) -> np.ndarray:
     ``per_sample`` (recomputed at every scan from the measured values: the TDOA-DF range sd
     then shrinks exactly when the measured range falls short, which pulls the decision
     toward the nearer radar track).
-
-    Returns
-    -------
-    var : broadcastable to (N, K, J, 5).
-    """
+    Returns ``var`` broadcastable to (N, K, J, 5)."""
     if rule == "nominal":
         return diff.var_nominal
     if rule == "trial_mean":
@@ -564,16 +474,10 @@ def membership(kind: str, d: np.ndarray, diff: Differences, idx: Sequence[int],
                params: Mapping[str, Any]) -> np.ndarray:
     """Evaluation matrices of one fuzzy algorithm.
 
-    Parameters
-    ----------
-    kind : ``gaussian`` (traditional grade, spread by ``baseline.spread``), ``posterior``,
-        ``l1`` or ``l2`` (inverse distance). d : (N, K, J, F) absolute differences of the
-        factors ``idx``. diff : the batch's differences (variances). params : resolved params.
-
-    Returns
-    -------
-    R : (N, K, F, J) memberships.
-    """
+    Parameters: ``kind`` ``gaussian`` (traditional grade, spread by ``baseline.spread``),
+    ``posterior``, ``l1`` or ``l2`` (inverse distance). ``d`` (N, K, J, F) absolute differences of
+    the factors ``idx``. ``diff`` the batch's differences (variances). ``params`` resolved params.
+    Returns ``R`` (N, K, F, J) memberships."""
     dd = np.swapaxes(d, -1, -2)
     if kind == "gaussian":
         var = baseline_variance(diff, params["baseline.spread"])[..., idx]
@@ -589,17 +493,11 @@ def evaluate(variant: Variant, diff: Differences, alpha: np.ndarray,
              params: Mapping[str, Any]) -> dict[str, np.ndarray]:
     """Run one algorithm on a simulated batch.
 
-    Parameters
-    ----------
-    variant : the algorithm. diff : :func:`differences` of the batch.
-    alpha : (N, K) manoeuvre index. params : resolved experiment params.
-
-    Returns
-    -------
-    dict of (N,) arrays: ``chosen`` (0-based track), ``margin``, ``range_weight_mean``,
-    ``range_weight_min``; and, for fuzzy variants, ``weights`` (N, K, F) and
-    ``range_weights`` (N, K), the range factor's weight per scan (0 without range).
-    """
+    Parameters: ``variant`` the algorithm. ``diff`` :func:`differences` of the batch. ``alpha`` (N,
+    K) manoeuvre index. ``params`` resolved experiment params.
+    Returns dict of (N,) arrays: ``chosen`` (0-based track), ``margin``, ``range_weight_mean``,
+    ``range_weight_min``; and, for fuzzy variants, ``weights`` (N, K, F) and ``range_weights`` (N,
+    K), the range factor's weight per scan (0 without range)."""
     names = factor_names(variant, params)
     idx = [FACTORS.index(f) for f in names]
     N, K = alpha.shape

@@ -1,55 +1,18 @@
 """Experiment ``passive_assoc``: paper 002, two-sensor passive association by (improved) PGA.
 
-One trial simulates one scan of the two infrared sensors of paper 002 (targets M1..Mn, or
+One trial simulates one scan of the two infrared sensors (paper 002's targets M1..Mn, or
 ``n`` random targets in the same box), computes the assignment weights, solves the
-dummy-augmented 2-D assignment exactly (the reference the paper says cannot be computed,
-weakness W002-1) and runs each requested PGA variant on the same weights, scoring the best
-solution at every checkpoint of the operation count. The model, the corrected equations and
-the defaults where the paper is silent are in docs/papers/passive_assoc.md.
+dummy-augmented 2-D assignment exactly (``exact``: one row, ``ops = 0``) and runs each
+requested PGA variant (:data:`VARIANTS`) on the same weights, one row per checkpoint of the
+operation count. ``gap`` and ``at_opt`` are relative to the exact optimum ``J*`` of the same
+trial; a PGA above ``J*`` fails the trial (:class:`ExactSolverError`). Model, variants,
+metrics and defaults: ``docs/papers/passive_assoc.md``.
 
-Algorithms (``algorithms`` parameter):
-
-* ``exact``: the exact optimum (``assoc.exact``), one row with ``ops = 0`` (sentinel: the
-  exact solver has no operation count).
-* ``pga_paper``: the paper-like improved PGA (roulette column-swap crossover, unpairing
-  mutation, monotone acceptance), one row per checkpoint.
-* ``pga_repair``: the same plus a re-pair move, which makes the search chain
-  irreducible (W002-2), and staged evaluation (crossover and mutation offspring accepted
-  separately, see :mod:`trackfuse.association.pga`).
-* ``pga_evict``: ours: ``pga_repair`` whose re-pair move may also evict the occupant of a
-  column (one step for "swap an unpaired row into a pair").
-* ``pga_anneal``: ``pga_evict`` with simulated-annealing acceptance (``pga.t0 -> pga.t1``).
-* ``pga_repair_joint`` and ``pga_staged``: ablations, the re-pair move without staged
-  evaluation and staged evaluation without the re-pair move.
-
-Row metrics (``gap`` and ``at_opt`` are relative to the exact optimum ``J*`` of the same
-trial, computed even when ``exact`` is not listed):
-
-* ``accuracy``: measurement-level accuracy, the fraction of all measurements of both sensors
-  whose assigned partner (other-sensor index or dummy) is the true one.
-* ``precision`` / ``recall``: correct pairs over declared pairs / over true pairs (1 when
-  the denominator is 0: no false pair declared / no pair to find).
-* ``correct``: 1 iff the whole partition equals the truth; ``at_opt``: 1 iff
-  ``|J* - J| <= 1e-9 max(1, |J*|)``.
-* ``gap``: ``J* - J`` (nats, 0 within that tolerance), ``objective``: ``J``, ``pairs``:
-  number of declared pairs. A PGA above ``J*`` by more than the tolerance means the exact
-  solver is wrong: the trial fails with :class:`ExactSolverError`.
-* ``solve_time_s`` (wall time of the solver up to the checkpoint) and ``weights_time_s``
-  (triangulation and weights, shared by all solvers); the runner files these under
-  timings.csv.
-
-Random streams: ``truth, noise, shuffle, algo`` are spawned from the trial's common stream
-(the same at every sweep point) and the false alarms come from its point stream (shared by
-sweep points that differ only in parameters marked ``draws=False``: the solver settings, and
-the angle noise and detection probability, which scale or threshold common-stream draws and
-leave the false alarms' distribution unchanged, so a noise sweep compares on the same false
-alarms too);
-the PGA variants take fixed children of ``algo`` by their position in :data:`VARIANTS`
-(append new variants at the end), so adding or removing an algorithm in a config changes no
-other number.
-
-Figures and report tables, drawn from the saved CSVs:
-:mod:`trackfuse.experiments.passive_assoc.report`.
+Random streams: ``truth, noise, shuffle, algo`` are children of the trial's common stream;
+the false alarms come from its point stream (angle noise and detection probability are
+``draws=False``: they scale or threshold common draws). The PGA variants take fixed children
+of ``algo`` by their position in :data:`VARIANTS` (append new ones at the end), so changing
+the algorithm list changes no other number.
 """
 
 from __future__ import annotations
@@ -146,8 +109,7 @@ def score(partner1: np.ndarray, partner2: np.ndarray, truth1: np.ndarray,
           truth2: np.ndarray) -> dict[str, float]:
     """Accuracy, pair precision/recall and whole-solution correctness of an assignment.
 
-    partner1 (m1,), partner2 (m2,): assigned partners (-1 = dummy); truth1, truth2 likewise.
-    """
+    partner1 (m1,), partner2 (m2,): assigned partners (-1 = dummy); truth1, truth2 likewise."""
     n_meas = len(partner1) + len(partner2)
     hits = int(np.sum(partner1 == truth1) + np.sum(partner2 == truth2))
     declared = int(np.sum(partner1 >= 0))
@@ -173,8 +135,7 @@ def run_trial(params: dict[str, Any], streams: TrialStreams) -> list[dict[str, A
     """One scan: simulate, weigh, solve exactly and by each PGA variant; rows per checkpoint.
 
     The PGA runs compiled (:func:`trackfuse.association.pga_search.pga`, bit for
-    bit :func:`trackfuse.association.pga.pga`).
-    """
+    bit :func:`trackfuse.association.pga.pga`)."""
     import scipy.optimize  # noqa: F401 - on use, and before the exact solve is timed
 
     from trackfuse.association.pga_search import pga  # numba: on use

@@ -1,50 +1,16 @@
 """Experiment ``passive_sd``: S-D assignment of S >= 2 passive sensors, beside two sensors.
 
-One trial simulates one scan of ``sensors.n`` angle-only sensors observing ``targets.n``
-targets drawn uniformly in the box of paper 002's targets M1-M10 (sensors 1 and 2 are paper
-002's, so their data are those of a ``passive_assoc`` scan with the same seed and
-``scene.mode: random``), builds the tuple costs from the lines of sight
-(:func:`trackfuse.association.sd_costs.tuple_costs`) and solves (``docs/papers/
-sd_assignment.md``):
+One trial simulates one scan of ``sensors.n`` angle-only sensors (sensors 1 and 2 see the
+scan ``passive_assoc`` simulates with ``scene.mode: random``), builds the tuple costs
+(:func:`trackfuse.association.sd_costs.tuple_costs`; ``assoc.position`` ``fitted`` or
+``marginal`` over :data:`PRIOR_VOLUME`) and solves with ``sd_lagrangian``, ``sd_exact`` (the
+integer program, the reference) and ``exact_2d`` (sensors 1 and 2 alone). Sensor positions,
+metrics and results: ``docs/papers/sd_assignment.md``, "Experiment passive_sd".
 
-* ``sd_lagrangian``: Lagrangian relaxation on all sensors (:func:`~trackfuse.association.
-  sd_assignment.solve_sd`, stopping at ``sd.max_gap`` or ``sd.max_iter``);
-* ``sd_exact``: the exact S-D optimum by integer programming (the reference);
-* ``exact_2d``: the exact two-sensor assignment on sensors 1 and 2 alone (paper 002's
-  problem, the baseline a third sensor improves on).
-
-Tuple costs: ``assoc.position: fitted`` (default) is the generalised likelihood ratio with
-the target position fitted, paper 002's weights at two sensors; ``marginal`` integrates the
-position over the box the targets are drawn in (:data:`PRIOR_VOLUME`), which charges each
-declared tuple for its free coordinates.
-
-Sensor positions (km): S1 = (0, 0, 0) and S2 = (0, 20, 7) (paper 002), S3 =
-(``sensor3.baseline``, 0, 0), S4 = (20, 20, 0). A small baseline puts S3 beside S1: its
-lines of sight repeat S1's, and the ghosts of S1 and S2 stay; a long one sees the scene from
-elsewhere and removes them.
-
-Row metrics (over the measurements of the sensors the algorithm uses; a measurement's *true
-tuple* is the set of measurements of its target on those sensors when there are two or
-more, else the measurement alone):
-
-* ``accuracy``: measurements put in their true tuple; ``correct``: all of them are;
-* ``ghost_rate``: declared tuples (two or more measurements) that are not all from one
-  target, over the declared tuples (0 when none is declared); ``ghosts``: their number;
-* ``found``: targets (of ``targets.n``) that a declared tuple of their own measurements
-  localises; ``tuples``: declared tuples;
-* ``objective``: minus the summed tuple cost of the solution (nats, a log-likelihood ratio
-  against "all false"; ``exact_2d``'s is that of its own two-sensor problem);
-* ``duality_gap``: ``(primal - dual) / max(|primal|, 1)`` of ``sd_lagrangian`` (0 for the
-  exact solvers); ``at_opt``: its objective equals ``sd_exact``'s (relative 1e-9; NaN for
-  ``exact_2d``, whose problem is another); ``iterations``: relaxed problems solved;
-* ``solve_time_s`` and ``costs_time_s`` (the tuple costs, shared by the S-D solvers).
-
-Random streams: ``truth, noise, shuffle`` are the first three children of the trial's
-common stream (as in ``passive_assoc``), the false alarms come from the point stream, in
-sensor order. ``sensor3.baseline`` is declared ``draws=False``: it moves sensor 3, whose false
-alarms are the same uniform draws scaled to its field of view, so the points of a geometry
-sweep share their targets, noise and false alarms, and ``exact_2d`` gives the same numbers
-at every baseline (a paired comparison).
+Random streams: ``truth, noise, shuffle`` are the first three children of the trial's common
+stream (as in ``passive_assoc``); the false alarms come from the point stream, in sensor
+order. ``sensor3.baseline`` is ``draws=False`` (its false alarms are the same draws scaled to
+its field of view), so a geometry sweep is a paired comparison.
 """
 
 from __future__ import annotations
