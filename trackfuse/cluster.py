@@ -1,29 +1,14 @@
 """Dask workers started through a batch system (SLURM, PBS) by dask-jobqueue.
 
 ``trackfuse run CONFIG --cluster slurm`` (or ``pbs``) starts a dask scheduler in the
-``trackfuse`` process and submits batch jobs that each start dask workers connecting back
-to it; the run's batches then go to those workers as on any dask cluster (the runner's dask
-path: the workers' code and library versions are checked against the run id, results are
-ordered by (point, batch), so the files are byte-identical to a serial run). The number of
-jobs adapts between ``min_jobs`` and ``max_jobs`` to the work queued.
-
-Settings come from the config's ``cluster`` section
-(:class:`~trackfuse.cluster_settings.ClusterSettings`: ``queue``,
-``account``, ``cores``, ``processes``, ``memory``, ``walltime``, ``min_jobs``,
-``max_jobs``, ``job_extra_directives``, ``interface``), each falling back to dask's own
-configuration (``jobqueue.slurm.*`` / ``jobqueue.pbs.*`` in ``~/.config/dask/jobqueue.yaml``)
-when not given. The section is not part of the resolved config: where a run computes never
-changes its numbers or its run id.
-
-Walltime. A job that reaches its walltime is killed by the batch system with the workers in
-it. Each worker is told to retire five minutes before its job's walltime (``--lifetime``,
-:mod:`trackfuse.cluster_settings`, staggered, as dask-jobqueue advises), handing its queued
-batches back, and
-the adaptive cluster submits a new job; a batch whose worker dies anyway (killed, out of
-memory) is run again on another worker by the scheduler (up to
-``distributed.scheduler.allowed-failures`` times). A batch is a pure function of its task,
-so a batch run twice gives the same bytes. ``--cluster local`` runs the same jobs as local
-processes (dask-jobqueue's ``LocalCluster``): what the tests use.
+``trackfuse`` process and submits jobs whose workers connect back to it; the run then goes as
+on any dask cluster (workers checked against the run id, results ordered by (point, batch)).
+Settings: the config's ``cluster`` section
+(:class:`~trackfuse.cluster_settings.ClusterSettings`), falling back to dask's jobqueue
+configuration; it is not part of the resolved config, so it changes no number or run id.
+Workers retire before their job's walltime and a lost batch is run again elsewhere (a batch
+is a pure function of its task). ``--cluster local`` runs the jobs as local processes (the
+tests). See ``docs/cluster.md``.
 """
 
 from __future__ import annotations

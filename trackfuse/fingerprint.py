@@ -1,22 +1,11 @@
 """The code that produced a run's numbers, as one digest for the run id.
 
-A run folder is reused ("already complete", or resumed) only if the run id matches, so the
-run id must change whenever the code that computes the numbers changes; otherwise an edited
-experiment, a plugin, or a package installed in editable mode would silently return the old
-numbers. :func:`code_fingerprint` hashes the source of:
-
-* the experiment's own modules: the modules defining ``run_trial`` and ``run_batch``, and
-  every module they import, transitively, that belongs to the same top-level package
-  (a plugin's own package) or to ``trackfuse``;
-* the trackfuse modules on the path from trial to CSV whatever the experiment:
-  :data:`NUMBERS_PATH` (seeding, batch execution, CSV formatting, summary statistics),
-  each on its own (not what they import).
-
-Imports are found by reading the source (:mod:`ast`), so nothing is executed. A module
-without Python source (a compiled extension) contributes its file's bytes. Figures and
-report modules do not change numbers and are left out, so redrawing code can change without
-recomputing. Third-party libraries are not hashed: the run id covers their versions
-(:mod:`trackfuse.environment`). See ``docs/runner.md`` (run id).
+A run folder is reused only if its run id matches, so the id changes whenever the code that
+computes the numbers does. :func:`code_fingerprint` hashes the source of the experiment's own
+modules (those defining ``run_trial``/``run_batch`` and, transitively, what they import from
+their own package or trackfuse) and of :data:`NUMBERS_PATH`, read with :mod:`ast` (nothing is
+run). Report code is left out; library versions are covered by :mod:`trackfuse.environment`.
+See ``docs/runner.md``, "Run id and code fingerprint".
 """
 
 from __future__ import annotations

@@ -1,30 +1,13 @@
 """Sequential trial counts: add trials to a sweep point until its intervals are narrow enough.
 
-A config may give, instead of a fixed count::
-
-    trials: {min: 100, max: 20000, until: {metric: correct, half_width: 0.01}}
-
-Each sweep point starts with ``min`` trials. At each *look* the runner summarizes the point's
-rows as ``summary.csv`` does (:func:`trackfuse.summary.summarize`: Wilson for a 0/1 metric,
-Student t for a mean, bootstrap-t for a root mean square) and stops the point when the 95 %
-interval of ``metric`` has a half-width ``(ci_high - ci_low) / 2`` of at most
-``half_width`` in every cell of the point (every value of the experiment's row keys: each
-algorithm); otherwise it continues to the next look. The looks are fixed in advance
-(:meth:`SequentialRule.looks`): ``min`` rounded up to whole batches, then doubling, each
-rounded up to whole batches, up to ``max``. Because batches are cut by trial index alone and
-the rule is evaluated only on the rows of trials ``0 .. n - 1`` at a look ``n``, whether a
-point stops, and so every number written, is the same for any worker count, executor,
-completion order and resume; the point's rows are those of a fixed-count run of its final
-count. A point that reaches ``max`` without meeting the rule is *stopped at max*: the
-manifest (``sequential``) and the report list those points, and ``summary.csv`` says in its
-``stopping`` column, per row, the rule and whether the point met it.
-
-Coverage. Stopping on a half-width looks at the data several times (at most
-``log2(max / min) + 1`` looks: 9 for 100 to 20,000), so the final interval is not exactly a
-fixed-n interval. For the Wilson interval of a proportion, whose half-width shrinks as the
-estimate moves away from 1/2, ``examples/sequential_coverage.py`` measures the coverage of
-the final 95 % interval under this rule by simulation (docs/runner.md, Sequential trial
-counts, gives the numbers); ``tests/test_sequential.py`` checks it at a few points.
+``trials: {min: 100, max: 20000, until: {metric: correct, half_width: 0.01}}``: each point
+starts with ``min`` trials and stops at the first look where the 95 % interval of ``metric``
+(as :func:`trackfuse.summary.summarize` computes it) has a half-width of at most
+``half_width`` in every cell of the point, or at ``max``. The looks are fixed in advance
+(:meth:`SequentialRule.looks`: ``min``, then doubling, in whole batches), and the rule reads
+only the rows of trials ``0 .. n - 1``, so every number is the same for any worker count,
+executor and resume. Rules, records and measured coverage: ``docs/runner.md``, "Sequential
+trial counts".
 """
 
 from __future__ import annotations

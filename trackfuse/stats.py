@@ -1,23 +1,12 @@
-"""Interval estimates used by summaries and figures.
+"""Interval estimates used by summaries, figures and ``compare``.
 
-* Proportions: Wilson score interval (Wilson 1927; Agresti & Coull 1998).
-* Means: Student-t interval on the sample mean.
-* Medians: the distribution-free order-statistic interval (binomial coverage).
-* NEES: two-sided chi-square band for the average NEES over ``n_runs`` runs of an
-  ``dim``-dimensional state (Bar-Shalom, Li & Kirubarajan 2001, sec. 5.4).
-* Differences between two runs: paired or Welch t intervals for means; Newcombe's hybrid
-  score intervals for differences of proportions, paired (his method 10, 1998) or
-  independent (method 10 of Newcombe 1998, Stat. Med. 17, 873-890), which keep their
-  coverage when few pairs are discordant, where the Wald interval does not.
-
-scipy is imported on first use: ``scipy.stats`` takes about a second to import, and the
-summary of every run only needs the t and normal quantiles of ``scipy.special``
-(``stdtrit`` and ``ndtri``, the functions ``scipy.stats`` itself calls: bit for bit the same
-numbers, tested).
-
-Array arguments (``ArrayLike``: numbers, lists, arrays) broadcast against each other to one
-shape ``S``, and each returned array has that shape, except where a function gives its own
-shapes (:func:`holm_adjusted`, :func:`paired_binary`, the bootstrap intervals).
+Wilson score intervals for proportions, Student-t for means, order-statistic intervals for
+medians, the chi-square NEES band, paired or Welch t and Newcombe's hybrid score intervals
+for differences between runs, and bootstrap-t intervals for RMSE; which interval serves
+where, and their measured coverage: ``docs/statistics.md``. scipy is imported on first use
+(only ``scipy.special`` for the summary: the same numbers as ``scipy.stats``, tested). Array
+arguments broadcast to one shape, which each returned array has unless a function says
+otherwise.
 """
 
 from __future__ import annotations

@@ -1,21 +1,11 @@
-"""What plugin code may not do to the process that runs it: end it, outlast its time limit,
-or hold up its exit with a thread it left running.
+"""What plugin code may not do to the process that runs it: end it, outlast its time limit, or
+hold up its exit with a thread it left running.
 
-* ``os._exit(n)`` called by a trial (or a report's ``figures``/``tables``) in the thread
-  that runs it raises :class:`PluginExit` instead: the trial fails with it, on every
-  executor, as ``sys.exit`` does (a serial run ended at once with exit status 0, nothing
-  written, its manifest saying "running"). ``os._exit`` called by any other thread or process
-  (a worker's own exit, a fork's end) ends the process as it always does. A process ended
-  from compiled code, or killed, cannot be caught: a pool worker is replaced and its batch
-  run again, and a serial run resumes from its saved batches when run again.
-* A trial that runs longer than the limit (``trial_timeout``, ``--trial-timeout``) is
-  interrupted by :class:`TrialTimeout`, raised in the thread that runs it (by ``SIGALRM``
-  in a process's main thread, where it also cuts a ``sleep`` or a blocking read short;
-  between two bytecodes in another thread, such as a dask worker's). Compiled code that
-  does not return to Python (a numba loop) is interrupted when it returns.
-* Non-daemon threads a trial started and left running are noted; :func:`threads_left`
-  lists them, and a pool worker that holds some at its exit ends without waiting for them
-  (its pool waited for it forever).
+``os._exit`` called by a trial (or a report) in the thread that runs it raises
+:class:`PluginExit`; a trial running past ``trial_timeout`` gets :class:`TrialTimeout` in its
+thread (``SIGALRM`` in a main thread, between bytecodes elsewhere; compiled code when it
+returns); non-daemon threads a trial left running are listed by :func:`threads_left`. See
+``docs/runner.md``, "Failed trials".
 """
 
 from __future__ import annotations

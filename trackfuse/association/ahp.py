@@ -1,29 +1,13 @@
 """Analytic hierarchy process (AHP): priority weights from a pairwise judgement matrix.
 
-A judgement matrix ``B`` (``(n, n)``, positive, reciprocal: ``B[j, i] = 1 / B[i, j]``) holds
-Saaty-scale comparisons of ``n`` criteria. Two standard ways turn it into a weight vector
-``a`` (``(n,)``, positive, summing to 1):
+``B`` (n, n) is positive and reciprocal (``B[j, i] = 1 / B[i, j]``); the weights ``a`` (n,)
+are positive and sum to 1, by the root (geometric-mean) method or the principal eigenvector.
+Consistency: ``CI = (lambda_max - n) / (n - 1)``, ``CR = CI / RI(n)`` (accept ``CR < 0.1``).
+:data:`PAPER_001_JUDGEMENT` is paper 001's Table 1; its numbers:
+``docs/papers/esm_radar.md``, "Improved fuzzy evaluation" and W001-5.
 
-* the **root (geometric-mean) method**: ``a_i = (prod_j b_ij)^(1/n) / sum_k (prod_j b_kj)^(1/n)``;
-* the **eigenvector method**: ``a`` is the principal (Perron) eigenvector of ``B``, scaled to
-  sum 1.
-
-Consistency: ``lambda_max`` is the principal eigenvalue of ``B`` (``= n`` for a perfectly
-consistent matrix), the consistency index ``CI = (lambda_max - n) / (n - 1)`` and the
-consistency ratio ``CR = CI / RI(n)`` with Saaty's random index ``RI``. ``CR < 0.1`` is the
-usual acceptance rule.
-
-Paper 001 (Zhang et al. 2017, Table 1) orders its five factors as (range, speed, angle,
-time difference, phase difference); :data:`PAPER_001_JUDGEMENT` is that matrix. Its root
-weights are (0.5100, 0.2638, 0.1296, 0.0636, 0.0329), ``lambda_max = 5.23748``,
-``CI = 0.0594`` and ``CR = 0.0530`` (``docs/papers/esm_radar.md``, section
-"W001-5 factor numbering and rounded weights").
-
-References
-----------
-T. L. Saaty, "A scaling method for priorities in hierarchical structures", J. Math. Psychol.
-15(3), 1977, 234-281.
-T. L. Saaty, *The Analytic Hierarchy Process*, McGraw-Hill, 1980 (random index table).
+References: Saaty T. L., J. Math. Psychol. 15(3), 1977, 234-281; Saaty T. L., *The Analytic
+Hierarchy Process*, 1980.
 """
 
 from __future__ import annotations

@@ -1,24 +1,11 @@
-"""Manoeuvre-dependent factor weights (paper 001 eq. 14-16, corrected).
+"""Manoeuvre-dependent factor weights (paper 001 eq. 14-16, corrected; W001-3).
 
-The range weight is reduced when the target manoeuvres, because the ESM range (from TDOA and
-direction finding) then degrades; the other weights take up the slack. With ``a(1)`` the
-static AHP weights (``(F,)``, range first, summing to 1) and ``alpha(k)`` the manoeuvre index:
-
-    a'_1(k+1) = a_1(1) exp(-(alpha(k) / alpha_max)^2)                      (eq. 14)
-    D(k+1)    = a'_1(k+1) + sum_{i>=2} a_i(1)
-    a_1(k+1)  = a'_1(k+1) / D(k+1)                                          (eq. 15)
-    a_i(k+1)  = a_i(1) / D(k+1),  i >= 2                                    (eq. 16, corrected)
-
-The printed eq. 16 has ``a_i(k)`` in the numerator; since ``D < 1`` whenever ``a'_1 < a_1(1)``
-those weights then grow geometrically (W001-3 in ``docs/papers/esm_radar.md``). With
-``a_i(1)`` the weights sum to 1 for every alpha sequence, and the range weight stays in
-``[a_1 e^-1 / (a_1 e^-1 + 1 - a_1), a_1]`` when ``alpha <= alpha_max`` (``[0.277, 0.51]`` for
-the paper's weights), and tends to 0 for alpha much larger than ``alpha_max``.
-
-``alpha_max`` is not defined in the paper. ``mode="fixed"`` uses a given constant (the
-experiment's default is the chi-square quantile of its NIS index, W001-4);
-``mode="running_max"`` uses the running maximum of alpha up to scan k, so the ratio is in
-[0, 1] and every constant factor of alpha cancels.
+With ``a(1)`` the static AHP weights (F,) (range first) and ``alpha(k)`` the manoeuvre index:
+``a'_1(k+1) = a_1(1) exp(-(alpha(k) / alpha_max)^2)``, then every weight is its *static*
+value over ``D = a'_1(k+1) + sum_{i>=2} a_i(1)``, so the weights always sum to 1 and the range
+weight stays in ``[0.277, 0.51]`` for the paper's weights while ``alpha <= alpha_max``.
+``alpha_max``: a given constant (``mode="fixed"``) or the running maximum of alpha
+(``"running_max"``). Equations: ``docs/papers/esm_radar.md``, "Improved fuzzy evaluation".
 """
 
 from __future__ import annotations

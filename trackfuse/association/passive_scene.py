@@ -1,25 +1,11 @@
 """Scenario of paper 002: two passive (angle-only) sensors observing a set of point targets.
 
-Each sensor ``s`` reports azimuth ``a = atan2(dy, dx)`` and elevation
-``b = atan2(dz, sqrt(dx^2 + dy^2))`` of every target it detects, where ``(dx, dy, dz)`` is
-target minus sensor. A target is detected by sensor ``s`` with probability
-``P_D``; a detected target's angles carry independent Gaussian errors ``N(0, sigma^2)`` on
-azimuth and elevation. False alarms are uniform over the sensor's field-of-view box
-
-    FOV_s = [min a - margin, max a + margin] x [min b - margin, max b + margin]   (rad)
-
-built around the true target angles, and their number is Poisson with mean ``P_F * N`` (or
-Binomial(N, P_F)). Each sensor's list is shuffled; the target labels (``-1`` for a false
-alarm) are kept for scoring only (``docs/papers/passive_assoc.md``, "Model").
-
-Geometry (paper 002, sec. 4): S1 = (0, 0, 0) km, S2 = (0, 20, 7) km and ten targets M1-M10;
-the ``"paper"`` scene uses the first ``n`` of them, the ``"random"`` scene draws ``n``
-targets uniformly in the bounding box of M1-M10 (used for the scale study).
-
-References
-----------
-Liu H., Dou L., Xin B., Dong L., "Data association for passive sensor based on improved
-partheno-genetic algorithm", Control and Decision 23(4), 2008.
+Each sensor detects each target with probability ``P_D`` and reports its azimuth and
+elevation (rad) with independent ``N(0, sigma^2)`` errors; false alarms, Poisson with mean
+``P_F N`` (or Binomial), are uniform in the field-of-view box around the true angles widened
+by ``margin``. Lists are shuffled; target labels (``-1``: false alarm) are kept for scoring.
+Scenes: ``paper`` (the first ``n`` of M1-M10) or ``random`` (``n`` uniform in their bounding
+box). Geometry and defaults: ``docs/papers/passive_assoc.md``, "Model".
 """
 
 from __future__ import annotations

@@ -1,29 +1,13 @@
 """Emitter range from one bearing and one time difference of arrival (TDOA + DF).
 
-Two platforms A1 and A2 (baseline ``b = A2 - A1``, m) receive the same emission. A1 measures
-the bearing ``theta`` (rad, from +x toward +y) and the pair measures the range difference
-``dr = c dt = |p - A1| - |p - A2|`` (m). With ``u = [cos theta, sin theta]'`` the emitter is at
-``p = A1 + r u`` and ``|r u - b| = r - dr``; squaring gives
+A1 measures the bearing ``theta`` (rad), the pair A1, A2 (baseline ``b``, m) the range
+difference ``dr = c dt`` (m); with ``u = [cos theta, sin theta]'``,
+``r = (|b|^2 - dr^2) / (2 (u'b - dr))``. Samples whose denominator is near 0 or whose
+``r <= 0`` are invalid (:func:`carry_forward` holds the last valid value). The range sd is
+propagated to first order in closed form (exact, and checked against central differences).
+Equations: ``docs/papers/esm_radar.md``, "TDOA-DF range".
 
-    r = (|b|^2 - dr^2) / (2 (u'b - dr)).
-
-The inversion is exact for noise-free inputs. It fails when the denominator is near 0 (the
-bearing points along the hyperbola's asymptote) or gives ``r <= 0``: such samples are flagged
-invalid, and :func:`carry_forward` holds the last valid value.
-
-The range error follows from first-order propagation,
-``sigma_r^2 = J diag(sigma_theta^2, sigma_dr^2) J'`` with ``J = [dr/dtheta, dr/d(dr)]``:
-
-    dr/dtheta = -2 r (u_perp'b) / D,     dr/d(dr) = 2 (r - dr) / D,
-
-``D = 2 (u'b - dr)`` and ``u_perp = [-sin theta, cos theta]'``. The closed form is used rather
-than numerical derivatives because it is exact and cheaper; a test checks it against central
-differences.
-
-References
-----------
-D. Torrieri, "Statistical theory of passive location systems", IEEE Trans. AES 20(2), 1984,
-183-198 (TDOA/DF geometry and error propagation).
+Reference: Torrieri D., IEEE Trans. AES 20(2), 1984, 183-198.
 """
 
 from __future__ import annotations

@@ -1,25 +1,13 @@
 """Maximum-likelihood track-to-track association: the statistical reference for paper 001.
 
-For radar track ``j`` and scan ``k``, the factor difference ``d_kj = x_E(k) - x_Rj(k)``
-(``(F,)``, angle and phase wrapped) is, under the hypothesis that both tracks see the same
-target and to first order, Gaussian with zero mean and covariance
-``S_kj = P_E(k) + P_Rj(k)`` (independent sensors). With white errors over scans and equal
-priors, the ML decision minimizes the negative log-likelihood
+Under "radar track ``j`` is the ESM target", the factor difference ``d_kj`` (F,) is to first
+order zero-mean Gaussian with covariance ``S_kj = P_E(k) + P_Rj(k)``; with white errors and
+equal priors the ML decision minimises ``L_j = sum_k [d_kj' S_kj^-1 d_kj + log |S_kj|]``.
+The full covariance keeps the TDOA-DF range from counting as independent evidence. See
+``docs/papers/esm_radar.md``, "ML reference".
 
-    L_j = sum_k [ d_kj' S_kj^-1 d_kj + log |S_kj| ]     (up to a common constant and factor 1/2)
-
-whose first term is the chi-square track-to-track distance ``D_j``. The
-``log |S|`` term matters only where ``S`` differs between tracks (the ``derived`` radar model,
-the range factor); where it does not, the rule is ``argmin_j D_j``. Using the full covariance
-keeps the TDOA-DF range, which is a function of ESM bearing and TDOA, from being counted as
-independent evidence (``docs/papers/esm_radar.md``, section "ML reference").
-
-References
-----------
-Y. Bar-Shalom, "On the track-to-track correlation problem", IEEE Trans. AC 26(2), 1981,
-571-572.
-Y. Bar-Shalom, X. R. Li, *Multitarget-Multisensor Tracking: Principles and Techniques*,
-YBS Publishing, 1995, sec. 8.4 (track-to-track association).
+References: Bar-Shalom Y., IEEE Trans. AC 26(2), 1981, 571-572; Bar-Shalom Y., Li X. R.,
+*Multitarget-Multisensor Tracking*, 1995, sec. 8.4.
 """
 
 from __future__ import annotations

@@ -1,32 +1,13 @@
 """Registry of experiment kinds, looked up by name.
 
-Built-in experiments live in modules of this package; each exposes ``EXPERIMENT``. A config
-may also name an experiment of its own as ``"package.module:ATTRIBUTE"`` (a plugin), or by
-the name an installed distribution registers in the entry-point group
-:data:`ENTRY_POINT_GROUP` (``[project.entry-points."trackfuse.experiments"]`` in its
-``pyproject.toml``: ``coin = "coin:EXPERIMENT"``). Built-in names win over entry points.
-
-A config is code: naming a plugin runs its module. The module is imported only when a config
-naming it is validated or run, or when a run folder made from it is plotted, never while
-listing experiments or handling other configs. Before importing, :func:`get` reads the
-module's source without running it and refuses the import unless
-
-* the reference is an absolute dotted module path and an identifier (``pkg.mod:NAME``);
-* no part of the path is ``__main__`` (a program's entry point, not a library);
-* the module is a Python source file that binds ``NAME`` at its top level (an assignment,
-  ``def``, ``class`` or import), so a typo never runs an unrelated module;
-* its top level only imports, defines and assigns: a bare call statement outside
-  ``if __name__ == "__main__":`` (``main()``, ``app.run()``) means the module does work when
-  imported, like ``idlelib.idle`` opening a window, and is refused.
-
-Locating the module imports its parent packages (``pkg`` for ``pkg.mod``), as Python must.
-Any error while importing is reported in one line (:class:`PluginError`).
-
-Where a plugin is found: on the Python path. A run records the folder its plugin was
-imported from (:func:`plugin_folder`, the manifest's ``plugin_folder``), so ``plot`` and
-``compare`` add that folder to the end of the path (:func:`add_plugin_folder`) when they
-run elsewhere; the harness takes ``path/to/module.py:ATTRIBUTE`` as well
-(:func:`file_reference`).
+Built-in experiments are packages of this package, each exposing ``EXPERIMENT``. A config may
+also name a plugin, ``"package.module:ATTRIBUTE"``, or a name an installed distribution
+registers in the entry-point group :data:`ENTRY_POINT_GROUP` (built-in names win). A plugin
+module is imported only when a config naming it is validated or run, or its run plotted; it is
+first read without running it and refused unless it binds ``ATTRIBUTE`` at top level and does
+no work on import (the rules: ``docs/runner.md``, "Configs are code"). Errors are one line
+(:class:`PluginError`). A run records the folder its plugin came from (:func:`plugin_folder`),
+which ``plot`` and ``compare`` add to the path (:func:`add_plugin_folder`).
 """
 
 from __future__ import annotations

@@ -1,32 +1,12 @@
 """Stone Soup adapter: our simulated angle returns in, our estimate arrays out.
 
-trackfuse and Stone Soup describe the same things in different orders and types:
-
-====================  =================================  ====================================
-quantity              trackfuse                          Stone Soup
-====================  =================================  ====================================
-CV state              ``(x, y, z, vx, vy, vz)`` ``(6,)``  ``(x, vx, y, vy, z, vz)`` ``(6, 1)``
-angle return          ``(azimuth, elevation)`` rad       ``(Elevation, Bearing)`` ``(2, 1)``
-angle noise ``R``     ``diag(s_az^2, s_el^2)``           ``diag(s_el^2, s_az^2)``
-sensor position       ``sensor_pos[k, s]: (3,)`` m        ``translation_offset: (3, 1)``
-time                  ``times[k]`` s from 0              ``datetime``
-====================  =================================  ====================================
-
-The functions here convert between them, so the same simulated returns (target return,
-clutter, detections) reach a Stone Soup tracker and ours, and Stone Soup track states come
-back as our ``(6,)`` estimates and ``(6, 6)`` covariances for our metric rows. Elevation is
-``asin(dz / r) = atan2(dz, rh)`` in both (``trackfuse.tracking.sensors.azel``).
-
-Randomness: Stone Soup draws process noise for particles (transition model), measurement
-noise for particle measurement predictions (measurement model) and resampling offsets
-(``stonesoup.resampler``) from ``numpy.random``'s global state unless a model is given its
-own ``random_state``. :func:`algorithm_random_state` derives a dedicated generator from a
-trial's common stream; giving it to every model and to :class:`SeededSystematicResampler`
-makes a Stone Soup particle filter a pure function of the trial, whatever the executor,
-worker count, thread or resume (``docs/stonesoup.md``).
-
-Stone Soup is an optional extra (``pip install 'trackfuse[stonesoup]'``): this module imports
-without it, and :func:`require_stonesoup` raises a one-line error naming the extra.
+Converts between our orders and types and Stone Soup's (CV state ``(x, y, z, vx, vy, vz)``
+against ``(x, vx, y, vy, z, vz)``; ``(azimuth, elevation)`` against ``(Elevation, Bearing)``;
+seconds against ``datetime``), so the same simulated returns reach a Stone Soup tracker and
+ours. :func:`algorithm_random_state` gives every model and :class:`SeededSystematicResampler`
+a generator derived from the trial's common stream, so a particle filter is a pure function
+of the trial. Stone Soup is optional: this module imports without it and
+:func:`require_stonesoup` names the extra. See ``docs/stonesoup.md``.
 """
 
 from __future__ import annotations

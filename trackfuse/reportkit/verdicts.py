@@ -1,30 +1,12 @@
 """How a reproduced number, or a claim, becomes a verdict: one set of rules for every paper.
 
-A verdict is one of :data:`VERDICTS`, with the estimate it reads, that estimate's 95 %
-interval and a one-line reason in plain words (:class:`Verdict`). The rules:
-
-1. **A paper's rate is a sample too.** Where the paper states its trial count (its Table 3's
-   370 of 500), ours and the paper's are two independent samples: their difference with
-   Newcombe's hybrid score interval (his method 10; Newcombe 1998, Stat. Med. 17, 873-890)
-   and the 'N-1' chi-square test. "agrees" (consistent) when the interval holds 0, else
-   "differs" by the difference, with its interval (:func:`against_paper_sample`). The
-   paper's own sampling error stays in the interval, so more trials of ours do not turn a
-   match into a difference. A claimed bound from a stated count ("below 5 % in 50 runs")
-   is the largest count under it (2 of 50), and only a rate shown above that differs
-   (:func:`below_paper_bound`), at the one setting fixed in advance.
-2. **Shape claims by effect size, against a margin declared in advance** on the paper's
-   item (:attr:`trackfuse.reported.Reported.margin`, never in report code): "agrees" when
-   the interval shows the effect in the claim's direction and reaches the margin, "differs"
-   when it excludes every effect as large as the margin (a rise of at most 1.9 points
-   excludes a claimed rise of 2), else "inconclusive" (:func:`at_least`); for a claim that
-   a difference stays small, :func:`within`.
-3. **Only the comparison fixed in advance decides.** Callers pass the pre-specified
-   comparison to :func:`at_least`; pairs found by searching are reported with
-   :func:`exploration`, whose words say they decide nothing.
-4. **Printed values compared as printed**: ours rounded to the digits the paper prints
-   before comparing (:func:`as_printed_verdict`).
-5. **One verdict per paper item** (:func:`bottom_line`): the row of the config declared to
-   answer it (:attr:`~trackfuse.reported.Reported.answer`); other rows support it.
+A verdict is one of :data:`VERDICTS` with the estimate it reads, its 95 % interval and a
+one-line reason (:class:`Verdict`). The rules (``docs/statistics.md``, "Verdicts against a
+paper"): a paper's stated rate is a sample (:func:`against_paper_sample`,
+:func:`below_paper_bound`); shape claims by effect size against the margin declared on the
+paper item (:func:`at_least`, :func:`within`); only the pre-specified comparison decides
+(:func:`exploration` for the rest); printed values compared as printed
+(:func:`as_printed_verdict`); one verdict per item (:func:`bottom_line`).
 """
 
 from __future__ import annotations

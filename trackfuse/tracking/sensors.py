@@ -1,33 +1,19 @@
 """Passive azimuth/elevation sensors: measurement function, Jacobian, MGEKF rows, gates, clutter.
 
-Fixed Cartesian frame, z up. For the target-minus-sensor vector ``d = (dx, dy, dz)`` (m),
-``rh = sqrt(dx^2 + dy^2)`` and ``r = |d|``:
+Fixed Cartesian frame, z up; ``d = (dx, dy, dz)`` target minus sensor (m), ``rh`` its
+horizontal and ``r`` its full length:
 
     h(x) = [atan2(dy, dx), atan2(dz, rh)]                         (rad)
     H    = [[-dy/rh^2,          dx/rh^2,          0,       0, 0, 0],
             [-dx dz/(rh r^2),   -dy dz/(rh r^2),  rh/r^2,  0, 0, 0]]
 
-(the corrected form of paper 000 eq. 7, docs/papers/twin_sensor.md).
+(paper 000 eq. 7, corrected). The modified-gain rows (Song & Speyer 1985) use the measured
+angles, so for noise-free angles the MGEKF's only linearization error is ``tan e ~ e``;
+gates are ``nu' S^-1 nu <= chi2_nz^-1(P_G)`` with volume ``c_nz gamma^(nz/2) |S|^(1/2)``.
+See ``docs/papers/twin_sensor.md``, "Measurements" and "MGEKF".
 
-Modified-gain rows (Song & Speyer 1985; docs/papers/twin_sensor.md). With the *measured* angles
-``(th, ph)`` and the predicted relative position ``db = xbar[:3] - p``:
-
-    rho  = db_x cos th + db_y sin th
-    g_az = [-sin th, cos th, 0, 0, 0, 0] / rho
-    g_el = [-sin ph cos th, -sin ph sin th, cos ph, 0, 0, 0] / (rho cos ph + db_z sin ph)
-
-For noise-free angles ``tan(th - thbar) = g_az (x - xbar)`` and
-``tan(ph - atan2(db_z, rho)) = g_el (x - xbar)`` hold exactly, so the linearization error of
-the MGEKF is only that of ``tan e ~ e``.
-
-Gates: ``nu' S^-1 nu <= gamma`` with ``gamma = chi2_nz^-1(P_G)``; the gate volume is
-``c_nz gamma^(nz/2) |S|^(1/2)`` (Bar-Shalom & Fortmann 1988, sec. 2.3).
-
-References
-----------
-T. L. Song and J. L. Speyer, "A stochastic analysis of a modified gain extended Kalman filter
-with applications to estimation with bearings only measurements", IEEE TAC 30(10), 1985.
-Y. Bar-Shalom and T. E. Fortmann, *Tracking and Data Association*, Academic Press, 1988.
+References: Song T. L., Speyer J. L., IEEE TAC 30(10), 1985; Bar-Shalom Y., Fortmann T. E.,
+*Tracking and Data Association*, 1988, sec. 2.3.
 """
 
 from __future__ import annotations
