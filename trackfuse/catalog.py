@@ -1,19 +1,11 @@
 """Find the run folders under an output root and say what each one holds.
 
-A run folder is ``<root>/<config-stem>/<run-id>/`` with a ``manifest.json``; this module
-reads only manifests and file sizes (never the CSVs), so listing thousands of runs is quick.
-Each run's status is :func:`trackfuse.runstate.run_state` in words, as ``plot`` and
-``compare`` decide it; a folder whose manifest cannot be read is listed as
-:data:`~trackfuse.runstate.DAMAGED`. :func:`trackfuse.rundata.load` (which also compares
-checksums) says what is wrong.
-
-Each run's parameters come from its ``config.yaml`` (small): :func:`differences` picks, for
-each run, the values in which it differs from the other runs of its experiment listed, and
-:func:`runs` returns every run as one row of a DataFrame (``trackfuse.runs(path)``)::
-
-    import trackfuse
-    table = trackfuse.runs("results")   # experiment, status, name, seed, trials, params.*
-    table[table["params.clutter.mean"] == 5]
+Reads only manifests, file sizes and the small ``config.yaml`` (never the CSVs), so listing
+thousands of runs is quick. Each run's status is :func:`trackfuse.runstate.run_state` in
+words; an unreadable manifest is :data:`~trackfuse.runstate.DAMAGED` (``trackfuse.load`` says
+what is wrong). :func:`differences` picks the values in which each run differs from the other
+runs of its experiment; :func:`runs` (``trackfuse.runs(path)``) returns every run as one row
+of a DataFrame (``docs/outputs.md``).
 """
 
 from __future__ import annotations

@@ -2,19 +2,12 @@
 
 :func:`write_reproduction_report` reads finished run folders (each one's
 ``tables/paper_vs_reproduced.csv``, in the :data:`trackfuse.reports.HEADLINE_COLUMNS` schema,
-its figures and its config) and writes :data:`REPORT_MD` and :data:`REPORT_HTML` into the
-output root, with the notes of ``docs/papers/`` rendered beside them
-(:mod:`trackfuse.reportkit.notes`) so that each reason's link lands on its section.
-
-The page reads as a document: first the bottom line, one row per paper item with one
-verdict from the config declared to answer it (:func:`trackfuse.reportkit.verdicts.bottom_line`)
-and a one-line reason, the other configs' verdicts for the item folded under it; then a
-table of contents; per paper, every compared row (folded), each main figure once beside
-what the paper itself shows (for each paper item, the figure of the config that answers
-it), links to the other configs' main figures; last, a link to every run's own
-``index.html``. Numbers in one format (:mod:`trackfuse.reportkit.numberformat`), methods
-by their display names. The page needs no network and no JavaScript; its images are the
-run folders' PNG files, linked by relative paths.
+its figures and config) and writes :data:`REPORT_MD` and :data:`REPORT_HTML` into the output
+root, with the notes of ``docs/papers/`` rendered beside them
+(:mod:`trackfuse.reportkit.notes`). The page: the bottom line (one verdict per paper item,
+:func:`trackfuse.reportkit.verdicts.bottom_line`), then per paper every compared row, each
+main figure beside what the paper shows, and links to every run's ``index.html``
+(``docs/outputs.md``).
 """
 
 from __future__ import annotations

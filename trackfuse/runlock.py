@@ -1,16 +1,10 @@
 """One writer per run folder: an advisory lock held while a process writes the folder.
 
-``trackfuse run`` (from the client process for dask runs) and ``trackfuse plot`` hold
-:class:`RunLock` while they write. A second process that finds the folder locked stops with
-one line naming the holder (pid, host, start time) instead of computing the same batches or
-deleting the first one's temporary files.
-
-The lock is ``<run>/.lock``, taken with the ``filelock`` library (``flock`` on POSIX, so the
-operating system releases it when the holder dies, ``kill -9`` included). The holder writes
-who it is to ``<run>/.lock.holder.json`` and removes that file when it releases the lock, so
-finding the file while the lock is free means the previous holder was killed: the new
-process takes over with a one-line warning. On a network file system the lock is as good as
-that file system's ``flock``.
+``trackfuse run`` and ``trackfuse plot`` hold :class:`RunLock` (``<run>/.lock``, ``filelock``:
+``flock`` on POSIX, released by the OS when the holder dies); a second process stops with one
+line naming the holder. The holder records itself in ``<run>/.lock.holder.json`` and removes
+it on release, so that file beside a free lock means the previous holder was killed: the new
+process takes over with a warning. See ``docs/runner.md``, "One writer per run folder".
 """
 
 from __future__ import annotations

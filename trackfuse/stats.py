@@ -285,31 +285,15 @@ def bootstrap_t_mean_intervals(groups: Sequence[ArrayLike], level: float = 0.95,
                                resamples: int = 2000, seed: int = 0) -> np.ndarray:
     """Expanded bootstrap-t (studentized) interval of the mean of each array of ``groups``.
 
-    Each resample's mean is studentized by its own analytic standard error ``s* / sqrt(n)``;
-    the interval is ``mean - q_hi s / sqrt(n), mean - q_lo s / sqrt(n)`` with ``q_lo, q_hi``
-    the ``alpha', 1 - alpha'`` quantiles of the resampled t values (Efron & Tibshirani 1993,
-    ch. 12.5), where ``alpha' = Phi(sqrt(n / (n - 1)) t_{n-1}((1 - level) / 2))`` is
-    Hesterberg's expansion for small samples (Hesterberg 2015, Am. Stat. 69, 371-386),
-    which widens it at n = 8 and hardly at all at n = 50. Hesterberg proposes it for the
-    percentile interval; on a bootstrap-t it is our choice, made on the coverage measured
-    below (without it: 0.913-0.938 at n = 8, 0.943-0.948 at n = 50), and it errs on the wide
-    side (at n = 8 the tail quantiles rest on about 11 of 2000 resamples). A resample with
-    no spread has an infinite t (``+-inf``, 0 when its mean is the sample's), so with few
-    distinct values a bound can be infinite: the data do not bound the mean. A sample with
-    no spread gives ``(mean, mean)``.
+    Each resample's mean is studentized by its own ``s* / sqrt(n)``; the interval is ``mean - q_hi
+    s / sqrt(n), mean - q_lo s / sqrt(n)`` with ``q_lo, q_hi`` the resampled t quantiles at
+    Hesterberg's expanded ``alpha'`` (``docs/statistics.md``: method and measured coverage). A
+    bound can be infinite when the data do not bound the mean; a sample with no spread gives
+    ``(mean, mean)``.
 
-    groups : sequence of ``(n_i,)`` arrays (non-finite values dropped); groups of equal
-        size share one draw of resampling indices (generator ``seed``), the draw a separate
-        call would make, so a group's interval does not depend on the others.
-    Returns ``(len(groups), 2)`` (low, high); NaN where a group has fewer than 2 values.
-
-    Measured coverage (nominal 95 %; ``examples/interval_coverage.py`` on
-    ``configs/twin_sensor_orbit.yaml`` run with ``--set trials=4000``: the squared
-    final-scan range errors of nearest neighbour with MGEKF and EKF at clutter 0 and 9 as
-    the population, 1000 samples each, Monte Carlo s.e. 0.005-0.013) of the RMSE interval
-    :func:`rmse_intervals` built on it: 0.961-0.975 at n = 8 and 0.951-0.954 at n = 50,
-    where the percentile bootstrap covers 0.782-0.809 and 0.906-0.924 (``docs/statistics.md``
-    gives the command)."""
+    ``groups``: ``(n_i,)`` arrays (non-finite values dropped); groups of equal size share one
+    draw of resampling indices (generator ``seed``), the draw a separate call would make.
+    Returns ``(len(groups), 2)`` (low, high); NaN where a group has fewer than 2 values."""
     from scipy.special import ndtr, stdtrit  # on first use: see the module docstring
 
     clean = [np.asarray(g, dtype=float)[np.isfinite(np.asarray(g, dtype=float))]

@@ -1,17 +1,10 @@
 """Where a run keeps its trial rows: ``trials.csv`` (the default) or ``trials.parquet``.
 
-A config's ``outputs.store: parquet`` keeps the rows in Apache Parquet (columnar, zstd
-compressed; needs pyarrow, the ``parquet`` extra) instead of CSV. The runner always merges
-its verified parts into ``trials.csv`` first; :func:`write_parquet` then converts that file
-in fixed chunks of :data:`CHUNK_ROWS` rows and removes it, so the Parquet file holds the
-same rows in the same order, and since the CSV is byte-identical for any worker count,
-executor and resume, so is the Parquet file (pyarrow writes no time stamp).
-
-Types: each column gets the type ``pandas.read_csv(path, low_memory=False)`` gives it when
-reading the whole CSV (an integer column with a missing value is float, a text column is
-text), found in a first pass over the chunks, so :func:`read_trials` returns the same frame
-from either file. Every reader of a run's rows (``trackfuse.load``, the summary, ``plot``,
-``compare``) goes through :func:`trials_file`, :func:`read_trials` and :func:`chunks`.
+With ``outputs.store: parquet`` (pyarrow, the ``parquet`` extra) the merged ``trials.csv`` is
+converted in chunks of :data:`CHUNK_ROWS` rows, with the column types ``pandas.read_csv``
+would give, and removed: the same rows in the same order, byte-identical for any worker
+count (pyarrow writes no time stamp). Every reader of a run's rows goes through
+:func:`trials_file`, :func:`read_trials` and :func:`chunks` (``docs/outputs.md``).
 """
 
 from __future__ import annotations

@@ -1,15 +1,9 @@
 """Sweep axes: value parsing, command-line overrides, and expansion into points.
 
-An axis is a list of values or the string ``"range(start, stop[, step])"`` (stop excluded,
-as in Python; floats allowed). Axes combine as a full grid (``itertools.product`` in the
-order the axes are written; the last axis varies fastest) or, with ``sweep_mode: zip``,
-element by element.
-
-Overrides follow Hydra's spelling: ``--set a.b=1`` and ``--sweep a.b=0,5,10`` or
-``--sweep "a.b=range(0,21,2)"``. Values are parsed as YAML scalars (``1`` is an int, ``1.5``
-a float, ``true`` a bool, anything else a string); ``[1, 2]`` is a list. A comma separates
-sweep values only outside brackets and quotes, so ``--sweep "algorithms=[a,b],[c]"`` is an
-axis of two lists.
+An axis is a list of values or ``"range(start, stop[, step])"`` (stop excluded; floats
+allowed). Axes combine as a grid (the last axis varies fastest) or, with ``sweep_mode: zip``,
+element by element. Overrides: ``--set a.b=1``, ``--sweep a.b=0,5,10`` (values parsed as YAML
+scalars; a comma separates values only outside brackets and quotes). See ``docs/configs.md``.
 """
 
 from __future__ import annotations

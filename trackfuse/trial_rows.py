@@ -1,19 +1,12 @@
 """What a trial may return, checked one way for both forms (row dicts and a RowTable).
 
-A trial's rows (``run_trial``'s list of dicts, or its rows in a batch's
-:class:`~trackfuse.rowtable.RowTable`) must be a non-empty list of plain dicts whose column
-names are strings, carry every declared metric and row key, name no parameter and no runner
-column (:data:`~trackfuse.rowformat.RUNNER_COLUMNS`), give every declared metric as a real
-number, hold one row per combination of row keys (two rows of one algorithm were pooled as
-two trials, and the intervals came out too narrow), and write as UTF-8 text. Anything else
-fails the trial with a :class:`TypeError` saying what and naming the column: it becomes the
-trial's ``failed`` row. A result whose own methods raise (a list whose ``__bool__`` raises,
-a dict whose ``items()`` does) fails the same way: nothing a trial returns reaches the run's
-own code unchecked.
-
-A RowTable is checked column by column first (:func:`table_problem`, :func:`table_suspect`);
-a table whose values look wrong is read trial by trial through :func:`checked_rows`, which
-finds the trials at fault.
+A trial's rows must be a non-empty list of plain dicts with string column names that carry
+every declared metric (a real number) and row key, name no parameter and no runner column
+(:data:`~trackfuse.rowformat.RUNNER_COLUMNS`), hold one row per combination of row keys, and
+write as UTF-8. Anything else (including a result whose own methods raise) fails the trial
+with a :class:`TypeError` naming the column. A RowTable is checked column by column first
+(:func:`table_problem`, :func:`table_suspect`); a suspect table is read trial by trial through
+:func:`checked_rows` to find the trials at fault.
 """
 
 from __future__ import annotations

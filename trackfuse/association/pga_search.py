@@ -1,19 +1,11 @@
 """The partheno-genetic algorithm's search (:mod:`trackfuse.association.pga`), compiled.
 
-:func:`pga` runs the algorithm on one assignment problem. The setup (orientation, roulette
-weights, initial solution), the random draws (numpy blocks,
-:func:`~trackfuse.association.pga.draw_blocks`) and the collection are
-:mod:`trackfuse.association.pga`'s; the genetic operations run compiled (numba), on arrays.
-Their plain-Python oracle, ``tests/pga_reference.py``, does the same on lists: the same
-column choices (the roulette's binary search over the integer cumulative weights), the same
-moves, the same floating-point operations in the same order (``J`` grows by the same gains,
-the Metropolis test is ``u < exp(dJ / T)`` and ``T`` is multiplied by the same cooling
-factor after every operation). ``tests/test_pga_kernel.py`` pins the two exactly.
-
-The loop runs from checkpoint to checkpoint (and block to block of draws), so the wall time
-of each checkpoint is measured as in the oracle. The compiled code is cached on disk
-beside this module (``cache=True``): the first run on a machine compiles it (a few
-seconds), later processes load it.
+:func:`pga` runs the algorithm on one problem: the setup, the random draws
+(:func:`~trackfuse.association.pga.draw_blocks`) and the collection are
+:mod:`trackfuse.association.pga`'s; the genetic operations run compiled (numba, cached on disk
+beside this module), from checkpoint to checkpoint. The plain-Python oracle
+``tests/pga_reference.py`` makes the same choices and floating-point operations in the same
+order; ``tests/test_pga_kernel.py`` pins the two exactly.
 """
 
 from __future__ import annotations

@@ -1,17 +1,10 @@
-"""Aligning radar samples to ESM sample times (paper 001 eq. 1-2, corrected).
+"""Aligning radar samples to ESM sample times (paper 001 eq. 1-2, corrected; W001-7).
 
-Radar samples ``y(m)`` at ``t_m = m T_R``; the ESM samples at ``t_g``. With
-``t1 <= t_g < t2`` the neighbouring radar times and ``a = (t_g - t1) / (t2 - t1)``:
-
-* eq. 1 (correct as printed): ``y(t_g) = y(t1) + a (y(t2) - y(t1))``;
-* eq. 2 (corrected, W001-7 in ``docs/papers/esm_radar.md``): for independent errors of equal
-  variance ``sigma^2``, ``var y(t_g) = sigma^2 ((1 - a)^2 + a^2)``, which is at most
-  ``sigma^2``. The printed ``sigma^2 (1 + 2 (dt/(t2 - t1))^2)`` is not the variance of the
-  interpolant; any motion-model error term it might stand for is unspecified and not
-  modelled here.
-
-Without alignment the most recent radar sample (``a = 0``, zero-order hold) is used, which is
-the same thing when the sensors are synchronous.
+With ``t1 <= t_g < t2`` the neighbouring radar times and ``a = (t_g - t1) / (t2 - t1)``:
+``y(t_g) = y(t1) + a (y(t2) - y(t1))`` (eq. 1) and, for independent errors of variance
+``sigma^2``, ``var y(t_g) = sigma^2 ((1 - a)^2 + a^2)`` (eq. 2 corrected). Without alignment
+the latest radar sample is used (``a = 0``), the same for synchronous sensors. See
+``docs/papers/esm_radar.md``, "Time alignment".
 """
 
 from __future__ import annotations
