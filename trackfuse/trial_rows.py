@@ -87,12 +87,10 @@ def _shown(value: Any) -> str:
 
 def column_problem(experiment: Experiment, columns: list[Any], producer: str
                    ) -> TypeError | None:
-    """A ``TypeError`` naming what is wrong with the column names of a trial's (or a
-    batch's) rows, else ``None``: a name that is not a string, a declared metric or a row
-    key missing (a misspelt metric left it out of the summary and the report; rows without
-    ``algorithm`` were pooled into one cell, unsaid), or a column named like a parameter (it
-    overwrote a swept value) or like a runner column (``status``/``error`` forged a
-    failure)."""
+    """A ``TypeError`` naming what is wrong with the column names of a trial's (or a batch's)
+    rows, else ``None``: a name that is not a string, a missing declared metric or row key (it
+    would drop out of the summary, or pool rows into one cell), or a column named like a
+    parameter or a runner column (it would overwrite a swept value or forge a failure)."""
     if odd := [_shown(c) for c in columns if type(c) is not str]:
         return TypeError(f"{producer} returned rows with column names that are not strings: "
                          f"{', '.join(odd)}; allowed: str")

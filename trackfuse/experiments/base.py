@@ -35,20 +35,13 @@ KINDS = (float, int, bool, str, list)
 class Param:
     """One parameter of an experiment's schema.
 
-    Bounds are given by keyword (``low=``, ``high=``); dimensionless quantities have unit
-    ``"1"`` (probabilities: unit ``"1"``, ``low=0.0, high=1.0`` or tighter), free text has
-    unit ``""``. ``kind`` is one of ``float``, ``int``, ``bool``, ``str`` or ``list`` (a
-    non-empty list of numbers, of integers when ``item_kind`` is ``int``, or of strings when
-    ``choices`` is given, each choice at most once); ``low``/``high`` are inclusive bounds for
-    numbers (and for every element of a list); ``choices`` restricts strings (or numbers, or
-    every element of a list) to a fixed set; ``length`` fixes the number of items of a list
-    (a position's 3 coordinates).
-
-    ``draws``: whether the parameter changes what is simulated (the scene, the sensor
-    returns, the clutter) rather than only what is computed from it (an algorithm or its
-    settings, a filter's model or prior, the scoring). Sweep points that differ only in
-    parameters with ``draws=False`` share their point stream (``docs/runner.md``, seeding);
-    ``True``, the default, keeps a point's own stream (the safe choice for a plugin)."""
+    ``unit``: ``"1"`` dimensionless (probabilities: ``low=0.0, high=1.0`` or tighter), ``""``
+    free text. ``kind``: ``float``, ``int``, ``bool``, ``str`` or ``list`` (non-empty; of
+    ``item_kind`` numbers, or of distinct strings from ``choices``); ``low``/``high``: inclusive
+    bounds (of each element of a list); ``choices``: the allowed values; ``length``: a list's
+    fixed length. ``draws``: whether it changes what is simulated (scene, returns, clutter)
+    rather than what is computed from it; points that differ only in ``draws=False`` keys share
+    their point stream (``docs/runner.md``, "Seeding"); ``True`` is the safe default."""
 
     key: str
     default: Any
@@ -112,22 +105,14 @@ AGGREGATES = ("mean", "rms")
 class Metric:
     """One metric column of an experiment's rows.
 
-    ``unit``: its unit (``"1"`` for dimensionless); ``binary``: 0/1 per row (Wilson
-    intervals); ``better``: ``"lower"`` or ``"higher"`` when a change in one direction is a
-    regression (``trackfuse.compare`` gates it), ``None`` for a diagnostic; ``categorical``:
-    a label stored as a number (a chosen track's index), counted per value by the report and
-    never averaged: ``summary.csv`` has no row for it and ``compare`` skips it; ``bounds``:
-    ``(low, high)`` that every value lies in (:data:`FRACTION`, :data:`NON_NEGATIVE`), to
-    which ``summary.csv`` clips the mean's interval (a Student-t interval of a fraction near
-    1 otherwise passes 1); ``aggregate``: how ``summary.csv`` sums it up over trials,
-    ``"mean"`` (the mean of the per-trial values, with a t or Wilson interval) or ``"rms"``
-    (each trial's value is an error ``e`` in ``unit``: the root mean square
-    ``sqrt(mean(e^2))`` with the expanded bootstrap-t interval of
-    :func:`trackfuse.stats.rmse_intervals`, the built-in reports' RMSE interval; ``compare``
-    compares its mean square); ``optional``: a column only the runs of some algorithms
-    write (a track-existence filter's), NaN on the rows of the others; a run without those
-    algorithms leaves it out.
-    """
+    ``unit`` (``"1"`` dimensionless); ``binary``: 0/1 (Wilson intervals); ``better``:
+    ``"lower"``/``"higher"`` for a metric ``trackfuse compare`` gates, ``None`` for a diagnostic;
+    ``categorical``: a label stored as a number, never averaged (no summary row); ``bounds``:
+    ``(low, high)`` every value lies in, to which the summary clips the interval;
+    ``aggregate``: ``"mean"`` (t or Wilson interval) or ``"rms"`` (a per-trial error ``e``:
+    ``sqrt(mean(e^2))`` with :func:`trackfuse.stats.rmse_intervals`; ``compare`` compares the
+    mean square); ``optional``: a column only some algorithms write (NaN on the others' rows),
+    left out of a run without them."""
 
     name: str
     unit: str
@@ -158,9 +143,8 @@ class Metric:
 
 
 def column_name_problem(name: object) -> str | None:
-    """What is wrong with ``name`` as a column of ``trials.csv`` (a metric's or a row key's),
-    else ``None``: an empty name became 'Unnamed: 4' in the summary and escaped the
-    regression gate; a line break in it left ``summary.csv`` empty."""
+    """What is wrong with ``name`` as a column of ``trials.csv`` (a metric's or a row key's), else
+    ``None``: it must be non-empty and on one line for the summary and the gate to read it."""
     if not isinstance(name, str) or not name.strip():
         return "the name is empty or not a string; allowed: a non-empty str"
     if not name.isprintable() or name != name.strip():
