@@ -7,6 +7,8 @@ import ast
 import dataclasses
 import errno
 import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pandas as pd
@@ -63,6 +65,25 @@ def test_a_headline_row_shows_the_papers_value_as_printed_and_no_interval_of_an_
     assert shown.loc[0, "95 % CI"] == "" and shown.loc[1, "95 % CI"] == "0.800\u20130.950"
     first = reports.markdown_table(shown).splitlines()[2].split(" | ")
     assert first[3:8] == ["0.059375", "0.0594", "", "1", ""]  # paper, ours, CI, unit, trials
+
+
+def test_the_report_prepares_its_module_once_before_it_draws(toy_run):
+    toy_report.PREPARED.clear()
+    write_report(toy_run)
+    assert [toy_run.path] == toy_report.PREPARED
+
+
+def test_loading_ahead_runs_no_experiment_code():
+    """What the runner loads while its workers compute: libraries only, never a report
+    module (report code belongs to the report step)."""
+    code = ("import sys\n"
+            "from trackfuse.reports import load_drawing\n"
+            "load_drawing(['png'])\n"
+            "print(sorted(m for m in sys.modules if m.startswith('trackfuse.experiments.')"
+            " and m != 'trackfuse.experiments.base'), 'matplotlib' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.strip()
+    assert out == "[] True"
 
 
 def test_a_wanted_figure_the_report_cannot_draw_is_listed_with_its_reason(toy_run):

@@ -440,14 +440,13 @@ def test_the_anees_band_counts_the_runs_with_a_nees(small_run):
 
 
 def test_prepare_computes_every_bound_the_tables_use(shipped):
-    """After ``prepare`` (run while the workers compute, inherited by the drawing
-    processes) the tables and the range-error figure compute no bound of their own."""
+    """After ``prepare`` (called by the report before it forks the drawing processes) the
+    tables and the range-error figure compute no bound of their own."""
     from trackfuse.experiments.twin_sensor.model import _bounds_cached
-    from trackfuse.reports import load_drawing
 
     run = shipped("twin_sensor_orbit")
     _bounds_cached.cache_clear()
-    load_drawing(EXPERIMENT.report, ["png"], run.path)
+    report.prepare(run)
     prepared = _bounds_cached.cache_info()
     assert prepared.currsize == 2 * len(run.points)
     report.tables(run)

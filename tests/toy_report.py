@@ -11,6 +11,14 @@ from trackfuse.plots.style import band, new_figure
 from trackfuse.reportkit.verdicts import AGREES, DIFFERS
 from trackfuse.rundata import RunData
 
+#: The run folders :func:`prepare` was called for, in order (the tests read it).
+PREPARED: list[object] = []
+
+
+def prepare(run: RunData) -> None:
+    """Note the run: the report calls this once, before it draws."""
+    PREPARED.append(run.path)
+
 
 def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure | str]:
     """``estimate``: mean estimate per algorithm with its t band, against the point;

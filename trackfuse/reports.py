@@ -55,7 +55,7 @@ from trackfuse.results import (
 )
 from trackfuse.rowformat import FAILED_ROW
 from trackfuse.rowtable import frame_csv
-from trackfuse.rundata import RunData, load, swept_keys
+from trackfuse.rundata import RunData, swept_keys
 from trackfuse.store import trials_file
 from trackfuse.trial_guard import PLUGIN_FAILURES, guarded
 
@@ -367,25 +367,23 @@ def figure_formats(config: dict[str, Any]) -> list[str]:
     return list((config.get("outputs") or {}).get("formats") or ["png", "pdf"])
 
 
-def load_drawing(report_module: str | None, formats: Sequence[str],
-                 folder: Path | None = None) -> None:
-    """Import ``report_module`` (an experiment's report module, and with it matplotlib),
-    warm up the house style and, given the run ``folder``, call the module's ``prepare``:
-    what drawing a run's report needs first, done ahead of time (the runner calls this in a
-    thread while its workers compute). A module that fails, or whose ``prepare`` fails, is
-    left for :func:`write_report` to report: its tables and figures meet the same fault."""
-    if not report_module:
-        return
-    try:
-        module = importlib.import_module(report_module)
-    except Exception:  # noqa: BLE001 - write_report imports it again and says why it fails
-        return
+def load_drawing(formats: Sequence[str]) -> None:
+    """Import matplotlib and warm up the house style for ``formats``: the libraries drawing
+    needs first, loaded ahead (the runner calls this in a thread while its workers compute).
+    No experiment code runs here: :func:`write_report` imports the report module and calls
+    its ``prepare``."""
     from trackfuse.reportkit.style import warm_up  # matplotlib: see the module docstring
 
     warm_up(tuple(formats), PNG_DPI)
-    if folder is not None and hasattr(module, "prepare"):
-        with contextlib.suppress(Exception):  # a cache left cold: see the docstring
-            module.prepare(load(folder, require_complete=False))
+
+
+def _prepare(run: RunData, module: ModuleType) -> None:
+    """The report module's optional ``prepare(run)``: what its tables and figures both derive
+    from the config, computed once into its caches, which the drawing processes inherit. A
+    failure is left to the tables and figures, which meet it and say so."""
+    if hasattr(module, "prepare"):
+        with contextlib.suppress(*PLUGIN_FAILURES), guarded():
+            module.prepare(run)
 
 
 def wanted_figures(run: RunData) -> list[str]:
@@ -452,6 +450,7 @@ def write_report(run: RunData, wanted: Collection[str] | None = None,
     module = _module(run, report)
     tables: dict[str, pd.DataFrame] = {}
     if module is not None:
+        _prepare(run, module)
         _write_figures(run, module, list(wanted), formats, report,
                        meanwhile=lambda: tables.update(_write_tables(run, module, report)))
     if HEADLINE_TABLE in tables:  # its reasons link into the notes on the paper

@@ -604,17 +604,18 @@ class Runner:
             self._note_other_cpu(session.previous)
 
     def _load_finishing_code(self, executor_kind: str) -> threading.Thread | None:
-        """While the workers compute, load in this process what the steps after them need
-        first (scipy.special for the summary's intervals; the report module, matplotlib, the
-        warmed-up house style and the report's ``prepare``): about a second that would
-        otherwise follow the last batch. Not when the batches run in this process (serial)."""
+        """While the workers compute, load in this process the libraries the steps after
+        them need first (scipy.special for the summary's intervals; matplotlib and the
+        warmed-up house style for the report), no experiment code. Not when the batches run
+        in this process (serial)."""
         if executor_kind == "serial":
             return None
-        report = self.config.experiment.report if self.plots else None
+        drawing = self.plots and bool(self.config.experiment.report)
 
         def load_ahead() -> None:
             importlib.import_module("scipy.special")
-            load_drawing(report, figure_formats(self.resolved), self.folder.path)
+            if drawing:
+                load_drawing(figure_formats(self.resolved))
 
         thread = threading.Thread(target=load_ahead, name="trackfuse-load-finishing-code",
                                   daemon=True)
