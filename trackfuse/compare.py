@@ -367,16 +367,10 @@ def _with_fixed_keys(run: RunData, keys: Sequence[str], role: str) -> pd.DataFra
 
 
 def _pairing(base: Mapping, new: Mapping) -> tuple[bool, str]:
-    """Whether trials of the resolved configs ``base`` and ``new`` pair by index, and how.
-
-    Trial ``t``'s common stream (truth, noise) depends on the root seed and ``t`` alone
-    (:func:`trackfuse.seeding.trial_streams`), never on the trial count, the batch size or
-    the worker: with one seed, trial ``t`` of both runs has the same common draw, so the
-    trials both runs have pair by index; with two seeds no trial does. Its point stream
-    (clutter) is the same only where both sweeps give the point the same draw point
-    (:func:`trackfuse.seeding.draw_points`: the same sweep, or one that differs only in
-    values of non-drawing parameters after the drawing ones); the pairs stay independent
-    from trial to trial either way, so the paired tests hold, and gain most where it is."""
+    """Whether trials of the resolved configs ``base`` and ``new`` pair by index, and how: with
+    one root seed trial ``t`` has the same common draw in both runs (its point stream only where
+    both give the point the same draw point); with two seeds no trial pairs
+    (``docs/statistics.md``)."""
     seeds, trials = (base.get("seed"), new.get("seed")), (base.get("trials"), new.get("trials"))
     if seeds[0] != seeds[1]:
         return False, f"(the seeds differ, {seeds[0]} and {seeds[1]}: no trial is shared)"

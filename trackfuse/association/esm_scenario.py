@@ -1,39 +1,16 @@
 """Paper 001 world: snake-weaving and crossing targets and the five association factors.
 
-Geometry (``docs/papers/esm_radar.md``, section "Model"). Own aircraft A1 and A2 sit in a
-static 2-D frame (the paper ignores own motion). Three targets fly toward them:
+Own aircraft A1 and A2 sit still; T1 weaves (``x = x0 + A sin(2 pi t / P_w)``,
+``y = y0 - V t``), T2 = T1 + (sep, 0), and T3 flies straight through their centre line at
+``t_c``. The factors (:data:`FACTORS`, paper 001's Table 1 order, all measured at A1): range
+(m), speed (m/s), bearing (rad), TDOA (s) and interferometer phase (rad). The ESM sees T2 only,
+its range from the TDOA-DF inversion (:mod:`trackfuse.association.tdoa_df`, correlated with
+bearing and TDOA: :func:`esm_factors` returns the full covariance); the radar's TDOA and
+phase are either Table 2 noise (``table``) or computed from its measured position
+(``derived``). See ``docs/papers/esm_radar.md``, "Scenario" and "Factors and sensor models".
 
-* T1: ``x = x0 + A sin(2 pi t / P_w)``, ``y = y0 - V t`` (a snake manoeuvre; peak lateral
-  acceleration ``A (2 pi / P_w)^2``, 24.7 m/s^2 for the defaults);
-* T2 = T1 + (sep, 0): the same manoeuvre side by side;
-* T3: a straight line from ``p3`` through the T1/T2 centre-line midpoint
-  ``(x0 + sep/2, y0 - V t_c)`` at ``t_c``, so the crossing is simultaneous in time.
-
-Factors of a target at position ``p`` with velocity ``v`` (order :data:`FACTORS`, the order of
-paper 001's AHP Table 1):
-
-=========  =======  ==============================================================
-range      m        ``|p - A1|``
-speed      m/s      ``|v|``
-angle      rad      ``atan2(p_y - A1_y, p_x - A1_x)``
-tdoa       s        ``(|p - A1| - |p - A2|) / c``
-phase      rad      ``2 pi (d/lambda) cos(angle)`` (interferometer on A1, baseline along x)
-=========  =======  ==============================================================
-
-Sensor factor models (paper 001 Table 2):
-
-* ESM (target 2 only): bearing, TDOA, speed and phase each carry independent Gaussian noise;
-  the range comes from the TDOA-DF inversion (:mod:`trackfuse.association.tdoa_df`), so it is
-  correlated with bearing and TDOA; :func:`esm_factors` returns the full covariance.
-* radar, ``"table"`` model: every factor is truth plus independent Gaussian noise, range sd a
-  fraction of the range (Table 2 read literally).
-* radar, ``"derived"`` model: the radar measures range, bearing and speed; its TDOA and phase
-  are computed from the measured position (a radar cannot observe the emission's time
-  difference), so their errors follow from range and bearing (first order).
-
-References
-----------
-Zhang Xiaoqiang et al., J. Air Force Eng. Univ. (Nat. Sci.) 18(1), 2017, 44-49, sec. 3.
+Reference: Zhang Xiaoqiang et al., J. Air Force Eng. Univ. (Nat. Sci.) 18(1), 2017, 44-49,
+sec. 3.
 """
 
 from __future__ import annotations

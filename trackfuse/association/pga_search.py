@@ -48,19 +48,13 @@ def pga(weights: PairWeights, rng: np.random.Generator, ops: int = 1000,
         t1: float = 0.01) -> PGAResult:
     """Run the (improved) partheno-genetic algorithm on one assignment problem.
 
-    Parameters: ``weights`` the scan's :class:`PairWeights` (m1 x m2, either orientation). ``rng``
-    the algorithm's own random stream. ``ops`` number of genetic operations. ``checkpoints``
-    operation counts at which the best solution is recorded; counts above ``ops`` are ignored and
-    ``ops`` itself is always added. ``p_m`` mutation probability per operation. ``init``
-    ``"random_B"`` (random injection of the rows into distinct columns) or ``"standard"`` (row i in
-    column i, paper eq. 31). ``roulette`` ``"worse"`` (weight num(j)) or ``"better"`` (weight m1 + 2
-    - num(j)). ``second`` second crossover column by ``"roulette"`` over the rest or ``"uniform"``.
-    ``repair_moves`` enable the re-pair move (module docstring). ``evict`` half of the re-pair moves
-    pick any column, whose row then goes to the dummy column (:func:`exchange`); otherwise re-pair
-    only into empty columns. ``staged`` evaluate (and accept or reject) the crossover offspring and
-    the mutation offspring separately within one operation, instead of only their combination.
-    ``accept`` ``"monotone"`` or ``"anneal"``. ``t0``, ``t1`` initial and final annealing
-    temperatures, in units of J (nats)."""
+    ``weights``: the scan's :class:`PairWeights` (either orientation); ``rng``: the algorithm's
+    own stream; ``ops`` genetic operations, the best solution recorded at ``checkpoints`` (``ops``
+    always added, larger counts ignored); ``p_m``: mutation probability; ``init``: ``random_B``
+    or ``standard`` (eq. 31); ``roulette``: ``worse`` (weight num(j)) or ``better``; ``second``:
+    ``roulette`` or ``uniform``; ``repair_moves``, ``evict``, ``staged``, ``accept``
+    (``monotone``/``anneal``, temperatures ``t0`` to ``t1`` in nats): the variants of
+    ``docs/papers/passive_assoc.md``, "Partheno-genetic algorithm"."""
     start = time.perf_counter()
     w, rank, transpose = orient(weights, roulette)
     marks, anneal, cool = schedule(ops, checkpoints, accept, second, t0, t1)

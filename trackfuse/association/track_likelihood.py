@@ -20,17 +20,10 @@ from trackfuse.chi2 import chi2_quantile
 def gaussian_nll_terms(d: np.ndarray, S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Squared Mahalanobis distance and log-determinant, batched.
 
-    The covariance is scaled to a correlation matrix before solving, because the factors'
-    units differ by ~20 orders of magnitude (seconds of TDOA against metres of range). An LU
-    solve is used rather than a Cholesky factorization: when the TDOA-DF range is included
-    its covariance is an exact function of the ESM bearing and TDOA ones, and with the
-    ``derived`` radar model ``S`` can then be numerically singular (condition numbers up to
-    1e17 in paper 001's geometry), where Cholesky fails. Without the range the condition
-    number is below 2.
-
-    Parameters: ``d`` (..., F) differences; ``S`` (..., F, F) symmetric positive definite
-    covariances.
-    Returns ``m2`` (...,) ``d' S^-1 d``; ``logdet`` (...,) ``log |S|``."""
+    ``S`` is scaled to a correlation matrix (the factors' units differ by ~20 orders of
+    magnitude) and solved by LU, not Cholesky: with the TDOA-DF range and the ``derived`` radar
+    model ``S`` can be numerically singular (condition numbers up to 1e17). ``d`` (..., F),
+    ``S`` (..., F, F). Returns ``m2`` (...,) ``d' S^-1 d`` and ``logdet`` (...,) ``log |S|``."""
     s = np.sqrt(np.diagonal(S, axis1=-2, axis2=-1))
     Cn = S / (s[..., :, None] * s[..., None, :])
     e = d / s
@@ -56,22 +49,12 @@ def ml_track_decision(d: np.ndarray, S: np.ndarray) -> tuple[np.ndarray, np.ndar
 
 def abstaining_decision(j: np.ndarray, log_lr: np.ndarray, D_best: np.ndarray, dof: int,
                         lr_threshold: float, gate_alpha: float) -> np.ndarray:
-    """ML decision with a "no decision" outcome (W001-6: the paper always forces a choice).
+    """ML decision that may answer "no decision" (W001-6: the paper always forces a choice).
 
-    Two tests, both standard in track-to-track association:
-
-    * **gate** (goodness of fit): under the hypothesis that the best track is the ESM target,
-      ``D_best`` is chi-square with ``dof = K F`` degrees of freedom; it is rejected (no
-      radar track matches) when ``D_best > chi2.ppf(1 - gate_alpha, dof)``. ``gate_alpha = 0``
-      switches the gate off.
-    * **ambiguity** (likelihood ratio): the best track is declared only if its likelihood
-      beats the runner-up's by ``log_lr >= lr_threshold``; ``log(19)`` means 95 % posterior
-      probability between the two with equal priors. Near-identical tracks (T1 and T2 of
-      paper 001 at small separation) then yield "no decision" instead of a coin flip.
-
-    Parameters: ``j`` (...,) ML choice (0-based). ``log_lr`` (...,) best-vs-second log-likelihood
-    ratio. ``D_best`` (...,) chi-square distance of the chosen track. ``dof`` degrees of freedom.
-    ``lr_threshold`` >= 0. ``gate_alpha`` gate false-rejection probability in [0, 1).
+    Gate: ``D_best`` above the ``1 - gate_alpha`` quantile of chi-square with ``dof = K F``
+    degrees of freedom means no track fits (``gate_alpha = 0``: no gate). Ambiguity: the best
+    track is declared only if ``log_lr >= lr_threshold`` over the runner-up (``log(19)``: 95 %
+    posterior between the two). ``j`` (...,) ML choice (0-based); ``log_lr``, ``D_best`` (...,).
     Returns (...,) int: ``j`` where both tests pass, else -1."""
     ok = log_lr >= lr_threshold
     if gate_alpha > 0:

@@ -84,25 +84,15 @@ def position_bound(Jinv: np.ndarray) -> np.ndarray:
 
 def irf_q2(lam_w: float, P_D: float = 1.0, n_samples: int = 1_000_000,
            half_width: float = 6.0, seed: int = 0) -> tuple[float, float]:
-    """Information-reduction factor ``q2`` for a 2-D measurement and its standard error.
+    """Information-reduction factor ``q2`` for a 2-D measurement, and its standard error.
 
-    ``lam_w`` is the clutter density in whitened coordinates (per unit area), ``P_D`` in
-    ``(0, 1]`` the detection probability. Clutter is Poisson and uniform on the square
-    ``[-half_width, half_width]^2`` (``P_G = 1`` up to a negligible truncation). Monte Carlo
-    over ``n_samples`` samples from a fixed seed, ``_IRF_CHUNK`` at a time; unbiased but for
-    an ``O(1/n_samples)`` term from the fitted control-variate coefficient. Each sample is
-
-        g = p0 |s(z_t)|^2 / 2 + (1 - p0) |s(z_t, clutter)|^2 / 2
-
-    with ``p0 = exp(-mu)`` the probability of no clutter on the square (mean count ``mu``),
-    the clutter drawn given at least one point, and ``z_t`` the target measurement (kept with
-    probability ``P_D``): every sample evaluates both cases of the count, weighted by their
-    exact probabilities, so every sample sees clutter even at low density. The square is
-    invariant under a quarter turn, so ``E[s_1^2] = E[|s|^2 / 2]``. The control variate
-    ``c = |z_t|^2 / 2`` if detected, else 0, has the known mean ``P_D`` and equals ``g``
-    without clutter when ``P_D = 1``: the estimate is ``mean(g) - beta (mean(c) - P_D)``,
-    ``beta`` fitted on the same samples. The target measurements have a stream of their
-    own, the same at every ``lam_w`` (common random numbers)."""
+    ``lam_w``: clutter density per unit whitened area; ``P_D`` in ``(0, 1]``. Clutter is Poisson
+    and uniform on ``[-half_width, half_width]^2``. Monte Carlo over ``n_samples`` from a fixed
+    seed (``_IRF_CHUNK`` at a time): each sample evaluates both "no clutter" (probability
+    ``p0 = exp(-mu)``) and "at least one point", weighted exactly, so every sample sees clutter
+    even at low density; ``E[s_1^2] = E[|s|^2 / 2]`` by the square's symmetry; the control
+    variate ``c = |z_t|^2 / 2`` if detected (mean ``P_D``) is fitted on the same samples. The
+    target measurements are the same at every ``lam_w`` (common random numbers)."""
     if lam_w <= 0.0 or P_D <= 0.0:  # no clutter, or no detection: nothing to estimate
         return float(P_D), 0.0
     mu = lam_w * (2.0 * half_width) ** 2
