@@ -64,8 +64,7 @@ def lambda_max(B: np.ndarray, a: np.ndarray | None = None) -> float:
 
     Parameters: ``B`` (n, n) judgement matrix. ``a`` (n,) weights, optional. If given, returns the
     hand-calculation estimate ``(1/n) sum_i (B a)_i / a_i``, which equals the principal eigenvalue
-    exactly when ``a`` is the principal eigenvector.
-    Returns float"""
+    exactly when ``a`` is the principal eigenvector."""
     B = _check(B)
     if a is None:
         return float(np.max(np.real(np.linalg.eigvals(B))))

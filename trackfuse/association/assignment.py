@@ -94,7 +94,7 @@ def pair_weights(z1: np.ndarray, z2: np.ndarray, s1: np.ndarray, s2: np.ndarray,
                  psi: tuple[float, float] | np.ndarray = (1.0, 1.0)) -> PairWeights:
     """Assignment weights of a scan (module docstring).
 
-    Parameters: ``z1`` (m1, 2), z2 : (m2, 2) measured azimuth/elevation, rad. ``s1``, ``s2`` (3,)
+    Parameters: ``z1`` (m1, 2), ``z2`` (m2, 2) measured azimuth/elevation, rad. ``s1``, ``s2`` (3,)
     sensor positions, m. ``sigma_a``, ``sigma_b`` angle noise standard deviations, rad (both
     sensors). ``p_d`` detection probability (both sensors). ``p_f`` the paper's false-alarm
     likelihood (``"paper"`` and ``"printed"`` costs). ``cost`` one of :data:`COSTS`. ``tri``

@@ -20,7 +20,7 @@ def bracket(t: np.ndarray, period: float, n_samples: int) -> tuple[np.ndarray, n
     Parameters: ``t`` (K,) query times (s), >= 0. ``period`` radar sampling period ``T_R`` (s).
     ``n_samples`` number of radar samples M (times ``0 .. (M-1) T_R``); needs ``t < (M - 1) T_R`` so
     that ``m1 + 1`` exists.
-    Returns ``m1`` (K,) int, a : (K,) fraction in [0, 1)."""
+    Returns ``m1`` (K,) int, ``a`` (K,) fraction in [0, 1)."""
     pos = np.asarray(t, dtype=float) / period
     m1 = np.floor(pos + 1e-9).astype(int)
     if np.any(m1 < 0) or np.any(m1 + 1 >= n_samples):
