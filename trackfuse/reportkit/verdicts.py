@@ -54,8 +54,8 @@ def points(value: float) -> str:
 
 
 def against_paper_sample(k: int, n: int, paper_k: int, paper_n: int) -> Verdict:
-    """Our ``k`` of ``n`` against the paper's ``paper_k`` of ``paper_n`` (rule 1 of the module
-    docstring): the difference ours - paper with Newcombe's independent-samples interval and
+    """Our ``k`` of ``n`` against the paper's ``paper_k`` of ``paper_n`` (rule 1 of
+    ``docs/statistics.md``, "Verdicts against a paper"): the difference ours - paper with Newcombe's independent-samples interval and
     the two-sided 'N-1' chi-square p; "agrees" when the interval holds 0."""
     diff = k / n - paper_k / paper_n
     low, high = (float(v) for v in proportion_difference_interval(paper_k, paper_n, k, n))
@@ -87,7 +87,7 @@ def below_paper_bound(k: int, n: int, bound: float, paper_n: int) -> Verdict:
 def at_least(estimate: float, low: float, high: float, margin: float, claim: str) -> Verdict:
     """A claim that a difference of two rates (fractions) is at least ``margin`` (declared in
     advance; negative for a claimed decline), judged by ``estimate`` and its 95 % interval
-    (rule 2 of the module docstring); ``claim`` names it in words ("a rise")."""
+    (rule 2 of ``docs/statistics.md``); ``claim`` names it in words ("a rise")."""
     sign = 1.0 if margin > 0 else -1.0
     near, far = sorted((sign * low, sign * high))
     shown = f"{points(estimate)} points ({points(low)} to {points(high)})"
@@ -201,8 +201,8 @@ def _answers(item: Reported, rows: pd.DataFrame) -> pd.Series:
 
 def bottom_line(results: Sequence[Reported], rows: pd.DataFrame,
                 ran: Collection[str] | None = None) -> list[Line]:
-    """One :class:`Line` per item of ``results`` that declares an answer (rule 5 of the module
-    docstring), from ``rows`` (headline rows of every config, with a ``config`` column):
+    """One :class:`Line` per item of ``results`` that declares an answer (rule 5 of
+    ``docs/statistics.md``), from ``rows`` (headline rows of every config, with a ``config`` column):
     the answering rows' verdicts :func:`combined`; "not comparable" when the answering
     config gave no row, or is not among the configs that ``ran`` (when given)."""
     out = []
