@@ -55,8 +55,9 @@ def points(value: float) -> str:
 
 def against_paper_sample(k: int, n: int, paper_k: int, paper_n: int) -> Verdict:
     """Our ``k`` of ``n`` against the paper's ``paper_k`` of ``paper_n`` (rule 1 of
-    ``docs/statistics.md``, "Verdicts against a paper"): the difference ours - paper with Newcombe's independent-samples interval and
-    the two-sided 'N-1' chi-square p; "agrees" when the interval holds 0."""
+    ``docs/statistics.md``, "Verdicts against a paper"): the difference ours - paper with
+    Newcombe's independent-samples interval and the two-sided 'N-1' chi-square p; "agrees" when
+    the interval holds 0."""
     diff = k / n - paper_k / paper_n
     low, high = (float(v) for v in proportion_difference_interval(paper_k, paper_n, k, n))
     p = float(two_proportion_p(k, n, paper_k, paper_n))
@@ -202,8 +203,8 @@ def _answers(item: Reported, rows: pd.DataFrame) -> pd.Series:
 def bottom_line(results: Sequence[Reported], rows: pd.DataFrame,
                 ran: Collection[str] | None = None) -> list[Line]:
     """One :class:`Line` per item of ``results`` that declares an answer (rule 5 of
-    ``docs/statistics.md``), from ``rows`` (headline rows of every config, with a ``config`` column):
-    the answering rows' verdicts :func:`combined`; "not comparable" when the answering
+    ``docs/statistics.md``), from ``rows`` (headline rows of every config, with a ``config``
+    column): the answering rows' verdicts :func:`combined`; "not comparable" when the answering
     config gave no row, or is not among the configs that ``ran`` (when given)."""
     out = []
     for item in (r for r in results if r.answer is not None):
