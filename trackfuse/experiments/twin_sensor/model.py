@@ -21,12 +21,16 @@ the target with probability ``P_D`` and reports Poisson clutter:
 * ``clutter.model = "window"``: ``N_c ~ Poisson(clutter.mean)`` points uniform in a fixed
   ``+-clutter.window`` rad box around the true line of sight, identical for every filter.
 
-Each trial spawns independent generators for truth, initialization and sensor noise from its
-common stream (the same at every sweep point) and draws clutter from its point stream (shared
-by sweep points that differ only in parameters marked ``draws=False``: the filter, its
-initialization, gating and scoring, and the sensors' noise and detection probabilities,
-which scale or threshold common-stream draws), so adding an algorithm never changes the
-simulated data and sweep points compare on the same targets and noise. Every algorithm
+Each trial spawns independent generators for truth, initialization, sensor noise and
+clutter from its common stream (the same at every sweep point; the point stream is not
+used), so adding an algorithm never changes the simulated data and sweep points compare on
+the same targets, noise and clutter. The parameters marked ``draws=False`` (the filter, its
+initialization, gating and scoring, and the sensors' noise and detection probabilities)
+only scale or threshold these draws. Clutter is nested across levels: a level's false
+returns are the arrivals at or below ``clutter.mean`` of a unit-rate Poisson process per
+sensor and scan (:mod:`~trackfuse.experiments.twin_sensor.clutter`), so each level has its
+exact Poisson law, a lower level's returns are a subset of a higher level's, and
+neighbouring levels share most of their returns. Every algorithm
 (association variant x covariance form, see :mod:`trackfuse.tracking.pda`) starts from the
 same ``x0 ~ N(x_true(0), P0)``. The range standard deviation of ``P0`` (the radar cue) is
 ``init.sigma_range`` metres (``init.range_cue = "absolute"``, the paper's 20 km at 200 km)
@@ -91,6 +95,7 @@ import numpy as np
 
 from trackfuse.chi2 import chi2_quantile
 from trackfuse.experiments.base import FRACTION, NON_NEGATIVE, Metric, Param
+from trackfuse.experiments.twin_sensor.clutter import nested_poisson
 from trackfuse.experiments.twin_sensor.stonesoup import (
     STONESOUP_ALGORITHMS,
     STONESOUP_PARAMS,
@@ -353,12 +358,13 @@ class Batch:
 def simulate(sc: Scenario, streams: Sequence[TrialStreams]) -> Batch:
     """Draw each trial's truth, initialization, target returns and clutter from its streams.
 
-    Truth, initialization, detections and noise come from the trial's common stream (the
-    same at every sweep point; detections and noise are drawn for :data:`MAX_SENSORS`
-    sensors, so a one-sensor point sees sensor 1's returns of a two-sensor point); clutter
-    comes from the point stream. Per trial only the random draws run in a loop; what is
-    computed from them is computed for the whole batch at once (element by element, so a
-    trial's numbers do not depend on the batch it is in).
+    Everything comes from the trial's common stream (the same at every sweep point), each
+    from its own spawned child: truth, initialization, detections and noise, clutter.
+    Detections, noise and clutter are drawn for :data:`MAX_SENSORS` sensors, so a one-sensor
+    point sees sensor 1's returns of a two-sensor point; the clutter is nested across
+    levels (:mod:`~trackfuse.experiments.twin_sensor.clutter`). Per trial only the random
+    draws run in a loop; what is computed from them is computed for the whole batch at once
+    (element by element, so a trial's numbers do not depend on the batch it is in).
     """
     N, K, S = len(streams), sc.K, sc.R.shape[0]
     moving = sc.q_truth > 0  # else the truth draws nothing and is the same in every trial
@@ -368,15 +374,17 @@ def simulate(sc: Scenario, streams: Sequence[TrialStreams]) -> Batch:
     uniform, normal = np.empty((N, K, MAX_SENSORS)), np.empty((N, K, MAX_SENSORS, 2))
     counts = np.empty((N, K, S), dtype=np.int64)
     chol, draws = sc.P0_chol, []
+    cell_sensor = np.tile(np.arange(MAX_SENSORS), K)  # clutter cells are scan-, sensor-major
     for n, trial in enumerate(streams):
-        g_truth, g_init, g_noise = trial.common.spawn(3)
+        g_truth, g_init, g_noise, g_clutter = trial.common.spawn(4)
         if moving:
             x_true[n] = truth_trajectory(sc, g_truth)
         x0[n] = x_true[n, 0] + chol @ g_init.standard_normal(6)
         uniform[n] = g_noise.random((K, MAX_SENSORS))
         normal[n] = g_noise.standard_normal((K, MAX_SENSORS, 2))
-        counts[n] = trial.point.poisson(sc.clutter_mean, (K, S))
-        draws.append(_clutter_draws(sc, trial.point, int(counts[n].sum())))
+        cell_counts, cell_draws = nested_poisson(g_clutter, sc.clutter_mean, K * MAX_SENSORS)
+        counts[n] = cell_counts.reshape(K, MAX_SENSORS)[:, :S]
+        draws.append(cell_draws[:, np.repeat(cell_sensor, cell_counts) < S])
     detected = (uniform < _padded(sc.P_D))[..., :S]
     los = azel(x_true[:, 1:, None, :3] - sc.sensor_pos[1:])
     z_target = wrap(los + sc.noise_sd * normal[:, :, :S])
@@ -388,24 +396,17 @@ def simulate(sc: Scenario, streams: Sequence[TrialStreams]) -> Batch:
     return Batch(x_true, x0, detected, los, z_target, clutter, ok)
 
 
-def _clutter_draws(sc: Scenario, rng: np.random.Generator, total: int) -> np.ndarray:
-    """The uniforms ``(2, total)`` behind one trial's ``total`` clutter points: radius and
-    angle in the unit disk (in_gate, the draws of ``unit_disk``), or the azimuth and
-    elevation offsets in the window (``window`` clutter, on ``[-window, window)``)."""
-    if sc.clutter_model == "in_gate":
-        return rng.random((2, total))  # the radii's uniforms, then the angles'
-    return rng.uniform(-sc.window, sc.window, (total, 2)).T
-
-
 def _clutter_points(sc: Scenario, draws: np.ndarray, los: np.ndarray,
                     counts: np.ndarray) -> np.ndarray:
-    """Clutter points ``(total, 2)`` of a batch from its :func:`_clutter_draws`
-    (concatenated, trial-, scan-, sensor-major), its lines of sight ``(N, K, S, 2)`` (rad)
-    and clutter counts ``(N, K, S)``."""
+    """Clutter points ``(total, 2)`` of a batch from the uniforms ``(2, total)`` on [0, 1)
+    behind them (concatenated, trial-, scan-, sensor-major), its lines of sight
+    ``(N, K, S, 2)`` (rad) and clutter counts ``(N, K, S)``: points of the unit disk
+    (radius and angle uniforms, ``in_gate``) or azimuth and elevation uniform on
+    ``[-window, window)`` about the line of sight (``window``)."""
     if sc.clutter_model == "in_gate":
         return disk_points(draws[0], draws[1])
     centre = np.repeat(los.reshape(-1, 2), counts.ravel(), axis=0)
-    points = centre + draws.T
+    points = centre + sc.window * (2.0 * draws.T - 1.0)
     points[:, 0] = wrap(points[:, 0])
     return points
 
