@@ -54,12 +54,12 @@ def test_a_level_without_clutter_has_no_returns():
 def reference_nested(rng: np.random.Generator, mean: float, cells: int):
     """The same process drawn one round at a time (no blocks): per cell, the arrivals at
     or below ``mean`` and their uniforms."""
-    clock = np.zeros(cells)
+    clock = np.ones(cells)  # product of the gap uniforms: exp(-arrival)
     kept: list[list[np.ndarray]] = [[] for _ in range(cells)]
-    while (clock <= mean).any():
+    while (clock > np.exp(-mean)).any():
         draw = rng.random((cells, 3))
-        clock = clock + -np.log1p(-draw[:, 0])
-        for c in np.flatnonzero(clock <= mean):
+        clock = clock * draw[:, 0]
+        for c in np.flatnonzero(clock > np.exp(-mean)):
             kept[c].append(draw[c, 1:])
     counts = np.array([len(k) for k in kept])
     return counts, np.array([u for k in kept for u in k]).reshape(-1, 2).T

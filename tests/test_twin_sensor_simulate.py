@@ -19,12 +19,12 @@ def clutter_one(rng, mean, K, S):
     """One trial's clutter counts ``(K, S)`` and uniforms ``(total, 2)`` drawn round by
     round: every round one gap and two position uniforms per scan and sensor (of
     ``MAX_SENSORS``); a cell keeps its arrivals at or below ``mean``."""
-    clock = np.zeros((K, MAX_SENSORS))
+    clock = np.ones((K, MAX_SENSORS))  # exp(-arrival)
     kept = [[[] for _ in range(MAX_SENSORS)] for _ in range(K)]
-    while (clock <= mean).any():
+    while (clock > np.exp(-mean)).any():
         draw = rng.random((K, MAX_SENSORS, 3))
-        clock = clock + -np.log1p(-draw[..., 0])
-        for k, s in zip(*np.nonzero(clock <= mean), strict=True):
+        clock = clock * draw[..., 0]
+        for k, s in zip(*np.nonzero(clock > np.exp(-mean)), strict=True):
             kept[k][s].append(draw[k, s, 1:])
     counts = np.array([[len(kept[k][s]) for s in range(S)] for k in range(K)])
     uniforms = [u for k in range(K) for s in range(S) for u in kept[k][s]]
@@ -33,7 +33,7 @@ def clutter_one(rng, mean, K, S):
 
 def simulate_one(sc, streams):
     """One trial drawn and computed on its own (the simulation before it was batched)."""
-    g_truth, g_init, g_noise, g_clutter = streams.common.spawn(4)
+    g_truth, g_init, g_noise = streams.common.spawn(3)
     x_true = truth_trajectory(sc, g_truth)
     x0 = x_true[0] + sc.P0_chol @ g_init.standard_normal(6)
     S = sc.R.shape[0]
@@ -42,7 +42,7 @@ def simulate_one(sc, streams):
     los = azel(x_true[1:, None, :3] - sc.sensor_pos[1:])
     unit_noise = g_noise.standard_normal((sc.K, MAX_SENSORS, 2))[:, :S]
     z_target = wrap(los + sc.noise_sd * unit_noise)
-    n_clutter, u = clutter_one(g_clutter, sc.clutter_mean, sc.K, S)
+    n_clutter, u = clutter_one(g_noise, sc.clutter_mean, sc.K, S)
     if sc.clutter_model == "in_gate":
         clutter = disk_points(u[:, 0], u[:, 1])
     else:

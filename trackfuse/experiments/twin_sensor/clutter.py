@@ -12,7 +12,7 @@ returns depend only on the trial's stream and that level, not on the sweep's oth
 (no largest level needs to be known, and drawing costs what the level itself needs).
 
 The stream is read in rounds: round ``r`` draws ``(cells, 3)`` uniforms, for every cell the
-gap to its next arrival and that arrival's two position uniforms. Rounds are drawn in
+gap to its next arrival (``-log u``) and that arrival's two position uniforms. Rounds are drawn in
 blocks until every cell's last arrival lies above ``lambda``; a block of ``b`` rounds reads
 the same numbers as ``b`` single rounds, so round ``r``'s draws do not depend on the block
 size or on ``lambda``.
@@ -27,20 +27,18 @@ def nested_poisson(rng: np.random.Generator, mean: float,
                    cells: int) -> tuple[np.ndarray, np.ndarray]:
     """False-return counts ``(cells,)`` int, each ``Poisson(mean)``, and the two position
     uniforms on ``[0, 1)`` of every return, ``(2, total)``, cell-major then in arrival order
-    (see the module docstring). ``mean`` is the mean number of returns per cell (>= 0)."""
+    (see the module docstring). ``mean`` is the mean number of returns per cell (>= 0).
+
+    Arrival ``j`` lies at or below ``mean`` when the product of the first ``j`` gap
+    uniforms is above ``exp(-mean)`` (the gaps ``-log u`` are ``Exp(1)``)."""
+    if mean <= 0.0:  # no arrival and nothing drawn (so read the clutter last from a stream)
+        return np.zeros(cells, dtype=np.int64), np.empty((2, 0))
+    floor = np.exp(-mean)
     block = int(mean + 4.0 * np.sqrt(mean)) + 2  # one block suffices almost always
     rounds = rng.random((block, cells, 3))
-    arrivals = _arrivals(rounds)
-    while not (arrivals[-1] > mean).all():
+    kept = np.cumprod(rounds[..., 0], axis=0) > floor  # (rounds, cells): a prefix per cell
+    while kept[-1].any():
         rounds = np.concatenate([rounds, rng.random((block, cells, 3))])
-        arrivals = _arrivals(rounds)
-    kept = (arrivals <= mean).T  # (cells, rounds): a prefix of each row
-    counts = kept.sum(axis=1)
-    return counts, rounds[..., 1:].transpose(1, 0, 2)[kept].T
-
-
-def _arrivals(rounds: np.ndarray) -> np.ndarray:
-    """Arrival positions ``(R, cells)`` on the clutter-mean axis from the rounds' gap
-    uniforms ``rounds[..., 0]``: cumulative sums of ``Exp(1)`` gaps, added in round order
-    (so a round's arrival does not depend on how many rounds follow)."""
-    return np.cumsum(-np.log1p(-rounds[..., 0]), axis=0)
+        kept = np.cumprod(rounds[..., 0], axis=0) > floor
+    where = np.nonzero(kept.T)  # (cell, round) of every return, cell-major
+    return np.bincount(where[0], minlength=cells), rounds[where[1], where[0], 1:].T

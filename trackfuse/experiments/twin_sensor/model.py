@@ -21,16 +21,16 @@ the target with probability ``P_D`` and reports Poisson clutter:
 * ``clutter.model = "window"``: ``N_c ~ Poisson(clutter.mean)`` points uniform in a fixed
   ``+-clutter.window`` rad box around the true line of sight, identical for every filter.
 
-Each trial spawns independent generators for truth, initialization, sensor noise and
-clutter from its common stream (the same at every sweep point; the point stream is not
-used), so adding an algorithm never changes the simulated data and sweep points compare on
-the same targets, noise and clutter. The parameters marked ``draws=False`` (the filter, its
-initialization, gating and scoring, and the sensors' noise and detection probabilities)
-only scale or threshold these draws. Clutter is nested across levels: a level's false
-returns are the arrivals at or below ``clutter.mean`` of a unit-rate Poisson process per
-sensor and scan (:mod:`~trackfuse.experiments.twin_sensor.clutter`), so each level has its
-exact Poisson law, a lower level's returns are a subset of a higher level's, and
-neighbouring levels share most of their returns. Every algorithm
+Each trial spawns independent generators for truth, initialization and the sensor returns
+(detections and noise, then clutter) from its common stream (the same at every sweep point;
+the point stream is not used), so adding an algorithm never changes the simulated data and
+sweep points compare on the same targets, noise and clutter. The parameters marked
+``draws=False`` (the filter, its initialization, gating and scoring, and the sensors' noise
+and detection probabilities) only scale or threshold these draws. Clutter is nested across
+levels: a level's false returns are the arrivals below ``clutter.mean`` of a unit-rate
+Poisson process per sensor and scan (:mod:`~trackfuse.experiments.twin_sensor.clutter`), so
+each level has its exact Poisson law, a lower level's returns are a subset of a higher
+level's, and neighbouring levels share most of their returns. Every algorithm
 (association variant x covariance form, see :mod:`trackfuse.tracking.pda`) starts from the
 same ``x0 ~ N(x_true(0), P0)``. The range standard deviation of ``P0`` (the radar cue) is
 ``init.sigma_range`` metres (``init.range_cue = "absolute"``, the paper's 20 km at 200 km)
@@ -358,13 +358,14 @@ class Batch:
 def simulate(sc: Scenario, streams: Sequence[TrialStreams]) -> Batch:
     """Draw each trial's truth, initialization, target returns and clutter from its streams.
 
-    Everything comes from the trial's common stream (the same at every sweep point), each
-    from its own spawned child: truth, initialization, detections and noise, clutter.
+    Everything comes from the trial's common stream (the same at every sweep point), from
+    three spawned children: truth, initialization, and the sensor returns (detections and
+    noise, then the clutter, read last so that the clutter level changes nothing else).
     Detections, noise and clutter are drawn for :data:`MAX_SENSORS` sensors, so a one-sensor
-    point sees sensor 1's returns of a two-sensor point; the clutter is nested across
-    levels (:mod:`~trackfuse.experiments.twin_sensor.clutter`). Per trial only the random
-    draws run in a loop; what is computed from them is computed for the whole batch at once
-    (element by element, so a trial's numbers do not depend on the batch it is in).
+    point sees sensor 1's returns of a two-sensor point; the clutter is nested across levels
+    (:mod:`~trackfuse.experiments.twin_sensor.clutter`). Per trial only the random draws run
+    in a loop; what is computed from them is computed for the whole batch at once (element
+    by element, so a trial's numbers do not depend on the batch it is in).
     """
     N, K, S = len(streams), sc.K, sc.R.shape[0]
     moving = sc.q_truth > 0  # else the truth draws nothing and is the same in every trial
@@ -376,15 +377,16 @@ def simulate(sc: Scenario, streams: Sequence[TrialStreams]) -> Batch:
     chol, draws = sc.P0_chol, []
     cell_sensor = np.tile(np.arange(MAX_SENSORS), K)  # clutter cells are scan-, sensor-major
     for n, trial in enumerate(streams):
-        g_truth, g_init, g_noise, g_clutter = trial.common.spawn(4)
+        g_truth, g_init, g_returns = trial.common.spawn(3)
         if moving:
             x_true[n] = truth_trajectory(sc, g_truth)
         x0[n] = x_true[n, 0] + chol @ g_init.standard_normal(6)
-        uniform[n] = g_noise.random((K, MAX_SENSORS))
-        normal[n] = g_noise.standard_normal((K, MAX_SENSORS, 2))
-        cell_counts, cell_draws = nested_poisson(g_clutter, sc.clutter_mean, K * MAX_SENSORS)
+        uniform[n] = g_returns.random((K, MAX_SENSORS))
+        normal[n] = g_returns.standard_normal((K, MAX_SENSORS, 2))
+        cell_counts, cell_draws = nested_poisson(g_returns, sc.clutter_mean, K * MAX_SENSORS)
         counts[n] = cell_counts.reshape(K, MAX_SENSORS)[:, :S]
-        draws.append(cell_draws[:, np.repeat(cell_sensor, cell_counts) < S])
+        draws.append(cell_draws if S == MAX_SENSORS else
+                     cell_draws[:, np.repeat(cell_sensor, cell_counts) < S])
     detected = (uniform < _padded(sc.P_D))[..., :S]
     los = azel(x_true[:, 1:, None, :3] - sc.sensor_pos[1:])
     z_target = wrap(los + sc.noise_sd * normal[:, :, :S])
