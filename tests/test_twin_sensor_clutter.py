@@ -39,16 +39,17 @@ def assert_poisson(counts: np.ndarray, mean: float) -> None:
 
 @pytest.mark.parametrize("mean", [0.4, 3.0, 9.0, 40.0])
 def test_every_level_is_poisson_of_its_mean(mean):
-    counts, uniforms = nested_poisson(np.random.default_rng(17), mean, 20000)
-    assert_poisson(counts, mean)
+    counts, uniforms = nested_poisson([np.random.default_rng(17)], mean, 20000)
+    assert counts.shape == (1, 20000)
+    assert_poisson(counts[0], mean)
     assert uniforms.shape == (2, counts.sum())
     for u in uniforms:  # the kept arrivals' positions stay uniform on [0, 1)
         assert stats.kstest(u, "uniform").pvalue > ALPHA
 
 
 def test_a_level_without_clutter_has_no_returns():
-    counts, uniforms = nested_poisson(np.random.default_rng(2), 0.0, 50)
-    assert not counts.any() and uniforms.shape == (2, 0)
+    counts, uniforms = nested_poisson([np.random.default_rng(2)] * 3, 0.0, 50)
+    assert counts.shape == (3, 50) and not counts.any() and uniforms.shape == (2, 0)
 
 
 def reference_nested(rng: np.random.Generator, mean: float, cells: int):
@@ -66,11 +67,17 @@ def reference_nested(rng: np.random.Generator, mean: float, cells: int):
 
 
 @pytest.mark.parametrize("mean", [0.0, 2.5, 30.0])
-def test_the_blocks_read_the_stream_as_single_rounds_would(mean):
-    got = nested_poisson(np.random.default_rng(5), mean, 40)
-    want = reference_nested(np.random.default_rng(5), mean, 40)
-    np.testing.assert_array_equal(got[0], want[0])
-    np.testing.assert_allclose(got[1], want[1], rtol=0, atol=1e-15)
+def test_the_blocks_read_each_stream_as_single_rounds_would(mean):
+    """A batch of trials, some of which need more than one block of rounds (400 cells),
+    gives each trial what its own stream drawn round by round gives."""
+    seeds = range(6)
+    counts, uniforms = nested_poisson([np.random.default_rng(s) for s in seeds], mean, 400)
+    want = [reference_nested(np.random.default_rng(s), mean, 400) for s in seeds]
+    np.testing.assert_array_equal(counts, np.stack([w[0] for w in want]))
+    np.testing.assert_array_equal(uniforms, np.concatenate([w[1] for w in want], axis=1))
+    if mean:  # one trial, not all, needed a second block (the first has this many rounds)
+        more = counts.max(axis=1) >= int(mean + 4.0 * np.sqrt(mean)) + 2
+        assert more.any() and not more.all()
 
 
 def cell_sets(batch) -> dict[tuple[int, ...], set[tuple[float, float]]]:

@@ -373,9 +373,7 @@ def simulate(sc: Scenario, streams: Sequence[TrialStreams]) -> Batch:
     if not moving:
         x_true[:] = truth_trajectory(sc, None)
     uniform, normal = np.empty((N, K, MAX_SENSORS)), np.empty((N, K, MAX_SENSORS, 2))
-    counts = np.empty((N, K, S), dtype=np.int64)
-    chol, draws = sc.P0_chol, []
-    cell_sensor = np.tile(np.arange(MAX_SENSORS), K)  # clutter cells are scan-, sensor-major
+    chol, returns = sc.P0_chol, []
     for n, trial in enumerate(streams):
         g_truth, g_init, g_returns = trial.common.spawn(3)
         if moving:
@@ -383,17 +381,19 @@ def simulate(sc: Scenario, streams: Sequence[TrialStreams]) -> Batch:
         x0[n] = x_true[n, 0] + chol @ g_init.standard_normal(6)
         uniform[n] = g_returns.random((K, MAX_SENSORS))
         normal[n] = g_returns.standard_normal((K, MAX_SENSORS, 2))
-        cell_counts, cell_draws = nested_poisson(g_returns, sc.clutter_mean, K * MAX_SENSORS)
-        counts[n] = cell_counts.reshape(K, MAX_SENSORS)[:, :S]
-        draws.append(cell_draws if S == MAX_SENSORS else
-                     cell_draws[:, np.repeat(cell_sensor, cell_counts) < S])
+        returns.append(g_returns)
+    cell_counts, draws = nested_poisson(returns, sc.clutter_mean, K * MAX_SENSORS)
+    counts = cell_counts.reshape(N, K, MAX_SENSORS)[..., :S]
+    if S < MAX_SENSORS:  # clutter cells are trial-, scan-, sensor-major
+        draws = draws[:, np.repeat(np.arange(cell_counts.size) % MAX_SENSORS < S,
+                                   cell_counts.ravel())]
     detected = (uniform < _padded(sc.P_D))[..., :S]
     los = azel(x_true[:, 1:, None, :3] - sc.sensor_pos[1:])
     z_target = wrap(los + sc.noise_sd * normal[:, :, :S])
     C = max(int(counts.max()) if counts.size else 0, 1)
     ok = np.arange(C) < counts[..., None]
     clutter = np.zeros(ok.shape + (2,))
-    points = _clutter_points(sc, np.concatenate(draws, axis=1), los, counts)
+    points = _clutter_points(sc, draws, los, counts)
     clutter.reshape(-1, 2)[np.flatnonzero(ok)] = points  # trial-, scan-, sensor-major
     return Batch(x_true, x0, detected, los, z_target, clutter, ok)
 
