@@ -25,13 +25,14 @@ from collections.abc import Sequence
 import numpy as np
 
 
-def nested_poisson(rngs: Sequence[np.random.Generator], mean: float,
-                   cells: int) -> tuple[np.ndarray, np.ndarray]:
+def nested_poisson(rngs: Sequence[np.random.Generator], mean: float, cells: int,
+                   wanted: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """False-return counts ``(N, cells)`` int, each ``Poisson(mean)``, and the two position
     uniforms on ``[0, 1)`` of every return, ``(2, total)``, trial-, cell-major then in
     arrival order, for ``N`` trials each drawing from its own generator of ``rngs`` (see
     the module docstring). ``mean`` is the mean number of returns per cell (>= 0); nothing
-    is drawn at 0, so read the clutter last from a stream.
+    is drawn at 0, so read the clutter last from a stream. ``wanted: (cells,)`` bool, if
+    given: the cells whose returns are kept (the others are drawn alike, and count 0).
 
     Arrival ``j`` lies below ``mean`` when the product of the first ``j`` gap uniforms is
     above ``exp(-mean)`` (the gaps ``-log u`` are ``Exp(1)``)."""
@@ -41,13 +42,13 @@ def nested_poisson(rngs: Sequence[np.random.Generator], mean: float,
     rounds = np.empty((len(rngs), block, cells, 3))
     for n, rng in enumerate(rngs):
         rng.random(out=rounds[n])
-    counts, uniforms = _arrivals(rounds, mean)
+    counts, uniforms = _arrivals(rounds, mean, wanted)
     longer = {}
     for n in np.flatnonzero(counts.max(axis=1) >= block):  # a cell may have more arrivals
         drawn = rounds[n]
         while (np.cumprod(drawn[..., 0], axis=0)[-1] > np.exp(-mean)).any():
             drawn = np.concatenate([drawn, rngs[n].random((block, cells, 3))])
-        longer[n] = _arrivals(drawn[None], mean)
+        longer[n] = _arrivals(drawn[None], mean, wanted)
     if longer:  # replace those trials' returns, in trial order
         pieces = np.split(uniforms, np.cumsum(counts.sum(axis=1))[:-1], axis=1)
         for n, (trial_counts, trial_uniforms) in longer.items():
@@ -56,15 +57,19 @@ def nested_poisson(rngs: Sequence[np.random.Generator], mean: float,
     return counts, uniforms
 
 
-def _arrivals(rounds: np.ndarray, mean: float) -> tuple[np.ndarray, np.ndarray]:
+def _arrivals(rounds: np.ndarray, mean: float,
+              wanted: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
     """Counts ``(N, cells)`` and uniforms ``(2, total)`` (trial-, cell-major, in arrival
-    order) of the arrivals below ``mean`` in ``rounds: (N, R, cells, 3)``: those whose
-    product of gap uniforms, from the first round on, is above ``exp(-mean)``."""
+    order) of the arrivals below ``mean`` in ``rounds: (N, R, cells, 3)``, in the
+    ``wanted`` cells (every cell if ``None``): those whose product of gap uniforms, from
+    the first round on, is above ``exp(-mean)``."""
     N, R, cells, _ = rounds.shape
     product = rounds[..., 0].copy()  # (N, R, cells); a loop over rounds beats cumprod here
     for r in range(1, R):
         product[:, r] *= product[:, r - 1]
     kept = product > np.exp(-mean)  # a prefix of the rounds in each cell
+    if wanted is not None:
+        kept &= wanted
     trial, cell, arrival = np.nonzero(kept.transpose(0, 2, 1))
-    counts = np.bincount(trial * cells + cell, minlength=N * cells).reshape(N, cells)
-    return counts, rounds[trial, arrival, cell, 1:].T
+    rows = (trial * R + arrival) * cells + cell  # of rounds as (N * R * cells, 3)
+    return kept.sum(axis=1), np.take(rounds.reshape(-1, 3), rows, axis=0)[:, 1:].T

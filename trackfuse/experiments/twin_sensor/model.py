@@ -382,11 +382,9 @@ def simulate(sc: Scenario, streams: Sequence[TrialStreams]) -> Batch:
         uniform[n] = g_returns.random((K, MAX_SENSORS))
         normal[n] = g_returns.standard_normal((K, MAX_SENSORS, 2))
         returns.append(g_returns)
-    cell_counts, draws = nested_poisson(returns, sc.clutter_mean, K * MAX_SENSORS)
+    wanted = np.tile(np.arange(MAX_SENSORS) < S, K)  # clutter cells: scan-, sensor-major
+    cell_counts, draws = nested_poisson(returns, sc.clutter_mean, K * MAX_SENSORS, wanted)
     counts = cell_counts.reshape(N, K, MAX_SENSORS)[..., :S]
-    if S < MAX_SENSORS:  # clutter cells are trial-, scan-, sensor-major
-        draws = draws[:, np.repeat(np.arange(cell_counts.size) % MAX_SENSORS < S,
-                                   cell_counts.ravel())]
     detected = (uniform < _padded(sc.P_D))[..., :S]
     los = azel(x_true[:, 1:, None, :3] - sc.sensor_pos[1:])
     z_target = wrap(los + sc.noise_sd * normal[:, :, :S])
