@@ -251,7 +251,7 @@ def _panel(ax: Axes, experiment: Experiment, data: pd.DataFrame, plot: Plot,
             x = kit_axes.shifted(x, np.asarray(order, float), plot.xscale, COINCIDING_SHIFT)
         drawn.append(mean)
         _series(ax, x, mean, low, high, looks_of(experiment, name), plot.categories)
-    for reference in plot.references:
+    for reference in (r for r in plot.references if not r.metrics or metric in r.metrics):
         _reference(ax, experiment, data, plot, where, reference, (scale, order))
         if reference.values:
             _paper_values(ax, experiment, data, plot, where, reference, (scale, order))

@@ -34,6 +34,9 @@ class Reference:
     * ``values``: ``((algorithm, y), ...)`` the paper's value of each method, drawn as an
       open star in its colour at the sweep ``points`` where the run is at the paper's
       setting (one legend entry, ``label``).
+
+    ``metrics``: the metrics whose panels draw it (``()``: every panel), e.g. a design
+    false-association rate only in the false-association panel.
     """
 
     algorithm: str = ""
@@ -43,6 +46,7 @@ class Reference:
     label: str = ""
     values: tuple[tuple[str, float], ...] = ()
     points: tuple[int, ...] = ()
+    metrics: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)

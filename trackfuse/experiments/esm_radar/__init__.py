@@ -10,7 +10,16 @@ from __future__ import annotations
 from trackfuse.experiments.base import Experiment, FigureSpec
 from trackfuse.experiments.esm_radar.checks import config_problem
 from trackfuse.experiments.esm_radar.model import PARAMS, ROW_METRICS, run_batch, run_trial
-from trackfuse.reportkit.looks import BLACK, BLUE, GREEN, GREYS, VERMILLION, Look
+from trackfuse.reportkit.looks import (
+    BLACK,
+    BLUE,
+    GREEN,
+    GREYS,
+    ORANGE,
+    PURPLE,
+    VERMILLION,
+    Look,
+)
 from trackfuse.reportkit.spec import Plot
 
 LOOKS = {
@@ -25,8 +34,8 @@ LOOKS = {
     "chi2": Look("χ² ML reference", BLACK, "o", "reference", open=True),
     "chi2_lrt": Look("χ² reference, may abstain", GREYS[0], "X", "reference"),
     "chi2_5f": Look("χ², 5 factors", GREYS[1], "d", "reference", open=True),
-    "counting": Look("counting test, track history", GREYS[0], "v"),
-    "sprt": Look("sequential test (SPRT)", GREYS[1], "X"),
+    "counting": Look("counting test (history)", ORANGE, "v", "ours"),
+    "sprt": Look("sequential test (SPRT)", PURPLE, "X", "ours"),
 }
 #: The x of a rate figure is chosen per run (the report): the first numeric swept key of
 #: more than two values as a curve, else the first swept key as categories.
@@ -45,6 +54,17 @@ FIGURES = {
     "correct_rate_references": FigureSpec(
         "The same for the chi-square maximum-likelihood references beside the paper's two "
         "methods", "", _RATE),
+    "history_rates": FigureSpec(
+        "Correct (top), false (middle: a wrong radar track chosen) and missed (bottom: no "
+        "decision) association rates (%), 95 % Wilson intervals, of the counting test and "
+        "Wald's sequential test over the track history beside the single-scan chi-square "
+        "reference and the paper's fuzzy methods, on the same trials; dotted in the middle "
+        "panel: the counting test's design false-association rate, the binomial probability "
+        "that a track of another target falls inside the gate in as many scans of the window "
+        "as the threshold asks", "",
+        Plot(("correct", "wrong", "missed"), "target.separation",
+             ("traditional", "improved", "chi2", "counting", "sprt"), width="single",
+             panel_height=1.55)),
     "trajectory": FigureSpec(
         "True tracks and the ESM TDOA-DF location of one saved trial, its manoeuvre index "
         "and (where a dynamic-weight algorithm ran) range weight per scan, and the ESM range "

@@ -58,6 +58,7 @@ from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from trackfuse.association import ahp
 from trackfuse.association.esm_scenario import FACTORS
+from trackfuse.association.track_history_tests import binomial_tail, counting_threshold
 from trackfuse.experiments.esm_radar import EXPERIMENT, FIGURES, LOOKS
 from trackfuse.experiments.esm_radar.model import (
     ALGORITHMS,
@@ -73,6 +74,7 @@ from trackfuse.experiments.esm_radar.model import (
 )
 from trackfuse.reported import ESM_RADAR, ESM_RADAR_WEIGHTS
 from trackfuse.reportkit import render
+from trackfuse.reportkit.derived import Rate, with_rates
 from trackfuse.reportkit.render import BAND_ALPHA
 from trackfuse.reportkit.spec import SLOTS, Reference
 from trackfuse.reportkit.style import context, legend_below, legend_entries, panels
@@ -619,6 +621,42 @@ def _rate_figure(run: RunData, group: str) -> Figure | str:
     return render.draw(run, plot, _rate_title(group, x, categories, bool(points)))
 
 
+#: A wrong radar track chosen, and no decision: the outcomes beside ``correct`` of a test
+#: that may abstain (the fuzzy methods always decide).
+HISTORY_RATES = (
+    Rate("wrong", "false association rate", lambda t: (t["decided"] == 1) & (t["correct"] == 0)),
+    Rate("missed", "missed association rate", lambda t: t["decided"] == 0))
+#: The tests over the track history: the figure needs one of them.
+HISTORY_TESTS = ("counting", "sprt")
+#: Params that set the counting test's design rate: a run sweeping one has no single rate.
+DESIGN_KEYS = ("counting.window", "history.p_false", "history.alpha", "scan.count")
+
+
+def counting_design_rate(params: Mapping[str, Any]) -> float:
+    """The counting test's design false-association rate: ``P(Binomial(n, p_false) >= M)``
+    for its window ``n`` (the configured one, at most the ESM's scans) and threshold ``M``."""
+    n = min(int(params["counting.window"]), len(esm_times(params)))
+    p_false = float(params["history.p_false"])
+    return binomial_tail(n, p_false, counting_threshold(n, p_false, params["history.alpha"]))
+
+
+def _history_figure(run: RunData) -> Figure | str:
+    """Correct, false and missed association rates of the tests over the track history
+    beside the single-scan reference and the fuzzy methods (:data:`HISTORY_RATES`), the
+    counting test's design rate dotted in the false-association panel."""
+    if not set(HISTORY_TESTS) & set(run.summary["algorithm"]):
+        return "neither of the tests over the track history (counting, sprt) was run"
+    x, categories = rate_axis(run)
+    fixed = not set(DESIGN_KEYS) & set(run.sweep)
+    references = (Reference(y=counting_design_rate(run.params), label="counting test's design",
+                            metrics=("wrong",)),) if fixed and "counting" in run.params[
+                                "algorithms"] else ()
+    plot = replace(FIGURES["history_rates"].plot, x=x, categories=categories,
+                   references=references)
+    return render.draw(with_rates(run, HISTORY_RATES), plot,
+                       "Association over the track history (no paper figure)")
+
+
 # --------------------------------------------------------------------------- per-scan figures
 
 #: Colours of the true tracks T1, T2, T3 and of the ESM location (no algorithm's colour).
@@ -870,6 +908,7 @@ def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure | str]:
     ``trials.csv``); a one-line reason string for a wanted figure this run cannot draw."""
     drawers: dict[str, Callable[[], Figure | str]] = {
         **{g: (lambda g=g: _rate_figure(run, g)) for g in GROUPS},
+        "history_rates": lambda: _history_figure(run),
         "trajectory": lambda: _trajectory_figure(run),
         "manoeuvre": lambda: _manoeuvre_figure(run)}
     with context():
