@@ -20,6 +20,9 @@ if TYPE_CHECKING:
 X_MARGIN = 0.05
 #: The most x values ticked one by one; a denser grid is ticked by a locator.
 MAX_VALUE_TICKS = 5
+#: The most values of a log or symlog grid ticked one by one when it spans too few powers
+#: of 10 to tick those (``0, 25, 50, 100, 200, 500`` rather than ``0, 100``).
+MAX_SPREAD_TICKS = 7
 PLAIN = FuncFormatter(lambda value, _: number(value))
 
 
@@ -46,15 +49,17 @@ def _set_scale(ax: Axes, scale: str, values: np.ndarray) -> None:
 
 
 def _ticks(values: np.ndarray, scale: str) -> Sequence[float] | None:
-    """The x ticks: every value of a short grid, 0 and the powers of 10 of a long log one,
-    ``None`` (a locator) for a long linear one."""
+    """The x ticks: every value of a short grid, 0 and the powers of 10 of a long log one
+    (every value when those are fewer than 3 and the grid at most :data:`MAX_SPREAD_TICKS`
+    long), ``None`` (a locator) for a long linear one."""
     if len(values) <= MAX_VALUE_TICKS:
         return list(values)
     if scale == "linear":
         return None
     positive = values[values > 0]
     powers = 10.0 ** np.arange(np.ceil(np.log10(positive[0])), np.floor(np.log10(values[-1])) + 1)
-    return [0.0] * bool(values[0] == 0) + list(powers)
+    ticks = [0.0] * bool(values[0] == 0) + list(powers)
+    return list(values) if len(ticks) < 3 and len(values) <= MAX_SPREAD_TICKS else ticks
 
 
 def x_axis(axes: Sequence[Axes], values: Sequence[Any], wanted: str, shown: Quantity,

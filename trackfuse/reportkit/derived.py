@@ -25,11 +25,15 @@ from trackfuse.stats import wilson_interval
 @dataclass(frozen=True)
 class Rate:
     """A 0/1 outcome per row: ``name`` (the metric name the plot uses), ``label`` (its axis
-    label) and ``of`` (the rows' frame to a 0/1 (or boolean) series, one value per row)."""
+    label), ``of`` (the rows' frame to a 0/1 (or boolean) series, one value per row) and
+    ``algorithms``: the only ones it is computed for (``()``: every one), so a rate that is
+    0 by construction for the others (no decision of a method that always decides) draws
+    no curve for them."""
 
     name: str
     label: str
     of: Callable[[pd.DataFrame], pd.Series]
+    algorithms: tuple[str, ...] = ()
 
 
 def rate_rows(trials: pd.DataFrame, keys: Sequence[str], rates: Sequence[Rate]
@@ -40,7 +44,10 @@ def rate_rows(trials: pd.DataFrame, keys: Sequence[str], rates: Sequence[Rate]
     keys = [k for k in keys if k in trials]
     out = []
     for rate in rates:
-        frame = trials[keys].assign(_hit=rate.of(trials).astype(float).to_numpy())
+        rows = trials[trials["algorithm"].isin(rate.algorithms)] if rate.algorithms else trials
+        if rows.empty:
+            continue
+        frame = rows[keys].assign(_hit=rate.of(rows).astype(float).to_numpy())
         grouped = frame.groupby(keys, sort=False)["_hit"].agg(["size", "sum", "std"])
         low, high = wilson_interval(grouped["sum"].to_numpy(), grouped["size"].to_numpy())
         out.append(grouped.reset_index().assign(

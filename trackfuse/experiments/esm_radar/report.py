@@ -75,6 +75,7 @@ from trackfuse.experiments.esm_radar.model import (
 from trackfuse.reported import ESM_RADAR, ESM_RADAR_WEIGHTS
 from trackfuse.reportkit import render
 from trackfuse.reportkit.derived import Rate, with_rates
+from trackfuse.reportkit.numberformat import sig3
 from trackfuse.reportkit.render import BAND_ALPHA
 from trackfuse.reportkit.spec import SLOTS, Reference
 from trackfuse.reportkit.style import context, legend_below, legend_entries, panels
@@ -621,13 +622,14 @@ def _rate_figure(run: RunData, group: str) -> Figure | str:
     return render.draw(run, plot, _rate_title(group, x, categories, bool(points)))
 
 
-#: A wrong radar track chosen, and no decision: the outcomes beside ``correct`` of a test
-#: that may abstain (the fuzzy methods always decide).
-HISTORY_RATES = (
-    Rate("wrong", "false association rate", lambda t: (t["decided"] == 1) & (t["correct"] == 0)),
-    Rate("missed", "missed association rate", lambda t: t["decided"] == 0))
 #: The tests over the track history: the figure needs one of them.
 HISTORY_TESTS = ("counting", "sprt")
+#: A wrong radar track chosen, and no decision: the outcomes beside ``correct`` of a test
+#: that may abstain (no decision is drawn only for the methods that may abstain).
+HISTORY_RATES = (
+    Rate("wrong", "false association rate", lambda t: (t["decided"] == 1) & (t["correct"] == 0)),
+    Rate("missed", "missed association rate", lambda t: t["decided"] == 0,
+         (*HISTORY_TESTS, "chi2_lrt")))
 #: Params that set the counting test's design rate: a run sweeping one has no single rate.
 DESIGN_KEYS = ("counting.window", "history.p_false", "history.alpha", "scan.count")
 
@@ -648,7 +650,8 @@ def _history_figure(run: RunData) -> Figure | str:
         return "neither of the tests over the track history (counting, sprt) was run"
     x, categories = rate_axis(run)
     fixed = not set(DESIGN_KEYS) & set(run.sweep)
-    references = (Reference(y=counting_design_rate(run.params), label="counting test's design",
+    design = counting_design_rate(run.params)
+    references = (Reference(y=design, label=f"design rate {sig3(100 * design)} %",
                             metrics=("wrong",)),) if fixed and "counting" in run.params[
                                 "algorithms"] else ()
     plot = replace(FIGURES["history_rates"].plot, x=x, categories=categories,

@@ -50,17 +50,19 @@ class ExactSolverError(RuntimeError):
 
 PARAMS = (
     Param("targets.n", 10, "number of targets, uniform in the box of paper 002's M1-M10",
-          "count", kind=int, low=1, high=40),
+          "count", kind=int, low=1, high=40, label="targets", symbol="N"),
     Param("sensors.n", 3, "number of sensors S of the S-D assignment (S1, S2 of paper 002, "
-          "then S3, S4)", kind=int, choices=(2, 3, 4)),
+          "then S3, S4)", kind=int, choices=(2, 3, 4), label="sensors", symbol="S"),
     Param("sensor3.baseline", 20.0, "x coordinate of sensor 3 at (x, 0, 0): its distance "
-          "from sensor 1", "km", low=0.001, high=100.0, draws=False),
+          "from sensor 1", "km", low=0.001, high=100.0, draws=False,
+          label="sensor 3 baseline"),
     Param("noise.sigma", 0.005, "angle noise standard deviation (azimuth and elevation, "
-          "every sensor)", "rad", low=1e-7, high=1.0, draws=False),
+          "every sensor)", "rad", low=1e-7, high=1.0, draws=False, label="angle noise",
+          symbol="σ"),
     Param("sensor.p_d", 0.95, "detection probability of each sensor", "1", low=1e-3,
-          high=1.0, draws=False),
+          high=1.0, draws=False, label="detection probability", symbol="$P_D$"),
     Param("clutter.p_f", 0.05, "false alarms per sensor: Poisson(p_f N) or Binomial(N, p_f)",
-          "1", low=0.0, high=1.0),
+          "1", low=0.0, high=1.0, label="false-alarm rate", symbol="$p_f$"),
     Param("clutter.model", "poisson", "false-alarm count model", kind=str,
           choices=("poisson", "binomial")),
     Param("clutter.margin", 0.1, "FOV box margin around the true target angles", "rad",
@@ -72,7 +74,9 @@ PARAMS = (
           choices=COSTS, draws=False),
     Param("assoc.position", "fitted", "target position in the tuple likelihood: fitted "
           "(generalised ratio, paper 002's at two sensors) or integrated over the box the "
-          "targets are drawn in (marginal ratio)", kind=str, choices=POSITIONS, draws=False),
+          "targets are drawn in (marginal ratio)", kind=str, choices=POSITIONS, draws=False,
+          label="target position", words=(("fitted", "position fitted"),
+                                          ("marginal", "position integrated out"))),
     Param("algorithms", list(ALGORITHMS), "solvers reported per trial", kind=list,
           choices=ALGORITHMS, draws=False),
     Param("sd.max_gap", 0.01, "relative duality gap at which the relaxation stops", "1",
@@ -200,23 +204,23 @@ def _sd_row(name: str, result, elapsed: float, optimum: float, scan, n: int,
 
 ROW_METRICS = (
     Metric("accuracy", "1", "measurements put in their true tuple", better="higher",
-           bounds=FRACTION),
+           bounds=FRACTION, label="correct association rate"),
     Metric("correct", "1", "the whole partition is right", binary=True, better="higher"),
     Metric("ghost_rate", "1", "declared tuples whose measurements are not all from one "
-           "target", better="lower", bounds=FRACTION),
+           "target", better="lower", bounds=FRACTION, label="ghost tuples"),
     Metric("ghosts", "tuples", "declared tuples not all from one target", better="lower",
            bounds=NON_NEGATIVE),
     Metric("found", "1", "targets localised by a tuple of their own measurements",
-           better="higher", bounds=FRACTION),
+           better="higher", bounds=FRACTION, label="targets found"),
     Metric("tuples", "tuples", "declared tuples (two or more measurements)",
            bounds=NON_NEGATIVE),
     Metric("objective", "nat", "minus the summed tuple cost (log-likelihood ratio)"),
     Metric("duality_gap", "1", "relative duality gap (primal - dual) / max(|primal|, 1)",
-           better="lower", bounds=NON_NEGATIVE),
+           better="lower", bounds=NON_NEGATIVE, label="relative duality gap"),
     Metric("at_opt", "1", "the solution reaches the exact S-D optimum", binary=True,
            better="higher"),
     Metric("iterations", "count", "relaxed problems solved", bounds=NON_NEGATIVE),
-    Metric("solve_time_s", "s", "wall seconds of the solver"),
+    Metric("solve_time_s", "s", "wall seconds of the solver", label="solve time"),
     Metric("costs_time_s", "s", "wall seconds of the tuple costs"),
 )
 """Every metric column of the rows (see the module docstring)."""
