@@ -23,6 +23,8 @@ MAX_VALUE_TICKS = 5
 #: The most values of a log or symlog grid ticked one by one when it spans too few powers
 #: of 10 to tick those (``0, 25, 50, 100, 200, 500`` rather than ``0, 100``).
 MAX_SPREAD_TICKS = 7
+#: The most powers of 10 a log y axis spans with 1-2-5 ticks; a wider one ticks the powers.
+MAX_SPREAD_DECADES = 2.5
 PLAIN = FuncFormatter(lambda value, _: number(value))
 
 
@@ -109,12 +111,17 @@ def shifted(x: np.ndarray, grid: np.ndarray, wanted: str, fraction: float) -> np
 
 
 def y_log(ax: Axes, scale: str) -> None:
-    """A log (or symlog, linear below 1) y axis labelled with plain numbers."""
+    """A log (or symlog, linear below 1) y axis labelled with plain numbers, ticked at
+    1, 2 and 5 times the powers of 10 over a view of at most :data:`MAX_SPREAD_DECADES`,
+    at the powers alone over more."""
     if scale == "symlog":
         ax.set_yscale("symlog", linthresh=1.0)
     else:
         ax.set_yscale("log")
-        ax.yaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+        low, high = ax.get_ylim()
+        decades = np.log10(high / low) if 0 < low < high else 0.0
+        ax.yaxis.set_major_locator(LogLocator(
+            subs=(1.0,) if decades > MAX_SPREAD_DECADES else (1.0, 2.0, 5.0)))
     ax.yaxis.set_major_formatter(PLAIN)
     ax.yaxis.set_minor_formatter(NullFormatter())
 

@@ -262,8 +262,10 @@ def _series(ax: Axes, x: np.ndarray, mean: np.ndarray, low: np.ndarray, high: np
     """A mean with its interval: a band (bars for unjoined categories) for the emphasised
     methods, the mean alone for the others."""
     kw = look.line()
-    if categories:
+    if categories:  # unjoined: a markerless look (a reference) marks its mean by a bar
         kw["linestyle"] = "none"
+        if not kw["marker"]:
+            kw.update(marker="_", markersize=9)
         ax.errorbar(x, mean, yerr=np.maximum([mean - low, high - mean], 0), fmt="none",
                     ecolor=look.colour, elinewidth=0.8, zorder=kw["zorder"])
     ax.plot(x, mean, **kw)
