@@ -61,8 +61,10 @@ def test_every_figure_of_every_shipped_config_meets_the_journal_rules(shipped_ru
     run_algorithms = set(shipped_run.params["algorithms"])
     for name, fig in figs.items():
         if isinstance(fig, str):
-            assert name in report.GROUPS and "\n" not in fig, (name, fig)
-            assert not run_algorithms & (set(report.GROUPS[name]) - set(report.PAPER_PAIR))
+            assert "\n" not in fig, (name, fig)
+            own = set(report.HISTORY_TESTS) if name == "history_rates" else \
+                set(report.GROUPS[name]) - set(report.PAPER_PAIR)
+            assert not run_algorithms & own, (name, fig)
             continue
         assert journal_problems(fig) == [], name
         assert alike_legend_entries(fig) == [], name
@@ -352,3 +354,37 @@ def test_two_settings_are_drawn_as_categories_not_joined(shipped_run):
     ticks = [t.get_text() for t in fig.axes[-1].get_xticklabels()]
     if x == "snake.amplitude":
         assert ticks == ["no weave", "1 km weave"]
+
+
+def test_history_rates_are_the_trials_outcomes_with_the_counting_design_rate(tmp_path):
+    """The false- and missed-association panels are each method's share of trials that
+    chose a wrong radar track / none (missed only for the tests that may abstain), and the
+    counting test's binomial design false-association rate is a level in the false panel
+    alone."""
+    names = ["traditional", "improved", "chi2", "counting", "sprt"]
+    params = {"algorithms": names, "counting.window": 10, "history.alpha": 0.05}
+    run = harness.run_data(tmp_path, "esm_radar", params,
+                           {"target.separation": [0.0, 50.0, 200.0]}, trials=8, seed=5)
+    fig = house_figures(run, ["history_rates"])["history_rates"]
+    assert journal_problems(fig) == [] and internal_names(fig, EXPERIMENT) == []
+    correct, wrong, missed = (ax for ax in fig.axes if ax.get_visible())
+    t = run.trials[run.trials["algorithm"] == "counting"].sort_values(["target.separation",
+                                                                        "trial"])
+    by_x = t.groupby("target.separation")
+    false_rate = by_x.apply(lambda g: ((g["decided"] == 1) & (g["correct"] == 0)).mean())
+    (line,) = [ln for ln in wrong.get_lines() if ln.get_label() == LOOKS["counting"].label]
+    np.testing.assert_allclose(line.get_ydata(), 100 * false_rate.to_numpy())
+    missed_labels = {ln.get_label() for ln in missed.get_lines()}
+    assert LOOKS["sprt"].label in missed_labels and LOOKS["improved"].label not in missed_labels
+    design = 100 * report.counting_design_rate(run.params)
+    assert 0 < design <= 5.0
+    levels = [ax for ax in (correct, wrong, missed) for ln in ax.get_lines()
+              if ln.get_linestyle() == ":" and np.allclose(ln.get_ydata(), design)]
+    assert levels == [wrong]
+
+
+def test_history_rates_say_why_without_a_history_test(tmp_path):
+    run = harness.run_data(tmp_path, "esm_radar", {"algorithms": ["traditional", "chi2"]},
+                           {"target.separation": [0.0, 50.0, 200.0]}, trials=2, seed=5)
+    fig = house_figures(run, ["history_rates"])["history_rates"]
+    assert isinstance(fig, str) and "\n" not in fig

@@ -721,31 +721,33 @@ def _tracks_panel(ax: Axes, params: Mapping[str, Any], row: pd.Series) -> None:
 
 
 def _index_panel(ax: Axes, run: RunData, row: pd.Series, params: Mapping[str, Any]) -> None:
-    """One trial's manoeuvre index (log) and, on a twin axis, its range weight per scan."""
+    """One trial's manoeuvre index (log) and, on a twin axis, its range weight per scan;
+    the legend in two columns in headroom above the curves."""
     t = esm_times(params)
     ax.plot(t, decode_series([row["alpha_per_scan"]])[0], color="0.2",
-            label=f"manoeuvre index α(k), "
+            label=f"index α(k), "
             f"{render.quantity(EXPERIMENT, 'alpha.index').word(params['alpha.index'])}")
     a_max, mode = alpha_max(params)
     if mode == "fixed":
         ax.axhline(a_max, color="0.2", linestyle=":", linewidth=1.0, label="α_max")
     ax.set_yscale("log")
+    low, high = ax.get_ylim()
+    ax.set_ylim(low, high * (high / low) ** 0.45)  # room for the legend
     ax.set_xlabel("time (s)")
     ax.set_ylabel("manoeuvre index α\n(log scale)")
     weights = _weight_series(run.trials, int(row["point"]), [int(row["trial"])])
+    top = ax
     if weights is not None:
         name, a1 = weights
-        twin = ax.twinx()
-        twin.plot(t, a1[0], color=LOOKS[name].colour, linewidth=2.0,
-                  label=f"range weight a₁(k), {name}")
-        twin.axhline(static_weights(FACTORS, params["weights"])[0], color=LOOKS[name].colour,
-                     linestyle=":", linewidth=1.0, label="static AHP range weight")
-        twin.set_ylim(0, 0.7)
-        twin.set_ylabel("range weight a₁")
-        twin.grid(False)
+        top = ax.twinx()
+        top.plot(t, a1[0], color=LOOKS[name].colour, linewidth=2.0, label="range weight a₁(k)")
+        top.axhline(static_weights(FACTORS, params["weights"])[0], color=LOOKS[name].colour,
+                    linestyle=":", linewidth=1.0, label="static AHP weight")
+        top.set_ylim(0, 1.0)
+        top.set_ylabel("range weight a₁")
+        top.grid(False)
     ax.set_title("one trial: index" + (" and range weight" if weights else "") + " per scan")
-    top = twin if weights is not None else ax  # the legend over both axes' lines
-    top.legend(*legend_entries([ax, top]), loc="best", fontsize=7)
+    top.legend(*legend_entries([ax, top]), loc="upper center", ncols=2, fontsize=7)
 
 
 def _range_error_panel(ax: Axes, esm: pd.DataFrame, params: Mapping[str, Any]) -> None:
