@@ -303,7 +303,7 @@ def test_straight_flight_is_not_compared_with_the_papers_table_3(tmp_path):
     run = harness.run_data(tmp_path, "esm_radar", {"algorithms": ["traditional", "improved"]},
                            {"snake.amplitude": [0.0, 1000.0]}, trials=4, seed=2)
     t3 = report.paper_vs_reproduced(run).query("paper_item == 'Table 3'")
-    assert len(t3) == 2 and t3["quantity"].str.contains("snake amplitude 1000 m").all()
+    assert len(t3) == 2 and t3["quantity"].str.contains("1 km weave").all()
 
 
 def test_manoeuvre_table_gives_the_index_and_range_weight_per_point(tmp_path):

@@ -50,7 +50,6 @@ from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
-import matplotlib
 import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
@@ -76,7 +75,8 @@ from trackfuse.reported import ESM_RADAR, ESM_RADAR_WEIGHTS
 from trackfuse.reportkit import render
 from trackfuse.reportkit.derived import Rate, with_rates
 from trackfuse.reportkit.numberformat import sig3
-from trackfuse.reportkit.render import BAND_ALPHA
+from trackfuse.reportkit.paired import against_reference
+from trackfuse.reportkit.series import MAX_KEYED, mean_band, setting_colours, settings_bar
 from trackfuse.reportkit.spec import SLOTS, Reference
 from trackfuse.reportkit.style import context, legend_below, legend_entries, panels
 from trackfuse.reportkit.verdicts import (
@@ -137,58 +137,25 @@ def table3(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
 
 
 def ablation(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
-    """Each algorithm against ``improved`` on the same trials (paired, exact McNemar test).
+    """Each algorithm against ``improved`` on the same trials
+    (:func:`~trackfuse.reportkit.paired.against_reference` of ``correct``: paired gain,
+    exact McNemar test, Holm over a point's variants and over the sweep), each described by
+    its factors, membership and weights. Empty when ``improved`` was not run."""
+    table = against_reference(trials, swept_keys(config), "correct", "improved")
+    if table.empty:
+        return table
+    described = pd.DataFrame([_described(n, config["params"]) for n in table["algorithm"]])
+    at = table.columns.get_loc("algorithm") + 1
+    return pd.concat([table.iloc[:, :at], described, table.iloc[:, at:]], axis=1)
 
-    ``gain_vs_improved`` is the variant's correct rate minus improved's, with Newcombe's
-    paired 95 % interval; ``n_variant_only`` and ``n_improved_only`` count the discordant
-    trials; ``mcnemar_p`` is the two-sided exact binomial test of those counts (Q. McNemar,
-    Psychometrika 12, 1947, 153-157), ``mcnemar_p_holm`` the same adjusted by Holm's method
-    over the variants compared at that point, and ``mcnemar_p_holm_sweep`` adjusted over the
-    points of the run for that variant (the family of a claim along the sweep, such as "leads
-    from 100 m to 1 km"). ``improved``'s own row is no comparison: its gain is 0 with no
-    interval and no p-value (NaN). Empty when ``improved`` was not run.
-    """
 
-    if "improved" not in set(trials["algorithm"]):
-        return pd.DataFrame()
-    keys = swept_keys(config)
-    wide = trials.pivot_table(index=["point", *keys, "trial"], columns="algorithm",
-                              values="correct", aggfunc="first")
-    params = config["params"]
-    order = list(dict.fromkeys(trials["algorithm"]))
-    out = []
-    for point_key, g in wide.groupby(level=["point", *keys], sort=True):
-        point_key = point_key if isinstance(point_key, tuple) else (point_key,)
-        ref = g["improved"].to_numpy()
-        for name in order:
-            x = g[name].to_numpy()
-            lo, hi = wilson_interval(x.sum(), len(x))
-            gain = paired_binary(ref, x)
-            v = ALGORITHMS[name]
-            member = params["membership_norm"] if v.membership == "param" else v.membership
-            out.append({
-                **dict(zip(["point", *keys], point_key, strict=True)),
-                "algorithm": name, "description": v.summary,
-                "factors": len(factor_names(v, params)), "membership": member,
-                "weights": "-" if v.membership.startswith("chi2") else
-                ("dynamic" if v.dynamic else "static"),
-                "correct_rate": x.mean(), "correct_rate_ci_low": float(lo),
-                "correct_rate_ci_high": float(hi), "gain_vs_improved": float(gain.diff),
-                "gain_vs_improved_ci_low": float(gain.low),
-                "gain_vs_improved_ci_high": float(gain.high),
-                "n_variant_only": int(gain.y_only), "n_improved_only": int(gain.x_only),
-                "mcnemar_p": float(gain.p),
-            })
-    table = pd.DataFrame(out)
-    own = table["algorithm"] == "improved"
-    table.loc[own, ["gain_vs_improved_ci_low", "gain_vs_improved_ci_high", "mcnemar_p"]] = np.nan
-    table["mcnemar_p_holm"] = np.nan
-    table["mcnemar_p_holm_sweep"] = np.nan
-    for _, rows in table[~own].groupby(["point", *keys], sort=False):
-        table.loc[rows.index, "mcnemar_p_holm"] = holm_adjusted(rows["mcnemar_p"])
-    for _, rows in table[~own].groupby("algorithm", sort=False):
-        table.loc[rows.index, "mcnemar_p_holm_sweep"] = holm_adjusted(rows["mcnemar_p"])
-    return table
+def _described(name: str, params: Mapping[str, Any]) -> dict[str, Any]:
+    """An algorithm's summary, factor count, membership and weights (ablation columns)."""
+    v = ALGORITHMS[name]
+    return {"description": v.summary, "factors": len(factor_names(v, params)),
+            "membership": params["membership_norm"] if v.membership == "param" else v.membership,
+            "weights": "-" if v.membership.startswith("chi2") else
+            ("dynamic" if v.dynamic else "static")}
 
 
 def manoeuvre_table(summary: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
@@ -259,17 +226,9 @@ def at_paper_setting(params: Mapping[str, Any]) -> bool:
 
 
 def _setting_words(point: Mapping[str, Any], keys: Sequence[str]) -> str:
-    """The swept settings of a point in words (``radar TDOA/phase derived``, ...)."""
+    """The swept settings of a point in words (:func:`_value_words`), so a headline row
+    says which setting (which radar-factor model) it judges."""
     return "; ".join(_value_words(k, point[k]) for k in keys)
-
-
-def _headline_words(point: Mapping[str, Any], keys: Sequence[str]) -> str:
-    """The swept settings of a point for the headline table: as :func:`_setting_words`, but
-    the radar-factor model, named by its value (``radar factors 'derived': ...``), so a row
-    says which model it judges."""
-    return "; ".join(f"radar factors '{point[k]}': "
-                     + _value_words(k, point[k]).removeprefix("radar ")
-                     if k == "radar.factor_model" else _value_words(k, point[k]) for k in keys)
 
 
 def _table3_rows(run: RunData) -> list[dict[str, Any]]:
@@ -295,7 +254,7 @@ def _table3_rows(run: RunData) -> list[dict[str, Any]]:
                    and params["radar.factor_model"] == "table" else "")
             out.append(headline_row(
                 "Table 3", "correct association rate at 200 m separation, radar range sd 1 %"
-                + (f" ({_headline_words(params, keys)})" if keys else ""), name, item.value,
+                + (f" ({_setting_words(params, keys)})" if keys else ""), name, item.value,
                 x.mean(), lo, hi, "fraction", len(x), verdict.word, verdict.reason + why,
                 f"{DOCS}#w001-2-radar-tdoa-and-phase" if why else f"{DOCS}#table-3",
                 claim=item.quantity, setting=setting_text({k: params[k] for k in swept})))
@@ -344,7 +303,7 @@ def _sweep_groups(run: RunData, x: str) -> list[tuple[str, str, list[tuple[float
     groups: dict[tuple, list[tuple[float, int]]] = {}
     for point, params in enumerate(run.points):
         groups.setdefault(tuple(params[k] for k in others), []).append((float(params[x]), point))
-    return [(_headline_words(values, others), setting_text(values), sorted(members))
+    return [(_setting_words(values, others), setting_text(values), sorted(members))
             for key, members in groups.items()
             for values in [dict(zip(others, key, strict=True))]]
 
@@ -529,31 +488,15 @@ def tables(run: RunData) -> dict[str, pd.DataFrame]:
 
 # --------------------------------------------------------------------------- figures
 
-#: Axis label of each numeric swept key (unit included) and how its values are scaled.
-AXES = {
-    "target.separation": ("T1-T2 separation (m)", 1.0),
-    "radar.sigma_range_coef": ("radar range error sd (% of range)", 100.0),
-    "phase.d_over_lambda": ("interferometer spacing d/λ (1)", 1.0),
-    "snake.amplitude": ("snake amplitude (m)", 1.0),
-    "alpha.max": ("α_max (1)", 1.0),
-}
-#: Words for the values of categorical keys.
-WORDS = {("radar.factor_model", "table"): "radar TDOA/phase with their own noise",
-         ("radar.factor_model", "derived"): "radar TDOA/phase derived from its position",
-         ("alpha.index", "nis_tdoa"): "NIS index", ("alpha.index", "literal"): "literal index",
-         ("alpha.max_mode", "chi2"): "α_max chi-square", ("alpha.max_mode", "fixed"): "α_max fixed",
-         ("alpha.max_mode", "running_max"): "α_max running maximum"}
 def _value_words(key: str, value: Any) -> str:
-    """A swept value in words (``separation 200 m``, ``radar range sd 1 %``)."""
-    if (key, value) in WORDS:
-        return WORDS[key, value]
-    if key in AXES:
-        label, scale = AXES[key]
-        name, _, unit = label.rpartition(" (")
-        unit = unit.rstrip(")")
-        return f"{name} {scale * float(value):g}" + ("" if unit == "1" else
-                                                      f" {unit.replace('% of range', '%')}")
-    return f"{key} = {value}"
+    """A swept value in the experiment's declared words: its word (a quoted word after the
+    key's label: ``radar factors 'derived' (from position)``), else ``label value``
+    (``T1–T2 separation 200 m``)."""
+    shown = render.quantity(EXPERIMENT, key)
+    word = dict(shown.words).get(value)
+    if word:
+        return f"{shown.label} {word}" if word.startswith("'") else word
+    return f"{shown.label} {shown.value(value)}"
 
 
 #: The algorithms of each correct-rate figure: the paper's pair and ours, the ablations
@@ -806,21 +749,6 @@ def _trajectory_figure(run: RunData) -> Figure | str:
     return fig
 
 
-def _series_band(ax: Axes, t: np.ndarray, values: np.ndarray, label: str, colour: str,
-                 shade: bool) -> None:
-    """Mean over trials of ``values`` (N, K) against ``t`` with its 95 % t band (scans
-    where every trial is defined)."""
-    ok = np.isfinite(values).all(axis=0)
-    v = values[:, ok]
-    mean = v.mean(axis=0)
-    if shade and len(v) > 1:
-        lo, hi = t_interval(mean, v.std(axis=0, ddof=1), len(v))
-        ax.plot(t[ok], mean, label=label, color=colour)
-        ax.fill_between(t[ok], lo, hi, color=colour, alpha=BAND_ALPHA, linewidth=0)
-    else:
-        ax.plot(t[ok], mean, label=label, color=colour)
-
-
 def _esm_groups(run: RunData, esm: pd.DataFrame) -> list[tuple[str, int, pd.DataFrame]]:
     """``(words, point, first rows)`` per setting of the swept keys that change the ESM
     track (:data:`ESM_TRACK_KEYS`), at its first point."""
@@ -847,15 +775,14 @@ def _manoeuvre_figure(run: RunData) -> Figure | str:
     fig, grid = panels(1, 2 if weight_name else 1, panel_height=2.4)
     axes = grid.ravel()
     ax = axes[0]
-    colours = ["0.2"] if len(groups) == 1 else [
-        matplotlib.colormaps["viridis"](i / (len(groups) - 1) * 0.9) for i in range(len(groups))]
+    colours = setting_colours(len(groups))
     keyed = len(groups) > MAX_KEYED  # the settings on a colour bar, not in the legend
     for (words, point, rows), colour, w in zip(groups, colours, weights, strict=True):
         t, shade = esm_times(run.point_params(point)), len(groups) <= 3
         words = f"_{words}" if keyed else words
-        _series_band(ax, t, decode_series(rows["alpha_per_scan"]), words, colour, shade)
+        mean_band(ax, t, decode_series(rows["alpha_per_scan"]), words, colour, shade)
         if w is not None:
-            _series_band(axes[1], t, w[1], words, colour, shade)
+            mean_band(axes[1], t, w[1], words, colour, shade)
     indices = _index_references(ax, [run.point_params(p) for _, p, _ in groups])
     ax.set_yscale("log")
     labelled = [(ax, "manoeuvre index α\n(log scale)", "manoeuvre index")]
@@ -867,7 +794,7 @@ def _manoeuvre_figure(run: RunData) -> Figure | str:
         labelled.append((axes[1], "range weight a₁", f"range weight, {LOOKS[weight_name].label}"))
     with context():
         if keyed:
-            _settings_bar(fig, axes, [words for words, _, _ in groups])
+            settings_bar(fig, axes, [words for words, _, _ in groups])
         for a, ylabel, title in labelled:
             a.set_xlabel("time (s)")
             a.set_ylabel(ylabel)
@@ -877,20 +804,6 @@ def _manoeuvre_figure(run: RunData) -> Figure | str:
         fig.suptitle(f"Manoeuvre index ({', '.join(words.word(i) for i in indices)})"
                      + (" and range weight" if weight_name else "") + " per scan")
     return fig
-
-
-#: The most settings of the ESM track named in the legend; more go on a colour bar.
-MAX_KEYED = 3
-
-
-def _settings_bar(fig: Figure, axes: Sequence[Axes], words: Sequence[str]) -> None:
-    """A colour bar beside ``axes`` naming each setting's colour (``words``, in order)."""
-    steps = matplotlib.colors.BoundaryNorm(np.arange(len(words) + 1) - 0.5, len(words))
-    colours = matplotlib.colors.ListedColormap(
-        [matplotlib.colormaps["viridis"](i / (len(words) - 1) * 0.9) for i in range(len(words))])
-    bar = fig.colorbar(matplotlib.cm.ScalarMappable(steps, colours), ax=list(axes),
-                       ticks=range(len(words)), aspect=30)
-    bar.ax.set_yticklabels(words)
 
 
 def _index_references(ax: Axes, settings: Sequence[Mapping[str, Any]]) -> list[str]:

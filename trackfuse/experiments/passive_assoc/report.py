@@ -64,7 +64,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike
 
-from trackfuse.experiments.passive_assoc import FIGURES
+from trackfuse.experiments.passive_assoc import FIGURE_VARIANTS, FIGURES
 from trackfuse.reported import PASSIVE_ASSOC
 from trackfuse.reportkit import render
 from trackfuse.reportkit.verdicts import AGREES, DIFFERS, setting_text, within
@@ -80,8 +80,6 @@ from trackfuse.stats import (
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-#: PGA variants drawn in the figures (the ablations appear only in the ``final`` table).
-FIGURE_VARIANTS = ("pga_paper", "pga_repair", "pga_evict", "pga_anneal")
 #: Short names of swept keys in panel titles.
 KEY_WORDS = {"pga.p_m": "p_m", "pga.ops": "operations", "noise.sigma": "sigma (rad)",
              "sensor.p_d": "P_D",
@@ -131,40 +129,11 @@ def _point_label_with_sweep(values: dict[str, Any], config: dict) -> str:
     return ", ".join([_point_label(values, config), *_swept_words(values, POINT_LABEL_KEYS)])
 
 
-def _cell_title(values: dict[str, Any], config: dict) -> str:
-    """Short panel title of a grid cell: the target count and the other swept values."""
-    p = {**config.get("params", {}), **values}
-    n = int(p.get("targets.n", 10))
-    title = f"N = {n} " + (f"(M1-M{n})" if p.get("scene.mode", "paper") == "paper"
-                           else "(random)")
-    return "; ".join([title, *_swept_words(values, ("targets.n",))])
-
-
 def _points(summary: pd.DataFrame, config: dict) -> list[tuple[int, dict[str, Any]]]:
     """``(point, {swept key: value})`` for every sweep point, in point order."""
     keys = [k for k in _grouping_keys(config) if k in summary]
     first = summary.drop_duplicates("point").sort_values("point")
     return [(int(r["point"]), {k: r[k] for k in keys}) for _, r in first.iterrows()]
-
-
-def _pga_names(summary: pd.DataFrame) -> list[str]:
-    """PGA variants present in the summary, ablations left to the tables."""
-    present = set(summary["algorithm"])
-    return [name for name in FIGURE_VARIANTS if name in present]
-
-
-def _final_ops(summary: pd.DataFrame, algorithm: str) -> int:
-    """Last checkpoint (operation count) of ``algorithm`` in the summary."""
-    return int(summary.loc[summary["algorithm"] == algorithm, "ops"].max())
-
-
-def _by_x(summary: pd.DataFrame, xkey: str, algorithm: str, metric: str,
-          ops: int | None) -> pd.DataFrame:
-    """Summary rows of one algorithm and metric (at ``ops`` unless None), sorted by ``xkey``."""
-    sel = summary[(summary["algorithm"] == algorithm) & (summary["metric"] == metric)]
-    if ops is not None:
-        sel = sel[sel["ops"] == ops]
-    return sel.sort_values(xkey)
 
 
 def _clip(values: ArrayLike, metric: str) -> np.ndarray:
