@@ -79,16 +79,12 @@ from trackfuse.reportkit.paired import against_reference
 from trackfuse.reportkit.series import MAX_KEYED, mean_band, setting_colours, settings_bar
 from trackfuse.reportkit.spec import SLOTS, Reference
 from trackfuse.reportkit.style import context, legend_below, legend_entries, panels
+from trackfuse.reportkit.sweepclaims import higher_everywhere, narrows
 from trackfuse.reportkit.verdicts import (
-    AGREES,
-    ALPHA,
     DIFFERS,
     against_paper_sample,
     as_printed_verdict,
     at_least,
-    claim_verdict,
-    exploration,
-    points,
     printed_decimals,
     setting_text,
 )
@@ -96,10 +92,7 @@ from trackfuse.reports import HEADLINE_COLUMNS, headline_row
 from trackfuse.rundata import RunData, swept_keys
 from trackfuse.stats import (
     PairedBinary,
-    holm_adjusted,
     paired_binary,
-    paired_t_p,
-    t_interval,
     wilson_interval,
 )
 
@@ -341,74 +334,33 @@ def _gap_rows(item: str, anchor: str, x: str, setting: str, imp: pd.DataFrame,
 def _narrowing_row(item: str, anchor: str, x: str, where: str, imp: pd.DataFrame,
                    trad: pd.DataFrame, xs: list[tuple[float, int]], at: str = ""
                    ) -> dict[str, Any]:
-    """"The gap narrows as separation grows", decided by the one comparison fixed in
-    advance: the gap at the closest separation minus the gap at the widest, over the same
-    trials (per trial, improved's 0/1 outcome minus traditional's), with its 95 % paired t
-    interval, judged against the declared margin
-    (:func:`~trackfuse.reportkit.verdicts.at_least`). Every other pair of separations is
-    searched too (paired t, Holm over all pairs); a pair found widening goes into the reason
-    as exploration, never into the verdict."""
+    """"The gap narrows as separation grows"
+    (:func:`~trackfuse.reportkit.sweepclaims.narrows`: the gap at the closest separation
+    minus at the widest, same trials, against the declared margin)."""
     gap = {xv: imp[p].to_numpy() - trad[p].to_numpy() for xv, p in xs}
-    tests = []
-    for i, (xa, _) in enumerate(xs):
-        for xb, _ in xs[i + 1:]:
-            d = gap[xa] - gap[xb]
-            d = d[np.isfinite(d)]
-            mean, sd = float(d.mean()), float(d.std(ddof=1))
-            lo, hi = t_interval(mean, sd, len(d))
-            tests.append((xa, xb, mean, float(lo), float(hi),
-                          float(paired_t_p(mean, sd, len(d)))))
-    holm = holm_adjusted([t[-1] for t in tests])
-    x0, x1 = xs[0][0], xs[-1][0]
-    _, _, d_end, lo_end, hi_end, _ = next(t for t in tests if t[:2] == (x0, x1))
     claim = ESM_RADAR.result("gap narrows")
-    verdict = at_least(d_end, lo_end, hi_end, claim.margin, "a narrowing")
-    means = {xv: float(np.nanmean(g)) for xv, g in gap.items()}
-    reason = (f"gap {points(means[x0])} points at {_fmt_x(x, x0)}, {points(means[x1])} at "
-              f"{_fmt_x(x, x1)}, the comparison fixed in advance: {verdict.reason}")
-    widening = sorted((q, i) for i, (t, q) in enumerate(zip(tests, holm, strict=True))
-                      if t[2] < 0 and q < ALPHA and t[:2] != (x0, x1))
-    if widening:
-        q, i = widening[0]
-        xa, xb = tests[i][:2]
-        reason += "; " + exploration(len(tests), (
-            f"the gap widens from {_fmt_x(x, xa)} to {_fmt_x(x, xb)}, Holm p = {q:.2g}"))
+    v = narrows(gap, claim.margin, lambda value: _fmt_x(x, value))
+    x0, x1 = xs[0][0], xs[-1][0]
     return headline_row(item, f"gap at {_fmt_x(x, x0)} minus gap at {_fmt_x(x, x1)}, same "
                         f"trials{where}", "improved", "gap narrows as separation grows",
-                        d_end, lo_end, hi_end, "fraction difference", len(imp), verdict.word,
-                        reason, f"{DOCS}#{anchor}", claim=claim.quantity, setting=at)
+                        v.estimate, v.low, v.high, "fraction difference", len(imp), v.word,
+                        v.reason, f"{DOCS}#{anchor}", claim=claim.quantity, setting=at)
 
 
 def _always_higher_row(item: str, anchor: str, x: str, where: str, n: int,
                        gaps: list[tuple[float, PairedBinary]], at: str = "") -> dict[str, Any]:
     """"Always higher" (abstract, over separation) / "higher throughout" (Fig. 4):
-    ``agrees`` when the paired interval lies above 0 at every value (each must be shown, so
-    no adjustment is needed); ``differs`` when improved is shown *lower* somewhere (exact
-    McNemar, Holm over the values); else ``inconclusive``. ``gaps``: ``(x value,
-    improved against traditional)`` per value; ``reproduced`` is the smallest gap, for
-    display."""
-    not_shown = [(xv, g) for xv, g in gaps if not g.low > 0]
-    holm = holm_adjusted([g.p for _, g in gaps])
-    lower = [xv for (xv, g), q in zip(gaps, holm, strict=True)
-             if g.x_only > g.y_only and q < ALPHA]
-    word = claim_verdict(not not_shown, bool(lower))
-    listed = ", ".join(_fmt_x(x, xv) + (" (the same outcome in every trial)"
-                                        if g.x_only == g.y_only == 0 else f" ({points(g.diff)} "
-                                        f"points, {points(g.low)} to {points(g.high)})")
-                       for xv, g in not_shown)
-    reason = ("paired interval above 0 at every value" if word == AGREES else
-              "shown lower at " + ", ".join(_fmt_x(x, v) for v in lower) + " (exact McNemar, "
-              f"Holm over the {len(gaps)} values)" if word == DIFFERS else
-              f"not shown higher at {listed}; shown lower nowhere (exact McNemar, Holm over "
-              f"the {len(gaps)} values)")
-    xm, gm = min(gaps, key=lambda xg: xg[1].diff)
+    :func:`~trackfuse.reportkit.sweepclaims.higher_everywhere` of improved against
+    traditional (``gaps``: per x value); ``reproduced`` is the smallest gap."""
+    v = higher_everywhere(gaps, lambda value: _fmt_x(x, value))
+    xm, _ = min(gaps, key=lambda xg: xg[1].diff)
     separation = x == "target.separation"
     claim = ESM_RADAR.result("always higher" if separation else "higher throughout")
     return headline_row("Abstract" if separation else item,
                         f"smallest improved - traditional over the {len(gaps)} values, at "
-                        f"{_fmt_x(x, xm)}{where}", "improved", claim.claim, float(gm.diff),
-                        float(gm.low), float(gm.high), "fraction difference", n, word, reason,
-                        f"{DOCS}#{anchor}", claim=claim.quantity, setting=at)
+                        f"{_fmt_x(x, xm)}{where}", "improved", claim.claim, v.estimate, v.low,
+                        v.high, "fraction difference", n, v.word, v.reason, f"{DOCS}#{anchor}",
+                        claim=claim.quantity, setting=at)
 
 
 def _trend_rows(item: str, anchor: str, x: str, setting: str, rates: dict[str, pd.DataFrame],
