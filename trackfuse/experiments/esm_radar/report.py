@@ -1,47 +1,17 @@
-"""Figures and report tables of the ``esm_radar`` experiment (paper 001).
+"""Figures and report tables of the ``esm_radar`` experiment (paper 001: Zhang Xiaoqiang et
+al., "An ESM-radar track correlation algorithm based on improved fuzzy comprehensive
+evaluation", J. Air Force Eng. Univ. (Nat. Sci.) 18(1), 2017, 44-49).
 
-Zhang Xiaoqiang et al., "An ESM-radar track correlation algorithm based on improved fuzzy
-comprehensive evaluation", J. Air Force Eng. Univ. (Nat. Sci.) 18(1), 2017, 44-49. The
-experiment itself (scenario, algorithms, rows) is :mod:`trackfuse.experiments.esm_radar.model`;
-this module imports it, never the reverse, and reads saved runs only: every curve and table
-entry comes from ``trials.csv`` or ``summary.csv``. Only the noise-free geometry (true
-tracks, sensor positions) and the static AHP weights are recomputed, from the config alone.
+Reads saved runs only (``trials.csv``, ``summary.csv``); only the noise-free geometry and the
+static AHP weights are recomputed, from the config. The rate figures are the report kit's
+declared plots (:data:`trackfuse.experiments.esm_radar.FIGURES`, their captions say what
+each draws) with the x chosen per run (:func:`rate_axis`); ``trajectory`` and ``manoeuvre``
+are drawn here from the per-scan columns. A figure a run cannot draw is a one-line reason.
 
-Figures, returned by :func:`figures`:
-
-========================  ==================================================================
-correct_rate              the paper's main result: correct-association rate (%) of its
-                          method (``improved``), its baseline (``traditional``) and our
-                          improvement (``improved_gauss``), 95 % Wilson intervals, one panel
-                          per value of the other swept keys. Table 3 layout (one row per
-                          method, the paper's 74.0 % and 55.2 % beside ours) when nothing
-                          numeric is swept; Fig. 3 (separation) or Fig. 4 (radar range
-                          error) layout otherwise, the paper's Table 3 values marked just
-                          right of every point at its setting (:func:`at_paper_setting`),
-                          under our markers. Chance between T1 and T2 is 1/2 (track 3 is
-                          never chosen).
-correct_rate_ablations    the same for those ablations the run has (``traditional_5f``,
-                          ``improved_static``, ``improved_no_range``, ``improved_3f``,
-                          ``improved_l2``) beside ``improved``; on curves the thin ones with
-                          Wilson error bars, shifted sideways (bands for the paper's).
-correct_rate_references   the same for the chi-square ML references beside the paper's two.
-trajectory                paper Figs. 1-2 (redrawn if point 0 has the paper's weave): true
-                          tracks and the ESM TDOA-DF location track of one saved trial, its
-                          per-scan manoeuvre index and range weight, and the RMS ESM range
-                          error per scan over all trials.
-manoeuvre                 mean manoeuvre index and mean range weight of ``improved`` per scan
-                          with 95 % t bands, one curve per setting of the ESM track (the
-                          index panel alone without a dynamic-weight algorithm).
-========================  ==================================================================
-
-A figure that a run cannot draw (e.g. no algorithm of its group was run) is returned as a
-one-line reason string.
-
-Tables, returned by :func:`tables`: ``table3`` (counts per chosen radar track, correct
-rate with its Wilson interval), ``ablation`` (every algorithm against ``improved`` on the
-same trials, exact McNemar test), ``ahp`` (paper Table 1), ``manoeuvre`` (mean manoeuvre
-index and range weight of ``improved`` per point, 95 % t intervals) and ``paper_vs_reproduced``
-(:data:`trackfuse.reports.HEADLINE_COLUMNS`, see :func:`paper_vs_reproduced`).
+Tables (:func:`tables`): ``table3`` (counts per chosen radar track, correct and wrong rates
+with Wilson intervals), ``ablation`` (every algorithm against ``improved`` on the same
+trials), ``ahp`` (paper Table 1), ``manoeuvre`` (index and range weight per point) and
+``paper_vs_reproduced`` (:func:`paper_vs_reproduced`).
 """
 
 from __future__ import annotations
@@ -79,6 +49,7 @@ from trackfuse.reportkit.paired import against_reference
 from trackfuse.reportkit.series import MAX_KEYED, mean_band, setting_colours, settings_bar
 from trackfuse.reportkit.spec import SLOTS, Reference
 from trackfuse.reportkit.style import context, legend_below, legend_entries, panels
+from trackfuse.reportkit.summarytable import per_point
 from trackfuse.reportkit.sweepclaims import higher_everywhere, narrows
 from trackfuse.reportkit.verdicts import (
     DIFFERS,
@@ -157,21 +128,10 @@ def manoeuvre_table(summary: pd.DataFrame, config: Mapping[str, Any]) -> pd.Data
     (``improved_range_weight``), each with its 95 % Student-t interval from ``summary.csv``
     (columns ``<q>_ci_low``/``<q>_ci_high``). The index is the same for every algorithm of a
     trial; it is read from the first algorithm's rows."""
-    keys = swept_keys(config)
     first = summary["algorithm"].iloc[0]
-    wanted = {("alpha_mean", first): "alpha_mean",
-              ("range_weight_mean", "improved"): "improved_range_weight"}
-    out = []
-    for point, g in summary.groupby("point", sort=True):
-        row = {"point": point, **{k: g[k].iloc[0] for k in keys}}
-        for (metric, name), column in wanted.items():
-            hit = g[(g["metric"] == metric) & (g["algorithm"] == name)]
-            if len(hit):
-                row.update({column: hit["mean"].iloc[0],
-                            f"{column}_ci_low": hit["ci_low"].iloc[0],
-                            f"{column}_ci_high": hit["ci_high"].iloc[0]})
-        out.append(row)
-    return pd.DataFrame(out)
+    return per_point(summary, swept_keys(config),
+                     {("alpha_mean", first): "alpha_mean",
+                      ("range_weight_mean", "improved"): "improved_range_weight"})
 
 
 def ahp_table() -> pd.DataFrame:
