@@ -1,57 +1,19 @@
-"""Figures and report tables of the ``passive_assoc`` experiment (paper 002).
+"""Figures and report tables of the ``passive_assoc`` experiment (paper 002: two passive
+infrared sensors associated by an improved partheno-genetic algorithm, PGA).
 
-Paper 002 associates the measurements of two passive infrared sensors by an improved
-partheno-genetic algorithm (PGA). Its only results figure, Fig. 2, plots association
-accuracy against the number of genetic operations; the other figures here are this
-project's studies of the same experiment.
+The figures are the report kit's declared plots
+(:data:`trackfuse.experiments.passive_assoc.FIGURES`, whose captions say what each draws);
+this module only titles ``convergence`` as paper 002's Fig. 2 where the run redraws it
+(:func:`fig2_title`) and says why a figure cannot be drawn. Nothing is recomputed from
+trials but the tables' intervals.
 
-Figures (returned by :func:`figures`, keyed by file name; a one-line reason string for a
-figure the run cannot draw):
-
-* ``convergence``: paper Fig. 2 redrawn where the run is at its setting. Mean correct
-  association rate (measurement-level accuracy) against the number of genetic operations,
-  the target counts (5, 7, 10 in the paper) of one setting of the other swept keys side by
-  side, at most 3 panels a row; the paper's PGA and ours emphasised with 95 % bands, other
-  variants thin, the exact optimum (LSA) dashed with its interval shaded. The operation
-  axis is symlog (linear from 0 to 10, log above) when the checkpoints start at 0, else
-  log, and says so. The title reads "Fig. 2 redrawn" only when every point is at the
-  paper's setting (:data:`PAPER_SETTING`, 5, 7 or 10 targets); when some are, their
-  panels are marked; when none is, it says "No paper figure" and what the run lacks.
-* ``at_optimum``: no paper counterpart. The fraction of runs whose PGA solution reaches
-  the exact optimum ``J*``, in the same layout.
-* ``noise``: no paper counterpart (E002-sigma). Accuracy and whole-solution-correct rate of
-  the exact optimum and of the PGA at its final checkpoint, against the angle noise sigma,
-  with the two readings of the paper's noise figure (0.005 rad as a standard deviation or
-  as a variance) marked.
-* ``scale``: no paper counterpart. Solve time (log axis), objective gap ``J* - J`` (symlog,
-  linear below 1 nat) and accuracy against the number of targets N (a linear axis ticked
-  at each N unless N spans >= 10x, then log), when N is the only swept key.
-
-Every log or symlog axis says so in its label.
-
-Tables (returned by :func:`tables`), computed from the trial rows; every interval is two
-numeric columns ``<quantity>_ci_low``/``<quantity>_ci_high``:
-
-* ``paper_vs_reproduced``: the paper's Fig. 2 claims and its claim about the Hungarian
-  method (:data:`trackfuse.reported.PASSIVE_ASSOC`) against what the run measures, in
-  :data:`trackfuse.reports.HEADLINE_COLUMNS` (:func:`paper_vs_reproduced`).
-* ``checkpoints``: every point, algorithm and checkpoint: measurement-level accuracy, pair
-  precision and recall (means, 95 % Student-t intervals), whole-solution-correct and
-  at-optimum rates (95 % Wilson intervals) and the gap ``J* - J`` (mean, 95 % bootstrap-t
-  interval, see :func:`gap_interval`).
-* ``final``: the same at each algorithm's last checkpoint, including the ablation variants
-  that the figures leave out.
-* ``versus_exact``: at the paper's setting, each compared variant against the exact
-  optimum on the same trials (paired differences, :func:`versus_exact`); a run with no
-  point at that setting (the scale study's random targets) gets the reason instead, listed
-  under "Not tabulated" in its report.
-
-Everything is drawn from the saved tables; no trial is recomputed. ``summary`` is the long
-format of :mod:`trackfuse.stats` (columns ``point``, the swept keys, ``algorithm``, ``ops``,
-``metric``, ``n``, ``mean``, ``ci_low``, ``ci_high``), with the timing rows
-(``metric == "solve_time_s"``, seconds) appended by the runner; ``trials`` is not needed.
-``config`` supplies the sweep axes and the fixed parameter
-values written into panel titles; its values are read, never simulated.
+Tables (:func:`tables`), every interval two columns ``<quantity>_ci_low``/``_ci_high``:
+``paper_vs_reproduced`` (the paper's claims against the run, :func:`paper_vs_reproduced`),
+``checkpoints`` (every metric per point, algorithm and checkpoint: Student-t for means,
+Wilson for 0/1 rates, bootstrap-t for the gap ``J* - J``, :func:`gap_interval`), ``final``
+(the same at each algorithm's last checkpoint, ablations included) and ``versus_exact``
+(at the paper's setting, each compared variant against the exact optimum on the same
+trials, :func:`versus_exact`; the reason instead when no point is at that setting).
 """
 
 from __future__ import annotations
@@ -160,21 +122,12 @@ def gap_interval(gap: ArrayLike, level: float = 0.95) -> tuple[float, float]:
     (:data:`BOOTSTRAP_RESAMPLES` resamples, generator :data:`BOOTSTRAP_SEED`), the lower
     bound clipped at 0 since no gap is negative.
 
-    gap : (n,) per-run gaps, each >= 0, exactly 0 for a run at the optimum (the model
-    writes the rounding residue of runs at ``J*`` as 0). When every run has the same gap
-    (all at the optimum, typically) the interval collapses to that value, and when fewer than a few
-    runs are off the optimum the upper bound is infinite (the data do not bound the mean):
-    in both cases the Wilson interval of the at-optimum rate says how sure the run is.
-    Measured coverage of the mean gap at 50 runs, nominal 0.95 (``examples/gap_coverage.py``
-    on ``configs/passive_association.yaml`` run with ``--set trials=2000``: the gaps at the
-    last checkpoint of each N as the population, 1000 samples each, Monte Carlo s.e.
-    0.005-0.016; ``docs/papers/passive_assoc.md``, "Metrics and intervals", gives the
-    commands): 0.951-0.973 for the paper's PGA (most runs off the optimum), where the
-    percentile bootstrap covered 0.937-0.948; 0.179-0.682 (percentile 0.158-0.440) for
-    ``pga_evict`` and ``pga_anneal``, at ``J*`` in 97.8-99.7 % of the population's runs,
-    where 70.1-98.6 % of the samples hold at most one run off the optimum (``pga_anneal`` at
-    N = 5 reaches ``J*`` in every run: true mean 0, covered by every [0, 0]). NaN for fewer
-    than 2 runs: one run does not bound the mean.
+    gap : (n,) per-run gaps, each >= 0, exactly 0 for a run at the optimum. All runs at the
+    optimum collapse the interval to 0, a few runs off it leave the upper bound infinite:
+    the Wilson interval of the at-optimum rate then says how sure the run is. NaN for
+    fewer than 2 runs. Its measured coverage (0.951-0.973 for the paper's PGA, far less
+    for variants nearly always at ``J*``): ``docs/papers/passive_assoc.md``, "Metrics and
+    intervals".
     """
     g = np.asarray(gap, dtype=float)
     low, high = bootstrap_t_mean_intervals([g], level, BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED)[0]
