@@ -198,3 +198,14 @@ def test_a_variant_is_one_headline_row_per_setting_when_algorithms_are_swept(tmp
     fig2 = table[table["paper_item"] == "Fig. 2"]
     assert len(fig2) == 2 and set(fig2["algorithm"]) == {"pga_paper"}
     assert not table.duplicated(["paper_item", "quantity", "algorithm"]).any()
+
+
+def test_headline_rows_name_their_setting_in_plain_declared_words(shipped_run):
+    """A headline row's setting is written in the declared labels as plain text (no
+    mathtext, no parameter key): ``N = 5, paper's M1-MN, σ = 0.005 rad, ... P_D = 0.95``."""
+    table = report.tables(shipped_run)["paper_vs_reproduced"]
+    fig2 = table[table["paper_item"] == "Fig. 2"]["quantity"]
+    assert len(fig2)
+    for text in fig2:
+        assert "N = " in text and "P_D = 0.95" in text, text
+        assert not re.search(r"[$\\{}]|targets\.n|noise\.sigma|sensor\.p_d", text), text

@@ -24,7 +24,7 @@ from trackfuse.reportkit import axes as kit_axes
 from trackfuse.reportkit.looks import Look, look_of
 from trackfuse.reportkit.spec import MAX_ENTRIES, Plot, Reference
 from trackfuse.reportkit.style import context, legend_below, panels
-from trackfuse.reportkit.typography import number, unit_text
+from trackfuse.reportkit.typography import number, plain, unit_text
 
 if TYPE_CHECKING:
     from trackfuse.experiments.base import Experiment
@@ -373,6 +373,12 @@ def _frame(fig: Figure, axes: np.ndarray, experiment: Experiment, plot: Plot,
 def panel_title(experiment: Experiment, cell: dict[str, Any]) -> str:
     """``N = 5, p_m = 0.2``: a panel's setting in the declared labels."""
     return ", ".join(quantity(experiment, k).title(v) for k, v in cell.items())
+
+
+def setting_words(experiment: Experiment, values: dict[str, Any]) -> str:
+    """``N = 5, P_D = 0.95``: a setting in the declared labels as plain text (a table's
+    cell: mathtext unwrapped)."""
+    return ", ".join(plain(quantity(experiment, k).title(v)) for k, v in values.items())
 
 
 def draw_beside(parts: Sequence[tuple[RunData, str]], plot: Plot, title: str = ""

@@ -35,3 +35,15 @@ def axis_label(label: str, unit: str, percent: bool = False, scale: str = "") ->
 def number(value: float) -> str:
     """A tick or title number: ``g`` format, a minus sign rather than a hyphen."""
     return f"{value:g}".replace("-", "−")
+
+
+#: Mathtext commands of declared symbols and their plain-text letters.
+MATH_LETTERS = {r"\sigma": "σ", r"\lambda": "λ", r"\alpha": "α"}
+
+
+def plain(text: str) -> str:
+    """``text`` with its mathtext unwrapped for a table cell: ``$P_D$`` -> ``P_D``,
+    ``$\\sigma_R/R$`` -> ``σ_R/R``."""
+    for command, letter in MATH_LETTERS.items():
+        text = text.replace(command, letter)
+    return re.sub(r"[${}\\]", "", text)

@@ -50,7 +50,8 @@ class ExactSolverError(RuntimeError):
 
 PARAMS = (
     Param("scene.mode", "paper", "target set: the paper's M1..Mn, or n uniform in their box",
-          kind=str, choices=("paper", "random")),
+          kind=str, choices=("paper", "random"), label="targets",
+          words=(("paper", "paper's M1-MN"), ("random", "random targets"))),
     Param("targets.n", 10, "number of targets (paper scene: first n of M1-M10)", "count", kind=int,
           low=1, high=2000, label="targets", symbol="N"),
     Param("noise.sigma", 0.005, "the paper's angle-error figure (azimuth and elevation, both "
@@ -58,7 +59,8 @@ PARAMS = (
           high=1.0, draws=False, label="angle noise", symbol="σ"),
     Param("noise.reading", "std", "reading of noise.sigma: 'std' (sigma = value) or "
           "'variance' (sigma = sqrt(value), in rad^2)", kind=str, choices=("std", "variance"),
-          draws=False),
+          draws=False, label="noise reading",
+          words=(("std", "σ read as sd"), ("variance", "σ read as variance"))),
     Param("sensor.p_d", 0.95, "detection probability of each sensor", "1", low=1e-3, high=1.0,
           draws=False, label="detection probability", symbol="$P_D$"),
     Param("clutter.p_f", 0.05, "false alarms per sensor: Poisson(p_f N) or Binomial(N, p_f)", "1",

@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike
 
-from trackfuse.experiments.passive_assoc import FIGURE_VARIANTS, FIGURES
+from trackfuse.experiments.passive_assoc import EXPERIMENT, FIGURE_VARIANTS, FIGURES
 from trackfuse.reported import PASSIVE_ASSOC
 from trackfuse.reportkit import render
 from trackfuse.reportkit.verdicts import AGREES, DIFFERS, setting_text, within
@@ -42,10 +42,6 @@ from trackfuse.stats import (
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-#: Short names of swept keys in panel titles.
-KEY_WORDS = {"pga.p_m": "p_m", "pga.ops": "operations", "noise.sigma": "sigma (rad)",
-             "sensor.p_d": "P_D",
-             "clutter.p_f": "false-alarm rate", "assoc.cost": "cost", "assoc.tri": "triangulation"}
 #: Metrics that live in [0, 1] (fractions and rates): their interval ends are clipped here
 #: too, for the tables' intervals computed from the trials and for run folders whose
 #: summary.csv predates Metric.bounds.
@@ -62,33 +58,17 @@ def _grouping_keys(config: dict) -> list[str]:
     return [k for k in swept_keys(config) if k != "algorithms"]
 
 
-def _point_label(values: dict[str, Any], config: dict, noise: bool = True) -> str:
-    """Panel title: target count and scene, angle noise (rad) unless ``noise`` is False,
-    detection probability; ``values`` (swept key -> value) override ``config['params']``."""
+#: The settings a headline row names, in order; any other swept key follows them.
+SETTING_KEYS = ("targets.n", "scene.mode", "noise.sigma", "noise.reading", "sensor.p_d")
+
+
+def _setting_words(values: dict[str, Any], config: dict) -> str:
+    """The setting of a point in the declared words (``N = 5, paper's M1-MN, σ = 0.005 rad,
+    σ read as sd, P_D = 0.95``), ``values`` (swept key -> value) over ``config['params']``,
+    and every other swept value (a headline row of a run sweeping p_m names its p_m)."""
     p = {**config.get("params", {}), **values}
-    mode = p.get("scene.mode", "paper")
-    n = int(p.get("targets.n", 10))
-    label = f"N = {n} ({f'M1-M{n}' if mode == 'paper' else 'random'})"
-    if noise:
-        reading = "" if p.get("noise.reading", "std") == "std" else " (variance reading)"
-        label += f", sigma = {float(p.get('noise.sigma', 0.005)):g} rad{reading}"
-    return label + f", P_D = {p.get('sensor.p_d', 0.95)}"
-
-
-#: The keys :func:`_point_label` writes out; any other swept key is added after it.
-POINT_LABEL_KEYS = ("scene.mode", "targets.n", "noise.sigma", "noise.reading", "sensor.p_d")
-
-
-def _swept_words(values: dict[str, Any], skip: Collection[str]) -> list[str]:
-    """``["p_m = 0.01", ...]``: the swept ``values`` whose keys are not in ``skip``."""
-    return [f"{KEY_WORDS.get(k, k)} = {v:g}" if isinstance(v, float) else
-            f"{KEY_WORDS.get(k, k)} = {v}" for k, v in values.items() if k not in skip]
-
-
-def _point_label_with_sweep(values: dict[str, Any], config: dict) -> str:
-    """:func:`_point_label` and every other swept value (``p_m = 0.01``): a headline row of
-    a run sweeping p_m names its p_m."""
-    return ", ".join([_point_label(values, config), *_swept_words(values, POINT_LABEL_KEYS)])
+    keys = [*SETTING_KEYS, *(k for k in values if k not in SETTING_KEYS)]
+    return render.setting_words(EXPERIMENT, {k: p[k] for k in keys if k in p})
 
 
 def _points(summary: pd.DataFrame, config: dict) -> list[tuple[int, dict[str, Any]]]:
@@ -272,7 +252,7 @@ def _fig2_headline(values: dict, config: dict, name: str, runs: pd.DataFrame,
     high_rate = PASSIVE_ASSOC.result("high correct rate")
     optimum = PASSIVE_ASSOC.result("optimum reached")
     ops, n = int(runs["ops"].max()), len(runs)
-    where = _point_label_with_sweep(values, config)
+    where = _setting_words(values, config)
     setting = setting_text({k: v for k, v in values.items() if k != "algorithms"})
     acc = _versus_exact(runs, exact, "accuracy")
     verdict = within(acc["exact_minus_pga"], acc["exact_minus_pga_ci_low"],
