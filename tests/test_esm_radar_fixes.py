@@ -11,7 +11,7 @@ from trackfuse.association import ahp
 from trackfuse.config import load
 from trackfuse.experiments.esm_radar import EXPERIMENT
 from trackfuse.experiments.esm_radar.model import alpha_max, differences, manoeuvre_alpha, simulate
-from trackfuse.experiments.esm_radar.report import paper_vs_reproduced
+from trackfuse.experiments.esm_radar.paper import paper_vs_reproduced
 from trackfuse.rundata import RunData
 from trackfuse.seeding import trial_streams
 

@@ -13,7 +13,7 @@ from matplotlib.collections import PolyCollection
 
 from trackfuse import harness
 from trackfuse.config import load
-from trackfuse.experiments.esm_radar import EXPERIMENT, LOOKS, model, report
+from trackfuse.experiments.esm_radar import EXPERIMENT, LOOKS, model, paper, report
 from trackfuse.reportkit.style import context
 from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS
 from trackfuse.rundata import RunData
@@ -63,7 +63,7 @@ def test_every_figure_of_every_shipped_config_meets_the_journal_rules(shipped_ru
         if isinstance(fig, str):
             assert "\n" not in fig, (name, fig)
             own = set(report.HISTORY_TESTS) if name == "history_rates" else \
-                set(report.GROUPS[name]) - set(report.PAPER_PAIR)
+                set(report.GROUPS[name]) - set(paper.PAPER_PAIR)
             assert not run_algorithms & own, (name, fig)
             continue
         assert journal_problems(fig) == [], name
@@ -82,8 +82,8 @@ def test_main_figure_draws_the_papers_values_only_at_its_setting(shipped_run):
     where some point of the run is at its setting (200 m, 1 %, the 1 km weave), else not;
     chance is drawn at 50 %."""
     fig = house_figures(shipped_run, ["correct_rate"])["correct_rate"]
-    at = [p for p in shipped_run.points if report.at_paper_setting(p)]
-    paired = set(report.PAPER_PAIR) & set(shipped_run.params["algorithms"])
+    at = [p for p in shipped_run.points if paper.at_paper_setting(p)]
+    paired = set(paper.PAPER_PAIR) & set(shipped_run.params["algorithms"])
     stars = _stars(fig)
     assert bool(stars) == bool(at and paired)
     assert {float(y) for ln in stars for y in ln.get_ydata()} <= {74.0, 55.2}
@@ -127,11 +127,11 @@ def test_headline_table_schema_verdicts_and_docs_links(shipped_run):
     assert ((t3["ci_low"] <= t3["reproduced"]) & (t3["reproduced"] <= t3["ci_high"])).all()
     inside = (t3["ci_low"] <= t3["paper_value"]) & (t3["paper_value"] <= t3["ci_high"])
     assert ((t3["verdict"] == "agrees") == inside).all()
-    headings = re.findall(r"^#+ (.+)$", (ROOT / report.DOCS).read_text(), flags=re.M)
+    headings = re.findall(r"^#+ (.+)$", (ROOT / paper.DOCS).read_text(), flags=re.M)
     anchors = {re.sub(r"[^\w\- ]", "", h.strip().lower()).replace(" ", "-") for h in headings}
     for link in set(table["docs"]):
         page, _, anchor = link.partition("#")
-        assert page == report.DOCS and anchor in anchors, link
+        assert page == paper.DOCS and anchor in anchors, link
 
 
 def test_curve_claims_follow_the_paired_intervals(tmp_path):
@@ -139,7 +139,7 @@ def test_curve_claims_follow_the_paired_intervals(tmp_path):
     traditional one at 300 m by a wide margin, and both are near 1 at 3 km."""
     run = harness.run_data(tmp_path, "esm_radar", {"algorithms": ["traditional", "improved"]},
                            {"target.separation": [300.0, 3000.0]}, trials=40, seed=2)
-    table = report.paper_vs_reproduced(run).set_index("quantity")
+    table = paper.paper_vs_reproduced(run).set_index("quantity")
     close = table.loc[table.index.str.startswith("improved - traditional at the closest")]
     assert close["verdict"].iloc[0] == "agrees" and close["ci_low"].iloc[0] > 0
     always = table[table["paper_item"] == "Abstract"].iloc[0]
@@ -162,7 +162,7 @@ def _outcomes(rates: dict[float, float | tuple[float, float]], n: int) -> pd.Dat
 
 def _gap_verdicts(trad: dict[float, float], imp: dict[float, float], n: int) -> dict:
     xs = [(x, i) for i, x in enumerate(trad)]
-    rows = report._gap_rows("Fig. 3", "fig-3-separation", "target.separation", "",
+    rows = paper._gap_rows("Fig. 3", "fig-3-separation", "target.separation", "",
                             _outcomes(imp, n), _outcomes(trad, n), xs)
     return {key: row for key, row in zip(("closest", "narrows", "always"), rows, strict=True)}
 
@@ -293,7 +293,7 @@ def test_headline_rows_name_the_radar_factor_model(tmp_path):
     run = harness.run_data(tmp_path, "esm_radar", {"algorithms": ["traditional", "improved"]},
                            {"target.separation": [50.0, 2000.0],
                             "radar.factor_model": ["table", "derived"]}, trials=10, seed=2)
-    table = report.paper_vs_reproduced(run)
+    table = paper.paper_vs_reproduced(run)
     close = table[table["quantity"].str.startswith("improved - traditional at the closest")]
     models = [re.search(r"radar factors '(\w+)'", q)[1] for q in close["quantity"]]
     assert sorted(models) == ["derived", "table"]  # one row, and one verdict, per model
@@ -302,7 +302,7 @@ def test_headline_rows_name_the_radar_factor_model(tmp_path):
 def test_straight_flight_is_not_compared_with_the_papers_table_3(tmp_path):
     run = harness.run_data(tmp_path, "esm_radar", {"algorithms": ["traditional", "improved"]},
                            {"snake.amplitude": [0.0, 1000.0]}, trials=4, seed=2)
-    t3 = report.paper_vs_reproduced(run).query("paper_item == 'Table 3'")
+    t3 = paper.paper_vs_reproduced(run).query("paper_item == 'Table 3'")
     assert len(t3) == 2 and t3["quantity"].str.contains("1 km weave").all()
 
 

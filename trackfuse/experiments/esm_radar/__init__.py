@@ -57,11 +57,9 @@ FIGURES = {
     "history_rates": FigureSpec(
         "Correct (top), false (middle: a wrong radar track chosen) and missed (bottom: no "
         "decision) association rates (%), 95 % Wilson intervals, of the counting test and "
-        "Wald's sequential test over the track history beside the single-scan chi-square "
-        "reference and the paper's fuzzy methods, on the same trials; dotted in the middle "
-        "panel: the counting test's design false-association rate, the binomial probability "
-        "that a track of another target falls inside the gate in as many scans of the window "
-        "as the threshold asks", "",
+        "Wald's sequential test over the track history beside the chi-square reference and "
+        "the paper's fuzzy methods, same trials; dotted: the counting test's binomial design "
+        "false-association rate", "",
         Plot(("correct", "wrong", "missed"), "target.separation",
              ("traditional", "improved", "chi2", "counting", "sprt"), width="single",
              panel_height=1.55)),
