@@ -23,7 +23,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
-from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from trackfuse.association import ahp
 from trackfuse.association.esm_scenario import FACTORS
@@ -50,6 +49,7 @@ from trackfuse.experiments.esm_radar.paper import (
     value_words,
 )
 from trackfuse.reported import ESM_RADAR, ESM_RADAR_WEIGHTS
+from trackfuse.reportkit import axes as kit_axes
 from trackfuse.reportkit import render
 from trackfuse.reportkit.derived import Rate, with_rates
 from trackfuse.reportkit.numberformat import sig3
@@ -371,15 +371,14 @@ def _range_error_panel(ax: Axes, esm: pd.DataFrame, params: Mapping[str, Any]) -
     ax.plot(t, np.nanmedian(np.abs(err), axis=0), color=ESM_COLOUR, linestyle="--",
             label="median |ESM range error|")
     ax.axhline(params["target.separation"], color="0.5", linewidth=1.0,
-               label="T1-T2 separation")
-    ax.set_yscale("log")
-    ax.yaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
-    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-    ax.yaxis.set_minor_formatter(NullFormatter())
+               label="T1–T2 separation")
+    kit_axes.y_log(ax, "log")
+    low, high = ax.get_ylim()
+    ax.set_ylim(low, high * (high / low) ** 0.35)  # room for the legend
     ax.set_xlabel("time (s)")
     ax.set_ylabel("ESM range error\n(m, log scale)")
     ax.set_title(f"all {len(esm)} trials of this point")
-    ax.legend(loc="best", fontsize=7)
+    ax.legend(loc="upper center", ncols=2, fontsize=7)
 
 
 #: Characters per line of a panel title at the house title size in a panel of half the
