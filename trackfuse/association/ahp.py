@@ -1,10 +1,8 @@
 """Analytic hierarchy process (AHP): priority weights from a pairwise judgement matrix.
 
-``B`` (n, n) is positive and reciprocal (``B[j, i] = 1 / B[i, j]``); the weights ``a`` (n,)
-are positive and sum to 1, by the root (geometric-mean) method or the principal eigenvector.
-Consistency: ``CI = (lambda_max - n) / (n - 1)``, ``CR = CI / RI(n)`` (accept ``CR < 0.1``).
-:data:`PAPER_001_JUDGEMENT` is paper 001's Table 1; its numbers:
-``docs/papers/esm_radar.md``, "Improved fuzzy evaluation" and W001-5.
+``B`` (n, n) positive reciprocal; weights ``a`` (n,) sum to 1. Consistency
+``CR = CI / RI(n)``, accept ``CR < 0.1``. Paper 001's numbers: ``docs/papers/esm_radar.md``,
+"Improved fuzzy evaluation" and W001-5.
 
 References: Saaty T. L., J. Math. Psychol. 15(3), 1977, 234-281; Saaty T. L., *The Analytic
 Hierarchy Process*, 1980.
@@ -39,20 +37,14 @@ def _check(B: np.ndarray) -> np.ndarray:
 
 
 def root_weights(B: np.ndarray) -> np.ndarray:
-    """Root (geometric-mean) method weights.
-
-    Parameters: ``B`` (n, n) positive reciprocal judgement matrix.
-    Returns ``a`` (n,) weights summing to 1."""
+    """Root (geometric-mean) weights (n,) of ``B`` (n, n), summing to 1."""
     B = _check(B)
     g = np.exp(np.mean(np.log(B), axis=1))
     return g / g.sum()
 
 
 def eigen_weights(B: np.ndarray) -> np.ndarray:
-    """Principal-eigenvector weights (Saaty 1977), scaled to sum to 1.
-
-    Parameters: ``B`` (n, n) positive reciprocal judgement matrix.
-    Returns ``a`` (n,) positive weights summing to 1."""
+    """Principal-eigenvector weights (n,) of ``B`` (n, n), summing to 1 (Saaty 1977)."""
     B = _check(B)
     values, vectors = np.linalg.eig(B)
     v = np.real(vectors[:, np.argmax(np.real(values))])
@@ -60,11 +52,7 @@ def eigen_weights(B: np.ndarray) -> np.ndarray:
 
 
 def lambda_max(B: np.ndarray, a: np.ndarray | None = None) -> float:
-    """Principal eigenvalue of ``B``, or its textbook estimate from a weight vector.
-
-    Parameters: ``B`` (n, n) judgement matrix. ``a`` (n,) weights, optional. If given, returns the
-    hand-calculation estimate ``(1/n) sum_i (B a)_i / a_i``, which equals the principal eigenvalue
-    exactly when ``a`` is the principal eigenvector."""
+    """Principal eigenvalue of ``B``; with weights ``a``, the estimate ``mean_i (B a)_i / a_i``."""
     B = _check(B)
     if a is None:
         return float(np.max(np.real(np.linalg.eigvals(B))))
@@ -78,9 +66,7 @@ def consistency_index(lam: float, n: int) -> float:
 
 
 def consistency_ratio(B: np.ndarray) -> float:
-    """``CR = CI / RI(n)`` with Saaty's random index; 0 for ``n <= 2``.
-
-    Parameters: ``B`` (n, n) judgement matrix, ``3 <= n <= 10`` for a non-trivial ratio."""
+    """``CR = CI / RI(n)``; 0 for ``n <= 2``; ValueError beyond n = 10."""
     B = _check(B)
     n = B.shape[0]
     if n <= 2:

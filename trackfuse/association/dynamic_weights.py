@@ -1,11 +1,7 @@
 """Manoeuvre-dependent factor weights (paper 001 eq. 14-16, corrected; W001-3).
 
-With ``a(1)`` the static AHP weights (F,) (range first) and ``alpha(k)`` the manoeuvre index:
-``a'_1(k+1) = a_1(1) exp(-(alpha(k) / alpha_max)^2)``, then every weight is its *static*
-value over ``D = a'_1(k+1) + sum_{i>=2} a_i(1)``, so the weights always sum to 1 and the range
-weight stays in ``[0.277, 0.51]`` for the paper's weights while ``alpha <= alpha_max``.
-``alpha_max``: a given constant (``mode="fixed"``) or the running maximum of alpha
-(``"running_max"``). Equations: ``docs/papers/esm_radar.md``, "Improved fuzzy evaluation".
+``a'_1(k+1) = a_1(1) exp(-(alpha(k) / alpha_max)^2)``; all weights are then renormalised to
+sum to 1. See ``docs/papers/esm_radar.md``, "Improved fuzzy evaluation".
 """
 
 from __future__ import annotations
@@ -15,13 +11,11 @@ import numpy as np
 
 def dynamic_weights(a1: np.ndarray, alpha: np.ndarray, alpha_max: float = 10.0,
                     mode: str = "fixed") -> np.ndarray:
-    """Per-scan factor weights from the manoeuvre index.
+    """Weights ``a`` (..., K, F), rows summing to 1, from ``alpha`` (..., K).
 
-    Parameters: ``a1`` (F,) static weights ``a(1)``, range first, summing to 1. ``alpha`` (..., K)
-    manoeuvre index per scan (dimensionless, >= 0). The weights applied at scan ``k`` use
-    ``alpha(k-1)``; scan 0 uses ``a(1)``. ``alpha_max`` normalizing constant for ``mode="fixed"`` (>
-    0). ``mode`` ``"fixed"`` or ``"running_max"``.
-    Returns ``a`` (..., K, F) weights, each row summing to 1."""
+    ``a1`` (F,) static weights, range first. Scan ``k`` uses ``alpha(k-1)`` (scan 0 uses ``a1``);
+    the normaliser is ``alpha_max`` (``mode="fixed"``) or the running maximum (``"running_max"``).
+    """
     a1 = np.asarray(a1, dtype=float)
     alpha = np.asarray(alpha, dtype=float)
     if mode == "fixed":

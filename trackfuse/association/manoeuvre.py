@@ -1,18 +1,9 @@
-"""Manoeuvre indices of the ESM track (paper 001 eq. 8-13): the default detector and the paper's
-literal form. The index ``alpha(k)`` and its normalizer ``alpha_max`` cut the range weight.
+"""Manoeuvre indices ``alpha(k)`` of the ESM track (paper 001 eq. 8-13); they cut the range weight.
 
-* Windowed NIS (default; :func:`ca_innovations`, :func:`windowed_nis`): a 1-D
-  nearly-constant-acceleration Kalman filter (DWPA: ``F = [[1, T, T^2/2], [0, 1, T], [0, 0,
-  1]]``, ``Q = q G G'``, ``G = [T^2/2, T, 1]'``, ``q`` in m^2/s^4) on the ESM range difference
-  ``c dt_E(k)``; ``alpha(k) = (1/N) sum_{i=k-N+1}^{k} nu(i)^2 / S(i)``, with ``N alpha ~
-  chi2(N)`` without a manoeuvre (:func:`nis_threshold`). NaN until the window is full (first
-  innovation at scan 3, first ``alpha`` at scan ``N + 2``).
-* The paper's literal index (:func:`cv_innovations`, :func:`manoeuvre_index`): the mean square
-  of the last ``N`` residuals of a 1-D constant-velocity filter on the TDOA-DF range, over its
-  measurement variance ``R``.
-
-Why this observable and model, and what the literal index does: ``docs/papers/esm_radar.md``,
-"Manoeuvre index and dynamic weights" and W001-4.
+Default: the windowed NIS of a 1-D nearly-constant-acceleration filter on ``c dt_E`` (m),
+``N alpha ~ chi2(N)`` without a manoeuvre. The paper's literal form: mean square of the last
+``N`` residuals of a 1-D CV filter on the TDOA-DF range over ``R``. Equations and why:
+``docs/papers/esm_radar.md``, "Manoeuvre index and dynamic weights" and W001-4.
 
 References: Bar-Shalom, Li, Kirubarajan, *Estimation with Applications to Tracking and
 Navigation*, Wiley, 2001, sec. 5.4.2, 6.3.3, 11.2; Kalata P. R., IEEE Trans. AES 20(2), 1984.
@@ -40,13 +31,11 @@ def _ca_start(z: np.ndarray, R: np.ndarray, T: float) -> tuple[np.ndarray, np.nd
 
 def ca_innovations(z: np.ndarray, R: np.ndarray, T: float,
                    q: float) -> tuple[np.ndarray, np.ndarray]:
-    """Innovations of a 1-D nearly-constant-acceleration Kalman filter (DWPA model).
+    """Innovations ``nu`` (m) and variances ``S`` (m^2), (..., K), of a 1-D DWPA Kalman filter.
 
-    Parameters: ``z`` (..., K) measurements (m), K >= 4. ``R`` (..., K) or scalar measurement
-    variances (m^2), > 0. ``T`` sampling period (s). ``q`` variance of the acceleration change over
-    one period (m^2/s^4), >= 0.
-    Returns ``nu`` (..., K) innovations ``z(k) - H x(k|k-1)`` (m); NaN at scans 0-2. ``S`` (..., K)
-    innovation variances (m^2); NaN at scans 0-2."""
+    ``z`` (..., K) m with K >= 4, ``R`` m^2, ``T`` s, ``q`` variance of the acceleration change
+    per period (m^2/s^4). NaN at scans 0-2 (three-point start).
+    """
     z = np.asarray(z, dtype=float)
     R = np.broadcast_to(np.asarray(R, dtype=float), z.shape)
     F = np.array([[1.0, T, T * T / 2], [0.0, 1.0, T], [0.0, 0.0, 1.0]])
@@ -67,12 +56,7 @@ def ca_innovations(z: np.ndarray, R: np.ndarray, T: float,
 
 
 def windowed_nis(nu: np.ndarray, S: np.ndarray, window: int) -> np.ndarray:
-    """Mean normalized innovation squared over the last ``window`` scans.
-
-    Parameters: ``nu``, ``S`` (..., K) innovations and their variances; NaN before the filter
-    starts. ``window`` number N of NIS values averaged (>= 1).
-    Returns ``alpha`` (..., K) dimensionless; NaN until N innovations exist (start-up excluded).
-    Without a manoeuvre ``N alpha ~ chi2(N)``."""
+    """Mean NIS ``nu^2 / S`` (..., K) over the last ``window`` scans; NaN until full."""
     eps = np.square(nu) / S
     csum = np.cumsum(np.nan_to_num(eps), axis=-1)
     count = np.cumsum(~np.isnan(eps), axis=-1)
@@ -83,19 +67,17 @@ def windowed_nis(nu: np.ndarray, S: np.ndarray, window: int) -> np.ndarray:
 
 
 def nis_threshold(window: int, false_alarm: float) -> float:
-    """``alpha_max`` for :func:`windowed_nis`: the ``1 - false_alarm`` quantile of
-    ``chi2(window) / window``, the index's distribution without a manoeuvre."""
+    """``alpha_max``: the ``1 - false_alarm`` quantile of ``chi2(window) / window``."""
     return chi2_quantile(1.0 - false_alarm, window) / window
 
 
 def cv_innovations(z: np.ndarray, R: np.ndarray, T: float,
                    q: float) -> tuple[np.ndarray, np.ndarray]:
-    """Innovations of a 1-D CV Kalman filter (the paper's literal index uses ``nu``).
+    """Residuals ``nu`` (m) and variances ``S`` (m^2), (..., K), of a 1-D CV Kalman filter.
 
-    Parameters: ``z`` (..., K) measurements (m), K >= 2. ``R`` (..., K) measurement variances (m^2),
-    > 0. ``T`` sampling period (s). ``q`` white acceleration variance (m^2/s^4).
-    Returns ``nu`` (..., K) residuals ``z(k) - H x(k|k-1)`` (m); NaN at scans 0 and 1. ``S`` (...,
-    K) innovation variances (m^2); NaN at scans 0 and 1."""
+    ``z`` (..., K) m with K >= 2, ``R`` m^2, ``T`` s, ``q`` white acceleration variance
+    (m^2/s^4). NaN at scans 0 and 1 (two-point start).
+    """
     z = np.asarray(z, dtype=float)
     R = np.broadcast_to(np.asarray(R, dtype=float), z.shape)
     K = z.shape[-1]
@@ -123,13 +105,10 @@ def cv_innovations(z: np.ndarray, R: np.ndarray, T: float,
 
 
 def manoeuvre_index(V: np.ndarray, R: np.ndarray, window: int = 5) -> np.ndarray:
-    """The paper's literal ``alpha(k)``: mean square of the last ``window`` residuals over
-    ``R(k)``.
+    """The paper's literal ``alpha(k)`` (..., K): mean square of recent residuals over ``R(k)``.
 
-    Parameters: ``V`` (..., K) residuals (m); NaN where none exists yet. ``R`` (..., K) measurement
-    variances ``sigma_n(k)^2`` (m^2), > 0. ``window`` number N of most recent residuals averaged
-    (fewer at the start).
-    Returns ``alpha`` (..., K) dimensionless, >= 0; NaN where no residual exists yet."""
+    Averages the last ``window`` residuals (fewer at the start); NaN where none exists yet.
+    """
     valid = ~np.isnan(V)
     sq = np.where(valid, np.square(np.nan_to_num(V)), 0.0)
     csum = np.cumsum(sq, axis=-1)

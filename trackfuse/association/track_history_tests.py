@@ -1,13 +1,8 @@
 """Track-to-track association over the track history: the counting test and Wald's SPRT.
 
-Both read, per scan and radar track, whether ``m2_k = d_k' S_k^-1 d_k`` falls inside the
-chi-square gate ``gamma`` (the ``p_gate`` quantile, ``F`` degrees of freedom): probability
-``p_gate`` for the same target (H0), a declared ``p_false`` for another (H1). Counting: at
-least ``M`` of the last ``n`` scans inside, ``M`` the smallest with ``P(Binomial(n, p_false)
->= M) <= alpha``. SPRT: the log-likelihood ratio accepts at ``ln((1 - beta) / alpha)`` and
-rejects at ``ln(beta / (1 - alpha))``. Several associated tracks compete (largest count,
-earliest acceptance; ties to the smallest summed ``m2``); none is "no decision" (-1). See
-``docs/papers/esm_radar.md``, "Tests over the track history".
+Both read whether ``m2_k = d_k' S_k^-1 d_k`` falls inside the chi-square gate ``gamma``;
+competing tracks and "no decision" (-1) as in ``docs/papers/esm_radar.md``, "Tests over the
+track history".
 
 References: Sagild, Hem, Brekke, FUSION 2021; Wald A., Ann. Math. Statist. 16(2), 1945.
 """
@@ -26,14 +21,12 @@ def binomial_tail(n: int, p: float, m: int) -> float:
 
 
 def counting_threshold(n: int, p_false: float, alpha: float) -> int:
-    """The least count ``M`` (0..n+1) with ``P(Binomial(n, p_false) >= M) <= alpha``;
-    ``n + 1`` (never associate) when even ``n`` hits are too likely under H1."""
+    """Least ``M`` with ``P(Binomial(n, p_false) >= M) <= alpha``; ``n + 1`` (never) if none."""
     return next((m for m in range(n + 2) if binomial_tail(n, p_false, m) <= alpha), n + 1)
 
 
 def _pick(accepted: np.ndarray, score: np.ndarray, m2_sum: np.ndarray) -> np.ndarray:
-    """Per trial, the accepted track of best ``score`` (lower is better), ties by the
-    smaller ``m2_sum``; -1 where none is accepted. All (..., J)."""
+    """Accepted track of lowest ``score``, ties to smaller ``m2_sum``; -1 if none. All (..., J)."""
     key = np.where(accepted, score, np.inf)
     best = key.min(axis=-1, keepdims=True)
     tied = accepted & (key == best)
@@ -43,10 +36,7 @@ def _pick(accepted: np.ndarray, score: np.ndarray, m2_sum: np.ndarray) -> np.nda
 
 def counting_decision(m2: np.ndarray, gamma: float, n: int, threshold: int
                       ) -> tuple[np.ndarray, np.ndarray]:
-    """Counting test on the last ``n`` scans of ``m2`` (..., K, J).
-
-    Returns the chosen track (..., ) (-1: none reaches ``threshold``) and the counts
-    (..., J)."""
+    """Counting test on the last ``n`` scans of ``m2`` (..., K, J): track (...,), counts."""
     window = m2[..., -n:, :]
     counts = (window <= gamma).sum(axis=-2)
     chosen = _pick(counts >= threshold, -counts.astype(float), window.sum(axis=-2))
@@ -55,10 +45,7 @@ def counting_decision(m2: np.ndarray, gamma: float, n: int, threshold: int
 
 def sprt_decision(m2: np.ndarray, gamma: float, p_gate: float, p_false: float, alpha: float,
                   beta: float) -> tuple[np.ndarray, np.ndarray]:
-    """Wald's SPRT per track on the gate indicators of ``m2`` (..., K, J).
-
-    Returns the chosen track (...,) (-1: none accepted) and the log-likelihood ratio of
-    each track when its test stopped, or at the last scan (..., J), nats."""
+    """Wald's SPRT on ``m2`` (..., K, J): chosen track (...,), final LLR (..., J) in nats."""
     inside = m2 <= gamma
     step = np.where(inside, math.log(p_gate / p_false),
                     math.log((1.0 - p_gate) / (1.0 - p_false)))

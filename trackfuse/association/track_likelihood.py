@@ -1,10 +1,7 @@
 """Maximum-likelihood track-to-track association: the statistical reference for paper 001.
 
-Under "radar track ``j`` is the ESM target", the factor difference ``d_kj`` (F,) is to first
-order zero-mean Gaussian with covariance ``S_kj = P_E(k) + P_Rj(k)``; with white errors and
-equal priors the ML decision minimises ``L_j = sum_k [d_kj' S_kj^-1 d_kj + log |S_kj|]``.
-The full covariance keeps the TDOA-DF range from counting as independent evidence. See
-``docs/papers/esm_radar.md``, "ML reference".
+ML picks the radar track ``j`` minimising ``L_j = sum_k [d_kj' S_kj^-1 d_kj + log |S_kj|]``
+with ``S_kj = P_E(k) + P_Rj(k)``. See ``docs/papers/esm_radar.md``, "ML reference".
 
 References: Bar-Shalom Y., IEEE Trans. AC 26(2), 1981, 571-572; Bar-Shalom Y., Li X. R.,
 *Multitarget-Multisensor Tracking*, 1995, sec. 8.4.
@@ -18,12 +15,11 @@ from trackfuse.chi2 import chi2_quantile
 
 
 def gaussian_nll_terms(d: np.ndarray, S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Squared Mahalanobis distance and log-determinant, batched.
+    """``d' S^-1 d`` and ``log |S|`` (...,) for ``d`` (..., F), ``S`` (..., F, F).
 
-    ``S`` is scaled to a correlation matrix (the factors' units differ by ~20 orders of
-    magnitude) and solved by LU, not Cholesky: with the TDOA-DF range and the ``derived`` radar
-    model ``S`` can be numerically singular (condition numbers up to 1e17). ``d`` (..., F),
-    ``S`` (..., F, F). Returns ``m2`` (...,) ``d' S^-1 d`` and ``logdet`` (...,) ``log |S|``."""
+    ``S`` is scaled to a correlation matrix (factor units differ by ~20 orders of magnitude) and
+    solved by LU: with the TDOA-DF range it can be near singular (condition up to 1e17).
+    """
     s = np.sqrt(np.diagonal(S, axis1=-2, axis2=-1))
     Cn = S / (s[..., :, None] * s[..., None, :])
     e = d / s
@@ -33,12 +29,10 @@ def gaussian_nll_terms(d: np.ndarray, S: np.ndarray) -> tuple[np.ndarray, np.nda
 
 
 def ml_track_decision(d: np.ndarray, S: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """ML choice of radar track from per-scan factor differences.
+    """ML choice of radar track from ``d`` (..., K, J, F) and ``S`` (..., K, J, F, F).
 
-    Parameters: ``d`` (..., K, J, F) factor differences (wrapped where angular). ``S`` (..., K, J,
-    F, F) difference covariances.
-    Returns ``j`` (...,) chosen track index (0-based). ``log_lr`` (...,) log-likelihood ratio of the
-    best over the second-best track (>= 0). ``D`` (..., J) chi-square distances ``sum_k d' S^-1 d``.
+    Returns the 0-based index (...,), the log-likelihood ratio of best over second best (>= 0),
+    and the chi-square distances ``D`` (..., J).
     """
     m2, logdet = gaussian_nll_terms(d, S)
     D = m2.sum(axis=-2)
@@ -49,13 +43,11 @@ def ml_track_decision(d: np.ndarray, S: np.ndarray) -> tuple[np.ndarray, np.ndar
 
 def abstaining_decision(j: np.ndarray, log_lr: np.ndarray, D_best: np.ndarray, dof: int,
                         lr_threshold: float, gate_alpha: float) -> np.ndarray:
-    """ML decision that may answer "no decision" (W001-6: the paper always forces a choice).
+    """The ML choice ``j``, or -1 where it fails the gate or the ambiguity test (W001-6).
 
-    Gate: ``D_best`` above the ``1 - gate_alpha`` quantile of chi-square with ``dof = K F``
-    degrees of freedom means no track fits (``gate_alpha = 0``: no gate). Ambiguity: the best
-    track is declared only if ``log_lr >= lr_threshold`` over the runner-up (``log(19)``: 95 %
-    posterior between the two). ``j`` (...,) ML choice (0-based); ``log_lr``, ``D_best`` (...,).
-    Returns (...,) int: ``j`` where both tests pass, else -1."""
+    Gate: ``D_best`` above the ``1 - gate_alpha`` chi-square quantile with ``dof = K F`` (0: no
+    gate). Ambiguity: ``log_lr < lr_threshold`` (``log(19)``: 95 % posterior between two).
+    """
     ok = log_lr >= lr_threshold
     if gate_alpha > 0:
         ok &= D_best <= chi2_quantile(1.0 - gate_alpha, dof)
