@@ -1,13 +1,8 @@
 """Paper 001 world: snake-weaving and crossing targets and the five association factors.
 
-Own aircraft A1 and A2 sit still; T1 weaves (``x = x0 + A sin(2 pi t / P_w)``,
-``y = y0 - V t``), T2 = T1 + (sep, 0), and T3 flies straight through their centre line at
-``t_c``. The factors (:data:`FACTORS`, paper 001's Table 1 order, all measured at A1): range
-(m), speed (m/s), bearing (rad), TDOA (s) and interferometer phase (rad). The ESM sees T2 only,
-its range from the TDOA-DF inversion (:mod:`trackfuse.association.tdoa_df`, correlated with
-bearing and TDOA: :func:`esm_factors` returns the full covariance); the radar's TDOA and
-phase are either Table 2 noise (``table``) or computed from its measured position
-(``derived``). See ``docs/papers/esm_radar.md``, "Scenario" and "Factors and sensor models".
+Factors (:data:`FACTORS`, measured at A1): range (m), speed (m/s), bearing (rad), TDOA (s),
+phase (rad). The ESM sees T2 only; its range comes from the TDOA-DF inversion. Geometry and
+sensor models: ``docs/papers/esm_radar.md``, "Scenario" and "Factors and sensor models".
 
 Reference: Zhang Xiaoqiang et al., J. Air Force Eng. Univ. (Nat. Sci.) 18(1), 2017, 44-49,
 sec. 3.
@@ -43,10 +38,7 @@ class SnakeCross:
     start3: tuple[float, float] = (10200.0, 15000.0)
 
     def states(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Positions and velocities of T1, T2, T3.
-
-        Parameters: ``t`` (T,) times (s).
-        Returns ``p`` (T, 3, 2) positions (m); ``v`` (T, 3, 2) velocities (m/s)."""
+        """Positions ``p`` (T, 3, 2) m, velocities ``v`` (T, 3, 2) m/s of T1-T3 at ``t`` (T,) s."""
         t = np.asarray(t, dtype=float)
         w = 2 * np.pi / self.snake_period
         x0, y0 = self.start
@@ -63,12 +55,7 @@ class SnakeCross:
 
 def position_factors(r: np.ndarray, theta: np.ndarray, A1: np.ndarray, A2: np.ndarray,
                      d_over_lambda: float) -> tuple[np.ndarray, np.ndarray]:
-    """TDOA (s) and interferometer phase (rad) of the point at range ``r``, bearing ``theta``
-    from A1.
-
-    Parameters: ``r`` (...,) m; ``theta`` (...,) rad; ``A1``, ``A2`` (2,) m; ``d_over_lambda``
-    antenna spacing in wavelengths.
-    Returns ``tdoa`` (...,) s; ``phase`` (...,) rad."""
+    """TDOA (s) and phase (rad) of the point at range ``r`` (m), bearing ``theta`` (rad) from A1."""
     b = np.asarray(A2, dtype=float) - np.asarray(A1, dtype=float)
     rho2 = np.hypot(r * np.cos(theta) - b[0], r * np.sin(theta) - b[1])
     return (r - rho2) / C, 2 * np.pi * d_over_lambda * np.cos(theta)
@@ -76,10 +63,7 @@ def position_factors(r: np.ndarray, theta: np.ndarray, A1: np.ndarray, A2: np.nd
 
 def position_factor_jacobian(r: np.ndarray, theta: np.ndarray, A1: np.ndarray, A2: np.ndarray,
                              d_over_lambda: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Partial derivatives of :func:`position_factors`.
-
-    Returns ``dtdoa_dr`` (...,) s/m; ``dtdoa_dtheta`` (...,) s/rad; ``dphase_dtheta`` (...,)
-    rad/rad."""
+    """``dtdoa/dr`` (s/m), ``dtdoa/dtheta`` (s/rad), ``dphase/dtheta`` (rad/rad), each (...,)."""
     b = np.asarray(A2, dtype=float) - np.asarray(A1, dtype=float)
     c, s = np.cos(theta), np.sin(theta)
     rho2 = np.hypot(r * c - b[0], r * s - b[1])
@@ -90,11 +74,7 @@ def position_factor_jacobian(r: np.ndarray, theta: np.ndarray, A1: np.ndarray, A
 
 def true_factors(p: np.ndarray, v: np.ndarray, A1: np.ndarray, A2: np.ndarray,
                  d_over_lambda: float) -> np.ndarray:
-    """The five factors of targets at ``p`` with velocity ``v``.
-
-    Parameters: ``p``, ``v`` (..., 2) position (m) and velocity (m/s). ``A1``, ``A2`` (2,)
-    own-aircraft positions (m).
-    Returns ``f`` (..., 5) in :data:`FACTORS` order and units."""
+    """The five factors (..., 5) of targets at ``p`` (m), velocity ``v`` (m/s), (..., 2)."""
     dp = p - np.asarray(A1, dtype=float)
     r = np.hypot(dp[..., 0], dp[..., 1])
     theta = np.arctan2(dp[..., 1], dp[..., 0])
@@ -125,14 +105,12 @@ class RadarNoise:
 
 def esm_factors(f_true: np.ndarray, z: np.ndarray, noise: ESMNoise, A1: np.ndarray,
                 A2: np.ndarray, min_denominator: float = 1.0):
-    """ESM factor measurements of one target and their covariance.
+    """ESM measurements ``x`` (N, K, 5), covariance ``P`` (N, K, 5, 5) and ``valid`` (N, K).
 
-    Parameters: ``f_true`` (K, 5) true factors of the target at the ESM times. ``z`` (N, K, 4)
-    standard-normal draws for (angle, tdoa, speed, phase), already multiplied by any noise scale.
-    ``noise`` ESM standard deviations. ``A1``, ``A2`` (2,) m. ``min_denominator`` TDOA-DF guard (m).
-    Returns ``x`` (N, K, 5) measured factors (range from TDOA-DF, invalid samples carried forward).
-    ``P`` (N, K, 5, 5) covariance (range correlated with angle and tdoa). ``valid`` (N, K) bool,
-    False where the TDOA-DF inversion failed."""
+    ``f_true`` (K, 5) true factors; ``z`` (N, K, 4) scaled standard-normal draws for (angle,
+    tdoa, speed, phase). The TDOA-DF range is correlated with angle and tdoa; invalid samples
+    are carried forward.
+    """
     b = np.asarray(A2, dtype=float) - np.asarray(A1, dtype=float)
     theta = f_true[:, 2] + noise.angle * z[..., 0]
     tdoa = f_true[:, 3] + noise.tdoa * z[..., 1]
@@ -160,15 +138,11 @@ def esm_factors(f_true: np.ndarray, z: np.ndarray, noise: ESMNoise, A1: np.ndarr
 
 def radar_factors(f_true: np.ndarray, z: np.ndarray, noise: RadarNoise, model: str,
                   A1: np.ndarray, A2: np.ndarray, d_over_lambda: float):
-    """Radar factor measurements of every track and their covariance.
+    """Radar measurements ``x`` (N, M, J, 5) and covariance ``P`` (N, M, J, 5, 5) of every track.
 
-    Parameters: ``f_true`` (M, J, 5) true factors at the radar times. ``z`` (N, M, J, 5)
-    standard-normal draws (range, speed, angle, tdoa, phase), already multiplied by any noise scale;
-    the ``"derived"`` model ignores the last two. ``noise`` radar standard deviations. ``model``
-    ``"table"`` or ``"derived"``. ``A1``, ``A2`` (2,) m. ``d_over_lambda`` interferometer spacing in
-    wavelengths.
-    Returns ``x`` (N, M, J, 5) measured factors; ``P`` (N, M, J, 5, 5) covariance, evaluated at the
-    measured range and bearing (what the association algorithm knows)."""
+    ``z`` (N, M, J, 5) scaled draws (the ``"derived"`` model ignores the last two). ``P`` is
+    evaluated at the measured range and bearing (what the association algorithm knows).
+    """
     sig_r_true = noise.range_coef * f_true[..., 0]
     r = f_true[..., 0] + sig_r_true * z[..., 0]
     speed = f_true[..., 1] + noise.speed * z[..., 1]
@@ -201,19 +175,11 @@ def radar_factors(f_true: np.ndarray, z: np.ndarray, noise: RadarNoise, model: s
 def nominal_sd(f_true: np.ndarray, esm_noise: ESMNoise, radar_noise: RadarNoise, model: str,
                A1: np.ndarray, A2: np.ndarray, d_over_lambda: float,
                min_denominator: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
-    """Sensor accuracies at the scenario's noise-free geometry, averaged over the scans.
+    """Per-factor sd (5,) of ESM and radar at the noise-free geometry, averaged over scans.
 
-    The first-order standard deviation of every ESM and radar factor is evaluated at the true
-    factors of the ESM target (no noise), then averaged over time: one constant per factor
-    and sensor for a given scenario. It is what a designer would read off the sensor
-    specifications for this engagement (for the ESM range, the TDOA-DF error at the
-    geometry), and it does not depend on any trial's noise.
-
-    Parameters: ``f_true`` (K, 5) true factors of the ESM target at the ESM times. ``esm_noise``,
-    ``radar_noise`` sensor standard deviations. ``model`` radar factor model. ``A1``, ``A2`` (2,) m.
-    ``d_over_lambda`` interferometer spacing. ``min_denominator`` TDOA-DF guard.
-    Returns ``sd_esm`` (5,) ESM sd per factor; ``sd_radar`` (5,) radar sd per factor (factor units).
-    NaN where the TDOA-DF inversion fails at every scan."""
+    What a designer reads off the specifications for this engagement; independent of any
+    trial's noise. NaN where the TDOA-DF inversion fails at every scan.
+    """
     K = f_true.shape[0]
     _, P_e, _ = esm_factors(f_true, np.zeros((1, K, 4)), esm_noise, A1, A2, min_denominator)
     _, P_r = radar_factors(f_true[:, None], np.zeros((1, K, 1, 5)), radar_noise, model, A1,

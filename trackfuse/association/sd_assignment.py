@@ -1,18 +1,11 @@
 """S-dimensional assignment with a dummy index, by Lagrangian relaxation (S >= 2 sensors).
 
-Index 0 of each sensor is the dummy. A tuple ``(i_1, ..., i_S)`` costs ``c`` (nats, the
-negative log-likelihood ratio of "one target" against "all false alarms",
-:func:`trackfuse.association.sd_costs.tuple_costs`); costs are clipped to ``min(c, 0)`` and a
-tuple at 0 is reported as singletons. The constraints of sensors 3..S are relaxed with
-multipliers ``u_s(i)``: ``L(u)`` (a lower bound) is a 2-D assignment over the cheapest tails
-(:func:`~trackfuse.association.assignment.solve_exact`); recovery assigns sensors 3..S one by
-one (an upper bound); the multipliers take Polyak subgradient steps (``theta`` halved after
-:data:`PATIENCE` iterations without a better dual bound). Stops at the relative duality gap
-``max_gap``, at a feasible relaxed solution, or after ``max_iter`` iterations. Equations:
-``docs/papers/sd_assignment.md``, "Lagrangian relaxation".
-
-The minimum over the tails runs compiled (numba, cached on disk beside this module);
-``tests/sd_reference.py`` is the plain numpy version the tests pin it to.
+Index 0 of each sensor is the dummy; tuple costs ``c`` (nats) come from
+:func:`trackfuse.association.sd_costs.tuple_costs`, clipped to ``min(c, 0)`` (a tuple at 0
+is reported as singletons). Sensors 3..S are relaxed with multipliers; the dual is a 2-D
+assignment, recovery gives the primal, and Polyak subgradient steps halve ``theta`` after
+:data:`PATIENCE` stale iterations. Equations: ``docs/papers/sd_assignment.md``, "Lagrangian
+relaxation". The tail minimum runs in numba; ``tests/sd_reference.py`` is its numpy oracle.
 
 References: Deb S. et al., IEEE Trans. AES 33(2), 1997, 523-538; Poore A. B., Rijavec N.,
 SIAM J. Optimization 3(3), 1993, 544-563; Held M., Wolfe P., Crowder H. P., Math.
@@ -39,13 +32,9 @@ GAP_SCALE_FLOOR = 1.0
 
 @dataclass(frozen=True)
 class SDResult:
-    """A feasible S-D assignment and its bounds.
-
-    Attributes: ``tuples`` (K, S) int, the chosen tuples (index 0 = dummy): every real index of
-    every sensor in exactly one row; a row with two or more real indices costs < 0. ``primal``
-    summed cost of ``tuples`` (nats): an upper bound on the optimum. ``dual`` best Lagrangian value
-    (nats): a lower bound on the optimum. ``gap`` relative duality gap ``(primal - dual) /
-    max(|primal|, 1)``, >= 0. ``iterations`` relaxed problems solved."""
+    """A feasible S-D assignment: ``tuples`` (K, S) (0 = dummy), ``primal`` (upper bound, nats),
+    ``dual`` (lower bound, nats), ``gap`` ``(primal - dual) / max(|primal|, 1)``, ``iterations``.
+    """
 
     tuples: np.ndarray
     primal: float
@@ -60,10 +49,9 @@ class SDResult:
 
 
 def checked_costs(cost: np.ndarray) -> np.ndarray:
-    """The cost tensor clipped to ``min(c, 0)`` as a C-contiguous float array.
-
-    Raises ValueError for fewer than 2 dimensions, a NaN, or a tuple with at most one real
-    index whose cost is not 0 (module docstring)."""
+    """``min(cost, 0)``, C-contiguous; ValueError for S < 2, NaN, or a nonzero cost on a tuple
+    with at most one real index.
+    """
     cost = np.asarray(cost, dtype=float)
     if cost.ndim < 2:
         raise ValueError(f"an S-D cost tensor needs S >= 2 dimensions, got {cost.ndim}")
@@ -79,10 +67,7 @@ def checked_costs(cost: np.ndarray) -> np.ndarray:
 
 @njit(**JIT)
 def reduce_tail(cost, utail):
-    """Minimum over the tail of the reduced cost ``cost[a, b, t] - utail[t]``.
-
-    cost : (A, B, T) float, utail : (T,) float. Returns the minimum (A, B) and the first
-    tail index reaching it (A, B) int64."""
+    """Min over ``t`` of ``cost[a, b, t] - utail[t]`` (A, B) and its first argmin (A, B)."""
     a, b, t = cost.shape
     low = np.empty((a, b))
     arg = np.empty((a, b), np.int64)
@@ -106,11 +91,10 @@ def tail_sum(multipliers: list[np.ndarray]) -> np.ndarray:
 
 
 def _dummy_matching(low: np.ndarray) -> tuple[np.ndarray, float]:
-    """Exact 2-D assignment with dummies on ``low`` (R+1, n+1), whose last row is the dummy
-    row and column 0 the dummy column: every real row and real column used once.
+    """Exact 2-D assignment on ``low`` (R+1, n+1); last row and column 0 are dummies.
 
-    Returns the column (0 = dummy) of each real row and of each real column left to the
-    dummy row, as rows ``(row, column)`` (row R = dummy), and the summed cost."""
+    Returns ``(row, column)`` pairs (row R = dummy) and their summed cost.
+    """
     r = low.shape[0] - 1
     gain = low[:r, :1] + low[r:, 1:] - low[:r, 1:]
     match = solve_exact(gain)
@@ -124,8 +108,7 @@ def _dummy_matching(low: np.ndarray) -> tuple[np.ndarray, float]:
 
 @dataclass(frozen=True)
 class Relaxed:
-    """The relaxed problem at multipliers ``u``: its value ``dual`` (a lower bound), its
-    solution ``tuples`` (K, S) and the subgradient ``g`` (one (n_s,) array per sensor >= 3)."""
+    """Relaxed problem at ``u``: ``dual`` (a lower bound), ``tuples`` (K, S), subgradient ``g``."""
 
     dual: float
     tuples: np.ndarray
@@ -133,8 +116,7 @@ class Relaxed:
 
 
 def relax(cost: np.ndarray, u: list[np.ndarray]) -> Relaxed:
-    """Solve the relaxed problem of the clipped ``cost`` at multipliers ``u`` (one
-    (n_s + 1,) array per sensor 3..S, ``u[k][0] = 0``)."""
+    """Relaxed problem at multipliers ``u`` ((n_s + 1,) per sensor 3..S, ``u[k][0] = 0``)."""
     shape = cost.shape
     utail = tail_sum(u)
     cube = cost.reshape(shape[0], shape[1], -1)
@@ -159,9 +141,7 @@ def relax(cost: np.ndarray, u: list[np.ndarray]) -> Relaxed:
 
 
 def recover(cost: np.ndarray, heads: np.ndarray, u: list[np.ndarray]) -> np.ndarray:
-    """A feasible solution (K, S) from fixed 2-D tuples ``heads`` (R, 2) (every real index
-    of sensors 1 and 2 once): sensors 3..S are added one at a time by exact 2-D
-    assignment, minimising over the later sensors with their multipliers ``u``."""
+    """Feasible tuples (K, S) from 2-D ``heads`` (R, 2), adding sensors 3..S by 2-D assignment."""
     shape = cost.shape
     rows = heads[(heads > 0).any(axis=1)]
     for k in range(2, len(shape)):
@@ -176,8 +156,7 @@ def recover(cost: np.ndarray, heads: np.ndarray, u: list[np.ndarray]) -> np.ndar
 
 
 def split_nonnegative(cost: np.ndarray, tuples: np.ndarray) -> np.ndarray:
-    """``tuples`` with every tuple of two or more real indices whose clipped cost is 0
-    split into singletons (same summed cost)."""
+    """``tuples`` with multi-index tuples of clipped cost 0 split into singletons."""
     value = cost[tuple(tuples.T)]
     keep = ((tuples > 0).sum(axis=1) < 2) | (value < 0.0)
     singles = [np.eye(tuples.shape[1], dtype=np.int64)[s] * i
@@ -187,15 +166,15 @@ def split_nonnegative(cost: np.ndarray, tuples: np.ndarray) -> np.ndarray:
 
 
 def relative_gap(primal: float, dual: float) -> float:
-    """``(primal - dual) / max(|primal|, 1)``, the module docstring's relative gap."""
+    """``(primal - dual) / max(|primal|, 1)``, the relative duality gap."""
     return (primal - dual) / max(abs(primal), GAP_SCALE_FLOOR)
 
 
 def solve_sd(cost: np.ndarray, max_gap: float = 0.01, max_iter: int = 100) -> SDResult:
-    """Minimise the summed tuple cost over the feasible S-D assignments (module docstring).
+    """Minimum-cost feasible S-D assignment of ``cost`` (n_1 + 1, ..., n_S + 1) in nats.
 
-    cost : (n_1 + 1, ..., n_S + 1) tuple costs, nats, index 0 the dummy on every axis.
-    max_gap : stop at this relative duality gap; max_iter : at most this many iterations."""
+    Stops at relative gap ``max_gap``, a feasible relaxed solution, or ``max_iter`` iterations.
+    """
     cost = checked_costs(cost)
     u = [np.zeros(n) for n in cost.shape[2:]]
     best_primal, best_dual, best = np.inf, -np.inf, None
