@@ -1,12 +1,8 @@
-"""Interval estimates used by summaries, figures and ``compare``.
+"""Interval estimates and tests used by summaries, figures and ``compare``.
 
-Wilson score intervals for proportions, Student-t for means, order-statistic intervals for
-medians, the chi-square NEES band, paired or Welch t and Newcombe's hybrid score intervals
-for differences between runs, and bootstrap-t intervals for RMSE; which interval serves
-where, and their measured coverage: ``docs/statistics.md``. scipy is imported on first use
-(only ``scipy.special`` for the summary: the same numbers as ``scipy.stats``, tested). Array
-arguments broadcast to one shape, which each returned array has unless a function says
-otherwise.
+Which interval serves where, and its measured coverage: ``docs/statistics.md``. scipy is
+imported on first use (only ``scipy.special`` for the summary). Array arguments broadcast to
+one shape ``S``, which each returned array has unless a function says otherwise.
 """
 
 from __future__ import annotations
@@ -22,10 +18,7 @@ from trackfuse.chi2 import chi2_quantile
 
 def wilson_interval(successes: ArrayLike, n: ArrayLike,
                     level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
-    """Wilson score interval for a binomial proportion.
-
-    ``successes`` and ``n`` broadcast to ``S``; returns ``(low, high)``, each ``S``, in
-    [0, 1]. Where ``n == 0`` both bounds are NaN."""
+    """Wilson score interval ``(low, high)`` of ``successes / n``; NaN where ``n == 0``."""
     from scipy.special import ndtri  # on first use: see the module docstring
 
     k = np.asarray(successes, dtype=float)
@@ -44,8 +37,7 @@ def wilson_interval(successes: ArrayLike, n: ArrayLike,
 
 def t_interval(mean: ArrayLike, std: ArrayLike, n: ArrayLike,
                level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
-    """Student-t interval ``mean +- t_{n-1} std / sqrt(n)`` (all broadcast to ``S``):
-    ``(low, high)``, each ``S``, in the unit of ``mean``; NaN where ``n < 2``."""
+    """Student-t interval ``mean +- t_{n-1} std / sqrt(n)``; NaN where ``n < 2``."""
     from scipy.special import stdtrit  # on first use: see the module docstring
 
     mean = np.asarray(mean, dtype=float)
@@ -58,10 +50,10 @@ def t_interval(mean: ArrayLike, std: ArrayLike, n: ArrayLike,
 
 
 def nees_band(dim: int, n_runs: int, level: float = 0.95) -> tuple[float, float]:
-    """Band for the average NEES of ``n_runs`` independent runs of a ``dim``-state filter.
+    """Band of the average NEES of ``n_runs`` runs of a ``dim``-state filter.
 
-    ``n_runs * ANEES ~ chi2(n_runs * dim)`` for a consistent filter, so the band is
-    ``chi2.ppf([a/2, 1-a/2], n_runs*dim) / n_runs``."""
+    ``n_runs * ANEES ~ chi2(n_runs * dim)`` for a consistent filter.
+    """
     dof = dim * n_runs
     alpha = 1 - level
     return chi2_quantile(alpha / 2, dof) / n_runs, chi2_quantile(1 - alpha / 2, dof) / n_runs
@@ -71,10 +63,10 @@ def nees_band(dim: int, n_runs: int, level: float = 0.95) -> tuple[float, float]
 def welch_interval(m1: ArrayLike, s1: ArrayLike, n1: ArrayLike, m2: ArrayLike,
                    s2: ArrayLike, n2: ArrayLike,
                    level: float = 0.95) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Welch interval for ``m2 - m1`` from two independent samples' means, standard
-    deviations and sizes (all broadcast to ``S``). Returns ``(low, high, p_value)``, each
-    ``S``; the p-value is
-    the two-sided Welch t test of equal means. NaN where a sample has fewer than two values."""
+    """Welch interval of ``m2 - m1`` from two samples' means, sds and sizes, and its two-sided p.
+
+    Returns ``(low, high, p_value)``; NaN where a sample has fewer than two values.
+    """
     from scipy import stats  # on first use: see the module docstring
 
     m1, s1, n1, m2, s2, n2 = (np.asarray(v, dtype=float) for v in (m1, s1, n1, m2, s2, n2))
@@ -94,19 +86,17 @@ def welch_interval(m1: ArrayLike, s1: ArrayLike, n1: ArrayLike, m2: ArrayLike,
 
 
 def _p_value(p_test: ArrayLike, se: ArrayLike, diff: ArrayLike) -> np.ndarray:
-    """``p_test`` where the standard error ``se`` is positive; where it is exactly 0 (every
-    value equal), 1 for a zero difference ``diff`` and 0 otherwise; NaN where ``se`` is not
-    a number (one value, or an infinite one): the test has nothing to go on."""
+    """``p_test`` where ``se > 0``; at ``se == 0`` 1 if ``diff == 0`` else 0; NaN if ``se`` NaN."""
     se, diff = np.asarray(se, dtype=float), np.asarray(diff, dtype=float)
     return np.where(se > 0, p_test, np.where(se == 0, np.where(diff == 0, 1.0, 0.0), np.nan))
 
 
 def no_spread_p(n1: ArrayLike, n2: ArrayLike | None = None) -> np.ndarray:
-    """Two-sided exact p-value (shape ``S``), twice the one-sided one, of a difference with
-    no spread at all: ``n1`` paired differences all equal and not 0 (sign test:
-    ``2 * 0.5**n1``), or, given ``n2``, two samples each of one value (permutation test:
-    the observed split is the most extreme of ``C(n1 + n2, n1)``, so ``2 / C``); at most 1.
-    A t test reads 0 there, whatever ``n``: two trials each made a 'regression'."""
+    """Two-sided exact p of a difference with no spread: sign test ``2 * 0.5**n1`` for paired
+    differences, or ``2 / C(n1 + n2, n1)`` for two constant samples; at most 1.
+
+    A t test reads 0 there, whatever ``n``.
+    """
     from scipy.special import comb  # on first use: see the module docstring
 
     n1 = np.asarray(n1, dtype=float)
@@ -115,9 +105,7 @@ def no_spread_p(n1: ArrayLike, n2: ArrayLike | None = None) -> np.ndarray:
 
 
 def paired_t_p(diff: ArrayLike, sd: ArrayLike, n: ArrayLike) -> np.ndarray:
-    """Two-sided p-value (shape ``S``) of the paired t test from the mean ``diff``, standard
-    deviation ``sd`` and number ``n`` of the per-trial differences (all broadcast to ``S``); see
-    :func:`_p_value` for ``sd`` zero or not a number."""
+    """Two-sided paired t p-value from the mean, sd and count of the differences."""
     from scipy import stats  # on first use: see the module docstring
 
     diff, sd, n = (np.asarray(v, dtype=float) for v in (diff, sd, n))
@@ -130,14 +118,11 @@ def paired_t_p(diff: ArrayLike, sd: ArrayLike, n: ArrayLike) -> np.ndarray:
 def proportion_difference_interval(k1: ArrayLike, n1: ArrayLike, k2: ArrayLike,
                                    n2: ArrayLike, both: ArrayLike | None = None,
                                    level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
-    """Newcombe's hybrid score interval for ``k2/n2 - k1/n1`` (all broadcast to ``S``):
-    ``(low, high)``, each ``S``, in [-1, 1].
+    """Newcombe's hybrid score interval of ``k2/n2 - k1/n1``, in [-1, 1]; NaN for an empty sample.
 
-    Independent samples when ``both`` is None (Newcombe 1998, Stat. Med. 17, 873-890,
-    method 10). Paired samples (the same trials, ``n1 == n2``) when ``both`` gives the number
-    of trials that are 1 in both (Newcombe 1998, Stat. Med. 17, 2635-2650, method 10): the
-    Wilson intervals of the two proportions are combined with the continuity-corrected
-    correlation ``phi`` of the 2x2 table. NaN where a sample is empty."""
+    Independent samples (Newcombe 1998, Stat. Med. 17, 873-890, method 10), or paired when
+    ``both`` counts the trials that are 1 in both (Stat. Med. 17, 2635-2650, method 10).
+    """
     k1, n1, k2, n2 = (np.asarray(v, dtype=float) for v in (k1, n1, k2, n2))
     with np.errstate(invalid="ignore", divide="ignore"):
         p1, p2 = k1 / n1, k2 / n2
@@ -153,8 +138,7 @@ def proportion_difference_interval(k1: ArrayLike, n1: ArrayLike, k2: ArrayLike,
 
 
 def _paired_phi(a: np.ndarray, k1: np.ndarray, k2: np.ndarray, n: np.ndarray) -> np.ndarray:
-    """Newcombe's continuity-corrected phi of the paired 2x2 table with ``a`` trials 1 in
-    both, ``k1``/``k2`` ones in the first/second sample, ``n`` trials."""
+    """Newcombe's continuity-corrected phi of the paired 2x2 table."""
     b, c = k1 - a, k2 - a
     d = n - a - b - c
     num = a * d - b * c
@@ -165,11 +149,10 @@ def _paired_phi(a: np.ndarray, k1: np.ndarray, k2: np.ndarray, n: np.ndarray) ->
 
 
 def holm_adjusted(p_values: ArrayLike) -> np.ndarray:
-    """Holm's step-down adjusted p-values ``(m,)`` of one family of ``m`` tests with
-    p-values ``p_values: (m,)`` (Holm 1979, Scand. J.
-    Stat. 6, 65-70): ``max over j <= i of min(1, (m - j + 1) p_(j))`` in ascending order of
-    ``p``, returned in the input order. Rejecting where it is below ``alpha`` keeps the
-    family-wise error rate at ``alpha`` under any dependence between the tests."""
+    """Holm's step-down adjusted p-values (m,) in input order (Holm 1979, Scand. J. Stat. 6, 65-70).
+
+    Rejecting below ``alpha`` keeps the family-wise error rate at ``alpha`` under any dependence.
+    """
     p = np.asarray(p_values, dtype=float)
     order = np.argsort(p, kind="stable")
     m = len(p)
@@ -180,10 +163,7 @@ def holm_adjusted(p_values: ArrayLike) -> np.ndarray:
 
 
 def mcnemar_p(b: ArrayLike, c: ArrayLike) -> np.ndarray:
-    """Two-sided exact McNemar p-value (shape ``S``) from the discordant counts ``b`` and
-    ``c`` (broadcast to ``S``; McNemar 1947): the binomial test of ``b`` in ``b + c`` at one
-    half; 1 when ``b + c = 0``. The binomial CDF of ``scipy.special`` (``bdtr``), equal
-    to ``scipy.stats``' to about 1e-13 relative, without its import."""
+    """Exact two-sided McNemar p from discordant counts ``b``, ``c``; 1 when ``b + c = 0``."""
     from scipy.special import bdtr  # on first use: see the module docstring
 
     b, c = np.asarray(b, dtype=float), np.asarray(c, dtype=float)
@@ -193,11 +173,11 @@ def mcnemar_p(b: ArrayLike, c: ArrayLike) -> np.ndarray:
 
 
 def median_interval(values: ArrayLike, level: float = 0.95) -> tuple[float, float, float]:
-    """``(median, low, high)`` of ``values``, with the distribution-free ``level`` interval of
-    the median from order statistics: ``[x_(j), x_(n+1-j)]`` (sorted, 1-based) for the
-    largest ``j`` whose coverage ``1 - 2 P(B < j)``, ``B ~ Binomial(n, 1/2)``, is at least
-    ``level`` (n = 50: the 18th and the 33rd value, coverage 0.967). Low and high are NaN
-    when even ``[min, max]`` covers less (fewer than 6 values at 95 %)."""
+    """``(median, low, high)``: distribution-free interval ``[x_(j), x_(n+1-j)]`` of the median.
+
+    ``j`` is the largest with ``1 - 2 P(B < j) >= level``, ``B ~ Binomial(n, 1/2)`` (n = 50: the
+    18th and 33rd values). NaN bounds when even ``[min, max]`` covers less (n < 6 at 95 %).
+    """
     from scipy.special import bdtr  # on first use: see the module docstring
 
     x = np.sort(np.asarray(values, dtype=float))
@@ -211,11 +191,11 @@ def median_interval(values: ArrayLike, level: float = 0.95) -> tuple[float, floa
 
 @dataclass(frozen=True)
 class PairedBinary:
-    """Two 0/1 outcomes ``x`` and ``y`` of the same trials compared (every field of shape
-    ``S``): ``n`` trials, ``k_x`` and ``k_y`` ones, ``both`` ones in both, the discordant
-    trials ``x_only`` (1 in ``x`` only) and ``y_only``, the rates ``rate_x`` and ``rate_y``,
-    ``diff = rate_y - rate_x`` with Newcombe's paired interval ``(low, high)`` and the exact
-    McNemar ``p`` (:func:`proportion_difference_interval`, :func:`mcnemar_p`)."""
+    """Two 0/1 outcomes ``x``, ``y`` of the same trials compared, every field of shape ``S``.
+
+    Counts, rates, ``diff = rate_y - rate_x`` with Newcombe's paired interval ``(low, high)``
+    and the exact McNemar ``p``.
+    """
 
     n: np.ndarray
     k_x: np.ndarray
@@ -233,8 +213,7 @@ class PairedBinary:
     @classmethod
     def from_counts(cls, n: ArrayLike, k_x: ArrayLike, k_y: ArrayLike, both: ArrayLike,
                     level: float = 0.95) -> PairedBinary:
-        """The comparison from its counts (broadcast to ``S``); rates and ``diff`` NaN and
-        ``p`` 1 where ``n`` is 0."""
+        """From counts; rates and ``diff`` NaN and ``p`` 1 where ``n`` is 0."""
         n, k_x, k_y, both = (np.asarray(v, dtype=float) for v in (n, k_x, k_y, both))
         x_only, y_only = k_x - both, k_y - both
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -245,9 +224,10 @@ class PairedBinary:
 
 
 def paired_binary(x: ArrayLike, y: ArrayLike, level: float = 0.95) -> PairedBinary:
-    """:class:`PairedBinary` of ``y`` against ``x``: 0/1 arrays of shape ``(trials, *S)``
-    (broadcast against each other), NaN where a trial has no row; each comparison counts the
-    trials where both have one. Every field has shape ``S``."""
+    """:class:`PairedBinary` of ``y`` against ``x``, 0/1 arrays (trials, *S), NaN = no row.
+
+    Each comparison counts only the trials where both have a row.
+    """
     x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
     ok = ~(np.isnan(x) | np.isnan(y))
     x, y = np.where(ok, x, 0.0), np.where(ok, y, 0.0)
@@ -256,9 +236,7 @@ def paired_binary(x: ArrayLike, y: ArrayLike, level: float = 0.95) -> PairedBina
 
 
 def binomial_above_p(k: ArrayLike, n: ArrayLike, p0: ArrayLike) -> np.ndarray:
-    """One-sided exact binomial p-value (shape ``S``) of ``k`` successes in ``n`` trials
-    against a success probability above ``p0`` (all broadcast to ``S``): ``P(X >= k)`` for
-    ``X ~ Binomial(n, p0)`` (``scipy.special.bdtrc``); 1 when ``k = 0`` or ``n = 0``."""
+    """One-sided exact p ``P(X >= k)``, ``X ~ Binomial(n, p0)``; 1 when ``k = 0`` or ``n = 0``."""
     from scipy.special import bdtrc  # on first use: see the module docstring
 
     k, n = np.asarray(k, dtype=float), np.asarray(n, dtype=float)
@@ -268,9 +246,7 @@ def binomial_above_p(k: ArrayLike, n: ArrayLike, p0: ArrayLike) -> np.ndarray:
 
 
 def two_proportion_p(k1: ArrayLike, n1: ArrayLike, k2: ArrayLike, n2: ArrayLike) -> np.ndarray:
-    """Two-sided p-value (shape ``S``) of the 'N-1' chi-square test of equal independent
-    proportions ``k1/n1`` and ``k2/n2`` (broadcast to ``S``; Campbell 2007, Stat. Med. 26,
-    3661-3675), accurate down to small expected counts."""
+    """Two-sided p of the 'N-1' chi-square test of equal proportions (Campbell 2007)."""
     from scipy import stats  # on first use: see the module docstring
 
     k1, n1, k2, n2 = (np.asarray(v, dtype=float) for v in (k1, n1, k2, n2))
@@ -283,17 +259,12 @@ def two_proportion_p(k1: ArrayLike, n1: ArrayLike, k2: ArrayLike, n2: ArrayLike)
 
 def bootstrap_t_mean_intervals(groups: Sequence[ArrayLike], level: float = 0.95,
                                resamples: int = 2000, seed: int = 0) -> np.ndarray:
-    """Expanded bootstrap-t (studentized) interval of the mean of each array of ``groups``.
+    """Expanded bootstrap-t interval of the mean of each group, (len(groups), 2).
 
-    Each resample's mean is studentized by its own ``s* / sqrt(n)``; the interval is ``mean - q_hi
-    s / sqrt(n), mean - q_lo s / sqrt(n)`` with ``q_lo, q_hi`` the resampled t quantiles at
-    Hesterberg's expanded ``alpha'`` (``docs/statistics.md``: method and measured coverage). A
-    bound can be infinite when the data do not bound the mean; a sample with no spread gives
-    ``(mean, mean)``.
-
-    ``groups``: ``(n_i,)`` arrays (non-finite values dropped); groups of equal size share one
-    draw of resampling indices (generator ``seed``), the draw a separate call would make.
-    Returns ``(len(groups), 2)`` (low, high); NaN where a group has fewer than 2 values."""
+    Method (Hesterberg's expanded ``alpha'``) and coverage: ``docs/statistics.md``. Non-finite
+    values are dropped; groups of equal size share one resampling draw (generator ``seed``). A
+    bound can be infinite; no spread gives ``(mean, mean)``; NaN below 2 values.
+    """
     from scipy.special import ndtr, stdtrit  # on first use: see the module docstring
 
     clean = [np.asarray(g, dtype=float)[np.isfinite(np.asarray(g, dtype=float))]
@@ -316,26 +287,27 @@ def bootstrap_t_mean_intervals(groups: Sequence[ArrayLike], level: float = 0.95,
 
 def percentile_mean_intervals(samples: np.ndarray, resamples: int = 2000,
                               seed: int = 0) -> np.ndarray:
-    """95 % percentile-bootstrap interval of the mean of each row of ``samples: (R, n)``,
-    ``(R, 2)``: the interval the expanded bootstrap-t replaced, kept to measure against
-    (``examples/interval_coverage.py``, ``examples/gap_coverage.py``). Every row uses the
-    same ``resamples`` draws of generator ``seed``."""
+    """95 % percentile-bootstrap interval (R, 2) of the mean of each row of ``samples`` (R, n).
+
+    Kept only to measure the bootstrap-t against (``examples/interval_coverage.py``).
+    """
     n = samples.shape[1]
     means = samples @ _resample_counts(n, resamples, seed).T / n  # (R, resamples)
     return np.quantile(means, [0.025, 0.975], axis=1).T
 
 
 def _resample_counts(n: int, resamples: int, seed: int) -> np.ndarray:
-    """``(resamples, n)`` counts of each value in each resample drawn with replacement."""
+    """(resamples, n) counts of each value in each resample with replacement."""
     idx = np.random.default_rng(seed).integers(0, n, (resamples, n))
     return np.bincount((np.arange(resamples)[:, None] * n + idx).ravel(),
                        minlength=resamples * n).reshape(resamples, n)
 
 
 def _bootstrap_t(x: np.ndarray, counts: np.ndarray) -> np.ndarray:
-    """``(groups, resamples)`` t values ``(mean* - mean) / (s* / sqrt(n))`` of the samples
-    ``x: (groups, n)`` resampled by ``counts: (resamples, n)``; ``+-inf`` (0 at the
-    sample's mean) where a resample has no spread."""
+    """(groups, resamples) t values ``(mean* - mean) / (s* / sqrt(n))`` of ``x`` (groups, n).
+
+    ``+-inf`` (0 at the mean) where a resample has no spread.
+    """
     n = x.shape[1]
     centred = x - x.mean(axis=1, keepdims=True)  # smaller cancellation than raw values
     scale = np.abs(centred).max(axis=1, keepdims=True)
@@ -352,10 +324,10 @@ def _bootstrap_t(x: np.ndarray, counts: np.ndarray) -> np.ndarray:
 
 def rmse_intervals(squared_errors: Sequence[ArrayLike], level: float = 0.95,
                    resamples: int = 2000, seed: int = 0) -> np.ndarray:
-    """Interval of the root mean square ``sqrt(mean(e^2))`` from the squared errors of each
-    array ``(n_i,)`` of ``squared_errors`` (in the square of the error's unit):
-    :func:`bootstrap_t_mean_intervals` of the mean square, lower bound clipped at 0, then
-    square-rooted. Assumes neither zero-mean nor Gaussian errors. Returns
-    ``(len(squared_errors), 2)`` (low, high) in the error's unit; coverage as measured there."""
+    """Interval (len, 2) of ``sqrt(mean(e^2))`` from squared errors, in the error's unit.
+
+    The bootstrap-t interval of the mean square, clipped at 0, square-rooted; assumes neither
+    zero-mean nor Gaussian errors.
+    """
     mse = bootstrap_t_mean_intervals(squared_errors, level, resamples, seed)
     return np.sqrt(np.clip(mse, 0.0, None))

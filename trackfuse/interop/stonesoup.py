@@ -1,12 +1,10 @@
 """Stone Soup adapter: our simulated angle returns in, our estimate arrays out.
 
-Converts between our orders and types and Stone Soup's (CV state ``(x, y, z, vx, vy, vz)``
-against ``(x, vx, y, vy, z, vz)``; ``(azimuth, elevation)`` against ``(Elevation, Bearing)``;
-seconds against ``datetime``), so the same simulated returns reach a Stone Soup tracker and
-ours. :func:`algorithm_random_state` gives every model and :class:`SeededSystematicResampler`
-a generator derived from the trial's common stream, so a particle filter is a pure function
-of the trial. Stone Soup is optional: this module imports without it and
-:func:`require_stonesoup` names the extra. See ``docs/stonesoup.md``.
+Converts orders and types (CV state ``(x, y, z, vx, vy, vz)`` against ``(x, vx, y, vy, z,
+vz)``; ``(azimuth, elevation)`` against ``(Elevation, Bearing)``; seconds against
+``datetime``), and seeds every Stone Soup random draw from the trial's common stream so a
+particle filter is a pure function of the trial. Stone Soup is optional: this module imports
+without it. See ``docs/stonesoup.md``.
 """
 
 from __future__ import annotations
@@ -31,9 +29,9 @@ STONESOUP_MISSING = ("Stone Soup is not installed: pip install 'trackfuse[stones
 
 @lru_cache(maxsize=1)
 def stonesoup_types() -> SimpleNamespace:
-    """Stone Soup's classes used here, imported on first use (importing Stone Soup costs
-    about a second, which ``trackfuse list``/``validate`` must not pay); ``ImportError``
-    with :data:`STONESOUP_MISSING` when it is not installed."""
+    """Stone Soup's classes used here, imported on first use (about 1 s, which ``list`` and
+    ``validate`` must not pay); ImportError with :data:`STONESOUP_MISSING` when absent.
+    """
     try:
         from stonesoup.models.measurement.nonlinear import CartesianToElevationBearing
         from stonesoup.models.transition.linear import (
@@ -49,17 +47,14 @@ def stonesoup_types() -> SimpleNamespace:
         raise ImportError(STONESOUP_MISSING) from None
 
     class ElevationBearingExactJacobian(CartesianToElevationBearing):
-        """``CartesianToElevationBearing`` with the analytic Jacobian
-        (:func:`trackfuse.tracking.sensors.azel_jacobian`; no rotation offset).
+        """``CartesianToElevationBearing`` with the analytic Jacobian (no rotation offset).
 
-        Stone Soup's default Jacobian is a forward difference with step
-        ``1e8 * numpy.spacing(x)``, floored at ``1e-8``: for a negative or near-zero
-        coordinate the step is 1e-8 m, and at 100 km ranges the angle difference it makes is
-        about a hundred floating-point spacings, so that column is about 1 % wrong
-        (``docs/stonesoup.md``)."""
+        Stone Soup's forward difference is about 1 % wrong in a column at 100 km ranges
+        (``docs/stonesoup.md``).
+        """
 
         def jacobian(self, state, **kwargs) -> np.ndarray:
-            """``H: (2, 6)`` (rad/m), rows (elevation, bearing), Stone Soup state order."""
+            """``H`` (2, 6) rad/m, rows (elevation, bearing), Stone Soup state order."""
             d = (np.asarray(state.state_vector, dtype=float)[list(self.mapping), 0]
                  - np.asarray(self.translation_offset, dtype=float)[:, 0])
             return azel_jacobian(d)[::-1][:, TO_STONESOUP]
@@ -111,8 +106,7 @@ def state_from_stonesoup(x: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.n
 
 
 def estimate(state) -> tuple[np.ndarray, np.ndarray]:
-    """Mean ``(6,)`` and covariance ``(6, 6)`` of a Stone Soup Gaussian or particle state,
-    in our order (a particle state gives its weighted mean and covariance)."""
+    """Mean (6,) and covariance (6, 6) of a Gaussian or particle state, in our order."""
     return state_from_stonesoup(state.mean, state.covar)
 
 
@@ -134,9 +128,7 @@ def particle_prior(x: np.ndarray, P: np.ndarray, t: float, count: int,
 
 def transition_model(F: np.ndarray, Q: np.ndarray,
                      random_state: np.random.RandomState | None = None):
-    """Stone Soup linear-Gaussian transition with our ``F, Q: (6, 6)`` for one scan period.
-
-    Time-invariant: every prediction applies one period, so predict only at scan times."""
+    """Time-invariant Stone Soup transition with our ``F, Q`` (6, 6): predict only at scan times."""
     T = stonesoup_types()
     model = T.LinearGaussianTimeInvariantTransitionModel(
         transition_matrix=F[np.ix_(TO_STONESOUP, TO_STONESOUP)],
@@ -148,9 +140,10 @@ def transition_model(F: np.ndarray, Q: np.ndarray,
 def angle_model(sensor: np.ndarray, R: np.ndarray,
                 random_state: np.random.RandomState | None = None,
                 exact_jacobian: bool = False):
-    """Stone Soup azimuth/elevation model of a sensor at ``sensor: (3,)`` (m) with our
-    ``R: (2, 2)`` (rad^2, azimuth first); ``exact_jacobian`` gives it the analytic Jacobian
-    (:class:`ElevationBearingExactJacobian`) instead of Stone Soup's finite difference."""
+    """Azimuth/elevation model of a sensor at ``sensor`` (3,) m with our ``R`` (2, 2) rad^2.
+
+    ``exact_jacobian`` uses :class:`ElevationBearingExactJacobian` instead of the finite difference.
+    """
     T = stonesoup_types()
     kind = T.ElevationBearingExactJacobian if exact_jacobian else T.CartesianToElevationBearing
     model = kind(ndim_state=6, mapping=(0, 2, 4),
@@ -160,9 +153,10 @@ def angle_model(sensor: np.ndarray, R: np.ndarray,
 
 
 def detections(z: np.ndarray, t: float, model) -> list:
-    """Stone Soup detections of the angle returns ``z: (M, 2)`` (rad, azimuth first) at ``t``
-    (s), in the order given. A list, not a set: a set's order follows memory addresses, and
-    the order fixes the floating-point sums of the association weights."""
+    """Detections of ``z`` (M, 2) rad at ``t`` s, as a list in the given order.
+
+    Not a set: the order fixes the floating-point sums of the association weights.
+    """
     T = stonesoup_types()
     when = timestamp(t)
     return [T.Detection(T.StateVector(zi[::-1]), timestamp=when, measurement_model=model)
@@ -170,19 +164,19 @@ def detections(z: np.ndarray, t: float, model) -> list:
 
 
 def measurement_gate(prediction) -> tuple[np.ndarray, np.ndarray]:
-    """Centre ``(2,)`` (rad, azimuth first) and innovation covariance ``S: (2, 2)`` of a
-    Stone Soup measurement prediction (``updater.predict_measurement``; for particles, their
-    weighted mean and covariance)."""
+    """Centre (2,) rad (azimuth first) and innovation covariance ``S`` (2, 2) of a measurement
+    prediction (for particles, their weighted mean and covariance).
+    """
     centre = np.asarray(prediction.mean, dtype=float).reshape(2)[::-1].copy()
     return centre, np.asarray(prediction.covar, dtype=float)[::-1, ::-1].copy()
 
 
 def algorithm_random_state(common: np.random.Generator, algorithm: str) -> np.random.RandomState:
-    """A ``RandomState`` for Stone Soup components, from a trial's common stream.
+    """A ``RandomState`` for Stone Soup, a function of (root seed, trial, algorithm) only.
 
-    A child of the stream's seed sequence under a fixed spawn-key branch and the algorithm's
-    name: a function of (root seed, trial, algorithm) only, independent of how often the
-    stream has been used or spawned, and it leaves the trial's own draws unchanged."""
+    A child of the common stream's seed sequence under a fixed spawn-key branch; the trial's
+    own draws are unchanged.
+    """
     seq = common.bit_generator.seed_seq
     key = (*seq.spawn_key, _STREAM_KEY, zlib.crc32(algorithm.encode()))
     return np.random.RandomState(np.random.PCG64(np.random.SeedSequence(seq.entropy,
@@ -190,19 +184,18 @@ def algorithm_random_state(common: np.random.Generator, algorithm: str) -> np.ra
 
 
 class SeededSystematicResampler:
-    """Systematic resampling (Kitagawa 1996) drawing from its own ``random_state``.
+    """Systematic resampling (Kitagawa 1996) from its own ``random_state``.
 
-    A drop-in for ``stonesoup.resampler.particle.SystematicResampler`` (same
-    ``resample(particles, nparts=None)`` call), which draws its offset from the global
-    ``numpy.random`` state. Resamples only when the effective sample size ``1 / sum w^2``
-    falls below ``ess_fraction`` times the particle count (``ess_fraction = 1``: always)."""
+    Drop-in for Stone Soup's ``SystematicResampler`` (which draws from global ``numpy.random``);
+    resamples only when the ESS ``1 / sum w^2`` is below ``ess_fraction`` times the count.
+    """
 
     def __init__(self, random_state: np.random.RandomState, ess_fraction: float = 0.5):
         self.random_state = random_state
         self.ess_fraction = ess_fraction
 
     def resample(self, particles, nparts: int | None = None):
-        """The resampled particle state (or ``particles`` unchanged when the ESS is high)."""
+        """Resampled particles, or ``particles`` when the ESS is high."""
         n = len(particles) if nparts is None else nparts
         log_w = np.asarray(particles.log_weight, dtype=float)
         weights = np.exp(log_w - logsumexp(log_w))
@@ -217,16 +210,12 @@ class SeededSystematicResampler:
 
 
 def gaussian_pda_update(hypotheses: Sequence, updater):
-    """PDA update of a Gaussian (Kalman-family) prediction: every hypothesis updated by
-    ``updater`` (the missed detection keeps the prediction), then the mixture collapsed with
-    the hypothesis probabilities ``beta_h``::
+    """PDA update of a Gaussian prediction, as Stone Soup's ``PDAUpdater(gm_method=True)``.
 
-        x = sum_h beta_h x_h,    P = sum_h beta_h [P_h + (x_h - x)(x_h - x)']
-
-    as ``stonesoup.updater.probability.PDAUpdater(gm_method=True)`` does, for any updater
-    (EKF, UKF). :func:`collapse` evaluates ``stonesoup.functions.gm_reduce_single``'s sums in
-    floats: fed ``Probability`` weights, Stone Soup's own sums run on Python objects and took
-    half the time of a Stone Soup EKF + PDA scan."""
+    Every hypothesis is updated by ``updater`` (any Kalman-family one), then collapsed with
+    ``beta_h`` (:func:`collapse`, in floats: Stone Soup's sums on ``Probability`` objects took
+    half the scan time).
+    """
     T = stonesoup_types()
     states = [updater.update(h) if h else h.prediction for h in hypotheses]
     beta = np.array([float(h.probability) for h in hypotheses])
@@ -239,8 +228,7 @@ def gaussian_pda_update(hypotheses: Sequence, updater):
 
 
 def collapse(x: np.ndarray, P: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Moment-matched single Gaussian ``(n,)``, ``(n, n)`` of the mixture of means
-    ``x: (H, n)``, covariances ``P: (H, n, n)`` and weights ``(H,)`` (normalised here)."""
+    """Moment-matched Gaussian (n,), (n, n) of means (H, n), covariances (H, n, n), weights (H,)."""
     w = weights / weights.sum()
     mean = w @ x
     d = x - mean
@@ -248,12 +236,11 @@ def collapse(x: np.ndarray, P: np.ndarray, weights: np.ndarray) -> tuple[np.ndar
 
 
 def particle_pda_update(hypotheses: Sequence, updater, resampler: SeededSystematicResampler):
-    """PDA update of a particle prediction: particle weights ``sum_h beta_h w_h``, with
-    ``w_h`` the weights updated by ``updater`` (a ``ParticleUpdater`` without resampler) on
-    hypothesis ``h``'s detection (the prior weights for the missed detection), then
-    ``resampler``. With exact ``beta_h`` this is Bayes' rule for the PDA likelihood
-    ``(1 - P_D P_G) + P_D / lambda sum_j p(z_j | x)``; Stone Soup's ``PDAHypothesiser``
-    gives ``beta_h`` from a Gaussian fit of the particle measurement prediction."""
+    """PDA update of a particle prediction: weights ``sum_h beta_h w_h``, then ``resampler``.
+
+    ``w_h`` are the weights updated on hypothesis ``h`` (prior weights for a miss); with exact
+    ``beta_h`` this is Bayes' rule for the PDA likelihood.
+    """
     T = stonesoup_types()
     prediction = hypotheses[0].prediction
     terms = []
