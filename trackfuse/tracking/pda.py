@@ -1,66 +1,15 @@
 """Probabilistic data association for one or two passive az/el sensors (numba-compiled).
 
-The filter runs ``N`` independent trials of ``K`` scans each (one Monte Carlo trial at a
-time, :func:`run_filter`); every scan predicts, places each sensor's returns (the target
-return and the clutter mapped into the sensor's gate at the prediction), gates them and
-updates with the validated returns. Hypotheses ``theta_ij`` (``i = 0..m_1``,
-``j = 0..m_2``; index 0 means "no target return from that sensor") are weighted in log space
-(``docs/papers/twin_sensor.md``, Algorithms):
+Per trial and scan: predict, place each sensor's returns (target and clutter), gate, and
+update. Hypotheses ``theta_ij`` (0 = no target return from that sensor) are weighted as the
+parallel multisensor PDA; the state is the exact collapse of the per-hypothesis MGEKF (or
+EKF) updates, computed from weighted moments. Variants (``method``): ``mspda_parallel``,
+``mspda_sequential``, ``nn`` and ``paper_approx`` (a labelled reconstruction of paper 000's
+eq. 26-28, W000-1). Equations and implementation notes: ``docs/papers/twin_sensor.md``,
+"Two-sensor PDA". The numpy oracle is ``tests/pda_reference.py`` (pinned to 1e-9).
 
-    w_00 = f_1(0) f_2(0)
-    w_i0 = P_D1 N(nu_1i; 0, S_1) f_2(0),     w_0j = f_1(0) P_D2 N(nu_2j; 0, S_2)
-    w_ij = P_D1 P_D2 N([nu_1i; nu_2j]; 0, S_12)                  (joint_cov = "full")
-    f_s(0) = (1 - P_Ds P_G) lambda_s   if m_s > 0, else 1
-
-with ``S_12 = H Pp H' + blkdiag(R_1, R_2)`` (cross blocks ``H_1 Pp H_2'``). This is the
-parallel multisensor PDA (Bar-Shalom & Li 1995; Pao & Frei 1995). For one sensor it is the
-PDAF of Bar-Shalom & Fortmann (1988). ``f_s(0) = 1`` when sensor ``s`` has no validated
-return is the same constant for every hypothesis, so it changes nothing when
-``lambda_s > 0`` and keeps the weights defined when ``lambda_s = 0``.
-
-Association variants (``method``):
-
-* ``"mspda_parallel"``: the weights above.
-* ``"mspda_sequential"``: the single-sensor PDAF with sensor 1, then sensor 2 re-linearized
-  and re-gated at the sensor-1 posterior (Pao & Frei's sequential MSPDA).
-* ``"nn"``: the single most likely hypothesis ``argmax w_ij`` (all weight on it).
-* ``"paper_approx"``: a *reconstruction* of paper 000's eq. 26-28 (W000-1), kept only as an
-  ablation: OR-combined ``P_D = 1 - (1 - P_D1)(1 - P_D2)`` and ``P_G``; every non-null
-  combination has prior ``1/(m_k - 1)`` with ``m_k = (m_1 + 1)(m_2 + 1)``; likelihoods are made
-  dimensionally consistent by giving a missing sensor ``1/V_s`` and the fused volume
-  ``V_f = V_1 V_2``; the null gets ``(1 - P_D P_G) mu`` with the Poisson ratio
-  ``mu = Lambda / m_f``, ``Lambda = lambda_1 V_1 + lambda_2 V_2`` and ``m_f = m_1 + m_2``.
-  For one sensor it equals the PDAF algebraically.
-
-State update: the exact collapse of the Gaussian mixture of per-hypothesis updates,
-
-    X = sum beta_h X_h,   P = sum beta_h [P_h + (X_h - X)(X_h - X)'],
-    X_h = Xp + K_h nu_h,  P_h = (I - K_h G_h) Pp (I - K_h G_h)' + K_h R_h K_h',
-
-where ``K_h`` is the EKF gain of the sensors used by ``h`` and ``G_h`` stacks the modified
-rows evaluated at *that hypothesis's own* measurements (``covariance = "mgekf"``, W000-4) or
-the Jacobian ``H`` (``"ekf_joseph"``). The sums are evaluated in closed form from weighted
-moments of ``nu`` and ``G``: expanding the Joseph form, ``sum beta_h P_h`` only needs
-``sum beta_h G_h``, ``sum beta_h G_h Pp G_h'`` and ``sum beta_h nu_h nu_h'``, which cost
-``O(m_1 m_2)`` scalar products instead of ``(m_1 + 1)(m_2 + 1)`` full 6x6 updates.
-
-Clutter density ``lambda_s`` (1/rad^2): ``density = "parametric"`` uses the value supplied
-by the caller (the true simulated density); ``"nonparametric"`` uses ``m_s / V_s``.
-
-Implementation: scalar loops over the validated returns of one trial and one hypothesis at
-a time, compiled by numba (``cache=True``: the compiled code is kept in numba's on-disk
-cache, beside this module or in ``NUMBA_CACHE_DIR``). The numpy oracle of the same equations
-over whole batches is ``tests/pda_reference.py``; the two agree to about 1e-12 relative
-(sums run in another order; the tests pin them to 1e-9). Results are bit-identical from run
-to run, whatever the executor, worker count or batch split.
-
-References
-----------
-Y. Bar-Shalom and T. E. Fortmann, *Tracking and Data Association*, Academic Press, 1988.
-Y. Bar-Shalom and X. R. Li, *Multitarget-Multisensor Tracking: Principles and Techniques*,
-YBS, 1995, ch. 8.
-L. Y. Pao and C. W. Frei, "A comparison of parallel and sequential implementations of a
-multisensor multitarget tracking algorithm", Proc. ACC, 1995.
+References: Bar-Shalom & Fortmann, *Tracking and Data Association*, 1988; Bar-Shalom & Li,
+*Multitarget-Multisensor Tracking*, 1995, ch. 8; Pao & Frei, Proc. ACC, 1995.
 """
 
 from __future__ import annotations
@@ -88,13 +37,10 @@ _FIRST_ROWS, _SECOND_ROWS = np.int64(0), np.int64(2)
 
 
 def run_filter(sc, b, options: PDAOptions) -> Estimates:
-    """Run one algorithm over every trial of a batch: the per-scan estimates, validated
-    counts and gate flags.
+    """Run one algorithm over every trial of batch ``b`` in scenario ``sc``: :class:`Estimates`.
 
-    ``sc`` is the scenario (:class:`trackfuse.experiments.twin_sensor.model.Scenario`:
-    ``P0, F, Q_filter (6, 6)``, ``sensor_pos (K+1, S, 3)``, ``R (S, 2, 2)``, ``P_D (S,)``,
-    ``gamma``, ``clutter_model``, ``clutter_mean``, ``window_density``), ``b`` the simulated
-    returns (:class:`~trackfuse.experiments.twin_sensor.model.Batch`).
+    ``sc`` is a twin_sensor ``Scenario`` (``P0, F, Q_filter`` (6, 6), ``sensor_pos`` (K+1, S, 3),
+    ``R`` (S, 2, 2), ``P_D`` (S,), gate and clutter settings); ``b`` its simulated ``Batch``.
     """
     N, K, S = b.detected.shape
     out = Estimates(np.empty((N, K, 6)), np.empty((N, K, 6, 6)), np.empty((N, K, S), np.int64),
@@ -120,11 +66,8 @@ D, ZH, DET, AREA, LAM = 0, 3, 5, 6, 7
 def _filter_batch(x0, P0, F, Q, sensor_pos, R, P_D, los, z_target, detected, clutter,
                   clutter_ok, gamma, P_G, in_gate, clutter_mean, window_density, method, mgekf,
                   joint_full, nonparametric, mg_combined, X_out, P_out, m_out, inside_out):
-    """Filter every trial of a batch; writes ``X_out: (N, K, 6)``, ``P_out: (N, K, 6, 6)``
-    (NaN from the scan a trial diverges), ``m_out: (N, K, S)`` and ``inside_out: (N, K)``.
-
-    ``sensor_pos: (K, S, 3)`` holds the sensor positions at scans ``1..K``; the other shapes
-    are those of the batch and scenario of :func:`run_filter`.
+    """Filter every trial; writes ``X_out`` (N, K, 6), ``P_out`` (N, K, 6, 6) (NaN once a trial
+    diverges), ``m_out`` (N, K, S), ``inside_out`` (N, K). ``sensor_pos`` (K, S, 3): scans 1..K.
     """
     N, K, S = detected.shape
     M = clutter.shape[3] + 1  # the target return first, then the clutter slots
@@ -192,9 +135,9 @@ _Lin = namedtuple("_Lin", "geom H PHt Sm Si Kg nu G log_n ok m w B")
 
 @njit(**INNER)
 def _copy_state(X, P, X_to, P_to):
-    """``X_to = X: (6,)``, ``P_to = P: (6, 6)``, element by element: an array-to-array
-    assignment compiles numba's shape-mismatch message (string formatting, about 5 s of the
-    first run after installing) for a mismatch that cannot occur here."""
+    """``X_to = X`` (6,), ``P_to = P`` (6, 6) element by element: an array assignment would compile
+    numba's shape-mismatch message (about 5 s of the first run).
+    """
     for i in range(6):
         X_to[i] = X[i]
         for j in range(6):
@@ -245,10 +188,9 @@ def _mahalanobis2(n0, n1, Si):
 
 @njit(**INNER)
 def _geometry(X, P, pos, R, lin, s):
-    """Sensor ``s`` seen from the state ``(X, P)``: relative position ``d = X[:3] - pos``,
-    predicted angles, the Jacobian's position columns ``H``, ``PHt = P[:, :3] H'``,
-    ``S = H P H' + R``, its inverse and determinant, the gate area and the gain ``P H' S^-1``
-    (oracle: ``pda_reference.linearize``)."""
+    """Sensor ``s`` seen from ``(X, P)``: relative position, predicted angles, ``H``,
+    ``PHt = P[:, :3] H'``, ``S`` and its inverse, gate area and gain, into ``lin``.
+    """
     g, H, PHt, Sm, Si, Kg = lin.geom[s], lin.H[s], lin.PHt[s], lin.Sm[s], lin.Si[s], lin.Kg[s]
     dx, dy, dz = X[0] - pos[0], X[1] - pos[1], X[2] - pos[2]
     g[D], g[D + 1], g[D + 2] = dx, dy, dz
@@ -551,11 +493,10 @@ def _collapse(X, P, b0, mom):
 
 @njit(**INNER)
 def _pair_update(Xp, Pp, R, P_D, P_G, method, joint_full, mg_combined, lin, mom, X, P):
-    """Two-sensor (parallel, nearest-neighbour or paper-reconstruction) PDA update of the
-    prediction ``(Xp, Pp)`` into ``(X, P)``, both sensors linearized at the prediction
-    (oracle: ``pda_reference._pair_update``); returns the weight of the hypothesis that
-    neither sensor saw the target (the existence update of :mod:`trackfuse.tracking.ipda`
-    reads it)."""
+    """Two-sensor PDA update of ``(Xp, Pp)`` into ``(X, P)`` (oracle: ``_pair_update``).
+
+    Returns the null hypothesis's weight, which the IPDA existence update reads.
+    """
     H, PHt = lin.H, lin.PHt
     Cx = np.empty((2, 2))  # H1 P H2'
     for i in range(2):

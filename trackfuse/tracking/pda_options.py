@@ -1,7 +1,6 @@
 """What the PDA filter (:mod:`trackfuse.tracking.pda`) is asked and what it returns.
 
-Kept apart from the compiled filter so that reading the options (a config check, the
-report's algorithm names) does not import numba.
+Apart from the filter so that reading options (config checks, report names) imports no numba.
 """
 
 from __future__ import annotations
@@ -21,20 +20,13 @@ MG_AT = ("hypothesis", "combined")
 
 @dataclass(frozen=True)
 class PDAOptions:
-    """How :func:`pda_update` associates and updates (every choice in one place).
+    """How the PDA filter associates and updates; every choice in one place.
 
-    Attributes
-    ----------
-    method : association variant, one of :data:`METHODS`.
-    covariance : ``"mgekf"`` (modified rows in the Joseph form) or ``"ekf_joseph"``.
-    joint_cov : ``"full"`` or ``"blockdiag"`` joint innovation covariance in ``w_ij``.
-    density : ``"parametric"`` (the caller's clutter density) or ``"nonparametric"``
-        (``m_s / V_s``).
-    mg_at : ``"hypothesis"`` (MGEKF rows at each hypothesis's own returns) or
-        ``"combined"`` (at the beta-weighted combined return of each sensor, W000-4).
-    P_G : gate probability of each sensor's gate.
-    n_z : dimension of one sensor's measurement (2: azimuth, elevation).
-    gamma : the gate threshold ``chi2_{n_z}^-1(P_G)``, derived once at construction.
+    ``method`` one of :data:`METHODS`; ``covariance`` ``"mgekf"`` (modified rows, Joseph form) or
+    ``"ekf_joseph"``; ``joint_cov`` the joint innovation covariance in ``w_ij``; ``density`` the
+    caller's clutter density or ``m_s / V_s``; ``mg_at`` MGEKF rows at each hypothesis's returns
+    or at the combined return (W000-4); ``P_G`` gate probability; ``gamma`` =
+    ``chi2_{n_z}^-1(P_G)``, derived.
     """
 
     method: str = "mspda_parallel"
@@ -61,11 +53,10 @@ class PDAOptions:
 
 @dataclass(frozen=True)
 class Estimates:
-    """Per-scan output of a filter over ``N`` trials and ``K`` scans, in our state order.
+    """Per-scan filter output over ``N`` trials and ``K`` scans, in our state order.
 
-    ``X: (N, K, 6)`` posterior means, ``P: (N, K, 6, 6)`` covariances (NaN after a failure),
-    ``n_valid: (N, K, S)`` validated returns per sensor, ``inside: (N, K)`` whether the
-    noise-free target return lay in at least one sensor's gate (the gate rule's input).
+    ``X`` (N, K, 6), ``P`` (N, K, 6, 6) (NaN after a failure), ``n_valid`` (N, K, S) validated
+    returns, ``inside`` (N, K) whether the noise-free return lay in any gate.
     """
 
     X: np.ndarray
