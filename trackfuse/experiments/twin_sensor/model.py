@@ -1,85 +1,18 @@
 """Paper 000: airborne twin-sensor synchronous angle-only tracking (MGEKF + fused-gate PDA).
 
 Reproduces and extends Wang, Wang & Yang, "Fusion algorithm for airborne twin-sensor
-synchronous angle-only tracking", Control and Decision 20(10), 2005, with the corrected
-equations and the defaults written down in ``docs/papers/twin_sensor.md``.
+synchronous angle-only tracking", Control and Decision 20(10), 2005. A target is observed
+for ``scan.count`` scans by one or two az/el sensors on an orbiting platform, with Poisson
+clutter ``in_gate`` (mapped into each filter's own gate from common draws, so comparisons
+stay paired) or in a fixed ``window``. Every algorithm starts from the same
+``x0 ~ N(x_true(0), P0)``; adding one never changes the simulated data. Everything is drawn
+from the trial's common stream, and clutter is nested across levels (:mod:`.clutter`: a
+lower level's returns are a subset of a higher level's).
 
-Scenario (one Monte Carlo trial)
---------------------------------
-A target (stationary by default, optionally nearly-constant-velocity with process noise) is
-observed for ``scan.count`` scans by one or two azimuth/elevation sensors. Sensor 1 rides a
-platform on the paper's climbing orbit about the target (or a straight line); sensor 2 flies
-in formation at a horizontal baseline (0 m = co-located, as in the paper). Each sensor detects
-the target with probability ``P_D`` and reports Poisson clutter:
-
-* ``clutter.model = "in_gate"``: per sensor and scan ``N_c ~ Poisson(clutter.mean)`` points
-  uniform in that sensor's validation ellipse, so the density is ``clutter.mean / V_s``. The
-  ellipse belongs to each filter, so the *same* unit-disk draws (count and positions, from the
-  trial's clutter stream) are mapped into each filter's own gate: every algorithm sees the
-  same random numbers (paired comparison) and exactly ``clutter.mean`` false returns on
-  average in its gate.
-* ``clutter.model = "window"``: ``N_c ~ Poisson(clutter.mean)`` points uniform in a fixed
-  ``+-clutter.window`` rad box around the true line of sight, identical for every filter.
-
-Each trial spawns independent generators for truth, initialization and the sensor returns
-(detections and noise, then clutter) from its common stream (the same at every sweep point;
-the point stream is not used), so adding an algorithm never changes the simulated data and
-sweep points compare on the same targets, noise and clutter. The parameters marked
-``draws=False`` (the filter, its initialization, gating and scoring, and the sensors' noise
-and detection probabilities) only scale or threshold these draws. Clutter is nested across
-levels: a level's false returns are the arrivals below ``clutter.mean`` of a unit-rate
-Poisson process per sensor and scan (:mod:`~trackfuse.experiments.twin_sensor.clutter`), so
-each level has its exact Poisson law, a lower level's returns are a subset of a higher
-level's, and neighbouring levels share most of their returns. Every algorithm
-(association variant x covariance form, see :mod:`trackfuse.tracking.pda`) starts from the
-same ``x0 ~ N(x_true(0), P0)``. The range standard deviation of ``P0`` (the radar cue) is
-``init.sigma_range`` metres (``init.range_cue = "absolute"``, the paper's 20 km at 200 km)
-or ``init.sigma_range_fraction`` times the true initial range (``"relative"``); the PCRLB
-starts from the same ``P0``.
-
-Rows
-----
-``row_keys = ("algorithm", "scan")``: one row per algorithm and scan ``k = 1..K`` with
-
-* ``range_err_m``: ``|p_hat - p_P| - |p - p_P|`` (signed, from platform 1; its mean is the
-  range bias of W000-3); ``range_sq_err_m2`` and ``pos_sq_err_m2`` (squared errors, whose
-  means are the MSEs); ``nees`` (6-state) and ``nees_pos`` (position);
-* ``n_valid``: validated returns per sensor (mean over sensors);
-* ``lost_gate`` (gate rule, depends on the filter's gate): 1 once the noise-free target
-  return has been outside the gate of every sensor for ``loss.window`` consecutive scans;
-* ``lost_angle`` (angle rule, filter-independent): 1 once the azimuth or the elevation of
-  the estimate, seen from sensor 1, has been more than ``loss.angle_sigmas`` sensor-1 noise
-  standard deviations from the true angle for ``loss.angle_window`` consecutive scans;
-* ``inconsistent_nees``: 1 if the position NEES at this scan exceeds
-  ``chi2_3^-1(loss.nees_quantile)``. This flags an overconfident covariance, not a lost
-  track: a filter can be on the target and inconsistent, or off it and consistent;
-* ``existence``, ``confirmed``, ``lost_existence`` (only in runs with an IPDA algorithm, NaN
-  on the other algorithms' rows): IPDA's existence probability, and whether the track has
-  been confirmed and terminated by its thresholds (:mod:`trackfuse.tracking.ipda`);
-* ``cpu_time_s``: CPU seconds per trial and scan of this algorithm, measured over the whole
-  batch: one value per batch and algorithm, written to ``timings.csv`` (not a row column).
-
-Losses are permanent; a trial's flags are the values at the last scan. A trial whose filter
-produced non-finite numbers is flagged lost (both rules) and inconsistent from then on,
-with NaN errors.
-The PCRLB overlay of the figures is recomputed from the config (deterministic, :func:`bounds`),
-not stored as rows. Figures and the report tables live in
-:mod:`trackfuse.experiments.twin_sensor.report`.
-
-Choices the paper leaves open (and why)
---------------------------------------
-* ``in_gate`` clutter is mapped into each filter's own gate from common unit-disk draws (see
-  above): "uniform in the sensor's validation ellipse" differs per filter, and this keeps
-  the comparison paired. For the sequential PDA the sensor-2 returns
-  are placed in the gate of the *prediction* and re-gated after the sensor-1 update.
-* ``sensors.sigma_el_ratio`` (default 1) instead of a separate elevation sigma, so that one
-  swept key scales both angles (default ``sigma_el = sigma_az = 0.01`` rad). Sensor 2
-  is described relative to sensor 1 (``sensor2.noise_ratio``, ``sensor2.pd_ratio``).
-* The PCRLB for ``in_gate`` clutter needs a clutter density, which depends on a gate: the
-  bound uses the gate of an ideal filter whose predicted covariance is the bound's own.
-* The PCRLB reference table's "no position prior" row (``docs/papers/twin_sensor.md``)
-  counts looks at ``t = 0..k`` (``k + 1`` looks); the prior rows count ``t = 1..k``. Both
-  reproduce the table within 1 % (tests).
+Rows: ``row_keys = ("algorithm", "scan")``, one row per algorithm and scan ``k = 1..K`` with
+:data:`METRICS` (and :data:`EXISTENCE_METRICS` for IPDA); CPU time per batch goes to
+``timings.csv``. Model, metrics, loss rules and the defaults the paper leaves open:
+``docs/papers/twin_sensor.md``. Figures and tables: :mod:`.report`.
 """
 
 from __future__ import annotations
@@ -228,14 +161,11 @@ PARAMS = (
 class Scenario:
     """Everything deterministic about a trial, derived from the params.
 
-    Shapes: ``K`` scans, ``S`` sensors; ``times: (K+1,)`` s, ``platform: (K+1, 3)`` m,
-    ``sensor_pos: (K+1, S, 3)`` m, ``R: (S, 2, 2)`` rad^2, ``P_D: (S,)``, ``x_start: (6,)``
-    the true state at t = 0 (position m, velocity m/s), ``P0, F, Q_filter: (6, 6)``.
-    Scalars: ``q_truth`` the truth's process-noise acceleration variance (m^2/s^4, 0 for
-    exact CV truth), ``gamma`` the gate threshold on ``nu' S^-1 nu`` (chi-square, 2 dof) and
-    ``P_G`` its gate probability, ``clutter_mean`` false returns per sensor and scan (in the
-    gate or the window, by ``clutter_model``), ``window`` the half-width (rad) of the window
-    clutter box in azimuth and elevation.
+    ``K`` scans, ``S`` sensors: ``times`` (K+1,) s, ``platform`` (K+1, 3) m, ``sensor_pos``
+    (K+1, S, 3) m, ``R`` (S, 2, 2) rad^2, ``P_D`` (S,), ``x_start`` (6,) m and m/s,
+    ``P0, F, Q_filter`` (6, 6); ``q_truth`` truth acceleration variance (m^2/s^4), ``gamma``
+    gate threshold (chi-square, 2 dof) with probability ``P_G``, ``clutter_mean`` false returns
+    per sensor and scan, ``window`` half-width (rad) of the window clutter box.
     """
 
     K: int
@@ -418,12 +348,10 @@ def _padded(P_D: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class LossRules:
-    """The track-loss and consistency rules (``docs/papers/twin_sensor.md``, Metrics).
+    """Track-loss and consistency rules (``docs/papers/twin_sensor.md``, Metrics).
 
-    ``gate_window``: consecutive scans with the noise-free target return outside every gate
-    (gate rule). ``angle_sigmas``, ``angle_window``: consecutive scans with the estimate's
-    azimuth or elevation seen from sensor 1 more than ``angle_sigmas`` sensor-1 noise
-    standard deviations from the true one (angle rule). ``nees_limit``: position-NEES
+    ``gate_window`` and ``angle_window`` consecutive scans for the gate and angle rules,
+    ``angle_sigmas`` sensor-1 noise sds for the angle rule, ``nees_limit`` the position-NEES
     threshold of the consistency flag.
     """
 
@@ -468,7 +396,7 @@ ROW_METRICS = (
     Metric("cpu_time_s", "s", "CPU seconds per trial and scan of this algorithm, one value "
            "per batch (timings.csv)"),
 )
-"""Every metric column of the rows (see the module docstring)."""
+"""Every metric column of the rows (``docs/papers/twin_sensor.md``, Metrics)."""
 METRICS = tuple(m.name for m in ROW_METRICS
                 if not m.name.endswith("_time_s") and not m.optional)
 """Per-scan metric columns of every trial's rows (:func:`score_estimates`)."""
@@ -481,11 +409,11 @@ BINARY_METRICS = tuple(m.name for m in ROW_METRICS if m.binary)
 
 def angle_off_target(X: np.ndarray, sensor: np.ndarray, los_true: np.ndarray,
                      sigma: np.ndarray, sigmas: float) -> np.ndarray:
-    """Angle rule: ``(...)`` bool, True where the azimuth or the elevation of the estimates
-    ``X: (..., 6)`` seen from ``sensor: (..., 3)`` (m) is more than ``sigmas`` times
-    ``sigma: (2,)`` (rad, az and el noise sd) from the true angles ``los_true: (..., 2)``
-    (rad). Non-finite estimates count as off target. Uses the truth, not the filter's
-    covariance, so it judges every filter by the same yardstick."""
+    """Angle rule (...,) bool: the estimate ``X`` (..., 6) seen from ``sensor`` (..., 3) m is more
+    than ``sigmas`` noise sds ``sigma`` (2,) rad from ``los_true`` (..., 2) rad in az or el.
+
+    Non-finite estimates count as off target.
+    """
     with np.errstate(invalid="ignore"):
         err = np.abs(wrap(azel(X[..., :3] - sensor) - los_true)) / sigma
         return ~(err <= sigmas).all(axis=-1)
@@ -504,15 +432,11 @@ def _runs(flags: np.ndarray) -> np.ndarray:
 
 def score_estimates(sc: Scenario, b: Batch, est: Estimates,
                     rules: LossRules) -> dict[str, np.ndarray]:
-    """Every metric of :data:`METRICS` as ``(N, K)`` for per-scan estimates ``est`` (ours,
-    from :func:`trackfuse.tracking.pda.run_filter` or another library's,
-    :class:`~trackfuse.tracking.pda_options.Estimates`), all scored alike.
+    """Every metric of :data:`METRICS` as (N, K) for per-scan :class:`Estimates` ``est``.
 
-    ``P`` is symmetrized; a trial is diverged from the first scan where its mean or
-    covariance is not finite, and both are NaN from then on. The loss flags are permanent:
-    lost by the gate rule after ``gate_window`` consecutive scans with the target outside
-    every gate, by the angle rule after ``angle_window`` consecutive scans off target, and
-    by both on divergence."""
+    Ours and another library's are scored alike: ``P`` is symmetrised, a trial is NaN from its
+    first non-finite scan, and losses are permanent (both rules on divergence).
+    """
     X = est.X.copy()
     P = 0.5 * (est.P + est.P.transpose(0, 1, 3, 2))
     bad = ~(np.isfinite(X).all(axis=2) & np.isfinite(P).all(axis=(2, 3)))
@@ -541,8 +465,9 @@ def score_estimates(sc: Scenario, b: Batch, est: Estimates,
 
 
 def _nees(e: np.ndarray, P: np.ndarray) -> np.ndarray:
-    """``e' P^-1 e`` for ``e: (..., n)``, ``P: (..., n, n)``: ``(...)``, NaN where ``P`` or
-    ``e`` is not finite; a singular ``P`` is inverted by its pseudo-inverse."""
+    """``e' P^-1 e`` (...,) for ``e`` (..., n), ``P`` (..., n, n); NaN where either is not finite,
+    the pseudo-inverse where ``P`` is singular.
+    """
     finite = np.isfinite(P).all(axis=(-2, -1)) & np.isfinite(e).all(axis=-1)
     out = np.full(e.shape[:-1], np.nan)
     if finite.any():
