@@ -1,15 +1,9 @@
 """Compile (or load) the numba kernels once, on tiny inputs: ``python -m trackfuse.precompile``.
 
-Each kernel has one compiled version (every option is a runtime value), so one call on any
-input of the right types puts it into numba's on-disk cache (or loads it from there).
-Building the wheel runs this module (``setup.py``): the cache, written beside each kernel
-module in the build tree, ships inside the installed package, keyed by the source's content,
-this Python, numba's version and this machine's CPU, so the first run after ``pip install .``
-loads the kernels instead of compiling them. Where any of those differ numba ignores the
-files and compiles on first use, as without them. The process pool's fork server calls the
-same functions (the experiments' ``preload`` modules). The build environment has numba and
-numpy only (``pyproject.toml``), so the S-D assignment's kernels, whose linear algebra needs
-scipy, compile on their first use.
+Building the wheel runs it so the cache ships with the package; the fork server calls the
+same functions. Where the cache was built and when numba ignores it:
+``docs/benchmarks.md``, "First run". The S-D kernels need scipy, which the build
+environment lacks, so they compile on first use.
 """
 
 from __future__ import annotations
@@ -28,9 +22,9 @@ from trackfuse.tracking.pda import run_filter
 
 
 def _tiny_batch() -> tuple[SimpleNamespace, SimpleNamespace, SimpleNamespace]:
-    """``(scenario, batch, options)`` of one trial of two scans, two sensors and one
-    clutter slot, with the arrays typed as a simulated batch is (PDAOptions would need
-    scipy, for its gate threshold)."""
+    """``(scenario, batch, options)`` of one trial, two scans, two sensors, one clutter slot, typed
+    as a simulated batch (without PDAOptions, which would import scipy).
+    """
     N, K, S, C = 1, 2, 2, 1
     angles = np.full((N, K, S, 2), 0.1)
     scenario = SimpleNamespace(
@@ -57,8 +51,7 @@ def load_ipda_filter() -> None:
 
 
 def load_pga() -> None:
-    """Run the compiled PGA search (:mod:`trackfuse.association.pga_search`) on a 2 x 3
-    problem."""
+    """Run the compiled PGA search (:mod:`trackfuse.association.pga_search`) on 2 x 3."""
     a = np.arange(6.0).reshape(2, 3)
     weights = PairWeights(a=a, a_i0=np.zeros(2), a_0j=np.zeros(3), chi2=np.zeros((2, 3)))
     pga(weights, np.random.default_rng(0), ops=10, repair_moves=True, staged=True, evict=True,
@@ -66,17 +59,14 @@ def load_pga() -> None:
 
 
 def load_sd_kernels() -> None:
-    """Cost and solve a small scan of three sensors with the S-D assignment's compiled
-    kernels (:mod:`trackfuse.association.sd_costs`, :mod:`~trackfuse.association.sd_assignment`)."""
+    """Cost and solve a small three-sensor scan with the S-D compiled kernels."""
     z = [np.array([[0.5, 0.2], [0.7, 0.3]]), np.array([[0.1, 0.2]]), np.array([[1.0, 0.1]])]
     sensors = np.array([[0.0, 0.0, 0.0], [0.0, 20e3, 7e3], [20e3, 0.0, 0.0]])
     solve_sd(tuple_costs(z, sensors, 0.01, 0.01, 0.9, 0.05))
 
 
 def main() -> int:
-    """Load every kernel; one that cannot compile here (the S-D kernels' linear algebra
-    needs scipy, which the wheel's build environment lacks) is named on stderr and left to
-    compile on first use. Returns the number of such kernels."""
+    """Load every kernel; one that cannot compile here is named on stderr. Returns their number."""
     failed = 0
     for load in (load_pda_filter, load_ipda_filter, load_pga, load_sd_kernels):
         try:

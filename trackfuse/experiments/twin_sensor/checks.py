@@ -1,10 +1,8 @@
 """Last checks of a ``twin_sensor`` config: what the schema's per-key limits cannot see.
 
-A config is refused before any trial runs when it asks for Stone Soup on a machine without
-it, when its geometry has no bearing to measure: a target on a sensor (zero range) or an
-orbit started on the target's vertical (zero radius), or when an IPDA termination
-threshold is not below its confirmation threshold. Only the noise-free truth is checked;
-truth process noise (``target.q``) can still bring a rare trial closer.
+Refused before any trial: Stone Soup asked for but absent, a degenerate noise-free geometry
+(target on a sensor, orbit started on the target's vertical), or ``ipda.terminate`` not
+below ``ipda.confirm``. Truth process noise can still bring a rare trial closer.
 """
 
 from __future__ import annotations
@@ -39,8 +37,7 @@ def config_problem(params: Mapping[str, Any], sweep: Mapping[str, list[Any]],
 
 def threshold_problem(params: Mapping[str, Any], sweep: Mapping[str, list[Any]],
                       mode: str) -> tuple[str, str] | None:
-    """``(key, problem)`` when some sweep point's ``ipda.terminate`` is not below its
-    ``ipda.confirm`` (a track would be confirmed and terminated at once), else ``None``."""
+    """``(key, problem)`` when a sweep point's ``ipda.terminate`` is not below ``ipda.confirm``."""
     keys = ("ipda.terminate", "ipda.confirm")
     for point in expand({k: v for k, v in sweep.items() if k in keys}, mode):
         values = {**params, **point.values}
@@ -56,10 +53,7 @@ def threshold_problem(params: Mapping[str, Any], sweep: Mapping[str, list[Any]],
 
 def geometry_problem(params: Mapping[str, Any], sweep: Mapping[str, list[Any]],
                      mode: str) -> tuple[str, str] | None:
-    """``(key, problem)`` when some sweep point's geometry is degenerate, else ``None``.
-
-    Each distinct combination of the swept :data:`GEOMETRY_KEYS` is checked once.
-    """
+    """``(key, problem)`` for the first degenerate geometry, each swept combination checked once."""
     axes = {k: v for k, v in sweep.items() if k in GEOMETRY_KEYS}
     checked: set[str] = set()
     for point in expand(axes, mode):
@@ -78,15 +72,15 @@ def geometry_problem(params: Mapping[str, Any], sweep: Mapping[str, list[Any]],
 
 def _blamed(keys: tuple[str, ...], params: Mapping[str, Any],
             sweep: Mapping[str, list[Any]]) -> str:
-    """The key an error names among those that together make a geometry degenerate: the
-    first swept, else the first the config changed from its default, else the first."""
+    """The key to name for a degenerate geometry: the first swept, else the first changed from its
+    default, else the first.
+    """
     return next((k for k in keys if k in sweep), None) or next(
         (k for k in keys if params[k] != DEFAULTS[k]), keys[0])
 
 
 def _separation_problem(params: dict[str, Any]) -> tuple[tuple[str, ...], str] | None:
-    """``(keys that make it so, what is degenerate)`` about one point's geometry, else
-    ``None``."""
+    """``(keys, what is degenerate)`` about one point's geometry, else ``None``."""
     target = np.asarray(params["target.position"], dtype=float)
     start = np.asarray(params["platform.start"], dtype=float)
     radius = float(np.hypot(*(start[:2] - target[:2])))

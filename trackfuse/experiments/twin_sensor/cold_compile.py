@@ -1,13 +1,9 @@
-"""Compile the PDA filter (:mod:`trackfuse.tracking.pda`) on two cores when numba's on-disk
-cache lacks it.
+"""Compile the PDA filter on two cores when numba's on-disk cache lacks it.
 
-numba compiles one function at a time in a process, so the fork server (:mod:`.preload`)
-compiled the whole filter on one core on the first run after installing. Here a helper
-process compiles the two-sensor update ``_pair_update`` (with its callees, about half the
-work) into numba's cache, while this process compiles the other callees of
-``_filter_batch``; compiled last, ``_filter_batch`` loads ``_pair_update`` from the cache.
-Whatever the helper does (fails, or loses a race with another run), the result is the
-same: numba compiles here what the cache lacks.
+numba compiles one function at a time per process: a helper process compiles
+``_pair_update`` (about half the work) into the cache while this one compiles the other
+callees; ``_filter_batch`` is compiled last. Whatever the helper does, numba compiles here
+what the cache lacks, so the result is the same.
 """
 
 from __future__ import annotations
@@ -34,11 +30,9 @@ HELPER = ("import sys; sys.path[:] = sys.argv[1:]; "
 
 
 def kernel_cached() -> bool:
-    """Whether numba's cache holds an index of ``_filter_batch`` that numba will use: one for
-    this Python (numba's file name), written by this numba version for this source (numba's
-    stamp: the source's SHA-256, or its modification time and size before numba 0.62).
-    A wrong answer costs time only: a stale index read as current means compiling on one
-    core; a current one read as stale, a helper process that loads from the cache."""
+    """Whether numba's cache holds a current index of ``_filter_batch`` for this Python, numba and
+    source. A wrong answer costs time only.
+    """
     source = Path(k.__file__)
     st = source.stat()
     stamps = (hashlib.sha256(source.read_bytes()).digest(), (st.st_mtime, st.st_size))
@@ -48,9 +42,7 @@ def kernel_cached() -> bool:
 
 
 def index_stamp(path: Path) -> object:
-    """The source stamp of the cache index ``path`` if this numba version wrote it (numba
-    pickles its version first, then the stamp and the entries, and ignores an index of
-    another version), or ``None`` if it is another version's or cannot be read."""
+    """The source stamp of cache index ``path`` if this numba version wrote it, else ``None``."""
     try:
         with path.open("rb") as f:
             version = pickle.load(f)  # numba's own cache file: numba unpickles it too
@@ -63,8 +55,7 @@ def index_stamp(path: Path) -> object:
 
 
 def callee_args() -> dict:
-    """Dummy arguments typed exactly as ``_filter_batch`` passes them to its main callees,
-    ``{dispatcher: args}`` (only their numba types are used; nothing runs on them)."""
+    """``{dispatcher: args}`` typed as ``_filter_batch`` passes them (only the types are used)."""
     lin, mom = k.Linearized.py_func(2, 2), k.Moments.py_func()
     x, P, R, s = np.empty(6), np.empty((6, 6)), np.empty((2, 2)), 0
     z, ok = np.empty((2, 2)), np.empty(2, np.bool_)
@@ -86,15 +77,13 @@ def compile_in(dispatcher, args: tuple) -> None:
 
 
 def compile_pair_update() -> None:
-    """The helper process: put ``_pair_update`` into numba's cache; it exits as soon as its
-    parent closes its stdin (or dies), so it never outlives the fork server."""
+    """The helper process: cache ``_pair_update``; exits when its parent closes stdin or dies."""
     threading.Thread(target=lambda: (sys.stdin.read(), os._exit(1)), daemon=True).start()
     compile_in(k._pair_update, callee_args()[k._pair_update])
 
 
 def compile_on_two_cores() -> None:
-    """Compile the kernel's callees with a helper process, then wait for it; the caller
-    then compiles ``_filter_batch`` (:func:`.preload.load_kernel`)."""
+    """Compile the kernel's callees beside a helper process, then wait for it."""
     try:
         helper = subprocess.Popen([sys.executable, "-c", HELPER, *sys.path], stdin=subprocess.PIPE,
                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)

@@ -1,10 +1,7 @@
-"""Load the compiled filter loop once, in the process pool's fork server.
+"""Load the compiled filter once, in the process pool's fork server, before it forks workers.
 
-The fork server imports this module (``Experiment.preload``) before it forks workers: the
-compiled PDA filter (:mod:`trackfuse.tracking.pda`) is loaded from numba's on-disk cache,
-or compiled on the first run on a machine, here once (on two cores: :mod:`.cold_compile`),
-and every worker inherits it in memory instead of loading it (about 0.6 s each) or
-compiling it (about 25 s each) on its own.
+Each worker then inherits it instead of loading it (about 0.6 s) or compiling it (about
+25 s) on its own; a cold cache compiles on two cores (:mod:`.cold_compile`).
 """
 
 from __future__ import annotations

@@ -1,31 +1,9 @@
 """Stone Soup's filters on exactly the returns our twin_sensor filters see (paired comparison).
 
-Algorithms ``stonesoup_pda/<filter>`` run Stone Soup components (``docs/stonesoup.md``):
-
-* ``ekf``: ``ExtendedKalmanPredictor`` / ``ExtendedKalmanUpdater``;
-* ``ukf``: ``UnscentedKalmanPredictor`` / ``UnscentedKalmanUpdater`` (Stone Soup's default
-  sigma-point parameters);
-* ``pf``: ``ParticlePredictor`` / ``ParticleUpdater`` with ``stonesoup.particles`` particles
-  and systematic resampling when the effective sample size drops below half.
-
-Association is Stone Soup's ``PDAHypothesiser`` (gate ``P_G``, detection probability ``P_D``,
-the true clutter density ``lambda``); Kalman filters collapse the hypothesis mixture with
-``gm_reduce_single``, the particle filter mixes the per-hypothesis particle weights
-(:mod:`trackfuse.interop.stonesoup`). With two sensors the update is sequential: sensor 1's
-PDA, then sensor 2's PDA on sensor 1's posterior at the same time (a zero-time identity
-prediction), the multi-sensor PDA that Stone Soup's public API supports; its hypothesisers
-have no joint (``(m_1 + 1)(m_2 + 1)``) hypotheses, so our ``mspda_parallel`` has no Stone Soup
-counterpart, and Stone Soup has no modified-gain (MGEKF) covariance.
-
-Same data as ours: the target returns, detections and clutter of the trial's
-:class:`~trackfuse.experiments.twin_sensor.model.Batch`. ``window`` clutter is used as is;
-``in_gate`` clutter maps the trial's unit-disk draws into the gate of *this* filter's
-measurement prediction (for sensor 2, of the prediction before sensor 1's update, as for our
-sequential PDA), with density ``clutter.mean / V_s``, as for every filter of ours.
-``stonesoup.process_noise = "ours"`` gives Stone Soup our discrete white-noise acceleration
-``Q`` (paired); ``"cv"`` uses Stone Soup's own ``ConstantVelocity`` (continuous white noise,
-``q T^3/3`` position variance instead of ``q T^4/4``), for the comparison of that choice.
-The particle filter's randomness comes from the trial's common stream
+Algorithms ``stonesoup_pda/ekf``, ``/ukf`` and ``/pf`` run Stone Soup's predictors,
+updaters and ``PDAHypothesiser`` on the trial's :class:`~.model.Batch`; two sensors update
+sequentially. Clutter placement, parameters and what Stone Soup cannot do:
+``docs/stonesoup.md``. The particle filter draws from the trial's common stream
 (:func:`trackfuse.interop.stonesoup.algorithm_random_state`), so rows are byte-identical for
 any executor and after resume.
 """
@@ -76,8 +54,9 @@ def is_stonesoup(algorithm: str) -> bool:
 
 def missing_stonesoup(params: Mapping[str, Any],
                       sweep: Mapping[str, list[Any]]) -> tuple[str, str] | None:
-    """``("algorithms", problem)`` when a Stone Soup algorithm is configured (in ``params``
-    or any swept value) but Stone Soup is not installed; else ``None``."""
+    """``("algorithms", problem)`` when a configured or swept Stone Soup algorithm cannot run
+    because Stone Soup is not installed; else ``None``.
+    """
     chosen = [*params.get("algorithms", []), *(a for value in sweep.get("algorithms", [])
                                               for a in value)]
     wanted = sorted({a for a in chosen if is_stonesoup(a)})
@@ -193,8 +172,9 @@ def _in_gate(los: np.ndarray, centre: np.ndarray, S: np.ndarray, gamma: float) -
 
 def _returns(sc: Scenario, b: Batch, n: int, k: int, s: int, centre: np.ndarray,
              S: np.ndarray) -> tuple[np.ndarray, float]:
-    """Angle returns ``(M, 2)`` (rad) of sensor ``s`` at scan ``k`` of trial ``n`` as this
-    filter sees them (target return if detected, then clutter), and the clutter density."""
+    """Returns ``(M, 2)`` rad of sensor ``s`` at scan ``k`` of trial ``n`` as this filter sees them
+    (target return if detected, then clutter), and the clutter density.
+    """
     target = b.z_target[n, k - 1, s][None] if b.detected[n, k - 1, s] else np.empty((0, 2))
     draws = b.clutter[n, k - 1, s][b.clutter_ok[n, k - 1, s]]
     if sc.clutter_model == "in_gate":
