@@ -1,13 +1,7 @@
-"""Track initialization from a coarse range cue (``docs/papers/twin_sensor.md``, Defaults).
+"""Track initialization from a coarse range cue (``docs/papers/twin_sensor.md``, Initialization).
 
-The prior covariance is built in the line-of-sight frame of the sensor: standard deviation
-``sigma_range`` along the line of sight, ``r * sigma_angle`` across it in azimuth and in
-elevation, and ``sigma_velocity`` per velocity axis. The same ``P0`` initializes the filters
-(``x0 ~ N(x_true(0), P0)``) and the PCRLB (``J0 = P0^-1``), which keeps the bound consistent.
-
-The range cue is given either in metres (``"absolute"``, the paper's scenario: 20 km at
-200 km) or as a fraction of the initial range (``"relative"``), so that a scenario whose
-target is close does not inherit a cue as wide as the range itself.
+``P0`` is built in the sensor's line-of-sight frame and initialises both the filters and the
+PCRLB (``J0 = P0^-1``), which keeps the bound consistent.
 """
 
 from __future__ import annotations
@@ -18,11 +12,7 @@ RANGE_CUES = ("absolute", "relative")
 
 
 def range_cue_sd(cue: str, d: np.ndarray, sigma_range: float, fraction: float) -> float:
-    """Range standard deviation (m) of the radar cue for target-minus-sensor ``d: (3,)`` (m).
-
-    Parameters: ``cue`` ``"absolute"`` (return ``sigma_range``) or ``"relative"`` (return ``fraction
-    * |d|``). ``sigma_range`` absolute standard deviation (m). ``fraction`` standard deviation as a
-    fraction of the range ``|d|`` (dimensionless)."""
+    """Range sd (m): ``sigma_range`` (``"absolute"``) or ``fraction * |d|`` (``"relative"``)."""
     if cue == "absolute":
         return float(sigma_range)
     if cue == "relative":
@@ -32,11 +22,9 @@ def range_cue_sd(cue: str, d: np.ndarray, sigma_range: float, fraction: float) -
 
 def los_prior_covariance(d: np.ndarray, sigma_range: float, sigma_angle: float,
                          sigma_velocity: float) -> np.ndarray:
-    """Prior covariance ``P0: (6, 6)`` for target-minus-sensor position ``d: (3,)`` (m).
-
-    Parameters: ``sigma_range`` range standard deviation (m). ``sigma_angle`` cross-range standard
-    deviation per axis as an angle (rad). ``sigma_velocity`` velocity standard deviation per axis
-    (m/s)."""
+    """``P0`` (6, 6) for target-minus-sensor ``d`` (3,) m: ``sigma_range`` m along the line of
+    sight, ``r sigma_angle`` across it per axis, ``sigma_velocity`` m/s per velocity axis.
+    """
     r = float(np.linalg.norm(d))
     u = d / r
     az = np.arctan2(d[1], d[0])

@@ -1,14 +1,7 @@
-"""Nearly-constant-velocity (CV) target model in three dimensions.
+"""Nearly-constant-velocity (CV) target model in 3-D: state ``[x, y, z, vx, vy, vz]`` (m, m/s).
 
-State ``x = [x, y, z, vx, vy, vz]`` in metres and metres per second. The discrete white-noise
-acceleration model (Bar-Shalom, Li & Kirubarajan 2001, sec. 6.3.2) is
-
-    x(k+1) = F x(k) + G v(k),   v(k) ~ N(0, q I3),
-    F = [[I3, T I3], [0, I3]],  G = [[T^2/2 I3], [T I3]],
-    Q = G q G' = q [[T^4/4 I3, T^3/2 I3], [T^3/2 I3, T^2 I3]].
-
-The printed lower-left block ``T^3/4`` of paper 000 (eq. 4) is an OCR error: ``G G'`` is
-symmetric, so it equals the upper-right ``T^3/2``. ``Q`` has rank 3 and is never inverted.
+Discrete white-noise acceleration (Bar-Shalom, Li & Kirubarajan 2001, sec. 6.3.2);
+equations in ``docs/papers/twin_sensor.md``, Scenario. ``Q`` has rank 3, never inverted.
 """
 
 from __future__ import annotations

@@ -1,16 +1,8 @@
 """Passive azimuth/elevation sensors: measurement function, Jacobian, MGEKF rows, gates, clutter.
 
-Fixed Cartesian frame, z up; ``d = (dx, dy, dz)`` target minus sensor (m), ``rh`` its
-horizontal and ``r`` its full length:
-
-    h(x) = [atan2(dy, dx), atan2(dz, rh)]                         (rad)
-    H    = [[-dy/rh^2,          dx/rh^2,          0,       0, 0, 0],
-            [-dx dz/(rh r^2),   -dy dz/(rh r^2),  rh/r^2,  0, 0, 0]]
-
-(paper 000 eq. 7, corrected). The modified-gain rows (Song & Speyer 1985) use the measured
-angles, so for noise-free angles the MGEKF's only linearization error is ``tan e ~ e``;
-gates are ``nu' S^-1 nu <= chi2_nz^-1(P_G)`` with volume ``c_nz gamma^(nz/2) |S|^(1/2)``.
-See ``docs/papers/twin_sensor.md``, "Measurements" and "MGEKF".
+Fixed Cartesian frame, z up; ``d`` is target minus sensor (m). ``h`` and ``H`` are paper
+000 eq. 7, corrected; the modified rows are Song & Speyer's. Equations:
+``docs/papers/twin_sensor.md``, "Measurements" and "MGEKF".
 
 References: Song T. L., Speyer J. L., IEEE TAC 30(10), 1985; Bar-Shalom Y., Fortmann T. E.,
 *Tracking and Data Association*, 1988, sec. 2.3.
@@ -49,13 +41,9 @@ def azel_jacobian(d: np.ndarray) -> np.ndarray:
 
 
 def modified_rows(z: np.ndarray, d_bar: np.ndarray) -> np.ndarray:
-    """Song-Speyer modified measurement matrix ``(..., 2, 6)`` (rad/m).
-
-    Parameters: ``z`` (..., 2) measured azimuth and elevation (rad). ``d_bar`` (..., 3) predicted
-    target-minus-sensor position (m); broadcasts against ``z``.
-
-    The tests' reference (the textbook MGEKF update in tests/test_tracking_pda.py): the
-    package uses :func:`modified_position_rows`, the nonzero columns."""
+    """Song-Speyer modified rows (..., 2, 6) rad/m at measured angles ``z`` (..., 2) rad and
+    predicted ``d_bar`` (..., 3) m. The tests' reference; the package uses the position columns.
+    """
     g3 = modified_position_rows(z, d_bar)
     return np.concatenate([g3, np.zeros(g3.shape)], axis=-1)
 
@@ -92,9 +80,7 @@ def _gamma(x: float) -> float:
 
 
 def gate_volume(S: np.ndarray, gamma: float) -> np.ndarray:
-    """Volume ``(...,)`` of the ellipsoidal gate ``nu' S^-1 nu <= gamma`` for ``S: (..., n, n)``.
-
-    ``c_n gamma^(n/2) |S|^(1/2)`` with the unit-ball volume ``c_n = pi^(n/2) / Gamma(n/2 + 1)``."""
+    """Gate volume (...,) ``c_n gamma^(n/2) |S|^(1/2)``, ``S`` (..., n, n)."""
     n = S.shape[-1]
     c_n = np.pi ** (n / 2) / _gamma(n / 2 + 1)
     det = inv2(S)[1] if n == 2 else np.linalg.det(S)
@@ -108,8 +94,7 @@ def unit_disk(rng: np.random.Generator, n: int) -> np.ndarray:
 
 
 def disk_points(u_radius: np.ndarray, u_angle: np.ndarray) -> np.ndarray:
-    """Points ``(n, 2)`` of the unit disk from uniforms on [0, 1): radius ``sqrt(u_radius)``,
-    angle ``2 pi u_angle`` (uniform in the disk when the uniforms are independent)."""
+    """Unit-disk points (n, 2) from uniforms: radius ``sqrt(u_radius)``, angle ``2 pi u_angle``."""
     r = np.sqrt(u_radius)
     a = 2.0 * np.pi * u_angle
     out = np.empty(r.shape + (2,))
@@ -119,10 +104,9 @@ def disk_points(u_radius: np.ndarray, u_angle: np.ndarray) -> np.ndarray:
 
 
 def inv2(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Inverse and determinant of 2x2 matrices ``S: (..., 2, 2)`` in closed form.
-
-    Never raises: a singular or non-finite ``S`` gives non-finite entries, so one diverged
-    trial of a batch cannot stop the others."""
+    """Inverse and determinant of ``S`` (..., 2, 2); never raises (a singular ``S`` gives
+    non-finite entries, so one diverged trial cannot stop a batch).
+    """
     a, b, c, d = S[..., 0, 0], S[..., 0, 1], S[..., 1, 0], S[..., 1, 1]
     det = a * d - b * c
     inv = np.empty(S.shape)
@@ -146,9 +130,8 @@ def chol2(S: np.ndarray) -> np.ndarray:
 
 
 def ellipse_points(u: np.ndarray, centre: np.ndarray, S: np.ndarray, gamma: float) -> np.ndarray:
-    """Map unit-disk points to the gate ellipse ``{centre + nu : nu' S^-1 nu <= gamma}``.
-
-    A linear map keeps uniformity, so uniform ``u: (N, M, 2)`` become uniform in the gates of
-    ``centre: (N, 2)``, ``S: (N, 2, 2)``; returns ``(N, M, 2)`` (rad)."""
+    """Map unit-disk points ``u`` (N, M, 2) into the gates ``nu' S^-1 nu <= gamma`` about ``centre``
+    (N, 2) with ``S`` (N, 2, 2): (N, M, 2) rad, still uniform (the map is linear).
+    """
     L = chol2(S)
     return centre[:, None, :] + np.sqrt(gamma) * (u @ L.transpose(0, 2, 1))
