@@ -1,22 +1,10 @@
 """Measurement-to-measurement assignment for two passive sensors: weights and exact solvers.
 
-For a candidate pair (measurement ``i`` of sensor 1, ``j`` of sensor 2) triangulate
-``p_hat`` (:mod:`trackfuse.association.triangulation`), predict the four angles and form
-``chi2_ij``, the sum of the four squared noise-normalised residuals. Weights are gains to
-maximise, ``COSTS``:
-
-* ``paper``: ``a_ij = sum_s [ln P_D - ln(2 pi sigma_a sigma_b)] - chi2_ij / 2``,
-  ``a_i0 = a_0j = ln p_f`` (eq. 12-18, sign of the quadratic corrected);
-* ``printed``: eq. 17 as printed, without the normalising term ``ln(2 pi sigma_a sigma_b)``;
-* ``pattipati``: ``a_ij = sum_s ln(P_D psi_s / (2 pi sigma_a sigma_b)) - chi2_ij / 2``,
-  ``a_i0 = a_0j = 0`` (``psi_s``: field-of-view area, rad^2).
-
-With the pair gain ``w_ij = a_ij - a_i0 - a_0j`` this module reports ``J = sum_{pairs} w_ij``.
-Exact solvers: ``lsa_clip`` (``linear_sum_assignment`` on ``max(W, 0)``, pairs with
-``w_ij <= 0`` dropped), ``lsa_augmented`` (the square (m1 + m2) matrix with dummy diagonals)
-and ``enumerate`` (brute force, for tests). Derivations, thresholds and W002-1/W002-4:
-``docs/papers/passive_assoc.md``, "Weights", "Departure from eq. 17 as printed" and
-"Exact optimum".
+Each candidate pair is triangulated and scored by ``chi2_ij`` of its four angle residuals;
+weights (:data:`COSTS`: ``paper``, ``printed``, ``pattipati``) give pair gains
+``w_ij = a_ij - a_i0 - a_0j`` and ``J = sum w_ij``. Solvers: ``lsa_clip``, ``lsa_augmented``,
+``enumerate`` (tests). Equations and W002-1/W002-4: ``docs/papers/passive_assoc.md``,
+"Weights", "Departure from eq. 17 as printed" and "Exact optimum".
 
 References: Pattipati K. R. et al., IEEE Trans. Automatic Control 37(2), 1992; Deb S. et al.,
 IEEE Trans. AES 33(2), 1997; Crouse D. F., IEEE Trans. AES 52(4), 2016.
@@ -40,12 +28,9 @@ BRUTE_FORCE = "enumerate"
 
 @dataclass(frozen=True)
 class PairWeights:
-    """Assignment weights of one two-sensor scan.
-
-    Attributes: ``a`` (m1, m2) pair weights ``a_ij`` (log-likelihood). ``a_i0`` (m1,) weight of
-    leaving sensor-1 measurement ``i`` unpaired. ``a_0j`` (m2,) weight of leaving sensor-2
-    measurement ``j`` unpaired. ``chi2`` (m1, m2) chi-square of the four angle residuals at the
-    triangulated point."""
+    """Weights of one scan: ``a`` (m1, m2) log-likelihood of each pair, ``a_i0`` (m1,) and ``a_0j``
+    (m2,) of leaving one unpaired, ``chi2`` (m1, m2) at the triangulated point.
+    """
 
     a: np.ndarray
     a_i0: np.ndarray
@@ -62,11 +47,9 @@ class PairWeights:
 
 @dataclass(frozen=True)
 class Assignment:
-    """A feasible partition of two measurement lists into pairs and singletons.
-
-    Attributes: ``partner1`` (m1,) index of the sensor-2 partner of each sensor-1 measurement, -1 if
-    none. ``partner2`` (m2,) the inverse map, -1 if none. ``objective`` sum of the pair gains
-    ``w_ij`` over the pairs."""
+    """Pairs and singletons: ``partner1`` (m1,) and ``partner2`` (m2,) (-1: unpaired), ``objective``
+    the summed pair gains.
+    """
 
     partner1: np.ndarray
     partner2: np.ndarray
@@ -75,9 +58,7 @@ class Assignment:
 
 def pair_chi2(z1: np.ndarray, z2: np.ndarray, s1: np.ndarray, s2: np.ndarray,
               sigma_a: float, sigma_b: float, tri: str = "unit_normal") -> np.ndarray:
-    """Chi-square of every candidate pair at its triangulated point.
-
-    z1 : (m1, 2), z2 : (m2, 2) rad; s1, s2 : (3,) m. Returns (m1, m2)."""
+    """Chi-square (m1, m2) of every pair at its triangulated point; z (m, 2) rad, s (3,) m."""
     m1, m2 = len(z1), len(z2)
     if m1 == 0 or m2 == 0:
         return np.zeros((m1, m2))
@@ -92,14 +73,11 @@ def pair_weights(z1: np.ndarray, z2: np.ndarray, s1: np.ndarray, s2: np.ndarray,
                  sigma_a: float, sigma_b: float, p_d: float, p_f: float,
                  cost: str = "paper", tri: str = "unit_normal",
                  psi: tuple[float, float] | np.ndarray = (1.0, 1.0)) -> PairWeights:
-    """Assignment weights of a scan (module docstring).
+    """:class:`PairWeights` of a scan: ``z1`` (m1, 2), ``z2`` (m2, 2) rad, ``s1``, ``s2`` (3,) m.
 
-    Parameters: ``z1`` (m1, 2), ``z2`` (m2, 2) measured azimuth/elevation, rad. ``s1``, ``s2`` (3,)
-    sensor positions, m. ``sigma_a``, ``sigma_b`` angle noise standard deviations, rad (both
-    sensors). ``p_d`` detection probability (both sensors). ``p_f`` the paper's false-alarm
-    likelihood (``"paper"`` and ``"printed"`` costs). ``cost`` one of :data:`COSTS`. ``tri``
-    triangulation method for ``p_hat``. ``psi`` (2,) field-of-view areas, rad^2 (``"pattipati"``
-    cost only)."""
+    ``cost`` one of :data:`COSTS` (``p_f`` for ``paper``/``printed``, ``psi`` (2,) rad^2 for
+    ``pattipati``); ``tri`` the triangulation method.
+    """
     chi2 = pair_chi2(z1, z2, s1, s2, sigma_a, sigma_b, tri)
     m1, m2 = chi2.shape
     log_norm = np.log(2.0 * np.pi * sigma_a * sigma_b)
@@ -132,8 +110,7 @@ def from_pairs(rows: np.ndarray, cols: np.ndarray, gain: np.ndarray) -> Assignme
 
 
 def linear_sum_assignment(cost: np.ndarray, maximize: bool = False):
-    """``scipy.optimize.linear_sum_assignment``, imported on first use (scipy.optimize costs
-    every ``trackfuse list``/``validate`` about half a second at module load)."""
+    """``scipy.optimize.linear_sum_assignment``, imported on first use (about 0.5 s at load)."""
     from scipy.optimize import linear_sum_assignment as solve
 
     return solve(cost, maximize=maximize)
@@ -188,10 +165,7 @@ def _enumerate(gain: np.ndarray) -> Assignment:
 
 
 def solve_exact(gain: np.ndarray, method: str = "lsa_clip") -> Assignment:
-    """Maximise the sum of pair gains over all partial matchings.
-
-    Parameters: ``gain`` (m1, m2) pair gains ``w_ij`` (:attr:`PairWeights.gain`). ``method``
-    ``"lsa_clip"``, ``"lsa_augmented"`` or ``"enumerate"`` (module docstring)."""
+    """Maximise the summed pair gains ``gain`` (m1, m2) over all partial matchings by ``method``."""
     gain = np.asarray(gain, dtype=float)
     if method == "lsa_clip":
         return _lsa_clip(gain)

@@ -1,15 +1,9 @@
-"""Costs of S-tuples of passive (azimuth/elevation) measurements, for the S-D assignment.
+"""Costs (nats) of S-tuples of passive az/el measurements, for the S-D assignment.
 
-A tuple ``(i_1, ..., i_S)`` takes measurement ``i_s`` of sensor ``s`` (0: the dummy). With
-``k >= 2`` real measurements, ``p_hat`` is the least-squares intersection of their lines of
-sight and ``chi2`` the sum of the ``2k`` squared normalised angle residuals at it; the cost
-(nats) is ``c = -[sum_{s real} g_s - chi2 / 2 + (S - k) ln(1 - P_D)]`` with ``g_s`` of the
-``paper`` or ``pattipati`` weights. A tuple with at most one real measurement costs 0,
-parallel lines of sight ``+inf``; with ``S = 2``, ``c = -w_ij`` of
-:func:`trackfuse.association.assignment.pair_weights`. With ``volume`` the position is
-integrated out over a uniform prior (Laplace), adding ``ln((2 pi)^{3/2} |P|^{1/2} / V)``.
-Equations: ``docs/papers/sd_assignment.md``, "Costs". The loop over the combinations runs
-compiled (numba, cached on disk beside this module).
+``c = -[sum_{s real} g_s - chi2 / 2 + (S - k) ln(1 - P_D)]`` at the LS intersection of the
+tuple's ``k >= 2`` lines of sight; 0 for at most one real index, ``+inf`` for parallel lines.
+With ``volume`` the position is integrated out (Laplace). Equations:
+``docs/papers/sd_assignment.md``, "Costs". The loop runs compiled (numba, cached on disk).
 """
 
 from __future__ import annotations
@@ -44,14 +38,11 @@ def sensor_gains(n_sensors: int, sigma_a: float, sigma_b: float, p_d: float, p_f
 
 def subset_fit(z: Sequence[np.ndarray], sensors: np.ndarray, sigma_a: float,
                sigma_b: float) -> tuple[np.ndarray, np.ndarray]:
-    """Fit of every combination of one measurement per listed sensor.
-
-    z : S' arrays (m_s, 2) rad; sensors : (S', 3) m. Returns, each (m_1, ..., m_S'), the
-    chi-square at the least-squares intersection (``+inf`` where it is undefined) and the
-    log-determinant of the position information ``sum_s H_s' R^-1 H_s`` there (``H_s`` the
-    Jacobian of sensor ``s``'s angles, 1/m^2 units; ``-inf`` where singular). The loop over
-    the combinations runs compiled (:func:`_combination_fit`); ``tests/sd_reference.py``
-    holds the vectorized numpy version the tests pin it to."""
+    """Chi-square at the LS intersection (``+inf`` if undefined) and log-determinant of the
+    position information (1/m^2; ``-inf`` if singular), each (m_1, ..., m_S'), of every
+    combination. ``z``: S' arrays (m_s, 2) rad; ``sensors`` (S', 3) m. Oracle:
+    ``tests/sd_reference.py``.
+    """
     shape = tuple(len(zs) for zs in z)
     if 0 in shape:
         return np.zeros(shape), np.zeros(shape)
@@ -69,11 +60,9 @@ def subset_fit(z: Sequence[np.ndarray], sensors: np.ndarray, sigma_a: float,
 
 @njit(**JIT)
 def _combination_fit(rows, rhs, angles, sensors, counts, inv_a, inv_b):
-    """Chi-square and information log-determinant (C order over the combinations,
-    ``prod(counts)`` each) of every combination of one measurement per sensor: the
-    least-squares point of the stacked unit-normal ``rows`` (k, m, 2, 3) and ``rhs``
-    (k, m, 2), then the squared normalised angle residuals of ``angles`` (k, m, 2) rad seen
-    from ``sensors`` (k, 3) and the angle Jacobians there."""
+    """Chi-square and information log-determinant, C order over the combinations, from rows
+    (k, m, 2, 3), rhs (k, m, 2), angles (k, m, 2) rad and sensors (k, 3) m.
+    """
     k = counts.shape[0]
     total = 1
     for s in range(k):
@@ -103,8 +92,7 @@ def _combination_fit(rows, rhs, angles, sensors, counts, inv_a, inv_b):
 
 @njit(**JIT)
 def _add_information(info, dx, dy, dz, inv_a, inv_b):
-    """Add ``H' R^-1 H`` of one sensor's azimuth and elevation at the relative position
-    ``(dx, dy, dz)`` m to ``info`` (3, 3), in place."""
+    """Add ``H' R^-1 H`` at relative position ``(dx, dy, dz)`` m to ``info`` (3, 3)."""
     rh2 = dx * dx + dy * dy
     rh = math.sqrt(rh2)
     r2 = rh2 + dz * dz
@@ -125,8 +113,7 @@ def _determinant(m):
 
 @njit(**JIT)
 def _intersection(rows, rhs, pick):
-    """Least-squares point (3,) of the rows of the picked measurements (normal equations,
-    inverse = adjugate / determinant, the adjugate's rows cross products of the columns)."""
+    """LS point (3,) of the picked rows (normal equations, adjugate / determinant)."""
     m = np.zeros((3, 3))
     v = np.zeros(3)
     for s in range(pick.shape[0]):
@@ -150,14 +137,12 @@ def tuple_costs(z: Sequence[np.ndarray], sensors: np.ndarray, sigma_a: float,
                 sigma_b: float, p_d: float, p_f: float, cost: str = "paper",
                 psi: Sequence[float] | None = None, volume: float | None = None
                 ) -> np.ndarray:
-    """The cost tensor (m_1 + 1, ..., m_S + 1) of a scan, nats (module docstring).
+    """Cost tensor (m_1 + 1, ..., m_S + 1) of a scan, nats.
 
-    Parameters: ``z`` S arrays (m_s, 2) of measured azimuth/elevation, rad. ``sensors`` (S, 3)
-    sensor positions, m. ``sigma_a``, ``sigma_b`` angle noise standard deviations, rad (every
-    sensor). ``p_d`` detection probability (every sensor); ``p_f`` the paper's false-alarm
-    likelihood. ``cost`` ``"paper"`` or ``"pattipati"``; ``psi`` (S,) FOV areas, rad^2
-    (``"pattipati"``). ``volume`` None for the fitted position, else the volume (m^3) over which the
-    target position is uniform a priori: the marginal likelihood (module docstring)."""
+    ``z``: S arrays (m_s, 2) rad; ``sensors`` (S, 3) m; ``sigma_a``, ``sigma_b`` rad; ``cost``
+    ``"paper"`` or ``"pattipati"`` (``psi`` (S,) FOV areas, rad^2); ``volume`` (m^3) for the
+    marginal position, None for the fitted one.
+    """
     n_sensors = len(z)
     gains = sensor_gains(n_sensors, sigma_a, sigma_b, p_d, p_f, cost, psi)
     log_miss = np.log1p(-p_d) if p_d < 1.0 else -np.inf
@@ -178,7 +163,5 @@ def tuple_costs(z: Sequence[np.ndarray], sensors: np.ndarray, sigma_a: float,
 
 
 def occam_term(logdet_info: np.ndarray, volume: float) -> np.ndarray:
-    """``ln((2 pi)^{3/2} |P|^{1/2} / V)``, nats: the Laplace approximation of integrating
-    the position over a uniform prior of volume ``V`` (m^3), ``P`` the inverse of the
-    position information whose log-determinant is ``logdet_info``."""
+    """``ln((2 pi)^{3/2} |P|^{1/2} / V)`` nats: position integrated over volume ``V`` (Laplace)."""
     return 1.5 * np.log(2.0 * np.pi) - 0.5 * logdet_info - np.log(volume)

@@ -1,12 +1,8 @@
 """Posterior Cramer-Rao lower bound (PCRLB) for angle-only tracking from moving platforms.
 
-Information recursion (Tichavsky et al. 1998), allowing a singular process noise
-``Q = G q G'``: ``J_0 = P_0^-1``, ``J_{k+1} = (Q + F J_k^-1 F')^-1 + sum_s q2_s(k)
-E[H_s' R_s^-1 H_s]`` with ``H_s`` the az/el Jacobian at the true state. Clutter and missed
-detections enter through the information-reduction factor ``q2`` (Niu et al. 2001),
-computed by Monte Carlo in whitened coordinates with clutter density ``lambda |R|^(1/2)``.
-Bounds: range ``sqrt(u' [J^-1]_pos u)`` along the true line of sight ``u``, position
-``sqrt(trace [J^-1]_pos)``. See ``docs/papers/twin_sensor.md``, "PCRLB".
+Tichavsky's information recursion with a singular ``Q``; clutter and missed detections
+enter through the information-reduction factor ``q2`` (Niu et al. 2001). Equations and the
+stored ``q2`` table: ``docs/papers/twin_sensor.md``, "PCRLB".
 
 References: Tichavsky, Muravchik, Nehorai, IEEE TSP 46(5), 1998; Niu, Willett, Bar-Shalom,
 IEEE TSP 49(7), 2001; Zhang, Willett, Bar-Shalom, IEEE TAES 41(4), 2005.
@@ -29,11 +25,11 @@ _IRF_CHUNK = 2048
 
 def measurement_information(x_true: np.ndarray, sensor_pos: np.ndarray,
                             R: np.ndarray) -> np.ndarray:
-    """Expected clutter-free measurement information per sensor, ``(K, S, 6, 6)``.
+    """Expected clutter-free information ``E[H' R^-1 H]`` per sensor, (K, S, 6, 6).
 
-    Parameters: ``x_true`` (K, 6) true states, or (M, K, 6) Monte Carlo truth samples (averaged).
-    ``sensor_pos`` (K, S, 3) sensor positions (m). ``R`` (S, 2, 2) measurement noise covariances
-    (rad^2)."""
+    ``x_true`` (K, 6), or (M, K, 6) truth samples averaged; ``sensor_pos`` (K, S, 3) m; ``R``
+    (S, 2, 2) rad^2.
+    """
     x = x_true if x_true.ndim == 3 else x_true[None]
     d = x[:, :, None, :3] - sensor_pos[None]  # (M, K, S, 3)
     H = azel_jacobian(d)  # (M, K, S, 2, 6)
@@ -44,13 +40,11 @@ def measurement_information(x_true: np.ndarray, sensor_pos: np.ndarray,
 def information_recursion(J0: np.ndarray, F: np.ndarray, Q: np.ndarray, Jz: np.ndarray,
                           q2: np.ndarray | Callable[[int, np.ndarray], np.ndarray] | None = None
                           ) -> np.ndarray:
-    """Bound covariances ``J_k^-1: (K+1, 6, 6)`` for ``k = 0..K`` from ``J0: (6, 6)``.
+    """Bound covariances ``J_k^-1`` (K+1, 6, 6), ``k = 0..K``, from prior information ``J0``.
 
-    Parameters: ``J0`` (6, 6) prior information. ``F``, ``Q`` (6, 6) truth-model transition and
-    process noise. ``Jz`` (K, S, 6, 6) per-sensor information from :func:`measurement_information`.
-    ``q2`` information-reduction factors, ``(K, S)``, or a function ``q2(k, Pp) -> (S,)`` of the
-    scan ``k = 1..K`` and the bound's predicted covariance ``Pp: (6, 6)`` (for clutter whose density
-    depends on the gate); ``None`` means no clutter, ``P_D = 1``."""
+    ``Jz`` (K, S, 6, 6) from :func:`measurement_information`; ``q2`` (K, S), or ``q2(k, Pp) ->
+    (S,)`` when the clutter density depends on the gate, or ``None`` (no clutter, ``P_D = 1``).
+    """
     out = np.empty((Jz.shape[0] + 1,) + J0.shape)
     Jinv = np.linalg.inv(J0)
     out[0] = Jinv
@@ -69,9 +63,7 @@ def information_recursion(J0: np.ndarray, F: np.ndarray, Q: np.ndarray, Jz: np.n
 
 
 def range_bound(Jinv: np.ndarray, x_true: np.ndarray, platform_pos: np.ndarray) -> np.ndarray:
-    """``sqrt(u' [J^-1]_pos u)``: ``(K,)`` (m) along the true lines of sight.
-
-    ``Jinv: (K, 6, 6)``, ``x_true: (K, 6)``, ``platform_pos: (K, 3)``."""
+    """``sqrt(u' [J^-1]_pos u)`` (K,) m along the true lines of sight from ``platform_pos``."""
     u = x_true[:, :3] - platform_pos
     u = u / np.linalg.norm(u, axis=1, keepdims=True)
     return np.sqrt(np.einsum("ka,kab,kb->k", u, Jinv[:, :3, :3], u))
@@ -84,15 +76,12 @@ def position_bound(Jinv: np.ndarray) -> np.ndarray:
 
 def irf_q2(lam_w: float, P_D: float = 1.0, n_samples: int = 1_000_000,
            half_width: float = 6.0, seed: int = 0) -> tuple[float, float]:
-    """Information-reduction factor ``q2`` for a 2-D measurement, and its standard error.
+    """``q2`` of a 2-D measurement and its standard error, by Monte Carlo from a fixed seed.
 
-    ``lam_w``: clutter density per unit whitened area; ``P_D`` in ``(0, 1]``. Clutter is Poisson
-    and uniform on ``[-half_width, half_width]^2``. Monte Carlo over ``n_samples`` from a fixed
-    seed (``_IRF_CHUNK`` at a time): each sample evaluates both "no clutter" (probability
-    ``p0 = exp(-mu)``) and "at least one point", weighted exactly, so every sample sees clutter
-    even at low density; ``E[s_1^2] = E[|s|^2 / 2]`` by the square's symmetry; the control
-    variate ``c = |z_t|^2 / 2`` if detected (mean ``P_D``) is fitted on the same samples. The
-    target measurements are the same at every ``lam_w`` (common random numbers)."""
+    ``lam_w`` clutter per unit whitened area (Poisson, uniform on a square). Each sample weighs
+    "no clutter" and "at least one point" exactly, uses the square's symmetry and a control
+    variate; the target draws are common to every ``lam_w``.
+    """
     if lam_w <= 0.0 or P_D <= 0.0:  # no clutter, or no detection: nothing to estimate
         return float(P_D), 0.0
     mu = lam_w * (2.0 * half_width) ** 2
@@ -177,8 +166,7 @@ ON_DEMAND_SAMPLES = 50_000
 
 
 def compute_q2_table(P_D: float, n_samples: int = 1_000_000) -> tuple[np.ndarray, np.ndarray]:
-    """``q2`` and its standard error, ``(37,)`` each, at every density of :func:`q2_grid` by
-    :func:`irf_q2` (``n_samples`` a point, seed 0)."""
+    """``q2`` and its standard error (37,) at each density of :func:`q2_grid` (seed 0)."""
     q2, se = np.array([irf_q2(g, P_D, n_samples=n_samples) for g in q2_grid()]).T
     return q2, se
 
@@ -194,13 +182,10 @@ def _q2_table(P_D: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def irf_q2_interp(lam_w: ArrayLike, P_D: float = 1.0) -> np.ndarray:
-    """``q2`` for an array of whitened densities, interpolated from a cached Monte Carlo table.
+    """``q2`` for whitened densities ``lam_w`` (any shape), from the cached Monte Carlo table.
 
-    ``lam_w``: clutter densities in whitened coordinates (per unit area, as in
-    :func:`irf_q2`), any shape ``S``; ``P_D`` in ``(0, 1]``. Returns ``q2`` (dimensionless),
-    shape ``S``. Interpolation is linear in ``log lam_w`` on ``[1e-4, 3]``; below the table
-    ``q2`` goes linearly to its clutter-free value ``P_D`` at 0, and above it stays at the
-    table's last value."""
+    Linear in ``log lam_w`` on ``[1e-4, 3]``; below, linear to ``P_D`` at 0; above, the last value.
+    """
     grid, table = _q2_table(float(P_D))
     lam = np.clip(np.asarray(lam_w, dtype=float), 0.0, grid[-1])
     log_grid = np.log(grid[1:])
