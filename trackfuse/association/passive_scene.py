@@ -1,11 +1,8 @@
-"""Scenario of paper 002: two passive (angle-only) sensors observing a set of point targets.
+"""Scenario of paper 002: two (or S) passive angle-only sensors observing point targets.
 
-Each sensor detects each target with probability ``P_D`` and reports its azimuth and
-elevation (rad) with independent ``N(0, sigma^2)`` errors; false alarms, Poisson with mean
-``P_F N`` (or Binomial), are uniform in the field-of-view box around the true angles widened
-by ``margin``. Lists are shuffled; target labels (``-1``: false alarm) are kept for scoring.
-Scenes: ``paper`` (the first ``n`` of M1-M10) or ``random`` (``n`` uniform in their bounding
-box). Geometry and defaults: ``docs/papers/passive_assoc.md``, "Model".
+Detections with ``P_D``, Gaussian az/el errors, Poisson (or Binomial) false alarms uniform
+in a widened field-of-view box; lists shuffled, labels kept for scoring. Geometry and
+defaults: ``docs/papers/passive_assoc.md``, "Model".
 """
 
 from __future__ import annotations
@@ -33,21 +30,16 @@ PAPER_BOX = np.stack([PAPER_TARGETS.min(axis=0), PAPER_TARGETS.max(axis=0)])
 
 
 def los_angles(p: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """Azimuth and elevation of points seen from a sensor.
-
-    Parameters: ``p`` (..., 3) target positions, m. ``s`` (3,) sensor position, m.
-    Returns (..., 2) array of ``[azimuth, elevation]`` in rad."""
+    """``[azimuth, elevation]`` (..., 2) rad of points ``p`` (..., 3) m seen from ``s`` (3,) m."""
     return azel(np.asarray(p, dtype=float) - s)
 
 
 @dataclass(frozen=True)
 class PassiveScan:
-    """One simultaneous scan of every sensor (two in paper 002, S in the S-D assignment).
+    """One simultaneous scan of every sensor.
 
-    Attributes: ``targets`` (N, 3) true target positions, m. ``sensors`` (S, 3) sensor positions, m.
-    ``z`` one (m_s, 2) array of measured ``[azimuth, elevation]`` per sensor, rad, shuffled.
-    ``labels`` one (m_s,) int array per sensor: the target index of each measurement, -1 for a false
-    alarm (for scoring only). ``fov`` (S, 4) per-sensor box ``[a_low, a_high, b_low, b_high]``, rad.
+    ``targets`` (N, 3) m, ``sensors`` (S, 3) m; per sensor ``z`` (m_s, 2) rad (shuffled) and
+    ``labels`` (m_s,) (target index, -1 false alarm); ``fov`` (S, 4) az and el bounds, rad.
     """
 
     targets: np.ndarray
@@ -85,15 +77,9 @@ def simulate_scan(targets: np.ndarray, sigma_a: float, sigma_b: float, p_d: floa
                   rng_clutter: np.random.Generator, rng_shuffle: np.random.Generator,
                   clutter: str = "poisson", margin: float = 0.1,
                   sensors: np.ndarray = SENSORS) -> PassiveScan:
-    """Simulate one scan of every sensor (in sensor order, so the first two sensors' data
-    do not depend on the sensors after them).
-
-    Parameters: ``targets`` (N, 3) target positions, m. ``sigma_a``, ``sigma_b`` azimuth / elevation
-    noise standard deviations, rad. ``p_d`` detection probability of each sensor. ``p_f``
-    false-alarm parameter; the count is Poisson(p_f N) or Binomial(N, p_f). ``rng_noise``,
-    ``rng_clutter``, ``rng_shuffle`` independent streams for detection and angle noise, false
-    alarms, and the shuffling of each sensor's list. ``clutter`` ``"poisson"`` or ``"binomial"``.
-    ``margin`` FOV box margin around the true angles, rad. ``sensors`` (S, 3) sensor positions, m.
+    """Simulate one scan of every sensor, in sensor order (the first sensors' data do not depend on
+    later ones). ``rng_noise``, ``rng_clutter``, ``rng_shuffle`` are independent streams;
+    ``p_f`` gives Poisson(p_f N) or Binomial(N, p_f) false alarms; ``margin`` rad.
     """
     n = len(targets)
     zs, labels, boxes = [], [], []
@@ -121,11 +107,9 @@ def simulate_scan(targets: np.ndarray, sigma_a: float, sigma_b: float, p_d: floa
 
 
 def true_partners(labels1: np.ndarray, labels2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Ground-truth partner of every measurement, -1 for the dummy.
-
-    The partner of a measurement of target ``t`` is the other sensor's measurement of ``t``
-    if that sensor detected it, else the dummy; a false alarm's partner is the dummy.
-    Returns ((m1,), (m2,)) int arrays of indices into the other sensor's list, or -1."""
+    """True partner (index into the other list) of every measurement, -1 for the dummy (a false
+    alarm, or a target the other sensor missed): ((m1,), (m2,)).
+    """
     where2 = {int(t): j for j, t in enumerate(labels2) if t >= 0}
     p1 = np.full(len(labels1), -1)
     p2 = np.full(len(labels2), -1)

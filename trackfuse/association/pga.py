@@ -1,15 +1,9 @@
 """Improved partheno-genetic algorithm (PGA) of paper 002 for the two-sensor assignment.
 
-The solution is the 0/1 matrix ``X`` of size (m1+1) x (m2+1) with dummy row and column 0,
-the smaller measurement set on the rows, stored as ``col_row`` (length m2, ``col_row[j]`` in
-``{0 (dummy), 1..m1}``). Its objective ``J = sum_j w[col_row[j]][j]`` (``w[0][j] = 0``,
-:mod:`trackfuse.association.assignment`) changes by the gains of the two or three columns a
-move touches, so each move is evaluated in O(1). One genetic operation = crossover, then
-mutation with probability ``p_m``, then evaluation; the operators (crossover, unpairing
-mutation, re-pair, evicting re-pair), staged evaluation and the acceptance rules
-(``monotone``, ``anneal``) are in ``docs/papers/passive_assoc.md``, "Partheno-genetic
-algorithm" and W002-2. The best solution is recorded at each checkpoint of the operation
-count (Fig. 2's x-axis); the budget ``ops`` is always a checkpoint.
+A solution is ``col_row`` (m2,), ``col_row[j]`` in ``{0 (dummy), 1..m1}``, the smaller set on
+the rows; ``J = sum_j w[col_row[j]][j]`` changes only in the columns a move touches, so each
+move costs O(1). Operators, evaluation and acceptance rules: ``docs/papers/passive_assoc.md``,
+"Partheno-genetic algorithm" and W002-2. The search itself is :mod:`.pga_search`.
 
 References: Liu H., Dou L., Xin B., Dong L., Control and Decision 23(4), 2008, sec. 3; Li M. J.,
 Tong T. S., Acta Automatica Sinica 25(1), 1999; Rudolph G., IEEE Trans. Neural Networks 5(1),
@@ -32,11 +26,9 @@ _BLOCK = 4096  # operations per block of pre-drawn uniforms
 
 @dataclass(frozen=True)
 class PGAResult:
-    """Best solutions of one PGA run at each checkpoint.
-
-    Attributes: ``checkpoints`` (C,) operation counts. ``partner1`` (C, m1) sensor-2 partner of each
-    sensor-1 measurement, -1 for the dummy. ``objective`` (C,) sum of pair gains of the best
-    solution. ``elapsed_s`` (C,) wall time from the start of the run, s."""
+    """Best solutions at each checkpoint: ``checkpoints`` (C,) operation counts, ``partner1``
+    (C, m1) (-1: dummy), ``objective`` (C,) summed pair gains, ``elapsed_s`` (C,) wall seconds.
+    """
 
     checkpoints: np.ndarray
     partner1: np.ndarray
@@ -45,10 +37,10 @@ class PGAResult:
 
 
 class Draws(NamedTuple):
-    """The eight uniforms on [0, 1) of one genetic operation, in stream order (drawn in
-    blocks of rows: memory stays bounded and the stream does not depend on the block size).
-    Under ``evict``, ``place < 1/2`` picks the evicting re-pair and ``2 place`` (or
-    ``2 place - 1``), again uniform and independent of that choice, the position."""
+    """The eight uniforms on [0, 1) of one operation, in stream order (drawn in blocks; the stream
+    does not depend on the block size). Under ``evict``, ``place < 1/2`` picks the evicting
+    re-pair and ``2 place`` (mod 1) the position.
+    """
 
     first_column: float  # roulette position of the first crossover column
     second_column: float  # roulette (or uniform) position of the second crossover column
@@ -61,9 +53,7 @@ class Draws(NamedTuple):
 
 
 def column_ranks(a: np.ndarray, a_0j: np.ndarray) -> np.ndarray:
-    """Descending rank (1 = largest) of each entry within its column of ``[a_0j; a]``.
-
-    a : (m1, m2), a_0j : (m2,). Returns (m1+1, m2) ints; ties keep row order."""
+    """Descending rank (1 = largest) in each column of ``[a_0j; a]``: (m1+1, m2), ties by row."""
     full = np.vstack([a_0j[None, :], a])
     order = np.argsort(-full, axis=0, kind="stable")
     ranks = np.empty_like(order)
@@ -95,7 +85,7 @@ def orient(weights: PairWeights, roulette: str) -> Oriented:
 
 
 def initial_solution(m1: int, m2: int, init: str, rng: np.random.Generator) -> list[int]:
-    """Setup: the initial solution ``col_row`` (module docstring)."""
+    """Setup: the initial ``col_row``, ``random_B`` or ``standard`` (paper 002 eq. 31)."""
     cur = [0] * m2
     if init == "random_B":
         for r, j in enumerate(rng.permutation(m2)[:m1].tolist(), start=1):
@@ -108,9 +98,9 @@ def initial_solution(m1: int, m2: int, init: str, rng: np.random.Generator) -> l
 
 
 class Schedule(NamedTuple):
-    """When a run records its best solution and how it accepts: ``marks`` the operation
-    counts of the checkpoints (``ops`` always one), ``anneal`` Metropolis acceptance,
-    ``cool`` the temperature factor per operation (1 without annealing)."""
+    """Checkpoint ``marks`` (``ops`` always one), Metropolis ``anneal``, and ``cool``, the
+    temperature factor per operation (1 without annealing).
+    """
 
     marks: set[int]
     anneal: bool
@@ -131,16 +121,14 @@ def schedule(ops: int, checkpoints: Sequence[int], accept: str, second: str, t0:
 
 
 def draw_blocks(rng: np.random.Generator, ops: int) -> Iterator[np.ndarray]:
-    """The uniforms of operations ``1..ops`` in blocks of at most ``_BLOCK`` rows, each
-    ``(rows, 8)`` with the columns of :class:`Draws`."""
+    """Uniforms of operations ``1..ops`` in blocks (rows, 8), columns as :class:`Draws`."""
     for first in range(0, ops, _BLOCK):
         yield rng.random((min(_BLOCK, ops - first), 8))
 
 
 def collect(saved: dict[int, tuple[list[int], float]], objective: Callable[[list[int]], float],
             transpose: bool, rows: int) -> PGAResult:
-    """Collection: checkpointed solutions (checkpoint -> (``col_row``, elapsed s)), scored
-    by ``objective``, back in the caller's orientation (``rows`` = sensor-1 count)."""
+    """Checkpointed ``col_row`` scored by ``objective``, back in the caller's orientation."""
     marks = sorted(saved)
     partner = np.full((len(marks), rows), -1)
     objective_at = np.empty(len(marks))

@@ -1,11 +1,8 @@
 """The partheno-genetic algorithm's search (:mod:`trackfuse.association.pga`), compiled.
 
-:func:`pga` runs the algorithm on one problem: the setup, the random draws
-(:func:`~trackfuse.association.pga.draw_blocks`) and the collection are
-:mod:`trackfuse.association.pga`'s; the genetic operations run compiled (numba, cached on disk
-beside this module), from checkpoint to checkpoint. The plain-Python oracle
-``tests/pga_reference.py`` makes the same choices and floating-point operations in the same
-order; ``tests/test_pga_kernel.py`` pins the two exactly.
+Setup, draws and collection are :mod:`.pga`'s; the genetic operations run in numba from
+checkpoint to checkpoint. The oracle ``tests/pga_reference.py`` does the same floating-point
+operations in the same order (pinned exactly by ``tests/test_pga_kernel.py``).
 """
 
 from __future__ import annotations
@@ -46,15 +43,12 @@ def pga(weights: PairWeights, rng: np.random.Generator, ops: int = 1000,
         roulette: str = "worse", second: str = "roulette", repair_moves: bool = False,
         staged: bool = False, evict: bool = False, accept: str = "monotone", t0: float = 1.0,
         t1: float = 0.01) -> PGAResult:
-    """Run the (improved) partheno-genetic algorithm on one assignment problem.
+    """Run the (improved) PGA on one problem with its own stream ``rng``: :class:`PGAResult`.
 
-    ``weights``: the scan's :class:`PairWeights` (either orientation); ``rng``: the algorithm's
-    own stream; ``ops`` genetic operations, the best solution recorded at ``checkpoints`` (``ops``
-    always added, larger counts ignored); ``p_m``: mutation probability; ``init``: ``random_B``
-    or ``standard`` (eq. 31); ``roulette``: ``worse`` (weight num(j)) or ``better``; ``second``:
-    ``roulette`` or ``uniform``; ``repair_moves``, ``evict``, ``staged``, ``accept``
-    (``monotone``/``anneal``, temperatures ``t0`` to ``t1`` in nats): the variants of
-    ``docs/papers/passive_assoc.md``, "Partheno-genetic algorithm"."""
+    ``ops`` operations, best recorded at ``checkpoints`` (``ops`` always added); the other
+    options are the variants of ``docs/papers/passive_assoc.md``, "Partheno-genetic algorithm"
+    (``t0``, ``t1`` in nats).
+    """
     start = time.perf_counter()
     w, rank, transpose = orient(weights, roulette)
     marks, anneal, cool = schedule(ops, checkpoints, accept, second, t0, t1)
@@ -89,10 +83,9 @@ def pga(weights: PairWeights, rng: np.random.Generator, ops: int = 1000,
 @njit(**JIT)
 def _search(draws, w, rank, cur, best, q, state, p_m, roulette_second, repair_moves, staged,
             evict, anneal, cool):
-    """Run the genetic operations of ``draws: (n, 8)`` from the solution ``cur: (m2,)``
-    (with its roulette weights ``q``), updating ``cur``, ``q``, ``best`` and ``state``
-    (``J``, best ``J``, temperature) in place; the flags are the options of
-    :func:`pga`. One iteration is ``_Search.operate`` of the oracle."""
+    """Run the operations of ``draws`` (n, 8) from ``cur`` (m2,), updating ``cur``, ``q``,
+    ``best`` and ``state`` (J, best J, temperature) in place (the oracle's ``operate``).
+    """
     m1, m2 = w.shape[0] - 1, w.shape[1]
     J, J_best, T = state[J_CUR], state[J_BEST], state[TEMPERATURE]
     child, cum, touched = cur.copy(), np.cumsum(q), np.empty(3, np.int64)
@@ -146,9 +139,9 @@ def _accepted(dJ, u, anneal, T):
 
 @njit(**INNER)
 def _commit(J, J_best, child_paired, cur, child, best, q, rank, touched, n_touched):
-    """Accept the offspring (objective ``J``): copy its touched columns into ``cur`` and
-    their roulette weights into ``q``, and keep it as ``best`` if it beats ``J_best``.
-    Returns ``J``, best ``J``, the number of pairs and the stale flag of the roulette."""
+    """Accept the offspring: copy its touched columns and roulette weights, keep it as ``best`` if
+    better. Returns ``J``, best ``J``, the pair count and the roulette's stale flag.
+    """
     for k in range(n_touched):
         j = touched[k]
         cur[j] = child[j]
@@ -162,9 +155,9 @@ def _commit(J, J_best, child_paired, cur, child, best, q, rank, touched, n_touch
 
 @njit(**INNER)
 def _cumulative_sum(q, out):
-    """``out = np.cumsum(q)`` in place, element by element: an array-to-array assignment
-    compiles numba's shape-mismatch message (string formatting, about 3 s of the first run
-    after installing) for a mismatch that cannot occur here."""
+    """``out = np.cumsum(q)`` element by element (an array assignment would compile numba's
+    shape-mismatch message, about 3 s of the first run).
+    """
     acc = 0
     for j in range(q.shape[0]):
         acc += q[j]
@@ -181,8 +174,7 @@ def _revert(cur, child, touched, n_touched):
 
 @njit(**INNER)
 def _bisect_right(cum, x, lo, hi, shift):
-    """First index in ``lo..hi-1`` with ``cum[i] - shift > x`` (``hi`` if none), by the
-    binary search of :func:`bisect.bisect_right` (``cum`` increasing)."""
+    """First ``i`` in ``lo..hi-1`` with ``cum[i] - shift > x``, else ``hi`` (``bisect_right``)."""
     while lo < hi:
         mid = (lo + hi) // 2
         if x < cum[mid] - shift:
@@ -212,8 +204,9 @@ def _columns(cum, q, u1, u2, roulette_second):
 
 @njit(**INNER)
 def _mutate(child, w, d, child_paired, repair_moves, evict, scratch, seen):
-    """Re-pair (plain or evicting) or unpair in place (``_Search._mutate`` of the
-    oracle). Returns the gain, the touched column (-1 for none) and the pair count."""
+    """Re-pair (plain or evicting) or unpair in place (the oracle's ``_mutate``): gain, touched
+    column (-1: none), pair count.
+    """
     m1, m2 = w.shape[0] - 1, w.shape[1]
     if repair_moves and d[REPAIR] < 0.5 and child_paired < m1:
         seen[:] = False
@@ -246,8 +239,7 @@ def _mutate(child, w, d, child_paired, repair_moves, evict, scratch, seen):
 
 @njit(**INNER)
 def _columns_where(child, paired, out):
-    """Write the columns that hold a real row (``paired``) or none into ``out``, in order;
-    return their number."""
+    """Write the columns holding a real row (``paired``) or none into ``out``; return how many."""
     n = 0
     for j in range(child.shape[0]):
         if (child[j] != 0) == paired:
