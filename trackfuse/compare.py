@@ -1,13 +1,9 @@
 """Compare two runs of one experiment cell by cell, and gate regressions for CI.
 
-A cell is one sweep point (matched by its swept values), one value of the row keys and one
-metric; for each cell both runs have: both means, ``new - base`` with its 95 % interval, a
-p-value and the test. Runs of one root seed are paired by trial index (paired t; Newcombe's
-paired score interval and exact McNemar for 0/1 metrics), others unpaired (Welch; Newcombe's
-hybrid score interval and 'N-1' chi-square). A metric with a declared direction regresses
-when its one-sided, Bonferroni-adjusted bound lies beyond the tolerance on the bad side;
-:meth:`Comparison.gate_failure` says why a gate fails (a regression, a base cell the new run
-lacks, nothing compared). Users' view: ``docs/statistics.md`` and ``docs/outputs.md``.
+A cell is one sweep point, one value of the row keys and one metric: both means,
+``new - base`` with its 95 % interval, a p-value and the test (paired by trial index with
+one root seed, else unpaired). Tests, the Bonferroni-adjusted one-sided gate and the
+verdicts: ``docs/statistics.md``; the files: ``docs/outputs.md``.
 """
 
 from __future__ import annotations
@@ -42,14 +38,12 @@ SWEPT = "(swept)"
 class Comparison:
     """Result of :func:`compare_trials`.
 
-    ``cells``: one row per cell with the key columns, ``metric``, ``better``, ``n_base``,
-    ``n_new``, ``base``, ``new``, ``diff``, ``ci_low``, ``ci_high`` (95 %), ``p_value``,
-    ``test`` and ``verdict`` (``regression``, ``improvement``, ``no significant change``,
-    or for ungated metrics ``differs`` / ``no significant difference``).
-    ``paired``: whether trials were paired. ``gated``: number of gated cells.
-    ``alpha``: the family-wise false-alarm level of the gate. ``only_base_cells``,
-    ``only_new_cells``: the key columns and ``metric`` of the cells of one run that were not
-    compared (a sweep point, row key or metric the other run lacks)."""
+    ``cells``: one row per cell (keys, ``metric``, ``better``, counts, ``base``, ``new``,
+    ``diff``, ``ci_low``, ``ci_high``, ``p_value``, ``test``, ``verdict``); ``paired``;
+    ``gated`` cell count; ``alpha`` the gate's family-wise level; ``only_base_cells``,
+    ``only_new_cells`` the cells one run lacks. Verdicts: ``regression``, ``improvement``,
+    ``no significant change``; ungated, ``differs`` or ``no significant difference``.
+    """
 
     cells: pd.DataFrame
     paired: bool
@@ -78,10 +72,9 @@ class Comparison:
         return len(self.only_new_cells)
 
     def gate_failure(self) -> str | None:
-        """Why the regression gate fails, in one line, or ``None`` when it passes.
-
-        It fails on a regression, on any cell of the base run left out (the new run no
-        longer produces it), when no cell was compared and when no compared cell is gated."""
+        """Why the gate fails, in one line, or ``None``: a regression, a base cell left out, no cell
+        compared, or no compared cell gated.
+        """
         names = list(self.only_base_cells.columns)
         reasons = []
         if self.cells.empty:
@@ -98,8 +91,8 @@ class Comparison:
         return "; ".join(reasons) or None
 
     def bottom_line(self) -> str:
-        """The comparison in one line: the gate's verdicts (regressions, improvements) over
-        the gated cells, then how many ungated cells differ at their own 95 %."""
+        """The gate's verdicts over the gated cells, then how many ungated cells differ, in one
+        line."""
         if self.cells.empty:
             return "bottom line: nothing compared (the runs share no cell)"
         verdicts = self.cells["verdict"].value_counts()
@@ -134,9 +127,9 @@ def metric_columns(frame: pd.DataFrame, keys: Sequence[str]) -> list[str]:
 
 
 def _long(frame: pd.DataFrame, keys: Sequence[str], metrics: Sequence[str]) -> pd.DataFrame:
-    """Rows of finished trials melted to ``[*keys, trial, metric, value]``. The metric
-    columns are melted under their positions, so that a metric may be called ``value`` or
-    ``metric`` (pandas refuses a melted column named like a column of the frame)."""
+    """Finished trials melted to ``[*keys, trial, metric, value]`` (by position, so a metric may be
+    called ``value`` or ``metric``).
+    """
     rows = succeeded_rows(frame)[[*keys, "trial", *metrics]]
     rows.columns = [*keys, "trial", *range(len(metrics))]
     long = rows.melt(id_vars=[*keys, "trial"], var_name="metric", value_name="value")
@@ -196,11 +189,10 @@ def _unpaired_cells(base: pd.DataFrame, new: pd.DataFrame, keys: list[str],
 
 def _without_spread(cells: pd.DataFrame, flat: np.ndarray, p_exact: np.ndarray, level: float,
                     test: str) -> pd.DataFrame:
-    """``cells`` where the ``flat`` ones (every difference, or every value of each run,
-    equal and the difference not 0: a t interval of zero width and p 0) read the exact test
-    ``test`` instead: its p-value ``p_exact``, and the difference as its interval only if
-    that p reaches ``1 - level``, else no bound at all (two trials of each cannot show a
-    difference at 95 %: the most extreme outcome has p 1/3)."""
+    """``cells`` where the ``flat`` ones (no spread, nonzero difference: t reads p 0) read the exact
+    ``test`` with ``p_exact``; the difference is their interval only if that p reaches
+    ``1 - level``.
+    """
     shown = flat & (p_exact <= 1 - level)
     for end, unbounded in (("ci_low", -np.inf), ("ci_high", np.inf)):
         cells[end] = np.where(shown, cells["diff"], np.where(flat, unbounded, cells[end]))
@@ -214,18 +206,13 @@ def compare_trials(base: pd.DataFrame, new: pd.DataFrame, keys: Sequence[str],
                    paired: bool = True, tolerance: Mapping[str, float] | None = None,
                    alpha: float = 0.05, metrics: Sequence[str] | None = None,
                    family_wise: bool = True, skip: Sequence[str] = ()) -> Comparison:
-    """Compare the trial rows of two runs (see the module docstring).
+    """Compare the trial rows of two runs cell by cell: a :class:`Comparison`.
 
-    Parameters: ``base``, ``new`` ``trials.csv`` frames of the two runs. ``keys`` columns that
-    identify a cell besides the metric: the swept keys and the experiment's row keys (not ``point``:
-    points are matched by their swept values). ``binary`` 0/1 metrics. ``better`` metric ->
-    ``"lower"`` or ``"higher"`` (gated metrics). ``paired`` pair trials by index (same root seed) or
-    treat the runs as independent. ``tolerance`` metric -> the worsening (in the metric's unit) that
-    is accepted; default 0. ``alpha`` family-wise false-alarm level of the regression gate.
-    ``metrics`` compare only these metrics (default: every metric present in both runs).
-    ``family_wise`` Bonferroni-adjust the gate over the gated cells (default); ``False`` gates every
-    cell at ``alpha`` on its own. ``skip`` columns that are labels, not quantities (categorical
-    metrics): never compared."""
+    ``keys`` identify a cell besides the metric (swept keys and row keys, not ``point``);
+    ``better`` gives gated metrics' directions; ``tolerance`` the accepted worsening per metric
+    (its unit); ``alpha`` the gate's family-wise level (``family_wise=False``: per cell);
+    ``skip`` label columns never compared.
+    """
     keys, binary, better = list(keys), set(binary), dict(better or {})
     tolerance = dict(tolerance or {})
     wanted = None if metrics is None else set(metrics)
@@ -273,18 +260,13 @@ def compare_runs(base: RunData, new: RunData, tolerance: Mapping[str, float] | N
                  alpha: float = 0.05, family_wise: bool = True,
                  metrics: Sequence[str] | None = None,
                  algorithms: Sequence[str] | None = None) -> Comparison:
-    """Compare two complete runs of the same experiment (see :func:`compare_trials`).
+    """Compare two complete runs of the same experiment (:func:`compare_trials`).
 
-    Cells are keyed by the keys either run sweeps and the experiment's row keys: a key one
-    run sweeps and the other fixes (``--set clutter.mean=5``) is compared at the fixed value
-    (:func:`_with_fixed_keys`). 0/1 metrics and the direction of each metric come from
-    ``Experiment.metrics``; a metric summarized as a root mean square is compared on its
-    per-trial squares (``base``, ``new``, ``diff`` in the unit squared: the RMS is worse
-    exactly when the mean square is). Trials are paired when both runs share the root seed, on the
-    trial indices both have (:func:`_pairing`). ``metrics``, ``algorithms``: compare only
-    these (default all); the gate's family is then the cells kept. Raises ``ValueError`` for
-    runs of different experiments, a key one run sweeps that the other fixes to a list or a
-    mapping, or a metric or algorithm neither run has."""
+    A key one run sweeps and the other fixes is compared at the fixed value; RMS metrics are
+    compared on their per-trial squares; trials pair when the root seeds match.
+    ValueError for different experiments, a fixed list or mapping against a sweep, or a metric
+    or algorithm neither run has.
+    """
     if base.config["experiment"] != new.config["experiment"]:
         raise ValueError(f"different experiments: {base.config['experiment']!r} and "
                          f"{new.config['experiment']!r}")
@@ -337,8 +319,7 @@ def _check_chosen(option: str, chosen: Sequence[str] | None, allowed: Sequence[s
 
 def _of_algorithms(frames: list[pd.DataFrame], algorithms: Sequence[str]
                    ) -> list[pd.DataFrame]:
-    """The rows of ``frames`` (both runs' trials) whose ``algorithm`` is one of
-    ``algorithms``; ``ValueError`` for an algorithm neither run has."""
+    """Rows of ``frames`` of the chosen ``algorithms``; ValueError for one neither has."""
     if any("algorithm" not in frame for frame in frames):
         raise ValueError("--algorithm: the runs' rows have no algorithm column; allowed: "
                          "compare without --algorithm")
@@ -348,8 +329,8 @@ def _of_algorithms(frames: list[pd.DataFrame], algorithms: Sequence[str]
 
 
 def _with_fixed_keys(run: RunData, keys: Sequence[str], role: str) -> pd.DataFrame:
-    """``run``'s trials with a column for each of ``keys`` it does not sweep, holding the value
-    its config fixes (one sweep point of the other run's axis)."""
+    """``run``'s trials with a column holding its fixed value for each of ``keys`` it does not
+    sweep."""
     trials = run.trials
     for key in keys:
         if key in run.sweep:
@@ -367,10 +348,9 @@ def _with_fixed_keys(run: RunData, keys: Sequence[str], role: str) -> pd.DataFra
 
 
 def _pairing(base: Mapping, new: Mapping) -> tuple[bool, str]:
-    """Whether trials of the resolved configs ``base`` and ``new`` pair by index, and how: with
-    one root seed trial ``t`` has the same common draw in both runs (its point stream only where
-    both give the point the same draw point); with two seeds no trial pairs
-    (``docs/statistics.md``)."""
+    """Whether trials of configs ``base`` and ``new`` pair by index, and why (one root seed: the
+    same common draws; ``docs/statistics.md``).
+    """
     seeds, trials = (base.get("seed"), new.get("seed")), (base.get("trials"), new.get("trials"))
     if seeds[0] != seeds[1]:
         return False, f"(the seeds differ, {seeds[0]} and {seeds[1]}: no trial is shared)"
@@ -381,8 +361,7 @@ def _pairing(base: Mapping, new: Mapping) -> tuple[bool, str]:
 
 
 def _flat(config: Mapping, prefix: str = "") -> dict[str, object]:
-    """A resolved config as ``{dotted path: value}`` (``params.clutter.mean``, ``trials``);
-    an empty mapping (``sweep: {}``) has no values."""
+    """A resolved config as ``{dotted path: value}``; an empty mapping has no values."""
     flat: dict[str, object] = {}
     for key, value in config.items():
         if isinstance(value, Mapping):
@@ -393,10 +372,9 @@ def _flat(config: Mapping, prefix: str = "") -> dict[str, object]:
 
 
 def config_differences(base: Mapping, new: Mapping) -> list[tuple[str, object, object]]:
-    """``(key, base value, new value)`` for every value of two resolved configs that differs
-    (``None`` where a config lacks the key), in the order of ``base`` then ``new``. The
-    ``params`` value of a swept key is no point's value: it reads :data:`SWEPT` (the
-    ``sweep`` entries give the values), so a key both runs sweep is left out."""
+    """``(key, base value, new value)`` for every differing value (``None`` where absent), base
+    order first; a key both runs sweep is left out (its ``params`` value reads :data:`SWEPT`).
+    """
     b, n = (_flat({**config, "params": {**(config.get("params") or {}), **dict.fromkeys(
         config.get("sweep") or {}, SWEPT)}}) for config in (base, new))
     return [(key, b.get(key), n.get(key)) for key in dict.fromkeys([*b, *n])

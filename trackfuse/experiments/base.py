@@ -1,13 +1,10 @@
 """The contract between the runner and an experiment: :class:`Experiment` and what it declares.
 
-An experiment module exposes ``EXPERIMENT = Experiment(...)``: its parameter schema
-(:class:`Param`), ``run_trial(params, streams) -> list[dict]`` (one trial, a pure function of
-the resolved params and its :class:`~trackfuse.seeding.TrialStreams`; every algorithm sees
-the same data), optionally ``run_batch`` (a batch of trials, each drawing from its own
-streams only; row lists or a :class:`~trackfuse.rowtable.RowTable`), its ``row_keys``, its
-metrics (:class:`Metric`), its report module and figures (:class:`FigureSpec`). The runner
-adds ``point``, ``trial`` and the swept values to each row; ``*_time_s`` columns go to
-``timings.csv``. The whole contract: ``docs/runner.md``, "The experiment contract".
+An experiment module exposes ``EXPERIMENT = Experiment(...)``: its parameters
+(:class:`Param`), ``run_trial`` (one trial, a pure function of the params and its
+streams) and optionally ``run_batch``, its row keys, metrics (:class:`Metric`) and figures
+(:class:`FigureSpec`). The contract: ``docs/runner.md``, "The experiment contract", and
+``docs/plugins.md``.
 """
 
 from __future__ import annotations
@@ -33,15 +30,11 @@ KINDS = (float, int, bool, str, list)
 
 @dataclass(frozen=True)
 class Param:
-    """One parameter of an experiment's schema.
+    """One parameter of an experiment's schema; the fields are described in ``docs/plugins.md``.
 
-    ``unit``: ``"1"`` dimensionless (probabilities: ``low=0.0, high=1.0`` or tighter), ``""``
-    free text. ``kind``: ``float``, ``int``, ``bool``, ``str`` or ``list`` (non-empty; of
-    ``item_kind`` numbers, or of distinct strings from ``choices``); ``low``/``high``: inclusive
-    bounds (of each element of a list); ``choices``: the allowed values; ``length``: a list's
-    fixed length. ``draws``: whether it changes what is simulated (scene, returns, clutter)
-    rather than what is computed from it; points that differ only in ``draws=False`` keys share
-    their point stream (``docs/runner.md``, "Seeding"); ``True`` is the safe default."""
+    ``draws=False`` marks a parameter that changes only what is computed, not what is simulated:
+    points differing only in such keys share their point stream.
+    """
 
     key: str
     default: Any
@@ -67,8 +60,8 @@ class Param:
             raise ValueError(f"Param {self.key!r}: {problem}")
 
     def _declaration_problem(self) -> str | None:
-        """What is wrong with this declaration (its default against its own kind, bounds
-        and choices), else ``None``: a plugin's mistake said where it is made."""
+        """What is wrong with this declaration (default against kind, bounds, choices), else
+        ``None``."""
         if self.kind not in KINDS or self.item_kind not in (float, int):
             return (f"kind={self.kind!r}, item_kind={self.item_kind!r}; allowed: kind one of "
                     "float, int, bool, str, list and item_kind float or int (the types)")
@@ -103,16 +96,11 @@ AGGREGATES = ("mean", "rms")
 
 @dataclass(frozen=True)
 class Metric:
-    """One metric column of an experiment's rows.
+    """One metric column of an experiment's rows; the fields are described in ``docs/plugins.md``.
 
-    ``unit`` (``"1"`` dimensionless); ``binary``: 0/1 (Wilson intervals); ``better``:
-    ``"lower"``/``"higher"`` for a metric ``trackfuse compare`` gates, ``None`` for a diagnostic;
-    ``categorical``: a label stored as a number, never averaged (no summary row); ``bounds``:
-    ``(low, high)`` every value lies in, to which the summary clips the interval;
-    ``aggregate``: ``"mean"`` (t or Wilson interval) or ``"rms"`` (a per-trial error ``e``:
-    ``sqrt(mean(e^2))`` with :func:`trackfuse.stats.rmse_intervals`; ``compare`` compares the
-    mean square); ``optional``: a column only some algorithms write (NaN on the others' rows),
-    left out of a run without them."""
+    ``optional``: a column only some algorithms write (NaN on the others' rows), left out of a
+    run without them.
+    """
 
     name: str
     unit: str
@@ -143,8 +131,8 @@ class Metric:
 
 
 def column_name_problem(name: object) -> str | None:
-    """What is wrong with ``name`` as a column of ``trials.csv`` (a metric's or a row key's), else
-    ``None``: it must be non-empty and on one line for the summary and the gate to read it."""
+    """What is wrong with ``name`` as a ``trials.csv`` column (empty, or not on one line), else
+    ``None``."""
     if not isinstance(name, str) or not name.strip():
         return "the name is empty or not a string; allowed: a non-empty str"
     if not name.isprintable() or name != name.strip():
@@ -159,10 +147,9 @@ FRACTION, NON_NEGATIVE = (0.0, 1.0), (0.0, math.inf)
 
 @dataclass(frozen=True)
 class FigureSpec:
-    """One figure of an experiment's report: a one-line ``caption`` and the ``paper``
-    figure or table it stands for (``""`` for an extension or a diagnostic); ``plot``: the
-    figure as data, drawn by :mod:`trackfuse.reportkit.render` (``None``: the report
-    module draws it itself)."""
+    """One report figure: a one-line ``caption``, the ``paper`` figure it stands for (``""``: an
+    extension), and ``plot``, the figure as data (``None``: the report module draws it).
+    """
 
     caption: str
     paper: str = ""
@@ -171,7 +158,7 @@ class FigureSpec:
 
 @dataclass(frozen=True)
 class Experiment:
-    """A registered experiment kind (see the module docstring for the contract)."""
+    """A registered experiment kind (the contract: module docstring)."""
 
     name: str
     title: str
@@ -202,9 +189,9 @@ class Experiment:
             raise ValueError(f"experiment {self.name!r}: {problem}")
 
     def _declaration_problem(self) -> str | None:
-        """What is wrong with the declaration, else ``None``: a parameter declared twice, a
-        metric named like a runner column, a row key or a parameter (its column would
-        overwrite the swept value), or a metric's ``better`` neither lower nor higher."""
+        """What is wrong with the declaration (a duplicate parameter, a metric named like a runner
+        column, row key or parameter, a bad ``better``), else ``None``.
+        """
         if len(self.schema) < len(self.params):
             twice = sorted({p.key for p in self.params if
                             sum(q.key == p.key for q in self.params) > 1})
@@ -261,10 +248,8 @@ class Experiment:
         return tuple(str(c) for c in param.choices) if param and param.choices else ()
 
     def missing_metrics(self, columns: Collection[str]) -> list[str]:
-        """The declared metrics not among ``columns``, the keys of a trial's (or a batch's)
-        rows: they carry every declared metric, NaN where one does not apply, but for
-        timings (``*_time_s``), which a batch may measure for all its trials at once, and
-        the :attr:`Metric.optional` ones."""
+        """Declared metrics absent from ``columns``, except timings (``*_time_s``) and optional
+        ones."""
         return [m.name for m in self.metrics if m.name not in columns
                 and not m.name.endswith(TIME_SUFFIX) and not m.optional]
 
