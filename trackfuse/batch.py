@@ -1,12 +1,8 @@
 """One batch of trials, run in a worker: seeds, the experiment's code, CSV text.
 
-Containment: whatever a trial raises (``SystemExit`` and, inside a worker,
-``KeyboardInterrupt`` included) or returns instead of a non-empty list of row dicts that
-carry every declared metric becomes one ``failed`` row carrying the error text; the run goes
-on. A batch form that raises is run again trial by trial, to isolate the failing trials.
-
-This module is what the process pool's workers load (with the experiment): it imports no
-pandas, no matplotlib and none of the run orchestration (:mod:`trackfuse.runner`).
+Whatever a trial raises or wrongly returns becomes one ``failed`` row with the error; the
+run goes on. A batch form that raises is rerun trial by trial. Workers load this module, so
+it imports no pandas, matplotlib or run orchestration.
 """
 
 from __future__ import annotations
@@ -40,11 +36,9 @@ _sigint_watched = threading.Event()
 
 @dataclass(frozen=True)
 class BatchTask:
-    """Everything a worker needs to run one batch (picklable, self-contained).
-
-    ``draw_point`` keys the trials' point streams (:func:`trackfuse.seeding.draw_points`);
-    ``span.point`` names the rows and the stored part; ``trial_timeout``: the time limit of
-    one trial (s; ``None``: none; :mod:`trackfuse.trial_guard`)."""
+    """Everything a worker needs for one batch (picklable): ``draw_point`` keys the point streams,
+    ``span.point`` names the rows, ``trial_timeout`` limits one trial (s, ``None``: no limit).
+    """
 
     experiment: Experiment
     params: dict[str, Any]
@@ -85,9 +79,9 @@ def _marking(handler: Callable[[int, object], None]) -> Callable[[int, object], 
 
 @contextmanager
 def watch_sigint() -> Iterator[None]:
-    """Mark Ctrl-C, and a SIGTERM turned into one, as the user's, so a trial's own
-    ``KeyboardInterrupt`` can be contained (a SIGTERM read as the trial's re-ran the batch
-    trial by trial, and a serial run went on to the end)."""
+    """Mark Ctrl-C (and SIGTERM turned into one) as the user's, so a trial's own
+    ``KeyboardInterrupt`` can be contained.
+    """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -136,10 +130,9 @@ def _failure(prefix: dict[str, Any], err: BaseException) -> dict[str, Any]:
 
 def _table_trials(experiment: Experiment, table: RowTable, producer: str
                   ) -> RowTable | list[Any]:
-    """``table`` itself if it passes the column checks of :mod:`trackfuse.trial_rows`, else
-    what each of its trials returned, for the per-trial check to name what is wrong: its
-    rows (values that may be wrong, :func:`~trackfuse.trial_rows.table_suspect`), or the
-    error that fails them all (a problem of the whole table)."""
+    """``table`` if it passes the column checks of :mod:`trackfuse.trial_rows`, else each trial's
+    rows or the error that fails them all, for the per-trial check to name what is wrong.
+    """
     try:
         if problem := table_problem(experiment, table, producer):
             return [problem] * table.trials
@@ -178,12 +171,11 @@ def _numpy_global_kept() -> Iterator[None]:
 
 
 def _run_trials(task: BatchTask, trials: range) -> tuple[Any, str]:
-    """What the batch's trials returned (a list per trial, or a RowTable) and which
-    function returned it. A ``run_batch`` runs with numpy's global generator seeded from
-    its first trial and the batch's time limit (the trials' limits summed); one that raises
-    (or outlasts it) or returns the wrong number of trials is run again trial by trial, each
-    seeded from its own (:func:`~trackfuse.seeding.seed_numpy_global`) and limited to one
-    trial's time (:func:`~trackfuse.trial_guard.guarded`)."""
+    """What the batch's trials returned (lists or a RowTable) and which function returned it.
+
+    ``run_batch`` runs seeded from its first trial under the summed time limit; if it raises,
+    times out or returns the wrong count, each trial reruns on its own seed and limit.
+    """
     if task.experiment.run_batch is not None:
         limit = task.trial_timeout and task.trial_timeout * len(trials)
         try:
@@ -203,11 +195,12 @@ def _run_trials(task: BatchTask, trials: range) -> tuple[Any, str]:
 
 
 def execute_batch(task: BatchTask) -> BatchResult:
-    """Run one batch (in a worker). A trial that fails becomes a ``failed`` row; a batch
-    form that raises is run again trial by trial (to isolate the failing trials), one that
-    returns rows without a declared metric fails all its trials (a retry would hide the
-    bug wherever ``run_trial`` is right). A batch a trial of which was interrupted at its
-    time limit asks for its worker to be replaced (``renew_worker``)."""
+    """Run one batch in a worker; failed trials become ``failed`` rows.
+
+    A batch form that raises is rerun trial by trial; one whose rows lack a declared metric
+    fails all its trials (a retry would hide the bug). A trial stopped at its time limit asks
+    for a new worker (``renew_worker``).
+    """
     before = timeouts()
     result = _execute(task)
     return replace(result, renew_worker=True) if timeouts() > before else result
@@ -239,10 +232,9 @@ def _execute(task: BatchTask) -> BatchResult:
 
 
 def _table_result(task: BatchTask, table: RowTable, t0: float) -> BatchResult:
-    """The CSV parts of a batch returned as a :class:`~trackfuse.rowtable.RowTable`: the
-    same trial rows, cell for cell, as the dict rows would give, and one timings row per
-    entry of the table's per-batch timing table (``trial`` is the batch's first trial,
-    ``trials`` its size)."""
+    """CSV parts of a :class:`~trackfuse.rowtable.RowTable` batch: the same trial rows as dict rows
+    would give, and one timings row per entry of its timing table.
+    """
     span = task.span
     swept = {k: Constant(v) for k, v in task.swept.items()}
     metrics = {k: v for k, v in table.columns.items() if not k.endswith(TIME_SUFFIX)}

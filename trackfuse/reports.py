@@ -1,19 +1,11 @@
 """A finished run's report: tables, figures, ``index.md`` and ``index.html``.
 
-Reads only the run folder (:mod:`trackfuse.rundata`) and the experiment's report module
-(``Experiment.report``), which provides::
-
-    figures(run: RunData, wanted: Collection[str]) -> dict[str, matplotlib.figure.Figure]
-    tables(run: RunData) -> dict[str, pandas.DataFrame | str]
-    prepare(run: RunData) -> None    # optional: fills the module's caches ahead
-
-A figure or table the run cannot give is a one-line reason (``str``), listed under "Not
-drawn"; each figure is drawn on its own, so one that raises costs only itself. A redraw
-removes the earlier report files it did not write again (the manifest's ``report_files``). A
-run nothing can be drawn from raises :class:`NothingToDraw`. Files are written atomically,
-PNG at :data:`PNG_DPI` dpi and PDF without timestamps (a redraw gives the same bytes).
-matplotlib is imported only to draw, so the runner, which imports this module, stays free of
-it. Users' view: ``docs/outputs.md``.
+Reads only the run folder and the experiment's report module (``figures``, ``tables`` and
+an optional ``prepare``: ``docs/runner.md``, "The experiment contract"). A figure or table
+the run cannot give is a one-line reason; one that raises costs only itself. Files are
+written atomically and reproducibly (same bytes on a redraw); a redraw removes only the
+earlier report files it did not write again. matplotlib is imported only to draw. Users'
+view: ``docs/outputs.md``.
 """
 
 from __future__ import annotations
@@ -86,9 +78,9 @@ def headline_row(paper_item: str, quantity: str, algorithm: str, paper_value: An
                  reproduced: float, ci_low: float, ci_high: float, unit: str,
                  trials: int | None, verdict: str, reason: str, docs: str, *, claim: str,
                  setting: str = "") -> dict[str, Any]:
-    """One row of a headline table, in :data:`HEADLINE_COLUMNS` order (see there);
-    ``reproduced``, ``ci_low`` and ``ci_high`` as floats (NaN for none). Raises
-    :class:`ValueError` for a ``verdict`` not in :data:`VERDICTS`."""
+    """One headline-table row in :data:`HEADLINE_COLUMNS` order (NaN for no value); ValueError for
+    a ``verdict`` not in :data:`VERDICTS`.
+    """
     if verdict not in VERDICTS:
         raise ValueError(f"verdict {verdict!r} is not one of {VERDICTS}")
     return dict(zip(HEADLINE_COLUMNS, (paper_item, quantity, algorithm, paper_value,
@@ -119,12 +111,10 @@ FIGURE_FILES = {".png": "the figure above, image (PNG)", ".pdf": "the figure abo
 
 @dataclass
 class Report:
-    """What :func:`write_report` wrote: figure and table files, the index, the notes on the
-    paper its headline table links to (``notes``, :mod:`trackfuse.reportkit.notes`; their
-    links by docs page in ``note_pages``), one message per figure or table that failed (the
-    data stay complete), the reason for each wanted figure this run's config cannot draw
-    (``not_drawn``) and each table it cannot fill (``not_tabulated``), and the files of an
-    earlier draw it deleted (``removed``)."""
+    """What :func:`write_report` wrote: figure and table files, the index, the paper ``notes`` (and
+    their ``note_pages``), one message per failed figure or table, the reasons in
+    ``not_drawn`` and ``not_tabulated``, and the earlier files ``removed``.
+    """
 
     figures: list[Path] = field(default_factory=list)
     tables: list[Path] = field(default_factory=list)
@@ -178,11 +168,9 @@ def as_printed(value: Any) -> Any:
 
 
 def display_table(table: pd.DataFrame) -> pd.DataFrame:
-    """``table`` for reading: each numeric pair ``<q>_ci_low``/``<q>_ci_high`` (or a bare
-    ``ci_low``/``ci_high``) becomes one column ``<q> 95 % CI`` holding ``low–high`` (three
-    significant figures, :func:`~trackfuse.reportkit.numberformat.interval_text`), placed
-    after ``<q>``; a paper's value is shown as printed (:func:`as_printed`). The CSV files
-    keep the numeric columns."""
+    """``table`` for reading: each ``<q>_ci_low``/``<q>_ci_high`` pair becomes one ``<q> 95 % CI``
+    column after ``<q>`` (three significant figures); paper values as printed. CSVs keep numbers.
+    """
     shown = table.copy()
     if "paper_value" in shown.columns:
         shown["paper_value"] = [as_printed(v) for v in shown["paper_value"]]
@@ -217,9 +205,9 @@ def _runs_per_point(trials: Any) -> str:
 
 def save_figure(fig, folder: Path, name: str, formats: Sequence[str],
                 source: str = "") -> list[Path]:
-    """Save ``fig`` as ``folder/name.<fmt>`` for each format, reproducibly and atomically;
-    ``source`` (:func:`provenance`) goes into the file's metadata (PDF ``Subject``, PNG
-    ``Source``, SVG ``Description``)."""
+    """Save ``fig`` as ``folder/name.<fmt>`` per format, reproducibly and atomically, with
+    ``source`` in the file's metadata.
+    """
     written = []
     for fmt in formats:
         path = folder / f"{name}.{fmt}"
@@ -323,9 +311,9 @@ def drawing_processes(figures: int) -> int:
 
 def _write_figures(run: RunData, module: ModuleType, wanted: Sequence[str],
                    formats: Sequence[str], report: Report, meanwhile: Callable[[], None]) -> None:
-    """Draw ``wanted`` in :func:`drawing_processes` forked processes, each taking the next
-    figure when it is free (each saves its own files, so the bytes do not depend on who
-    drew what), call ``meanwhile`` here while they draw, and merge their parts in order."""
+    """Draw ``wanted`` in forked processes (each saves its own files, so bytes do not depend on
+    who drew what), call ``meanwhile`` here, and merge their parts in order.
+    """
     global _FORK_STATE
     (run.path / "figures").mkdir(exist_ok=True)
     processes = drawing_processes(len(wanted))
@@ -368,28 +356,25 @@ def figure_formats(config: dict[str, Any]) -> list[str]:
 
 
 def load_drawing(formats: Sequence[str]) -> None:
-    """Import matplotlib and warm up the house style for ``formats``: the libraries drawing
-    needs first, loaded ahead (the runner calls this in a thread while its workers compute).
-    No experiment code runs here: :func:`write_report` imports the report module and calls
-    its ``prepare``."""
+    """Import matplotlib and warm up the house style for ``formats`` (the runner calls it in a
+    thread while workers compute); runs no experiment code.
+    """
     from trackfuse.reportkit.style import warm_up  # matplotlib: see the module docstring
 
     warm_up(tuple(formats), PNG_DPI)
 
 
 def _prepare(run: RunData, module: ModuleType) -> None:
-    """The report module's optional ``prepare(run)``: what its tables and figures both derive
-    from the config, computed once into its caches, which the drawing processes inherit. A
-    failure is left to the tables and figures, which meet it and say so."""
+    """The report module's optional ``prepare(run)``, computed once into caches the drawing
+    processes inherit; a failure is left to the figures and tables to report.
+    """
     if hasattr(module, "prepare"):
         with contextlib.suppress(*PLUGIN_FAILURES), guarded():
             module.prepare(run)
 
 
 def wanted_figures(run: RunData) -> list[str]:
-    """The figures the run's config asks for, in its order: ``outputs.figures``, or every
-    figure the experiment declares, in its declared order, when that says ``all`` (the
-    default)."""
+    """The figures the config asks for (``outputs.figures``), or every declared one for ``all``."""
     choice = (run.config.get("outputs") or {}).get("figures", "all")
     return list(run.experiment.figures) if choice == "all" else list(choice)
 
@@ -426,15 +411,12 @@ def _remove_earlier(run: RunData, keep: Collection[Path], report: Report) -> Non
 
 def write_report(run: RunData, wanted: Collection[str] | None = None,
                  formats: Sequence[str] | None = None) -> Report:
-    """Draw the tables and figures of ``run``, remove an earlier draw's that this one did not
-    write, and write ``index.md`` and ``index.html``.
+    """Draw ``run``'s tables and figures, remove an earlier draw's leftovers, write the index.
 
-    ``wanted``: figure names (default: :func:`wanted_figures`); ``formats``: default the
-    config's. ``run.manifest`` then lists the files written (the caller saves it), so a
-    redraw removes only what this draw wrote. Raises
-    :class:`~trackfuse.results.RunFolderError` for a ``figures/`` or ``tables/`` that is a
-    link or not a folder, :class:`NothingToDraw` (having removed any earlier report) for a
-    run :func:`undrawable` names a reason for."""
+    ``run.manifest`` then lists the files written (the caller saves it). Raises
+    :class:`~trackfuse.results.RunFolderError` for a ``figures/`` or ``tables/`` that is a link
+    or not a folder, :class:`NothingToDraw` for a run :func:`undrawable` names a reason for.
+    """
     RunFolder(run.path).check_layout()  # never write or delete through a link
     why = undrawable(run)
     if why is not None:
@@ -560,9 +542,9 @@ def _headline_cells(table: pd.DataFrame, report: Report, link: bool) -> list[lis
 
 
 def index_markdown(run: RunData, tables: dict[str, pd.DataFrame], report: Report) -> str:
-    """The run's report as Markdown: the paper against this run first (when the experiment
-    has a headline table), what was run, the figures, the other tables (a link to one
-    longer than :data:`FOLDED_TABLE_ROWS` rows), then what was not drawn and the files."""
+    """The report as Markdown: paper against run, what was run, figures, other tables (long ones
+    linked), then what was not drawn and the files.
+    """
     esc = md_text
     lines = [f"# {esc(run.config.get('title') or run.config['experiment'])}", ""]
     headline, others = _split_tables(tables)

@@ -1,13 +1,9 @@
 """Registry of experiment kinds, looked up by name.
 
-Built-in experiments are packages of this package, each exposing ``EXPERIMENT``. A config may
-also name a plugin, ``"package.module:ATTRIBUTE"``, or a name an installed distribution
-registers in the entry-point group :data:`ENTRY_POINT_GROUP` (built-in names win). A plugin
-module is imported only when a config naming it is validated or run, or its run plotted; it is
-first read without running it and refused unless it binds ``ATTRIBUTE`` at top level and does
-no work on import (the rules: ``docs/runner.md``, "Configs are code"). Errors are one line
-(:class:`PluginError`). A run records the folder its plugin came from (:func:`plugin_folder`),
-which ``plot`` and ``compare`` add to the path (:func:`add_plugin_folder`).
+Built-ins are subpackages exposing ``EXPERIMENT``; a config may also name a plugin
+``"package.module:ATTRIBUTE"`` or an entry point of :data:`ENTRY_POINT_GROUP` (built-in
+names win). Plugin modules are read before they run and refused unless they do no work on
+import (``docs/runner.md``, "Configs are code"); errors are one line (:class:`PluginError`).
 """
 
 from __future__ import annotations
@@ -54,10 +50,9 @@ def register(experiment: Experiment) -> Experiment:
 
 @dataclass(frozen=True)
 class Listed:
-    """One experiment as ``trackfuse list`` shows it, found without importing it.
-
-    ``origin``: ``"built-in"``, ``"registered"`` or ``"plugin <distribution> <version>"``;
-    ``reference``: the module (built-in) or ``module:ATTRIBUTE`` (plugin) it comes from."""
+    """One experiment as ``trackfuse list`` shows it, found without importing it: ``origin``
+    (built-in, registered, or plugin with version) and ``reference`` (module or ``module:ATTR``).
+    """
 
     name: str
     origin: str
@@ -108,9 +103,7 @@ def _docstring_summary(module: str, name: str) -> str:
 
 
 def reference(experiment: Experiment) -> str:
-    """What ``trackfuse list`` takes for ``experiment``: its name when that is known
-    (built in, an installed plugin, registered), else the ``module:ATTRIBUTE`` it was
-    loaded from (``cvtrack:EXPERIMENT``: the plugin's own name lists nothing)."""
+    """What ``trackfuse list`` takes for ``experiment``: its known name, else ``module:ATTR``."""
     if experiment.name in names():
         return experiment.name
     module = sys.modules.get(getattr(experiment.run_trial, "__module__", ""))
@@ -119,9 +112,9 @@ def reference(experiment: Experiment) -> str:
 
 
 def report_problem(experiment: Experiment) -> str | None:
-    """Why ``experiment``'s report module cannot be imported, found without importing it
-    (``None`` when it is on the Python path, or the experiment has none): a run would
-    otherwise find out after its last trial."""
+    """Why the report module cannot be imported (found without importing it), else ``None``: a run
+    would otherwise find out after its last trial.
+    """
     if not experiment.report:
         return None
     try:
@@ -133,11 +126,11 @@ def report_problem(experiment: Experiment) -> str | None:
 
 
 def get(name: str) -> Experiment:
-    """Return the experiment called ``name`` (built in, registered, an installed plugin's
-    entry-point name, or ``module:ATTRIBUTE``).
+    """The experiment called ``name``: built in, registered, an entry-point name or ``module:ATTR``.
 
-    Raises :class:`UnknownExperiment` for an unknown plain name and :class:`PluginError` for
-    a plugin reference that is refused or fails to import."""
+    Raises :class:`UnknownExperiment` for an unknown plain name, :class:`PluginError` for a
+    refused or failing plugin.
+    """
     if name in _registered:
         return _registered[name]
     if name in BUILTIN:
@@ -154,9 +147,9 @@ def get(name: str) -> Experiment:
 
 
 def plugin_folder(ref: str) -> str | None:
-    """The folder on the Python path that plugin ``ref`` (``pkg.mod:ATTR``, already
-    imported) was imported from: the folder holding ``pkg``; ``None`` for a built-in,
-    registered or installed (entry-point) name, or a module with no file."""
+    """The Python-path folder plugin ``ref`` was imported from, which ``plot`` and ``compare`` add
+    to the path; ``None`` for built-in, registered or entry-point names.
+    """
     module = sys.modules.get(ref.partition(":")[0]) if ":" in ref else None
     file = getattr(module, "__file__", None)
     if not file:
@@ -176,9 +169,8 @@ def add_plugin_folder(folder: str | Path) -> None:
 
 
 def file_reference(ref: str) -> tuple[Path, str] | None:
-    """``(folder, "module:ATTR")`` for a reference to a plugin by its file,
-    ``path/to/module.py:ATTR`` naming a file that exists; ``None`` for any other
-    reference."""
+    """``(folder, "module:ATTR")`` for ``path/to/module.py:ATTR`` naming an existing file, else
+    ``None``."""
     file, _, attr = ref.rpartition(":")
     path = Path(file)
     if path.suffix != ".py" or not path.is_file() or not attr.isidentifier():
