@@ -1,9 +1,8 @@
-"""What ``trackfuse list`` prints: the experiments (a table or JSON), or one experiment's
-parameters, metrics, algorithms and figures as a table, a commented config template (YAML)
-or JSON.
+"""What ``trackfuse list`` prints: the experiments, or one experiment's parameters, metrics,
+algorithms and figures as a table, a commented YAML template or JSON.
 
-Keys and names are never cut: each heads its own line in full, and its description wraps
-below it (also when the output is piped, where the width is 80 columns).
+Keys are never cut: each heads its own line, its description wrapped below (80 columns
+when piped).
 """
 
 from __future__ import annotations

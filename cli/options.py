@@ -30,20 +30,17 @@ def _stop(signum: int, frame: object) -> None:
 
 
 def _forget_caught_ctrl_c() -> None:
-    """Let the exit status a command chose stand after a Ctrl-C it caught.
+    """Let a command's chosen exit status stand after a Ctrl-C it caught.
 
-    CPython 3.11-3.13 (python/cpython#128130) marks the process as ended by Ctrl-C when a
-    ``KeyboardInterrupt`` leaves code run by ``exec`` of a string (a dataclass being built
-    during an import), even if caught; running such code clears the mark, so the command
-    exits 130 instead of killing itself by SIGINT."""
+    CPython 3.11-3.13 (python/cpython#128130) would end the process by SIGINT after a caught
+    ``KeyboardInterrupt`` left ``exec``'d code; running such code clears that mark."""
     exec("")
 
 
 class QuietClosedStdout:
-    """``sys.stdout`` for the length of a command: once its reader has gone (``trackfuse list
-    twin_sensor | head -1``), what is printed is dropped instead of raising
-    ``BrokenPipeError``, so the command ends as it would have (``compare``'s exit status is
-    its verdict) and says nothing about the pipe, as ``cat`` and ``grep`` do."""
+    """``sys.stdout`` for a command: once its reader has gone (``| head``) output is dropped
+    silently and the exit status is the command's own, as for ``cat``.
+    """
 
     def __init__(self, stream):
         self.stream = stream

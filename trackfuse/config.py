@@ -335,10 +335,10 @@ def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
           experiment: Experiment | None = None) -> Config:
     """Validate a parsed YAML document plus overrides into a :class:`Config`.
 
-    ``sets``: ``--set`` overrides (dotted key -> value; a set on a swept key removes that
-    axis); ``sweeps``: ``--sweep`` axes (dotted key -> list or ``"range(...)"``), replacing
-    the file's. A bad override is blamed on ``--set``/``--sweep``, not on the file.
-    ``experiment``: run this object as it is instead of looking up ``raw["experiment"]``."""
+    ``sets`` (``--set``; setting a swept key removes that axis) and ``sweeps`` (``--sweep``,
+    replacing the file's) are blamed on the option, not the file. ``experiment`` bypasses the
+    lookup of ``raw["experiment"]``.
+    """
     if raw is None:
         raise ConfigError(source, "", "the file is empty; expected a mapping with at least "
                                       "'experiment'")
@@ -472,10 +472,9 @@ def _sweep(source: str, exp: Experiment, sweep_raw: Any, sweeps: dict[str, Any],
 
 def _check_set_once(source: str, exp: Experiment, params: Mapping[str, Any],
                     params_raw: Mapping, sweep_raw: Mapping, overridden: set[str]) -> None:
-    """Refuse a file that sets a parameter under ``params`` to other than its default and
-    sweeps it too (the sweep's values would be used, that one never); an override of the key
-    settles it. A default left in place (``trackfuse list --format yaml`` writes every
-    parameter) is no conflict."""
+    """Refuse a file that both sets a parameter away from its default and sweeps it; an override
+    settles it.
+    """
     flat = flatten(params_raw)
     both = [key for key in map(str, sweep_raw) if key in flat and key not in overridden
             and params[key] != exp.schema[key].default]
@@ -602,10 +601,9 @@ def _store(source: str, store: Any) -> str:
 
 
 def read_yaml(path: str | Path) -> Any:
-    """Parse a YAML config file (:func:`~trackfuse.safe_yaml.read_yaml_file`), turning every
-    problem into :class:`ConfigError`. A FIFO named on the command line is read
-    (``trackfuse run <(generate)``); a run folder's ``config.yaml`` (a folder holding a
-    ``manifest.json``) must be a regular file: one found there is no one's pipe."""
+    """Parse a YAML config file, every problem a :class:`ConfigError`. A FIFO is read; a run
+    folder's ``config.yaml`` must be a regular file.
+    """
     in_run_folder = os.path.lexists(Path(path).parent / MANIFEST)
     try:
         return read_yaml_file(path, regular_only=in_run_folder)

@@ -1,13 +1,9 @@
 """The report of ``trackfuse reproduce``: per paper, what was reproduced and what was not.
 
-:func:`write_reproduction_report` reads finished run folders (each one's
-``tables/paper_vs_reproduced.csv``, in the :data:`trackfuse.reports.HEADLINE_COLUMNS` schema,
-its figures and config) and writes :data:`REPORT_MD` and :data:`REPORT_HTML` into the output
-root, with the notes of ``docs/papers/`` rendered beside them
-(:mod:`trackfuse.reportkit.notes`). The page: the bottom line (one verdict per paper item,
-:func:`trackfuse.reportkit.verdicts.bottom_line`), then per paper every compared row, each
-main figure beside what the paper shows, and links to every run's ``index.html``
-(``docs/outputs.md``).
+Reads finished run folders (``tables/paper_vs_reproduced.csv``, figures, config) and writes
+:data:`REPORT_MD` and :data:`REPORT_HTML` with the ``docs/papers/`` notes beside them: the
+bottom line, then per paper every compared row, each main figure beside the paper's, and
+links to every run (``docs/outputs.md``).
 """
 
 from __future__ import annotations
@@ -51,10 +47,9 @@ class MainFigure:
 
 @dataclass
 class PaperSection:
-    """Everything the report shows for one paper (an experiment with reported results):
-    ``rows`` the headline rows of every config (with a ``config`` column), ``figures`` drawn
-    beside the paper's claims (one per paper item), ``linked`` the other main figures,
-    ``runs`` each config's run folder."""
+    """One paper's part of the report: ``rows`` (headline rows with a ``config`` column),
+    ``figures`` beside the paper's claims, ``linked`` other main figures, ``runs`` folders.
+    """
 
     paper: Paper
     claims: dict[str, str]
@@ -103,10 +98,9 @@ def _config_name(run: RunData) -> str:
 
 def main_figure_names(wanted: Sequence[str], drawn: Collection[str],
                       paper_items: Mapping[str, str], own: bool) -> list[str]:
-    """Which drawn figures stand for a run in the report: for one of the paper's own configs
-    every drawn figure that names a paper item (``paper_items[name]`` non-empty), in
-    ``wanted`` order; for any other config the first of ``wanted`` that was drawn (its
-    declared main figure)."""
+    """Drawn figures that stand for a run: for the paper's own configs each one naming a paper
+    item, in ``wanted`` order; for any other config its first drawn ``wanted`` figure.
+    """
     present = [name for name in wanted if name in drawn]
     if own:
         return [name for name in present if paper_items.get(name)]
@@ -135,11 +129,9 @@ def _claims(paper: Paper) -> dict[str, str]:
 
 def collect(folders: Sequence[Path],
             papers: Mapping[str, Paper] = PAPERS) -> list[PaperSection]:
-    """One :class:`PaperSection` per paper among the complete runs in ``folders``, in the
-    order of ``papers`` (experiment name -> paper); other experiments' runs are skipped.
-    Every config's headline rows are kept (the bottom line picks the answering ones); the
-    main figures of the paper's own configs stand beside the paper, one per paper item
-    (:func:`one_per_item`), the rest are linked."""
+    """One :class:`PaperSection` per paper among the complete runs in ``folders``, in ``papers``
+    order; other experiments are skipped and every config's headline rows kept.
+    """
     sections: dict[str, PaperSection] = {}
     own_figures: dict[str, list[MainFigure]] = {}
     for folder in folders:

@@ -1,11 +1,9 @@
 """Experiment ``esm_radar``: paper 001, ESM-to-radar track association.
 
-One trial simulates the snake/crossing scenario (:mod:`trackfuse.association.esm_scenario`):
-an ESM track of target 2 and three radar tracks; every requested algorithm
-(:data:`ALGORITHMS`) picks a radar track from the same data (the truth is track 2). The model,
-the algorithms and their ablations, the row metrics and the per-scan text columns
-(:data:`SCAN_SERIES`, read back by :func:`decode_series`): ``docs/papers/esm_radar.md``.
-Figures and tables: :mod:`trackfuse.experiments.esm_radar.report`.
+One trial simulates the snake/crossing scenario; every algorithm (:data:`ALGORITHMS`) picks
+a radar track from the same data (the truth is track 2). Model, algorithms, row metrics and
+the per-scan columns (:data:`SCAN_SERIES`): ``docs/papers/esm_radar.md``. Figures and
+tables: :mod:`.report`.
 """
 
 from __future__ import annotations
@@ -70,16 +68,11 @@ UNINFORMATIVE_VAR = 1e24  # m^2: variance given to an ESM range that could not b
 
 @dataclass(frozen=True)
 class Variant:
-    """How one algorithm evaluates the association.
-
-    ``factors``: a tuple of factor names, or ``"baseline"`` for ``baseline.factors``.
-    ``membership``: ``gaussian``, ``l1``, ``l2``, ``posterior`` or ``"param"`` (the
-    ``membership_norm`` param); ``chi2`` for the ML reference, ``chi2_lrt`` for the ML
-    reference that may abstain. ``dynamic``: manoeuvre-dependent weights. ``decision``:
-    ``mean``, ``vote`` or ``"param"`` (``baseline.decision``). ``summary``: one line for the
-    ablation table. ``subset_weights``: static weights of a factor subset, ``ahp`` (the AHP
-    of the judgement matrix's sub-block) or ``rescaled`` (the five-factor weights of the
-    subset, rescaled to sum to 1)."""
+    """How one algorithm evaluates the association: ``factors`` (or ``"baseline"``), ``membership``
+    (``gaussian``, ``l1``, ``l2``, ``posterior``, ``"param"``; ``chi2``/``chi2_lrt`` for ML),
+    ``dynamic`` weights, ``decision``, a one-line ``summary`` and ``subset_weights`` (``ahp``
+    of the sub-block or ``rescaled``).
+    """
 
     factors: tuple[str, ...] | str
     membership: str
@@ -263,11 +256,10 @@ def sensor_noise(params: Mapping[str, Any]) -> tuple[ESMNoise, RadarNoise]:
 
 def manoeuvre_alpha(params: Mapping[str, Any], x_esm: np.ndarray, P_esm: np.ndarray,
                     index: str) -> np.ndarray:
-    """Manoeuvre index ``alpha(k)`` of the ESM track (:mod:`trackfuse.association.manoeuvre`).
+    """Manoeuvre index ``alpha`` (N, K) of the ESM track from ``x_esm`` (N, K, 5) and ``P_esm``.
 
-    Parameters: ``params`` resolved params (``esm.period``, ``alpha.*``). ``x_esm`` (N, K, 5) ESM
-    factors. ``P_esm`` (N, K, 5, 5) their covariance. ``index`` ``"nis_tdoa"`` or ``"literal"``.
-    Returns ``alpha`` (N, K), NaN where the index is not defined (start-up, or no ESM range)."""
+    ``index`` ``"nis_tdoa"`` or ``"literal"``; NaN at start-up or without an ESM range.
+    """
     T, window = params["esm.period"], params["alpha.window"]
     if index == "nis_tdoa":
         nu, S = ca_innovations(C * x_esm[..., 3], C**2 * P_esm[..., 3, 3], T,
@@ -323,12 +315,11 @@ def esm_times(params: Mapping[str, Any]) -> np.ndarray:
 
 
 def simulate(params: Mapping[str, Any], streams: Sequence[TrialStreams]) -> Simulated:
-    """Draw and align the sensor data of one trial per :class:`TrialStreams`.
+    """Draw and align the sensor data of one trial per stream.
 
-    Each trial's common stream (the same at every sweep point) spawns an ESM-noise and a
-    radar-noise stream of standard normals, scaled by the sensor accuracies afterwards; the
-    draws have fixed shapes, so the data never depend on the algorithms run, and sweep
-    points of separation or sensor accuracy compare on the same noise."""
+    Fixed-shape standard normals from each trial's common stream, scaled afterwards: the data
+    never depend on the algorithms run, and separation or accuracy sweeps share the noise.
+    """
     scen = scenario(params)
     A1 = np.zeros(2)
     A2 = np.array([params["geometry.baseline"], 0.0])
@@ -367,10 +358,9 @@ def simulate(params: Mapping[str, Any], streams: Sequence[TrialStreams]) -> Simu
 
 
 def static_weights(factors: Sequence[str], method: str) -> np.ndarray:
-    """AHP weights of a factor subset (in the given order) from paper 001 Table 1.
-
-    ``method``: ``root_exact`` or ``eigen`` on the sub-matrix, or ``paper_rounded`` (the
-    printed weights; only for the full set, subsets fall back to the root method)."""
+    """AHP weights of ``factors`` from Table 1: ``root_exact`` or ``eigen`` on the sub-matrix, or
+    ``paper_rounded`` (full set only; subsets fall back to the root method).
+    """
     idx = [FACTORS.index(f) for f in factors]
     if method == "paper_rounded" and len(idx) == len(FACTORS):
         return np.array(ahp.PAPER_001_WEIGHTS)
@@ -398,11 +388,9 @@ def factor_names(variant: Variant, params: Mapping[str, Any]) -> tuple[str, ...]
 
 @dataclass
 class Differences:
-    """ESM-minus-radar factor differences of a batch, computed once for every algorithm.
-
-    ``var`` holds the per-scan summed variances (from the measured values); the two static
-    spreads of the traditional Gaussian grade are ``var_nominal`` and ``var_trial_mean``
-    (see :func:`baseline_variance`)."""
+    """ESM-minus-radar factor differences of a batch, computed once for every algorithm, with the
+    per-scan summed variances ``var`` and the static spreads (:func:`static_spreads`).
+    """
 
     d: np.ndarray               # (N, K, J, 5) differences, angle and phase wrapped
     var: np.ndarray             # (N, K, J, 5) summed ESM + radar variances, per scan
@@ -419,13 +407,9 @@ def _summed_variance(sd_esm: np.ndarray, sd_radar: np.ndarray) -> np.ndarray:
 
 
 def static_spreads(sim: Simulated) -> tuple[np.ndarray, np.ndarray]:
-    """The two static spreads of the traditional Gaussian grade, as summed variances.
-
-    ``nominal``: ESM and radar sd at the scenario's noise-free geometry, averaged over the
-    scans (one constant per factor for the whole run). ``trial_mean``: the time mean over
-    the trial (and the radar tracks) of the sd computed from the measured values, one
-    constant per factor and trial; it uses no truth.
-    Returns ``var_nominal`` (5,); ``var_trial_mean`` (N, 1, 1, 5)."""
+    """Static spreads of the traditional grade: ``var_nominal`` (5,) and ``var_trial_mean``
+    (N, 1, 1, 5) (``docs/papers/esm_radar.md``, "Traditional baseline").
+    """
     var_nominal = _summed_variance(sim.sd_nominal[0], sim.sd_nominal[1])
     # Invalid TDOA-DF samples are carried forward, so a trial's ESM range sd is NaN at
     # every scan or at none: its time mean is NaN exactly when the trial has no ESM range.
@@ -454,13 +438,9 @@ def differences(sim: Simulated) -> Differences:
 
 
 def baseline_variance(diff: Differences, rule: str) -> np.ndarray:
-    """Summed variance ``sigma_E^2 + sigma_R^2`` of the traditional Gaussian grade.
-
-    ``rule``: ``nominal`` or ``trial_mean`` (static spreads, :func:`static_spreads`), or
-    ``per_sample`` (recomputed at every scan from the measured values: the TDOA-DF range sd
-    then shrinks exactly when the measured range falls short, which pulls the decision
-    toward the nearer radar track).
-    Returns ``var`` broadcastable to (N, K, J, 5)."""
+    """``sigma_E^2 + sigma_R^2`` of the traditional grade by ``rule`` (``nominal``, ``trial_mean``,
+    ``per_sample``; W001-8), broadcastable to (N, K, J, 5).
+    """
     if rule == "nominal":
         return diff.var_nominal
     if rule == "trial_mean":
@@ -472,12 +452,10 @@ def baseline_variance(diff: Differences, rule: str) -> np.ndarray:
 
 def membership(kind: str, d: np.ndarray, diff: Differences, idx: Sequence[int],
                params: Mapping[str, Any]) -> np.ndarray:
-    """Evaluation matrices of one fuzzy algorithm.
+    """Memberships ``R`` (N, K, F, J) of one fuzzy algorithm from ``d`` (N, K, J, F).
 
-    Parameters: ``kind`` ``gaussian`` (traditional grade, spread by ``baseline.spread``),
-    ``posterior``, ``l1`` or ``l2`` (inverse distance). ``d`` (N, K, J, F) absolute differences of
-    the factors ``idx``. ``diff`` the batch's differences (variances). ``params`` resolved params.
-    Returns ``R`` (N, K, F, J) memberships."""
+    ``kind`` ``gaussian`` (spread by ``baseline.spread``), ``posterior``, ``l1`` or ``l2``.
+    """
     dd = np.swapaxes(d, -1, -2)
     if kind == "gaussian":
         var = baseline_variance(diff, params["baseline.spread"])[..., idx]
@@ -491,13 +469,10 @@ def membership(kind: str, d: np.ndarray, diff: Differences, idx: Sequence[int],
 
 def evaluate(variant: Variant, diff: Differences, alpha: np.ndarray,
              params: Mapping[str, Any]) -> dict[str, np.ndarray]:
-    """Run one algorithm on a simulated batch.
-
-    Parameters: ``variant`` the algorithm. ``diff`` :func:`differences` of the batch. ``alpha`` (N,
-    K) manoeuvre index. ``params`` resolved experiment params.
-    Returns dict of (N,) arrays: ``chosen`` (0-based track), ``margin``, ``range_weight_mean``,
-    ``range_weight_min``; and, for fuzzy variants, ``weights`` (N, K, F) and ``range_weights`` (N,
-    K), the range factor's weight per scan (0 without range)."""
+    """Run one algorithm on a batch: dict of (N,) ``chosen`` (0-based), ``margin``,
+    ``range_weight_mean``, ``range_weight_min``; fuzzy variants add ``weights`` (N, K, F) and
+    ``range_weights`` (N, K).
+    """
     names = factor_names(variant, params)
     idx = [FACTORS.index(f) for f in names]
     N, K = alpha.shape
