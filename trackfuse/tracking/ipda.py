@@ -1,43 +1,17 @@
-"""Integrated PDA (IPDA) for one or two passive az/el sensors: the parallel PDA of
-:mod:`trackfuse.tracking.pda` plus the probability that the target exists (numba-compiled).
+"""Integrated PDA (IPDA): the parallel PDA of :mod:`trackfuse.tracking.pda` plus the probability
+``psi`` that the target exists (numba-compiled).
 
-The state estimate is the PDA's: given that the target exists, IPDA's association
-probabilities are the PDA's (one sensor: the PDAF; two: the parallel multisensor PDA with the
-fused update). What IPDA adds is the existence probability ``psi`` of the track
-(``docs/papers/twin_sensor.md``, Track existence), a two-state Markov chain (exists, does
-not) predicted and updated every scan:
+The state estimate is the PDA's, bit for bit. Existence is a two-state Markov chain with
+persistence ``p_s``, updated by the scan's likelihood ratio, taken from the PDA's null
+weight ``beta_0`` without a second pass over the returns:
 
-    psi_pred = p_s psi                                 (p_s: persistence, no birth)
-    psi      = Lambda psi_pred / (1 - psi_pred + Lambda psi_pred)
+    psi = c psi_pred / (beta_0 (1 - psi_pred) + c psi_pred),   c = prod_s (1 - P_Ds P_G)
 
-where ``Lambda`` is the likelihood ratio of the scan's validated returns under "the target
-exists" against "all are clutter" (Poisson clutter of density ``lambda_s``). One sensor:
+(defined when ``beta_0 = 0``). Equations: ``docs/papers/twin_sensor.md``, "Track existence
+(IPDA)"; oracle ``tests/ipda_reference.py`` (pinned to 1e-9).
 
-    Lambda = 1 - P_D P_G + P_D sum_i N(nu_i; 0, S) / lambda
-
-(Musicki, Evans & Stankovic 1994); two sensors, every joint hypothesis of the fused update:
-
-    Lambda = (1 - P_D1 P_G)(1 - P_D2 P_G) + P_D1 (1 - P_D2 P_G) sum_i N_1i / lambda_1
-             + (1 - P_D1 P_G) P_D2 sum_j N_2j / lambda_2
-             + P_D1 P_D2 sum_ij N([nu_1i; nu_2j]; 0, S_12) / (lambda_1 lambda_2).
-
-Both are the sum of the PDA's unnormalized hypothesis weights over the weight the "all
-clutter" hypothesis would have, so ``Lambda = prod_s (1 - P_Ds P_G) / beta_0`` with
-``beta_0`` the PDA's probability of the hypothesis that no sensor saw the target; the
-kernel takes it from there (no second pass over the returns):
-
-    psi = c psi_pred / (beta_0 (1 - psi_pred) + c psi_pred),   c = prod_s (1 - P_Ds P_G),
-
-which stays defined when ``beta_0 = 0`` (no clutter expected, a return validated: ``psi =
-1``). The numpy oracle, ``tests/ipda_reference.py``, evaluates ``Lambda`` from the sums
-above instead; the tests pin the two to 1e-9.
-
-References
-----------
-D. Musicki, R. Evans and S. Stankovic, "Integrated probabilistic data association", IEEE
-Trans. Automatic Control 39(6), 1994.
-D. Musicki and R. Evans, "Joint integrated probabilistic data association: JIPDA", IEEE
-Trans. Aerospace and Electronic Systems 40(3), 2004 (the Markov chains of existence).
+References: Musicki, Evans & Stankovic, IEEE TAC 39(6), 1994; Musicki & Evans, IEEE TAES
+40(3), 2004.
 """
 
 from __future__ import annotations
@@ -68,13 +42,8 @@ PARALLEL = METHODS.index("mspda_parallel")
 
 def run_ipda(sc, b, options: PDAOptions, model: ExistenceModel
              ) -> tuple[Estimates, np.ndarray]:
-    """Run IPDA over every trial of a batch: the per-scan estimates (as
-    :func:`trackfuse.tracking.pda.run_filter` with ``options.method = "mspda_parallel"``,
-    which ``options.method`` must be) and the existence probabilities ``(N, K)`` (NaN from
-    the scan a trial diverges).
-
-    ``sc`` and ``b`` are the scenario and batch of
-    :func:`trackfuse.tracking.pda.run_filter`; ``model`` the existence model.
+    """Run IPDA over every trial: :class:`Estimates` as ``pda.run_filter`` (``options.method`` must
+    be ``"mspda_parallel"``) and existence probabilities (N, K), NaN once a trial diverges.
     """
     if options.method != "mspda_parallel":
         raise ValueError(f"IPDA's state update is the parallel PDA's, got {options.method!r}")
@@ -99,10 +68,7 @@ def _ipda_batch(x0, P0, F, Q, sensor_pos, R, P_D, los, z_target, detected, clutt
                 clutter_ok, gamma, P_G, in_gate, clutter_mean, window_density, mgekf,
                 joint_full, nonparametric, mg_combined, persistence, initial, X_out, P_out,
                 m_out, inside_out, psi_out):
-    """Filter every trial of a batch; the outputs of ``pda._filter_batch`` plus
-    ``psi_out: (N, K)``, the existence probability after each scan's update. The state
-    update is ``pda._filter_batch``'s for the parallel method, step for step (the
-    estimates are the same bits)."""
+    """``pda._filter_batch``'s outputs, same bits, plus ``psi_out`` (N, K) after each update."""
     N, K, S = detected.shape
     M = clutter.shape[3] + 1
     lin, mom = Linearized(S, M), Moments()

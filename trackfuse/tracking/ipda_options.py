@@ -1,9 +1,7 @@
-"""What the IPDA filter (:mod:`trackfuse.tracking.ipda`) is asked about track existence, and
-the confirmation and termination decisions taken from its existence probabilities.
+"""IPDA's existence model and the confirmation and termination decisions.
 
-Kept apart from the compiled filter so that reading the options (a config check, scoring)
-does not import numba. The equations are in ``docs/papers/twin_sensor.md`` (Track
-existence).
+Apart from the compiled filter so that config checks and scoring import no numba.
+Equations: ``docs/papers/twin_sensor.md``, "Track existence (IPDA)".
 """
 
 from __future__ import annotations
@@ -17,14 +15,8 @@ import numpy as np
 
 @dataclass(frozen=True)
 class ExistenceModel:
-    """The existence model and the track decisions of IPDA.
-
-    ``persistence``: probability that a target existing at one scan still exists at the next
-    (the Markov chain's ``p_11``; no birth, ``p_21 = 0``), in (0, 1]. ``initial``: the
-    existence probability of the track at ``t = 0``, in (0, 1). ``confirm``: a track is
-    confirmed at the first scan its existence probability reaches this; ``terminate``: it
-    is terminated at the first scan its existence probability falls below this
-    (``0 < terminate < confirm < 1``).
+    """Existence model and decisions: ``persistence`` in (0, 1] (no birth), ``initial`` existence
+    at t = 0, thresholds ``0 < terminate < confirm < 1``.
     """
 
     persistence: float = 0.98
@@ -50,13 +42,10 @@ class ExistenceModel:
 
 def track_decisions(existence: np.ndarray, model: ExistenceModel
                     ) -> tuple[np.ndarray, np.ndarray]:
-    """``(confirmed, terminated)``, both ``(N, K)`` bool, from the existence probabilities
-    ``existence: (N, K)`` of ``N`` tracks at scans ``1..K`` (NaN from a diverged scan on).
+    """``(confirmed, terminated)`` (N, K) bool from ``existence`` (N, K), NaN from divergence on.
 
-    ``terminated`` is permanent from the first scan whose existence is below
-    ``model.terminate`` or NaN; ``confirmed`` is permanent from the first scan, before any
-    termination, whose existence reaches ``model.confirm`` (a track terminated later stays
-    counted as confirmed: it was a confirmed track).
+    Both permanent: terminated from the first scan below ``terminate`` or NaN; confirmed from
+    the first scan before that reaching ``confirm``.
     """
     with np.errstate(invalid="ignore"):
         low = ~(existence >= model.terminate)  # NaN counts as below
