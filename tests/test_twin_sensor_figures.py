@@ -19,13 +19,13 @@ from trackfuse.rundata import RunData
 ROOT = Path(__file__).resolve().parents[1]
 EVERY = ["nn/mgekf", "nn/ekf", "mspda_parallel/mgekf", "mspda_parallel/ekf",
          "mspda_sequential/mgekf", "mspda_sequential/ekf", "paper_approx/mgekf",
-         "paper_approx/ekf"]
+         "paper_approx/ekf", "ipda/mgekf"]
 
 
 @pytest.fixture(scope="module")
 def run_every(tmp_path_factory) -> RunData:
-    """Every association with both filters (eight curves, twin_sensor_orbit's), three
-    clutter levels, short runs."""
+    """Every association with both filters (twin_sensor_orbit's eight curves) and IPDA,
+    three clutter levels, short runs."""
     base = {**EXPERIMENT.defaults(), "algorithms": EVERY, "scan.count": 5}
     return harness.run_data(tmp_path_factory.mktemp("every"), EXPERIMENT, base,
                             {"clutter.mean": [0.0, 8.0, 15.0]}, trials=6, seed=3)
@@ -34,7 +34,7 @@ def run_every(tmp_path_factory) -> RunData:
 @pytest.fixture(scope="module")
 def run_grid(tmp_path_factory) -> RunData:
     """twin_sensor_range's 3 x 3 grid (range cue x filter q), without clutter."""
-    base = {**EXPERIMENT.defaults(), "algorithms": EVERY[2:4], "scan.count": 5}
+    base = {**EXPERIMENT.defaults(), "algorithms": EVERY[2:4], "scan.count": 5}  # no IPDA
     return harness.run_data(tmp_path_factory.mktemp("grid"), EXPERIMENT, base,
                             {"init.sigma_range": [2000.0, 20000.0, 50000.0],
                              "filter.q": [0.0, 1.0, 900.0]}, trials=4, seed=3)
@@ -70,6 +70,13 @@ def test_every_figure_meets_the_journal_rules(fixture, request):
         for name, fig in drawn.items():
             assert journal_problems(fig) == [], name
             assert internal_names(fig, EXPERIMENT) == [], name
+
+
+def test_the_existence_figure_keeps_ipda_among_nine_algorithms(run_every):
+    """Nine algorithms run, six legend entries at most: IPDA's curves, the figure's point,
+    are kept."""
+    fig = report.figures(run_every, ["existence_vs_clutter"])["existence_vs_clutter"]
+    assert LOOKS["ipda/mgekf"].label in _legend(fig) and len(_legend(fig)) <= 6
 
 
 def test_a_count_axis_has_integer_ticks(run_every):

@@ -123,10 +123,13 @@ def _loss_ablation(run: RunData) -> Figure | str:
 def _existence(run: RunData) -> Figure | str:
     """IPDA's tracks terminated and confirmed against clutter beside every algorithm's
     losses (:data:`~trackfuse.experiments.twin_sensor.FIGURES`' declared plot)."""
-    if not set(run.params["algorithms"]) & set(IPDA_ALGORITHMS):
+    algorithms = list(run.params["algorithms"])
+    ipda = [a for a in algorithms if a in IPDA_ALGORITHMS]
+    if not ipda:
         return "no IPDA algorithm was run"
-    return _loss(run, FIGURES["existence_vs_clutter"].plot,
-                 "Track existence against false returns")
+    plot = FIGURES["existence_vs_clutter"].plot  # IPDA's curves kept first of at most six
+    plot = replace(plot, algorithms=_curves(ipda + main_algorithms(algorithms) + algorithms))
+    return _loss(run, plot, "Track existence against false returns")
 
 
 def _loss_flags(run: RunData) -> Figure | str:
