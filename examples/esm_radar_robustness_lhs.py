@@ -34,7 +34,7 @@ import numpy as np
 import pandas as pd
 from scipy.stats import qmc
 
-from trackfuse.plots.style import PAGE_WIDTH_IN, new_figure
+from trackfuse.reportkit.style import panels
 from trackfuse.reportkit.verdicts import AGREES, against_paper_sample
 
 DESIGN_SEED = 638
@@ -133,7 +133,8 @@ def figure(table: pd.DataFrame, settings: pd.DataFrame, png: Path) -> None:
     settings ordered by their number of scans; filled markers where the rate is consistent
     with the paper's, open where it differs; the paper's rates as dashed lines."""
     order = np.argsort(settings["scan.count"].to_numpy(), kind="stable")
-    fig, axes = new_figure(1, 2, width=PAGE_WIDTH_IN, height=2.1)
+    fig, grid = panels(1, 2, "double", panel_height=2.1, extra_height=0.0)
+    axes = grid[0]
     colours = {"improved": "tab:blue", "traditional": "tab:orange"}
     markers = {"improved": "o", "traditional": "s"}
     for ax, model in zip(axes, MODELS, strict=True):

@@ -23,7 +23,6 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.text import Text
 
-from trackfuse.plots.style import PAGE_WIDTH_IN
 from trackfuse.reportkit.spec import MAX_ENTRIES, SLOTS
 from trackfuse.reportkit.style import MAX_HEIGHT_IN, MIN_POINTS, context
 
@@ -113,7 +112,7 @@ def _rendered_texts(fig: Figure) -> list[Text]:
     return drawn
 
 
-def smallest_printed_text(fig: Figure, width_in: float = PAGE_WIDTH_IN) -> tuple[float, str]:
+def smallest_printed_text(fig: Figure, width_in: float = SLOTS["double"]) -> tuple[float, str]:
     """``(size in pt, text)`` of the smallest text of ``fig`` once the figure is scaled to
     ``width_in`` inches wide (never enlarged): a 9 pt label of an 11 in figure prints at
     5.9 pt on a 7.16 in page."""

@@ -14,14 +14,13 @@ from conftest import another_value, trackfuse
 from trackfuse import harness
 from trackfuse.association.assignment import Assignment
 from trackfuse.experiments import get
-from trackfuse.experiments.passive_assoc import EXPERIMENT, model, report
+from trackfuse.experiments.passive_assoc import EXPERIMENT, LOOKS, model, report
 from trackfuse.experiments.passive_assoc.model import ALGORITHMS, VARIANTS, score, sigma_of
 from trackfuse.experiments.passive_assoc.report import (
     BOOTSTRAP_RESAMPLES,
     BOOTSTRAP_SEED,
     gap_interval,
 )
-from trackfuse.plots.algorithms import LOOKS
 from trackfuse.reported import PASSIVE_ASSOC
 from trackfuse.reports import HEADLINE_COLUMNS, VERDICTS
 from trackfuse.seeding import trial_streams

@@ -317,13 +317,14 @@ def test_every_figure_file_names_what_produced_it(toy_run):
 
 
 def test_text_a_figure_adds_after_its_axes_takes_the_house_sizes(toy_run, monkeypatch):
-    """The toy report's legend (made after ``new_figure`` returned, as the esm and passive
+    """The toy report's legend (made after ``panels`` returned, as the esm and passive
     figures' legends and titles were) came out in matplotlib's 10 pt, not the house size."""
     sizes = []
     save = reports.save_figure
 
     def spy(fig, *args, **kwargs):
-        sizes.extend(t.get_fontsize() for ax in fig.axes for t in ax.get_legend().get_texts())
+        legends = [*fig.legends, *(ax.get_legend() for ax in fig.axes if ax.get_legend())]
+        sizes.extend(t.get_fontsize() for legend in legends for t in legend.get_texts())
         return save(fig, *args, **kwargs)
 
     monkeypatch.setattr(reports, "save_figure", spy)

@@ -170,7 +170,7 @@ LAYERS: list[dict[str, tuple[str, ...]]] = [
     {"experiments": ("trackfuse.experiments.*.",),
      "set-up": ("trackfuse.config", "trackfuse.fingerprint", "trackfuse.environment")},
     {"reports": ("trackfuse.experiments.*.report", "trackfuse.experiments.*.paper",
-                 "trackfuse.experiments.*.tables", "trackfuse.reportkit.", "trackfuse.plots.",
+                 "trackfuse.experiments.*.tables", "trackfuse.reportkit.",
                  "trackfuse.reported", "trackfuse.rundata", "trackfuse.reports",
                  "trackfuse.reproduction", "trackfuse.compare")},
     {"runner": ("trackfuse.runner", "trackfuse.batch", "trackfuse.executors",

@@ -7,7 +7,7 @@ from collections.abc import Collection
 import pandas as pd
 from matplotlib.figure import Figure
 
-from trackfuse.plots.style import band, new_figure
+from trackfuse.reportkit.style import band, context, legend_below, panels
 from trackfuse.reportkit.verdicts import AGREES, DIFFERS
 from trackfuse.rundata import RunData
 
@@ -27,13 +27,15 @@ def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure | str]:
         return {"estimate_vs_sigma": "sigma is not swept"}
     if "estimate" not in wanted:
         return {}
-    fig, ax = new_figure()
-    rows = run.summary[run.summary["metric"] == "estimate"]
-    for algorithm, group in rows.groupby("algorithm", sort=False):
-        band(ax, group["point"], group["mean"], group["ci_low"], group["ci_high"], algorithm)
-    ax.set_xlabel("sweep point")
-    ax.set_ylabel("estimate (m)")
-    ax.legend()
+    fig, axes = panels(1, 1, "single")
+    ax = axes[0, 0]
+    with context():
+        rows = run.summary[run.summary["metric"] == "estimate"]
+        for algorithm, group in rows.groupby("algorithm", sort=False):
+            band(ax, group["point"], group["mean"], group["ci_low"], group["ci_high"], algorithm)
+        ax.set_xlabel("sweep point")
+        ax.set_ylabel("estimate (m)")
+        legend_below(fig, [ax])
     return {"estimate": fig}
 
 

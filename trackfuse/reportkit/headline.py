@@ -4,9 +4,12 @@ interval in the house number format (:mod:`trackfuse.reportkit.numberformat`).""
 
 from __future__ import annotations
 
+from functools import cache
+
 import pandas as pd
 
-from trackfuse.plots.algorithms import look
+from trackfuse import experiments
+from trackfuse.reportkit.looks import Look, look_of
 from trackfuse.reportkit.numberformat import sig3, with_interval
 
 #: The columns of a headline table as a reader sees it (:func:`reader_cells`).
@@ -19,10 +22,18 @@ def text(value: object) -> str:
     return "" if value is None or pd.isna(value) else str(value)
 
 
+@cache
+def _looks() -> dict[str, Look]:
+    """The looks every built-in experiment declares (algorithm names are unique across
+    them)."""
+    return {name: look for experiment in experiments.BUILTIN
+            for name, look in experiments.get(experiment).looks.items()}
+
+
 def method(algorithm: object) -> str:
-    """An algorithm's display name (its legend label); ``""`` for none."""
+    """An algorithm's display name (its declared legend label); ``""`` for none."""
     name = text(algorithm)
-    return look(name).label if name else ""
+    return look_of(_looks(), name).label if name else ""
 
 
 def ours(row: pd.Series) -> str:

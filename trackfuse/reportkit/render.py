@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import textwrap
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
@@ -68,8 +68,11 @@ class Quantity:
         in seconds all below 0.1 s."""
         if self.percent:
             return 100.0, self
-        if self.unit == "s" and np.nanmax(np.abs(values), initial=0.0) < 0.1:
+        largest = np.nanmax(np.abs(values), initial=0.0)
+        if self.unit == "s" and largest < 0.1:
             return 1e3, replace(self, unit="ms")
+        if self.unit == "m" and largest >= 1e3:
+            return 1e-3, replace(self, unit="km")
         return 1.0, self
 
     def word(self, v: Any) -> str:
@@ -103,6 +106,17 @@ def quantity(experiment: Experiment, key: str) -> Quantity:
     return Quantity(label, unit_text(unit), count=unit == "count")
 
 
+def y_quantity(experiment: Experiment, plot: Plot, metric: str) -> Quantity:
+    """How ``metric`` is shown on ``plot``'s y axis: its declared quantity, or for a plot
+    drawing its square root (``plot.root``) that label in the unit's square root."""
+    shown = quantity(experiment, metric)
+    if not plot.root:
+        return shown
+    declared = next((m.unit for m in experiment.metrics if m.name == metric), "")
+    return Quantity(plot.root, unit_text(declared.removesuffix("^2")),
+                    bounds=(0.0, float("inf")))
+
+
 def looks_of(experiment: Experiment, name: str) -> Look:
     """The declared look of algorithm ``name``."""
     return look_of(experiment.looks, name)
@@ -114,20 +128,37 @@ def selected(summary: pd.DataFrame, plot: Plot) -> pd.DataFrame:
     has no column of is ignored)."""
     rows = summary[summary["metric"].isin(plot.metrics)]
     for key, value in ((k, v) for k, v in plot.at.items() if k in rows):
-        if value == "last":
+        if isinstance(value, tuple):
+            rows = rows[rows[key].isin(value)]
+        elif value == "last":
             last = rows.groupby(["point", "algorithm"])[key].transform("max")
             rows = rows[rows[key] == last]
         else:
             rows = rows[rows[key] == value]
+    if plot.root:  # the root of a mean square and of its interval's ends
+        ends = ["mean", "ci_low", "ci_high"]
+        rows = rows.assign(**{c: np.sqrt(rows[c].clip(lower=0.0)) for c in ends})
     return rows
+
+
+def _held(plot: Plot, key: str, value: Any) -> bool:
+    """Whether a panel at ``key = value`` is drawn: ``plot.at`` holds ``key`` at it (or
+    does not hold ``key``)."""
+    wanted = plot.at.get(key)
+    if isinstance(wanted, tuple):
+        return value in wanted
+    return wanted is None or wanted == "last" or wanted == value
 
 
 def facets(run: RunData, plot: Plot) -> list[dict[str, Any]]:
     """``{swept key: value}`` of each panel: every setting of the swept keys but ``x`` and
-    ``algorithms``, in sweep-point order (``columns`` first varying fastest)."""
-    keys = [k for k in run.sweep if k not in ("algorithms", plot.x)]
+    ``algorithms`` that ``plot.at`` keeps, in sweep-point order (``columns`` first varying
+    fastest)."""
+    keys = [k for k in run.sweep if k not in ("algorithms", plot.x, *plot.together)]
     seen: dict[tuple, dict[str, Any]] = {}
     for point in run.points:
+        if not all(_held(plot, k, point.get(k)) for k in keys):
+            continue
         seen.setdefault(tuple(point.get(k) for k in keys), {k: point.get(k) for k in keys})
     found = list(seen.values())
     if plot.columns in keys:
@@ -159,8 +190,15 @@ def grid(plot: Plot, cells: list[dict[str, Any]]) -> tuple[int, int]:
     return math.ceil(len(cells) / across), across
 
 
-def draw(run: RunData, plot: Plot, title: str = "") -> Figure | str:
-    """The figure ``plot`` declares for ``run``, or a one-line reason it cannot be drawn."""
+#: Extra drawing of one panel by a report module (a bound computed from the config):
+#: ``decorate(axes, metric, panel setting, y factor of the shown unit)``.
+Decorate = Callable[[Axes, str, dict[str, Any], float], None]
+
+
+def draw(run: RunData, plot: Plot, title: str = "", decorate: Decorate | None = None
+         ) -> Figure | str:
+    """The figure ``plot`` declares for ``run``, or a one-line reason it cannot be drawn;
+    ``decorate`` adds what a summary row cannot hold to each panel."""
     swept = len(run.sweep.get(plot.x, ())) >= 2
     if plot.x in run.experiment.schema and not swept and not plot.categories:
         return f"{plot.x} is not swept over at least 2 values"
@@ -179,6 +217,8 @@ def draw(run: RunData, plot: Plot, title: str = "") -> Figure | str:
     with context():
         for ax, metric, cell in _cells(axes, plot, cells):
             _panel(ax, run.experiment, data, plot, (metric, cell), names, order)
+            if decorate is not None:
+                decorate(ax, metric, cell, _factor(run.experiment, plot, data, metric))
         _frame(fig, axes, run.experiment, plot, data, cells, order)
         legend_below(fig, axes.ravel())
         if title:
@@ -231,13 +271,18 @@ def _slot(i: int, n: int) -> float:
     return CATEGORY_SPREAD * (2 * i / (n - 1) - 1) if n > 1 else 0.0
 
 
+def _factor(experiment: Experiment, plot: Plot, data: pd.DataFrame, metric: str) -> float:
+    """The factor ``metric``'s values are drawn at (100 for %, 1e-3 for km)."""
+    means = data.loc[data["metric"] == metric, "mean"].to_numpy(float)
+    return y_quantity(experiment, plot, metric).shown(means)[0]
+
+
 def _panel(ax: Axes, experiment: Experiment, data: pd.DataFrame, plot: Plot,
            where: tuple[str, dict[str, Any]], names: list[str], order: list[Any]) -> None:
     """One panel (``where``: its metric and setting): each algorithm's mean with its
     interval, then the references."""
     metric, cell = where
-    scale, _ = quantity(experiment, metric).shown(
-        data.loc[data["metric"] == metric, "mean"].to_numpy(float))
+    scale = _factor(experiment, plot, data, metric)
     drawn: list[np.ndarray] = []
     for i, name in enumerate(names):
         rows = _rows(data, metric, cell, name, plot.x)
@@ -246,9 +291,11 @@ def _panel(ax: Axes, experiment: Experiment, data: pd.DataFrame, plot: Plot,
         x = _positions(rows, plot, order, _slot(i, len(names)))
         mean = scale * rows["mean"].to_numpy(float)
         low, high = (scale * rows[c].to_numpy(float) for c in ("ci_low", "ci_high"))
-        if not plot.categories and any(len(m) == len(mean) and np.allclose(
-                m, mean, equal_nan=True) for m in drawn):
-            x = kit_axes.shifted(x, np.asarray(order, float), plot.xscale, COINCIDING_SHIFT)
+        hidden = sum(len(m) == len(mean) and np.allclose(m, mean, equal_nan=True)
+                     for m in drawn)  # curves this one would lie on: one shift each
+        if not plot.categories and hidden:
+            x = kit_axes.shifted(x, np.asarray(order, float), plot.xscale,
+                                 hidden * COINCIDING_SHIFT)
         drawn.append(mean)
         _series(ax, x, mean, low, high, looks_of(experiment, name), plot.categories)
     for reference in (r for r in plot.references if not r.metrics or metric in r.metrics):
@@ -285,9 +332,13 @@ def _reference(ax: Axes, experiment: Experiment, data: pd.DataFrame, plot: Plot,
                    linewidth=1.0, zorder=1.5)
     for x in ref.x:
         ax.axvline(x, color="0.45", linewidth=0.7, linestyle=":", zorder=1)
-    if ref.band is not None:
+    if ref.band is not None and ref.until is None:
         ax.axhspan(scale * ref.band[0], scale * ref.band[1], color="0.85", zorder=0,
                    label=ref.label)
+    elif ref.band is not None:
+        ax.fill_between([float(order[0]), ref.until], scale * ref.band[0],
+                        scale * ref.band[1], color="0.85", linewidth=0, zorder=0,
+                        label=ref.label)
     if not ref.algorithm:
         return
     rows = _rows(data, metric, cell, ref.algorithm, plot.x)
@@ -350,7 +401,7 @@ def _frame(fig: Figure, axes: np.ndarray, experiment: Experiment, plot: Plot,
         for ax in axes[r]:
             if yscale != "linear" and ax.get_visible():
                 kit_axes.y_log(ax, yscale)
-        factor, yq = quantity(experiment, metric).shown(
+        factor, yq = y_quantity(experiment, plot, metric).shown(
             data.loc[data["metric"] == metric, "mean"].to_numpy(float))
         ylabel = yq.axis("" if yscale == "linear" else yscale, room=0.9 * plot.panel_height)
         if len(plot.metrics) > 1 or nrows == 1:
@@ -367,7 +418,23 @@ def _frame(fig: Figure, axes: np.ndarray, experiment: Experiment, plot: Plot,
                 ax.set_xlabel(xlabel)
     titled = axes[0] if len(plot.metrics) > 1 else axes.ravel()
     for ax, cell in zip(titled, cells, strict=False):
-        ax.set_title(panel_title(experiment, cell))
+        ax.set_title(wrapped(panel_title(experiment, cell), 0.95 * room / 0.85))
+
+
+def wrapped(title: str, width_in: float) -> str:
+    """``title`` over as many lines as it needs to fit ``width_in`` inches at 8 pt: broken
+    after its commas (between the settings it names), within a setting only where that
+    alone is too long."""
+    width = max(12, int(width_in / LABEL_CHAR_IN))
+    lines: list[str] = []
+    for part in title.split(", "):
+        if lines and len(lines[-1]) + 2 + len(part) <= width:
+            lines[-1] += ", " + part
+        else:
+            if lines:
+                lines[-1] += ","
+            lines += textwrap.wrap(part, width) or [""]
+    return "\n".join(lines)
 
 
 def panel_title(experiment: Experiment, cell: dict[str, Any]) -> str:
@@ -405,8 +472,9 @@ def draw_beside(parts: Sequence[tuple[RunData, str]], plot: Plot, title: str = "
                                           0.85 * fig.get_figwidth() / len(parts)))
             ax.set_title(panel_title)
         run = parts[0][0]
-        factor, yq = quantity(run.experiment, plot.metrics[0]).shown(
-            run.summary.loc[run.summary["metric"] == plot.metrics[0], "mean"].to_numpy(float))
+        data = selected(run.summary, plot)
+        factor, yq = y_quantity(run.experiment, plot, plot.metrics[0]).shown(
+            data.loc[data["metric"] == plot.metrics[0], "mean"].to_numpy(float))
         axes[0, 0].set_ylabel(yq.axis(room=0.9 * plot.panel_height))
         if yq.bounds is not None:
             kit_axes.bounded_limits(axes[0, 0], *(factor * b for b in yq.bounds))

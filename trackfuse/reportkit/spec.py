@@ -30,7 +30,9 @@ class Reference:
       unlabelled one is named in the caption);
     * ``x``: vertical lines at each of ``at`` (a setting the paper names), unlabelled
       (the caption says what they are);
-    * ``band``: ``(low, high)`` shaded as the paper's claim, labelled ``label``;
+    * ``band``: ``(low, high)`` shaded as the paper's claim, labelled ``label``, across
+      the panel or, with ``until``, from the first x value up to ``until`` (the x the
+      claim reaches: paper 000's "below 5 % up to 9 false returns");
     * ``values``: ``((algorithm, y), ...)`` the paper's value of each method, drawn as an
       open star in its colour at the sweep ``points`` where the run is at the paper's
       setting (one legend entry, ``label``).
@@ -47,6 +49,7 @@ class Reference:
     values: tuple[tuple[str, float], ...] = ()
     points: tuple[int, ...] = ()
     metrics: tuple[str, ...] = ()
+    until: float | None = None
 
 
 @dataclass(frozen=True)
@@ -58,12 +61,16 @@ class Plot:
     algorithm the run has, at most :data:`MAX_ENTRIES` with the references);
     ``columns``: the swept key whose values go across (``""``: every setting of the swept
     keys but ``x`` one panel each, wrapped at ``max_columns``); ``at``: row keys held fixed
-    (``{"ops": "last"}`` takes each algorithm's last checkpoint); ``xscale``/``yscale``
+    (``{"ops": "last"}`` takes each algorithm's last checkpoint; a tuple keeps the rows at
+    any of its values, and of a swept key only those panels); ``xscale``/``yscale``
     (``yscale`` may map each metric to its own): ``auto`` picks log for a positive grid
     spanning 10x or more over 4 values or more, symlog for one that starts at 0;
     ``categories``: the x values are separate scenes, drawn as unjoined points side by
     side; ``width``: ``single`` (3.5 in), ``double`` (7.16 in) or ``auto`` (single for one
-    column of panels); ``panel_height``: of a row of panels (in).
+    column of panels); ``panel_height``: of a row of panels (in); ``root``: draw the square
+    root of the metric's mean and interval ends, labelled ``root`` (a root mean square
+    error from a mean squared error; the unit's square root); ``together``: swept keys that
+    a zipped sweep varies with ``x`` (not panels of their own).
     """
 
     metrics: tuple[str, ...]
@@ -78,6 +85,8 @@ class Plot:
     categories: bool = False
     width: Literal["single", "double", "auto"] = "auto"
     panel_height: float = 1.9
+    root: str = ""
+    together: tuple[str, ...] = ()
 
     def yscale_of(self, metric: str) -> Scale:
         """The y scale of ``metric``'s panels."""

@@ -16,6 +16,7 @@ from contextlib import AbstractContextManager
 from functools import cache
 
 import matplotlib
+import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
@@ -121,3 +122,13 @@ def warm_up(formats: tuple[str, ...], dpi: int) -> None:
         legend_below(fig, axes.ravel())
         for fmt in formats:
             fig.savefig(io.BytesIO(), format=fmt, dpi=dpi)
+
+
+def band(ax: Axes, x, y, low, high, label: str, marker: str = "o", **line) -> None:
+    """``y`` against ``x`` with its ``[low, high]`` interval shaded in the line's colour
+    (``line``: more :meth:`~matplotlib.axes.Axes.plot` arguments): for a plugin's own
+    figure that no :class:`~trackfuse.reportkit.spec.Plot` declares."""
+    x = np.asarray(x, dtype=float)
+    (drawn,) = ax.plot(x, y, marker=marker, label=label, **line)
+    ax.fill_between(x, np.asarray(low, dtype=float), np.asarray(high, dtype=float),
+                    color=drawn.get_color(), alpha=0.18, linewidth=0)

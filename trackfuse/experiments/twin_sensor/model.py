@@ -73,7 +73,8 @@ PARAMS = (
     Param("target.velocity", [0.0, 0.0, 0.0], "True target velocity at t = 0 (x, y, z)", "m/s",
           kind=list, length=3, low=-1e4, high=1e4),
     Param("target.q", 0.0, "Truth process-noise acceleration variance (0 = stationary or exact "
-          "CV truth)", "m^2/s^4", low=0.0, high=1e6),
+          "CV truth)", "m^2/s^4", low=0.0, high=1e6, label="truth process noise q",
+          symbol="q"),
     Param("platform.motion", "orbit", "Platform trajectory of sensor 1", kind=str,
           choices=("orbit", "straight")),
     Param("platform.start", [153209.0, 0.0, 2000.0], "Platform position at t = 0 (x, y, z)", "m",
@@ -85,9 +86,9 @@ PARAMS = (
     Param("platform.heading", 90.0, "Course of straight flight, from +x towards +y", "deg",
           low=-360.0, high=360.0),
     Param("sensors.count", 2, "Number of sensors (1 = sensor 1 only)", "sensors", kind=int,
-          low=1, high=2),
+          low=1, high=2, label="sensors", symbol="sensors"),
     Param("sensors.baseline", 0.0, "Horizontal formation offset of sensor 2 from sensor 1",
-          "m", low=0.0, high=1e6),
+          "m", low=0.0, high=1e6, label="sensor baseline", symbol="baseline"),
     Param("sensors.baseline_angle", 90.0, "Direction of the baseline from the initial line of "
           "sight (90 = broadside)", "deg", low=-360.0, high=360.0),
     Param("sensors.sigma_az", 0.01, "Azimuth noise standard deviation of sensor 1 (paper: 0.01)",
@@ -102,7 +103,9 @@ PARAMS = (
     Param("sensor2.pd_ratio", 1.0, "Sensor 2 detection probability relative to sensor 1", "1",
           low=0.0, high=1.0, draws=False),
     Param("clutter.model", "in_gate", "Clutter model: uniform in each filter's gate, or in a "
-          "fixed window about the true line of sight", kind=str, choices=("in_gate", "window")),
+          "fixed window about the true line of sight", kind=str, choices=("in_gate", "window"),
+          label="clutter model", words=(("in_gate", "clutter in the gate"),
+                                        ("window", "clutter in a window"))),
     Param("clutter.mean", 0.0, "Mean number of false returns per sensor and scan (in the gate "
           "or window)", "returns/scan", low=0.0, high=200.0,
           label="mean false returns per sensor and scan", symbol="clutter"),
@@ -112,7 +115,8 @@ PARAMS = (
           "given: in metres (init.sigma_range) or as a fraction of the true initial range "
           "(init.sigma_range_fraction)", kind=str, choices=("absolute", "relative"), draws=False),
     Param("init.sigma_range", 20000.0, "Initial range standard deviation of an absolute cue "
-          "(paper default: 20 km = 10 % of 200 km)", "m", low=1.0, high=1e7, draws=False),
+          "(paper default: 20 km = 10 % of 200 km)", "m", low=1.0, high=1e7, draws=False,
+          label="range cue standard deviation", symbol="range cue sd"),
     Param("init.sigma_range_fraction", 0.1, "Initial range standard deviation of a relative "
           "cue, as a fraction of the true range from sensor 1 at t = 0", "1", low=1e-4, high=10.0,
           draws=False),
@@ -121,7 +125,7 @@ PARAMS = (
     Param("init.sigma_velocity", 30.0, "Initial velocity standard deviation per axis", "m/s",
           low=1e-3, high=1e4, draws=False),
     Param("filter.q", 900.0, "Filter process-noise acceleration variance", "m^2/s^4", low=0.0,
-          high=1e8, draws=False),
+          high=1e8, draws=False, label="filter process noise q", symbol="filter q"),
     Param("gate.pg", 0.99, "Gate probability P_G", "1", low=0.5, high=0.999999, draws=False),
     Param("filter.mg_at", "hypothesis", "Where the MGEKF modified rows are evaluated: each "
           "hypothesis's own returns, or the beta-weighted combined return (W000-4)", kind=str,
@@ -375,16 +379,18 @@ ROW_METRICS = (
            better="lower", bounds=NON_NEGATIVE),
     Metric("pos_sq_err_m2", "m^2", "squared position error (its mean is the position MSE)",
            better="lower", bounds=NON_NEGATIVE),
-    Metric("nees", "1", "6-state normalized estimation error squared", bounds=NON_NEGATIVE),
+    Metric("nees", "1", "6-state normalized estimation error squared", bounds=NON_NEGATIVE,
+           label="ANEES (6 states)"),
     Metric("nees_pos", "1", "position normalized estimation error squared",
            bounds=NON_NEGATIVE),
     Metric("n_valid", "returns", "validated returns per sensor (mean over sensors)",
            bounds=NON_NEGATIVE),
-    Metric("lost_gate", "1", "lost by the gate rule (permanent)", binary=True, better="lower"),
+    Metric("lost_gate", "1", "lost by the gate rule (permanent)", binary=True, better="lower",
+           label="lost, gate rule"),
     Metric("lost_angle", "1", "lost by the angle rule (permanent)", binary=True,
            better="lower", label="tracks lost"),
     Metric("inconsistent_nees", "1", "position NEES above its chi-square quantile",
-           binary=True, better="lower"),
+           binary=True, better="lower", label="inconsistent filters"),
     Metric("existence", "1", "IPDA's probability that the target exists, after the scan's "
            "update (NaN for the other algorithms)", bounds=FRACTION, optional=True),
     Metric("confirmed", "1", "IPDA track confirmed by this scan (existence reached "
