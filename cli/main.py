@@ -19,7 +19,7 @@ import inspect
 import json
 import os
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -518,16 +518,17 @@ def plot(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR",
     column the runner writes) is refused and its earlier report removed. Plotting a run of a
     plugin experiment imports the plugin's module (a config is code)."""
     from trackfuse.failures import first_failure
+    from trackfuse.manifest import write_manifest
     from trackfuse.reports import write_report
-    from trackfuse.results import CONFIG, RunFolder, RunFolderError, removed_words
+    from trackfuse.results import CONFIG, RunFolderError, removed_words
     from trackfuse.rundata import swept_keys
     from trackfuse.runlock import RunLock
     run = _load_run(run_dir)
     try:
         with RunLock(run.path, warn):
             report = write_report(run)
-            RunFolder(run.path).write_manifest({**run.manifest,
-                                                **report.manifest_entries(run.path)})
+            write_manifest(run.path, replace(
+                run.manifest, **report.manifest_entries(run.path)))
     except RunFolderError as err:
         fail(str(err))
     except OSError as err:
@@ -538,8 +539,8 @@ def plot(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR",
     if report.removed:
         print(f"removed {removed_words(report.removed, run.path)} (an earlier draw's)")
     print(f"drew {_count(len(report.figures), 'figure file')} in {run_dir / 'figures'}")
-    failed, total = run.manifest.get("trials_failed"), run.manifest.get("trials_total")
-    if isinstance(failed, int) and isinstance(total, int) and failed > 0:
+    failed, total = run.manifest.trials_failed, run.manifest.trials_total
+    if failed and total is not None:
         first = first_failure(run.trials, swept_keys(run.config))
         warn(f"{failed_trials_line(failed, total, first)}; the report shows the other "
              f"{total - failed}")

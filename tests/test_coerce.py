@@ -1,13 +1,7 @@
-"""Plain values from loose ones (trackfuse/coerce.py)."""
+"""An exception as one line (trackfuse/coerce.py)."""
 
-from trackfuse.coerce import MESSAGE_CHARS, int_or, one_line
+from trackfuse.coerce import MESSAGE_CHARS, one_line
 from trackfuse.results import RunFolderError
-
-
-def test_int_or_takes_only_a_true_int():
-    assert int_or(7) == 7 and int_or(0, 5) == 0
-    assert [int_or(v) for v in (True, "3", 3.0, None, [1])] == [0, 0, 0, 0, 0]
-    assert int_or(None, -1) == -1
 
 
 def test_one_line_reads_like_the_traceback_folded_and_cut():

@@ -187,8 +187,10 @@ def test_resuming_on_a_cpu_with_other_vector_extensions_says_so(write_config, tm
     assert json.loads(manifest_path.read_text())["cpu"] == [older, *this_cpu]
 
 
-def test_a_sibling_manifest_with_damaged_versions_is_just_other_code(write_config, tmp_path,
-                                                                      monkeypatch):
+def test_a_sibling_manifest_with_damaged_versions_is_no_run_to_note(write_config, tmp_path,
+                                                                     monkeypatch):
+    """A sibling whose manifest fails validation (trackfuse.manifest) is skipped like any
+    folder that is not a run: no note, no traceback."""
     import trackfuse.runner as runner_module
 
     config = load(write_config("experiment: toy_gaussian\ntrials: 4\nseed: 1\n"))
@@ -198,8 +200,8 @@ def test_a_sibling_manifest_with_damaged_versions_is_just_other_code(write_confi
     monkeypatch.setattr(runner_module, "library_versions",
                         lambda: {"python": "3", "numpy": None})
     notes: list[str] = []
-    Runner(config, tmp_path, progress=False, plots=False, warn=notes.append).run()
-    assert len(notes) == 1 and "from other code (1 such run(s))" in notes[0]
+    again = Runner(config, tmp_path, progress=False, plots=False, warn=notes.append).run()
+    assert notes == [] and again.folder != first.folder and again.computed_trials == 4
 
 
 def test_the_recorded_blas_kernel_is_the_one_openblas_runs():

@@ -152,12 +152,12 @@ def test_the_index_written_while_the_run_finishes_prints_no_none(toy_run):
     no finishing time yet; a package that is not installed has no version. Neither may be
     printed as the word None."""
     m = toy_run.manifest
-    running = dataclasses.replace(toy_run, manifest={
-        **m, "finished": None, "versions": {**m["versions"], "stonesoup": None}})
+    running = dataclasses.replace(toy_run, manifest=dataclasses.replace(
+        m, finished=None, versions={**m.versions, "stonesoup": None}))
     write_report(running)
     facts = _facts(toy_run.path / "index.md")
     assert "None" not in facts
-    assert f"**started**: {m['started']}" in facts and "stonesoup not installed" in facts
+    assert f"**started**: {m.started}" in facts and "stonesoup not installed" in facts
 
 
 def test_the_headline_table_shows_its_interval_as_one_column(toy_run):
@@ -209,7 +209,8 @@ def test_a_table_without_rows_is_not_written_as_a_result(toy_run, monkeypatch):
     folder = toy_run.path / "tables"
     folder.mkdir(exist_ok=True)
     (folder / "empty.csv").write_text("stale result\n")  # left by an earlier drawing
-    monkeypatch.setitem(toy_run.manifest, "report_files", ["tables/empty.csv"])
+    monkeypatch.setattr(toy_run, "manifest", dataclasses.replace(
+        toy_run.manifest, report_files=["tables/empty.csv"]))
     monkeypatch.setattr(toy_report, "tables", lambda run: {
         **tables, "empty": pd.DataFrame(columns=["a", "b"]), "why": "nothing at the setting"})
     report = write_report(toy_run)
@@ -256,10 +257,10 @@ def test_the_index_names_every_cpu_that_computed_the_run(toy_run):
     m = toy_run.manifest
     older = {"model": "an older machine", "numpy_simd": [], "settings": {"OPENBLAS_CORETYPE":
                                                                         "Haswell"}}
-    mixed = dataclasses.replace(toy_run, manifest={**m, "cpu": [*m["cpu"], older]})
+    mixed = dataclasses.replace(toy_run, manifest=dataclasses.replace(m, cpu=[*m.cpu, older]))
     write_report(mixed)
     facts = _facts(toy_run.path / "index.md")
-    here = m["cpu"][0]
+    here = m.cpu[0]
     assert f"**CPU**: {here['model']}, numpy {'/'.join(here['numpy_simd'])}, " \
            f"{'/'.join(here['blas'])}; an older machine, numpy baseline, " \
            "OPENBLAS_CORETYPE=Haswell" in facts
@@ -312,7 +313,7 @@ def test_every_figure_file_names_what_produced_it(toy_run):
     source = Image.open(png).text["Source"]
     assert source == reports.provenance(toy_run)
     assert "seed 4" in source and "20 runs per point" in source
-    assert toy_run.manifest["run_id"] in source
+    assert toy_run.manifest.run_id in source
     assert source.encode() in pdf.read_bytes()  # the PDF's Subject, uncompressed
 
 

@@ -208,7 +208,7 @@ def test_ctrl_c_during_the_finish_leaves_an_interrupted_run_that_resumes(
         stage, copy, reference, monkeypatch):
     config, out, folder = copy
     as_interrupted(folder)
-    target = {"merge": (RunFolder, "merge"), "summary": ("trackfuse.runner.summarize", None),
+    target = {"merge": (RunFolder, "merge"), "summary": ("trackfuse.finish.summarize", None),
               "figures": ("trackfuse.runner.write_report", None)}[stage]
 
     def interrupt(*args, **kwargs):
@@ -235,7 +235,7 @@ def test_ctrl_c_in_the_runner_api_raises_run_interrupted(copy, monkeypatch):
     def interrupt(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr("trackfuse.runner.summarize", interrupt)
+    monkeypatch.setattr("trackfuse.finish.summarize", interrupt)
     with pytest.raises(RunInterrupted) as err:
         Runner(load(config), out, executor="serial", progress=False).run()
     assert err.value.done == err.value.total == 20

@@ -18,7 +18,7 @@ from trackfuse.seeding import trial_streams
 def test_load_returns_the_frames_and_config_of_a_run(tmp_path):
     folder = run_data(tmp_path, "toy_gaussian", sweep={"mu": [0.0, 1.0]}, trials=6).path
     run = trackfuse.load(folder)
-    assert run.config["experiment"] == "toy_gaussian" and run.manifest["status"] == "complete"
+    assert run.config["experiment"] == "toy_gaussian" and run.manifest.status == "complete"
     assert len(run.trials) == 2 * 6 * 2  # points x trials x algorithms
     assert {"metric", "mean", "ci_low", "ci_high", "interval"} <= set(run.summary.columns)
     assert (run.summary["ci_low"] <= run.summary["mean"]).all()
@@ -37,16 +37,17 @@ def test_a_runs_draw_points_re_simulate_its_trials(tmp_path):
         streams = trial_streams(6, run.draw_points[point], trial)
         again = cluttered_trial(run.point_params(point), streams)[0]
         assert (again["uniform"], again["estimate"]) == (row["uniform"], row["estimate"])
-    assert run.manifest["draw_points"] == [0, 1, 0, 1]
+    assert run.manifest.draw_points == [0, 1, 0, 1]
 
 
 def test_draw_points_come_from_the_manifest_before_the_current_flags(tmp_path):
     run = run_data(tmp_path, "toy_cluttered", trials=2, seed=6,
                    sweep={"gain": [1.0, 2.0], "density": [1.0, 3.0]})
-    recorded = dataclasses.replace(run, manifest={**run.manifest, "draw_points": [0, 1, 2, 3]})
+    recorded = dataclasses.replace(run, manifest=dataclasses.replace(run.manifest,
+                                                                     draw_points=[0, 1, 2, 3]))
     assert recorded.draw_points == [0, 1, 2, 3]  # as if gain had drawn when it ran
-    older = dataclasses.replace(run, manifest={k: v for k, v in run.manifest.items()
-                                               if k != "draw_points"})
+    older = dataclasses.replace(run, manifest=dataclasses.replace(run.manifest,
+                                                                  draw_points=None))
     assert older.draw_points == [0, 1, 0, 1]
 
 

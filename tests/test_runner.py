@@ -18,6 +18,7 @@ from conftest import cli_env, ctrl_c_at_part, trackfuse
 from typer.testing import CliRunner
 
 from trackfuse.config import load
+from trackfuse.manifest import Manifest, write_manifest
 from trackfuse.results import RunFolder
 from trackfuse.runlock import HOLDER_FILE, RunLock
 from trackfuse.runner import RunInterrupted, Runner
@@ -258,7 +259,7 @@ def test_dry_run_says_what_the_run_would_start_from(write_config, tmp_path):
     assert plan().endswith("(new)")
     runner = Runner(load(path), out, progress=False)
     runner.folder.prepare(runner.resolved)
-    runner.folder.write_manifest({"status": "interrupted", "trials_done": 46})
+    write_manifest(runner.folder.path, Manifest("interrupted", trials_done=46))
     assert plan().endswith("(interrupted, 46 trials saved; resumes)")
     run(path, out)
     assert plan().endswith("(complete; nothing to compute)")
@@ -317,7 +318,7 @@ def test_plot_refuses_an_incomplete_run(write_config, tmp_path):
     path = write_config(CFG)
     runner = Runner(load(path), tmp_path, progress=False)
     runner.folder.prepare(runner.resolved)
-    runner.folder.write_manifest({"status": "interrupted"})
+    write_manifest(runner.folder.path, Manifest("interrupted"))
     result = trackfuse("plot", runner.folder.path)
     assert result.returncode == 2 and "not complete" in result.stderr
 

@@ -15,7 +15,7 @@ from datetime import datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from trackfuse.coerce import int_or
+from trackfuse.manifest import Manifest, read_manifest
 from trackfuse.results import (
     CONFIG,
     MANIFEST,
@@ -66,24 +66,24 @@ def _params(path: Path) -> dict[str, Any]:
     return {**config["params"], **sweep}
 
 
-def _wall_seconds(manifest: dict[str, Any]) -> float | None:
+def _wall_seconds(manifest: Manifest) -> float | None:
     """Seconds from the first start to the finish of a complete run, else ``None``."""
     try:
-        first = datetime.fromisoformat(str(manifest["first_started"]))
-        end = datetime.fromisoformat(str(manifest["finished"]))
-    except (KeyError, TypeError, ValueError):
+        first = datetime.fromisoformat(str(manifest.first_started))
+        end = datetime.fromisoformat(str(manifest.finished))
+    except ValueError:
         return None
     return (end - first).total_seconds()
 
 
-def _saved_trials(path: Path, manifest: dict[str, Any]) -> int:
+def _saved_trials(path: Path, manifest: Manifest) -> int:
     """Trials of the batches of the run's plan whose two parts are in ``parts/`` (names only,
     none read): what a running or stopped run has saved, which its manifest (rewritten at
     most every few seconds) lags behind."""
-    per_point, batch = int_or(manifest.get("trials_per_point")), int_or(manifest.get("batch_size"))
-    points = int_or(manifest.get("points"))
+    per_point, batch = manifest.trials_per_point or 0, manifest.batch_size or 0
+    points = manifest.points or 0
     if batch < 1:
-        return int_or(manifest.get("trials_done"))
+        return manifest.trials_done or 0
     kinds: dict[tuple[int, int], set[str]] = {}
     for point, number, kind in part_names(RunFolder(path).parts):
         if point < points and number * batch < per_point:
@@ -92,20 +92,15 @@ def _saved_trials(path: Path, manifest: dict[str, Any]) -> int:
                for (_, number), found in kinds.items() if found == set(PART_KINDS))
 
 
-def _info(path: Path, manifest: dict[str, Any]) -> RunInfo:
+def _info(path: Path, manifest: Manifest) -> RunInfo:
     state = run_state(path, manifest)
     done = (_saved_trials(path, manifest) if state.status in (RunStatus.RUNNING, STOPPED)
-            else int_or(manifest.get("trials_done")))
-    return RunInfo(path, path.parent.name, str(manifest.get("experiment", "")),
-                   str(manifest.get("name") or ""), str(state),
-                   done, int_or(manifest.get("trials_total")),
-                   str(manifest.get("first_started") or manifest.get("started") or ""),
-                   _wall_seconds(manifest), _int_or_none(manifest.get("root_seed")),
-                   _int_or_none(manifest.get("trials_per_point")), _params(path))
-
-
-def _int_or_none(value: Any) -> int | None:
-    return value if isinstance(value, int) and not isinstance(value, bool) else None
+            else manifest.trials_done or 0)
+    return RunInfo(path, path.parent.name, manifest.experiment or "", manifest.name or "",
+                   str(state), done, manifest.trials_total or 0,
+                   manifest.first_started or manifest.started or "",
+                   _wall_seconds(manifest), manifest.root_seed, manifest.trials_per_point,
+                   _params(path))
 
 
 def is_run_folder(path: Path) -> bool:
@@ -125,7 +120,7 @@ def find_runs(root: Path) -> list[RunInfo]:
         except OSError:  # a folder this user may not read (another user's, /proc/1/cwd)
             continue
         try:
-            manifest = RunFolder(path).read_manifest()
+            manifest = read_manifest(path)
         except RunFolderError:
             found.append(RunInfo(path, path.parent.name, "", "", DAMAGED, 0, 0, "", None))
             continue

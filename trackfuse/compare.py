@@ -276,8 +276,8 @@ def compare_runs(base: RunData, new: RunData, tolerance: Mapping[str, float] | N
     for run in (base, new):
         if succeeded_rows(run.trials).empty:
             raise ValueError(f"{run.path}: every trial of the run failed "
-                             f"({run.manifest.get('trials_failed', '?')} of "
-                             f"{run.manifest.get('trials_total', '?')}): nothing to compare")
+                             f"({_or_unknown(run.manifest.trials_failed)} of "
+                             f"{_or_unknown(run.manifest.trials_total)}): nothing to compare")
         points = [repr([p[k] for k in run.sweep]) for p in run.points]
         if len(set(points)) < len(points):
             raise ValueError(f"{run.path}: a sweep point comes twice (a run of a version "
@@ -379,3 +379,8 @@ def config_differences(base: Mapping, new: Mapping) -> list[tuple[str, object, o
         config.get("sweep") or {}, SWEPT)}}) for config in (base, new))
     return [(key, b.get(key), n.get(key)) for key in dict.fromkeys([*b, *n])
             if b.get(key) != n.get(key) or (key in b) != (key in n)]
+
+
+def _or_unknown(count: int | None) -> str:
+    """A count a manifest records, or ``?`` where it does not."""
+    return "?" if count is None else str(count)

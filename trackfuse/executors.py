@@ -1,9 +1,10 @@
 """Where batches run: in this process, in a local process pool, or on a dask cluster.
 
-All executors share one method, :meth:`imap_unordered`, which yields results as batches
-finish and keeps at most ``in_flight`` batches submitted, so memory stays flat however many
-batches there are. Results carry their own (point, batch) identity; the runner orders them,
-so completion order never reaches the output files.
+Every executor is an :class:`Executor`: its :meth:`~Executor.imap_unordered` yields results
+as batches finish and keeps at most about twice as many batches submitted as there are
+workers, so memory stays flat however many batches there are. Results carry their own
+(point, batch) identity; the runner orders them, so completion order never reaches the
+output files.
 
 * ``serial``: in this process (debugging, profiling, tiny runs).
 * ``process``: :class:`concurrent.futures.ProcessPoolExecutor` with the ``forkserver``
@@ -16,6 +17,8 @@ so completion order never reaches the output files.
   whose worker died (``distributed.scheduler.allowed-failures``). A scheduler file is read
   here first (it must exist and hold the scheduler's address): dask itself would wait forever
   for a missing file to appear.
+* a batch system's jobs (:class:`trackfuse.cluster.JobqueueExecutor`): dask on workers
+  that dask-jobqueue starts.
 """
 
 from __future__ import annotations
@@ -34,7 +37,7 @@ from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wai
 from concurrent.futures.process import BrokenProcessPool
 from itertools import islice
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 from trackfuse.child_processes import ctrl_c_held, setup_child
 
@@ -47,6 +50,24 @@ _END = object()
 
 class ExecutorError(RuntimeError):
     """The executor cannot start (missing extra, unreachable scheduler...)."""
+
+
+class Executor(Protocol):
+    """Runs a function on tasks somewhere; ``kind`` names where (:data:`KINDS`), for the
+    manifest; ``workers`` is how many run at once."""
+
+    kind: str
+    workers: int
+
+    def imap_unordered(self, fn: Callable, tasks: Iterable) -> Iterator[Any]:
+        """``fn(task)`` of every task, in the order they finish."""
+
+    def loading(self) -> bool:
+        """Whether the workers are still loading the experiment's code (for the progress
+        line; ``False`` where not known)."""
+
+    def close(self, abort: bool = False) -> None:
+        """Release the workers; ``abort``: at once, the run stops (an interrupt, an error)."""
 
 
 def default_workers() -> int:
@@ -164,57 +185,69 @@ class ProcessExecutor:
         return not self._forked
 
     def imap_unordered(self, fn: Callable, tasks: Iterable) -> Iterator[Any]:
-        tasks = iter(tasks)
-        limit = 2 * self.workers + 1
+        """``fn(task)`` of every task as batches finish. A dead worker breaks the pool: it is
+        replaced and the batches it held are submitted again (at most
+        :data:`MAX_POOL_RESTARTS` times). A result asking for its worker to be replaced
+        (``renew_worker``) stops submission until the batches in flight are done, then every
+        worker is replaced."""
+        todo = _Todo(tasks)
         pending: dict[Future, Any] = {}
-        retry: list[Any] = []
         restarts = 0
-        renew = False  # a result asked for its worker to be replaced: drain, then renew
+        renew = False
         while True:
             try:
-                while len(pending) < limit and not renew:
-                    task = retry.pop() if retry else next(tasks, _END)
-                    if task is _END:
-                        break
-                    try:
-                        with ctrl_c_held(None if self._forked else STOPPING_WHEN_LOADED):
-                            pending[self._pool.submit(fn, task)] = task
-                        self._forked = True
-                    except BrokenProcessPool:
-                        retry.append(task)
-                        raise
-                broken = False
-            except BrokenProcessPool:
-                broken = True
-            if not broken:
-                if not pending and not renew:
-                    return
-                if not pending:
+                if not renew:
+                    self._submit(fn, todo, pending)
+                if pending:
+                    renew = (yield from self._finished(pending, todo)) or renew
+                elif renew:
                     self._renew_workers()
                     renew = False
-                    continue
-                done, _ = wait(pending, return_when=FIRST_COMPLETED)
-                for future in done:
-                    task = pending.pop(future)
-                    try:
-                        result = future.result()
-                    except BrokenProcessPool:
-                        retry.append(task)
-                        broken = True
-                        continue
-                    renew = renew or getattr(result, "renew_worker", False)
-                    yield result
-            if broken:
+                else:
+                    return
+            except BrokenProcessPool:
                 restarts += 1
                 if restarts > MAX_POOL_RESTARTS:
                     raise ExecutorError(
                         f"the worker processes died {restarts} times (out of memory, or "
                         "killed?); the batches they finished are saved: run the same command "
                         "to resume, or add --executor serial to see the failure in this "
-                        "process")
-                retry.extend(pending.values())
+                        "process") from None
+                todo.again(pending.values())
                 pending.clear()
                 self._restart()
+
+    def _submit(self, fn: Callable, todo: _Todo, pending: dict[Future, Any]) -> None:
+        """Submit tasks until ``2 * workers + 1`` are in flight or none is left; a task the
+        broken pool refuses goes back to ``todo`` (and the :class:`BrokenProcessPool` on)."""
+        while len(pending) < 2 * self.workers + 1 and (task := todo.next()) is not _END:
+            try:
+                with ctrl_c_held(None if self._forked else STOPPING_WHEN_LOADED):
+                    pending[self._pool.submit(fn, task)] = task
+            except BrokenProcessPool:
+                todo.again([task])
+                raise
+            self._forked = True
+
+    @staticmethod
+    def _finished(pending: dict[Future, Any], todo: _Todo) -> Iterator[Any]:
+        """Yield the results of the batches that finish next; return whether one asked for
+        its worker to be replaced. Batches a dead worker broke go back to ``todo``, then a
+        :class:`BrokenProcessPool` is raised."""
+        done, _ = wait(pending, return_when=FIRST_COMPLETED)
+        renew = broken = False
+        for future in done:
+            task = pending.pop(future)
+            if isinstance(future.exception(), BrokenProcessPool):
+                todo.again([task])
+                broken = True
+                continue
+            result = future.result()
+            renew = renew or getattr(result, "renew_worker", False)
+            yield result
+        if broken:
+            raise BrokenProcessPool("a worker process died")
+        return renew
 
     def _restart(self) -> None:
         """A worker died: replace the pool (unfinished batches are resubmitted by the caller)."""
@@ -245,6 +278,20 @@ class ProcessExecutor:
             self._pool.shutdown(wait=True, cancel_futures=True)
             return
         self._end_workers()
+
+
+class _Todo:
+    """Tasks still to submit: those a broken pool handed back first, then new ones."""
+
+    def __init__(self, tasks: Iterable):
+        self._new, self._again = iter(tasks), []
+
+    def next(self) -> Any:
+        """The next task, or ``_END``."""
+        return self._again.pop() if self._again else next(self._new, _END)
+
+    def again(self, tasks: Iterable) -> None:
+        self._again.extend(tasks)
 
 
 class DaskExecutor:

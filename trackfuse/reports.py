@@ -11,6 +11,7 @@ view: ``docs/outputs.md``.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import html
 import importlib
 import math
@@ -30,6 +31,7 @@ from trackfuse.child_processes import ctrl_c_held, setup_child
 from trackfuse.coerce import one_line
 from trackfuse.environment import cpu_words, recorded_cpus
 from trackfuse.failures import first_failure
+from trackfuse.manifest import Manifest
 from trackfuse.reportkit.headline import READER_HEADERS, reader_cells
 from trackfuse.reportkit.htmltable import TABLE_CSS, cell_text, frame_html, html_table
 from trackfuse.reportkit.notes import NOTES, note_href, write_notes
@@ -190,10 +192,10 @@ def display_table(table: pd.DataFrame) -> pd.DataFrame:
 def provenance(run: RunData) -> str:
     """One line naming what produced a run's figures: config file, experiment, seed, trials
     per point and run id (embedded in every figure file: :func:`save_figure`)."""
-    source = Path(str(run.manifest.get("config_file") or "")).name or "(no file)"
+    source = Path(run.manifest.config_file or "").name or "(no file)"
     return (f"trackfuse {run.config.get('experiment')}, config {source}, seed "
             f"{run.config.get('seed')}, {_runs_per_point(run.config.get('trials'))}, run "
-            f"{run.manifest.get('run_id')}")
+            f"{run.manifest.run_id}")
 
 
 def _runs_per_point(trials: Any) -> str:
@@ -403,7 +405,7 @@ def undrawable(run: RunData) -> str | None:
 def _remove_earlier(run: RunData, keep: Collection[Path], report: Report) -> None:
     """Delete the files an earlier draw wrote (the manifest's ``report_files``: never a
     file of the user's) other than ``keep``, naming them in ``report.removed``."""
-    for path in RunFolder(run.path).report_files(run.manifest):
+    for path in RunFolder(run.path).report_files(run.manifest.report_files):
         if path not in keep:
             path.unlink()
             report.removed.append(path)
@@ -446,37 +448,38 @@ def write_report(run: RunData, wanted: Collection[str] | None = None,
     atomic_write(run.path / INDEX_MD, md)
     atomic_write(run.path / INDEX_HTML, index_html(run, tables, report))
     report.index = run.path / INDEX_HTML
-    run.manifest[REPORT_FILES] = report.manifest_entries(run.path)[REPORT_FILES]  # a redraw's
+    run.manifest = dataclasses.replace(  # a redraw's
+        run.manifest, report_files=report.manifest_entries(run.path)[REPORT_FILES])
     return report
 
 
 def _run_facts(run: RunData) -> list[tuple[str, str]]:
     m, c = run.manifest, run.config
     versions = ", ".join(f"{k} {'not installed' if v is None else v}"
-                         for k, v in (m.get("versions") or {}).items())
+                         for k, v in (m.versions or {}).items())
     sweep = "; ".join(f"{k} = {', '.join(map(str, v))}" for k, v in run.sweep.items())
     return [
         ("experiment", f"{c['experiment']}: {c.get('title', '')}"),
-        ("config", str(m.get("config_file", ""))),
-        ("command", " ".join(m.get("command") or [])),
+        ("config", m.config_file or ""),
+        ("command", " ".join(m.command or [])),
         ("sweep", sweep or "none (one point)"),
-        ("trials", f"{_per_point_text(run)}, {m.get('trials_total')} in all, "
-                   f"{m.get('trials_failed', 0)} failed{_first_failure_text(run)}"),
+        ("trials", f"{_per_point_text(run)}, {m.trials_total} in all, "
+                   f"{m.trials_failed or 0} failed{_first_failure_text(run)}"),
         ("root seed", str(c.get("seed"))),
-        ("run id", str(m.get("run_id", run.path.name))),
+        ("run id", m.run_id or run.path.name),
         ("code", _code_text(m)),
         ("versions", versions),
-        ("CPU", "; ".join(map(cpu_words, recorded_cpus(m.get("cpu")))) or "not recorded"),
-        ("started", str(m.get("first_started") or m.get("started", ""))),
+        ("CPU", "; ".join(map(cpu_words, recorded_cpus(m.cpu))) or "not recorded"),
+        ("started", m.first_started or m.started or ""),
         # the runner writes the report before it records the finishing time
-        *([("finished", str(m["finished"]))] if m.get("finished") else []),
+        *([("finished", m.finished)] if m.finished else []),
     ]
 
 
 def _per_point_text(run: RunData) -> str:
     """``50 per point``, or for a sequential run its rule, each point's count and the
     points stopped at ``max`` (from the manifest's ``sequential``)."""
-    trials, record = run.config.get("trials"), run.manifest.get("sequential")
+    trials, record = run.config.get("trials"), run.manifest.sequential
     if not isinstance(trials, dict) or not isinstance(record, dict):
         return f"{trials} per point"
     until = trials.get("until") or {}
@@ -490,18 +493,18 @@ def _per_point_text(run: RunData) -> str:
 
 def _first_failure_text(run: RunData) -> str:
     """``; first: point 0 (...), trial 0: ValueError: ...`` for a run with failed trials."""
-    if not run.manifest.get("trials_failed"):
+    if not run.manifest.trials_failed:
         return ""
     first = first_failure(run.trials, swept_keys(run.config))
     return f"; first: {first}" if first else ""
 
 
-def _code_text(manifest: dict[str, Any]) -> str:
-    git = manifest.get("git") if isinstance(manifest.get("git"), dict) else {}
+def _code_text(manifest: Manifest) -> str:
+    git = manifest.git or {}
     where = (f"{git.get('repository')} at {git.get('commit')}"
              + (" with uncommitted changes" if git.get("dirty") else "")) if git \
         else "not run from a git checkout"
-    code = manifest.get("code_fingerprint") or {}
+    code = manifest.code_fingerprint or {}
     return f"{where}; code fingerprint {str(code.get('sha256', ''))[:12]}"
 
 

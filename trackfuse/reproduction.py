@@ -92,7 +92,7 @@ def _headline(run: RunData) -> pd.DataFrame:
 
 
 def _config_name(run: RunData) -> str:
-    source = str(run.manifest.get("config_file") or run.path.parent.name)
+    source = run.manifest.config_file or run.path.parent.name
     return Path(source).stem
 
 

@@ -63,7 +63,6 @@ INDEX_FILES = (INDEX_MD, INDEX_HTML)
 REPORT_FILES = "report_files"
 PART_KINDS = ("trials", "timings")
 PART_MAGIC = "#trackfuse-part 1"
-MAX_MANIFEST_BYTES = 10_000_000
 _PART_NAME = re.compile(r"^p(\d{6})-b(\d{7})\.(trials|timings)\.csv$")
 _PART_HEADER = re.compile(r"^#trackfuse-part 1 point=(\d+) batch=(\d+) first=(\d+) "
                           r"stop=(\d+) rows=(\d+) bytes=(\d+) sha256=([0-9a-f]{64})\n$")
@@ -424,13 +423,13 @@ class RunFolder:
         atomic_write(self.path / CONFIG, data)
         return {"bytes": len(data), "sha256": hashlib.sha256(data).hexdigest()}
 
-    def report_files(self, manifest: dict[str, Any]) -> list[Path]:
-        """The files the manifest's :data:`REPORT_FILES` records the report wrote that are
-        still there (not folders): ``index.md``, ``index.html`` and plain names directly in
-        one of :data:`REPORT_DIRS`; any other entry (``../x``, ``trials.csv``) is ignored."""
-        recorded = manifest.get(REPORT_FILES)
+    def report_files(self, recorded: list[str] | None) -> list[Path]:
+        """The files of ``recorded`` (the manifest's :data:`REPORT_FILES`: what the report
+        wrote) that are still there (not folders): ``index.md``, ``index.html`` and plain
+        names directly in one of :data:`REPORT_DIRS`; any other entry (``../x``,
+        ``trials.csv``) is ignored."""
         found = []
-        for entry in recorded if isinstance(recorded, list) else []:
+        for entry in recorded or []:
             parts = str(entry).split("/")
             if not (parts in ([n] for n in INDEX_FILES) or len(parts) == 2
                     and parts[0] in REPORT_DIRS and parts[1] not in ("", ".", "..")):
@@ -440,17 +439,13 @@ class RunFolder:
                 found.append(path)
         return list(dict.fromkeys(found))
 
-    def clear(self) -> list[str]:
+    def clear(self, report_files: list[str] | None) -> list[str]:
         """Delete what trackfuse wrote of an earlier run, for a fresh start in the same
         folder (``--force``; call only with the lock held, after :meth:`check_layout`): its
-        parts, final files, index, the report files its manifest lists, then the manifest.
-        Other files stay, and so do the folders that hold them. Returns what it removed,
-        relative to the folder."""
-        try:
-            manifest = self.read_manifest() or {}
-        except RunFolderError:  # unreadable: no report file is known to be ours
-            manifest = {}
-        owned = [*self.report_files(manifest),
+        parts, final files, index, the ``report_files`` its manifest lists (``None`` for an
+        unreadable one), then the manifest. Other files stay, and so do the folders that
+        hold them. Returns what it removed, relative to the folder."""
+        owned = [*self.report_files(report_files),
                  *(self.path / n for n in (*FINAL_FILES, *INDEX_FILES, MANIFEST))]
         removed = self._remove_parts()
         for path in dict.fromkeys(owned):
@@ -557,34 +552,11 @@ class RunFolder:
                 raise RunFolderError(f"{path}: damaged and cannot be removed ({err.strerror}); "
                                      "move it away and run again") from None
 
-    def read_manifest(self) -> dict[str, Any] | None:
-        """The manifest, or ``None`` if there is none; :class:`RunFolderError` if unreadable."""
-        path = self.path / MANIFEST
-        try:
-            with open_regular(path) as fh:
-                data = fh.read(MAX_MANIFEST_BYTES + 1)
-        except FileNotFoundError:
-            return None
-        except OSError as err:
-            raise RunFolderError(f"{path}: unreadable ({err.strerror or type(err).__name__})") \
-                from None
-        try:
-            manifest = json.loads(data.decode("utf-8")) if len(data) <= MAX_MANIFEST_BYTES \
-                else None
-        except (UnicodeDecodeError, ValueError, RecursionError):
-            manifest = None
-        if not isinstance(manifest, dict):
-            raise RunFolderError(f"{path}: not a trackfuse manifest (not a JSON object)")
-        return manifest
-
-    def write_manifest(self, manifest: dict[str, Any]) -> None:
-        atomic_write(self.path / MANIFEST, json.dumps(manifest, indent=2, sort_keys=False) + "\n")
-
-    def check_final_files(self, manifest: dict[str, Any], checksums: bool = True) -> str | None:
-        """``None`` if every final file matches the size and checksum the manifest records,
-        else one line saying what does not. ``checksums=False`` compares sizes only (no file
-        is read)."""
-        files = manifest.get("files")
+    def check_final_files(self, files: dict[str, Any] | None,
+                          checksums: bool = True) -> str | None:
+        """``None`` if every final file matches the size and checksum ``files`` (the
+        manifest's record of them) holds, else one line saying what does not.
+        ``checksums=False`` compares sizes only (no file is read)."""
         if not isinstance(files, dict) or (TRIALS not in files and TRIALS_PARQUET not in files):
             return f"{self.path / MANIFEST}: no checksums of the final files"
         for name, record in files.items():
@@ -681,22 +653,3 @@ def split_timings(rows: list[dict[str, Any]], keys: Sequence[str]) -> tuple[list
         if times:
             timing_rows.append({**{k: row[k] for k in keys if k in row}, **times})
     return trial_rows, timing_rows
-
-
-def sibling_manifests(folder: Path) -> list[dict[str, Any]]:
-    """The readable manifests of the other run folders beside ``folder`` (same config stem),
-    skipping anything that is not a run's manifest."""
-    found = []
-    parent = Path(folder).parent
-    if not parent.is_dir():
-        return found
-    for entry in sorted(parent.iterdir()):
-        if entry == Path(folder) or not entry.is_dir():
-            continue
-        try:
-            manifest = RunFolder(entry).read_manifest()
-        except RunFolderError:
-            continue
-        if manifest is not None:
-            found.append(manifest)
-    return found

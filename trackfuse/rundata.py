@@ -51,8 +51,8 @@ class RunData(RunFiles):
     def _plugin_from_its_folder(self, name: str, err: Exception) -> Experiment:
         """Plugin ``name`` imported from the folder the run recorded in its manifest
         (``plugin_folder``), which the caller's Python path lacks; else ``err``."""
-        folder = self.manifest.get("plugin_folder")
-        if not isinstance(folder, str) or not Path(folder).is_dir():
+        folder = self.manifest.plugin_folder
+        if folder is None or not Path(folder).is_dir():
             raise RunFolderError(f"{self.path}: {err}") from None
         experiments.add_plugin_folder(folder)
         try:
@@ -66,9 +66,8 @@ class RunData(RunFiles):
         """The draw point of every sweep point (:func:`~trackfuse.seeding.draw_points`):
         ``trial_streams(seed, draw_points[p], t)`` re-simulates trial ``t`` of point ``p``.
         As the manifest recorded them, else from the experiment's current ``draws`` flags."""
-        recorded = self.manifest.get("draw_points")
-        if isinstance(recorded, list) and all(isinstance(p, int) for p in recorded):
-            return list(recorded)
+        if self.manifest.draw_points is not None:
+            return list(self.manifest.draw_points)
         points = expand(self.sweep, self.config.get("sweep_mode", "grid"))
         return draw_points(points, self.experiment.drawing)
 

@@ -14,6 +14,7 @@ from typing import Any
 
 import pandas as pd
 
+from trackfuse.manifest import Manifest, read_manifest
 from trackfuse.regular_files import open_regular
 from trackfuse.results import (
     CONFIG,
@@ -21,7 +22,6 @@ from trackfuse.results import (
     SUMMARY,
     TIMING_SUMMARY,
     TIMINGS,
-    RunFolder,
     RunFolderError,
     RunStatus,
 )
@@ -37,7 +37,7 @@ class RunFiles:
 
     path: Path
     config: dict[str, Any]
-    manifest: dict[str, Any]
+    manifest: Manifest
 
     @cached_property
     def trials(self) -> pd.DataFrame:
@@ -106,7 +106,7 @@ def read_run(path: str | Path, require_complete: bool = True) -> RunFiles:
     With ``require_complete`` the run must be complete and its final files must match the
     sizes and SHA-256 sums in its manifest."""
     path = Path(path)
-    manifest = RunFolder(path).read_manifest() if path.is_dir() else None
+    manifest = read_manifest(path) if path.is_dir() else None
     if manifest is None:
         raise RunFolderError(f"{path}: {_not_a_run(path)}; allowed: a run folder, "
                              "<out>/<config>/<run-id> (`trackfuse runs` lists them)")

@@ -14,10 +14,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
-from trackfuse.coerce import int_or
-from trackfuse.results import INDEX_HTML, MANIFEST, REPORT_FILES, RunFolder, RunStatus
+from trackfuse.manifest import Manifest
+from trackfuse.results import INDEX_HTML, RunFolder, RunStatus
 from trackfuse.runlock import held_by_a_live_process
 
 #: A run whose manifest says running but whose process has ended (killed, or stopped by a
@@ -51,27 +50,23 @@ class RunState:
                           *([] if self.report else ["no report"])])
 
 
-def has_report(path: Path, manifest: dict[str, Any]) -> bool:
+def has_report(path: Path, manifest: Manifest) -> bool:
     """Whether run folder ``path`` holds its whole report: ``index.html`` and every file in
     the manifest's :data:`REPORT_FILES` (a manifest from before it was recorded: the index
     alone)."""
-    recorded = manifest.get(REPORT_FILES)
-    names = recorded if isinstance(recorded, list) else []
-    return (path / INDEX_HTML).is_file() and all((path / str(n)).is_file() for n in names)
+    names = manifest.report_files or []
+    return (path / INDEX_HTML).is_file() and all((path / n).is_file() for n in names)
 
 
-def run_state(path: Path, manifest: dict[str, Any], checksums: bool = False) -> RunState:
+def run_state(path: Path, manifest: Manifest, checksums: bool = False) -> RunState:
     """The state of run folder ``path`` with the manifest ``manifest``; ``checksums``
     compares the final files' checksums too, not only their sizes."""
-    status = str(manifest.get("status", ""))
-    if status not in (RunStatus.RUNNING, RunStatus.INTERRUPTED, RunStatus.COMPLETE):
-        return RunState(DAMAGED, problem=f"{path / MANIFEST}: status {status[:40]!r}; "
-                                         "allowed: running, interrupted, complete")
+    status = manifest.status  # one of the manifest's statuses (trackfuse.manifest)
     if status == RunStatus.RUNNING and not held_by_a_live_process(path):
         return RunState(STOPPED)
     if status != RunStatus.COMPLETE:
         return RunState(status)
-    problem = RunFolder(path).check_final_files(manifest, checksums=checksums)
+    problem = RunFolder(path).check_final_files(manifest.files, checksums=checksums)
     if problem is not None:
         return RunState(DAMAGED, problem=problem)
-    return RunState(status, int_or(manifest.get("trials_failed")), has_report(path, manifest))
+    return RunState(status, manifest.trials_failed or 0, has_report(path, manifest))
