@@ -1,13 +1,5 @@
-"""How a reproduced number, or a claim, becomes a verdict: one set of rules for every paper.
-
-A verdict is one of :data:`VERDICTS` with the estimate it reads, its 95 % interval and a
-one-line reason (:class:`Verdict`). The rules (``docs/statistics.md``, "Verdicts against a
-paper"): a paper's stated rate is a sample (:func:`against_paper_sample`,
-:func:`below_paper_bound`); shape claims by effect size against the margin declared on the
-paper item (:func:`at_least`, :func:`within`); only the pre-specified comparison decides
-(:func:`exploration` for the rest); printed values compared as printed
-(:func:`as_printed_verdict`); one verdict per item (:func:`bottom_line`).
-"""
+"""How a reproduced number or a claim becomes a :class:`Verdict`: one set of rules for every
+paper, ``docs/statistics.md``, "Verdicts against a paper"."""
 
 from __future__ import annotations
 
@@ -54,10 +46,8 @@ def points(value: float) -> str:
 
 
 def against_paper_sample(k: int, n: int, paper_k: int, paper_n: int) -> Verdict:
-    """Our ``k`` of ``n`` against the paper's ``paper_k`` of ``paper_n`` (rule 1 of
-    ``docs/statistics.md``, "Verdicts against a paper"): the difference ours - paper with
-    Newcombe's independent-samples interval and the two-sided 'N-1' chi-square p; "agrees" when
-    the interval holds 0."""
+    """Our ``k`` of ``n`` against the paper's ``paper_k`` of ``paper_n`` (rule 1):
+    Newcombe interval of ours - paper; "agrees" when it holds 0."""
     diff = k / n - paper_k / paper_n
     low, high = (float(v) for v in proportion_difference_interval(paper_k, paper_n, k, n))
     p = float(two_proportion_p(k, n, paper_k, paper_n))
@@ -70,11 +60,8 @@ def against_paper_sample(k: int, n: int, paper_k: int, paper_n: int) -> Verdict:
 
 
 def below_paper_bound(k: int, n: int, bound: float, paper_n: int) -> Verdict:
-    """A claimed bound ("below ``bound`` (fraction) in ``paper_n`` runs") against our ``k``
-    of ``n`` at the setting fixed in advance: the paper's sample holds at most
-    ``ceil(bound * paper_n) - 1`` runs (2 of 50 below 5 %), and ours "differs" only when
-    the Newcombe interval of ours minus that count's rate lies above 0; a rate below it is
-    consistent with the claim however many runs show it."""
+    """A claimed bound ("below ``bound`` in ``paper_n`` runs") against our ``k`` of ``n`` (rule 1):
+    "differs" only when our rate lies above the largest count under the bound."""
     most = math.ceil(bound * paper_n) - 1
     diff = k / n - most / paper_n
     low, high = (float(v) for v in proportion_difference_interval(most, paper_n, k, n))
@@ -86,9 +73,8 @@ def below_paper_bound(k: int, n: int, bound: float, paper_n: int) -> Verdict:
 
 
 def at_least(estimate: float, low: float, high: float, margin: float, claim: str) -> Verdict:
-    """A claim that a difference of two rates (fractions) is at least ``margin`` (declared in
-    advance; negative for a claimed decline), judged by ``estimate`` and its 95 % interval
-    (rule 2 of ``docs/statistics.md``); ``claim`` names it in words ("a rise")."""
+    """A claim that a difference of two rates is at least ``margin`` (negative for a decline),
+    judged by ``estimate`` and its 95 % interval (rule 2)."""
     sign = 1.0 if margin > 0 else -1.0
     near, far = sorted((sign * low, sign * high))
     shown = f"{points(estimate)} points ({points(low)} to {points(high)})"
@@ -103,10 +89,7 @@ def at_least(estimate: float, low: float, high: float, margin: float, claim: str
 
 
 def within(estimate: float, low: float, high: float, margin: float, claim: str) -> Verdict:
-    """A claim that a difference of two rates (fractions) is at most ``margin`` (declared in
-    advance, positive): "agrees" when its 95 % interval lies at or below it, "differs" when
-    above it, else "inconclusive"; ``claim`` names it in words ("within 5 points of the
-    optimum")."""
+    """A claim that a difference of two rates is at most ``margin`` (rule 2, other side)."""
     shown = f"{points(estimate)} points ({points(low)} to {points(high)})"
     if high <= margin:
         return Verdict(AGREES, estimate, low, high, f"{shown}: {claim}")
@@ -174,9 +157,8 @@ def matches(setting: str, wanted: Mapping[str, object]) -> bool:
 
 @dataclass(frozen=True)
 class Line:
-    """One paper item's bottom line: its one ``verdict`` with a one-line ``reason``, from the
-    ``answering`` headline rows (of its declared config, algorithm and setting), and the
-    ``supporting`` rows of every other config or setting that judged it."""
+    """One paper item's bottom line: its ``verdict`` and ``reason`` from the ``answering`` headline
+    rows, and the ``supporting`` rows of every other config or setting."""
 
     item: Reported
     verdict: str
@@ -186,9 +168,7 @@ class Line:
 
 
 def _answers(item: Reported, rows: pd.DataFrame) -> pd.Series:
-    """Which of ``rows`` (headline rows with a ``config`` column, configs joined by ", "
-    where several gave the same row) the item's declared :class:`~trackfuse.reported.Answer`
-    names."""
+    """The ``rows`` that the item's declared :class:`~trackfuse.reported.Answer` names."""
     answer = item.answer
     assert answer is not None
     config = rows["config"].map(lambda c: answer.config in str(c).split(", "))
@@ -202,10 +182,8 @@ def _answers(item: Reported, rows: pd.DataFrame) -> pd.Series:
 
 def bottom_line(results: Sequence[Reported], rows: pd.DataFrame,
                 ran: Collection[str] | None = None) -> list[Line]:
-    """One :class:`Line` per item of ``results`` that declares an answer (rule 5 of
-    ``docs/statistics.md``), from ``rows`` (headline rows of every config, with a ``config``
-    column): the answering rows' verdicts :func:`combined`; "not comparable" when the answering
-    config gave no row, or is not among the configs that ``ran`` (when given)."""
+    """One :class:`Line` per item of ``results`` that declares an answer (rule 5); "not comparable"
+    when the answering config gave no row or did not run."""
     out = []
     for item in (r for r in results if r.answer is not None):
         about = rows[rows["claim"] == item.quantity] if len(rows) else rows

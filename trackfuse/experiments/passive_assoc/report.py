@@ -1,20 +1,6 @@
-"""Figures and report tables of the ``passive_assoc`` experiment (paper 002: two passive
-infrared sensors associated by an improved partheno-genetic algorithm, PGA).
-
-The figures are the report kit's declared plots
-(:data:`trackfuse.experiments.passive_assoc.FIGURES`, whose captions say what each draws);
-this module only titles ``convergence`` as paper 002's Fig. 2 where the run redraws it
-(:func:`fig2_title`) and says why a figure cannot be drawn. Nothing is recomputed from
-trials but the tables' intervals.
-
-Tables (:func:`tables`), every interval two columns ``<quantity>_ci_low``/``_ci_high``:
-``paper_vs_reproduced`` (the paper's claims against the run, :func:`paper_vs_reproduced`),
-``checkpoints`` (every metric per point, algorithm and checkpoint: Student-t for means,
-Wilson for 0/1 rates, bootstrap-t for the gap ``J* - J``, :func:`gap_interval`), ``final``
-(the same at each algorithm's last checkpoint, ablations included) and ``versus_exact``
-(at the paper's setting, each compared variant against the exact optimum on the same
-trials, :func:`versus_exact`; the reason instead when no point is at that setting).
-"""
+"""Figures and report tables of ``passive_assoc`` (paper 002, PGA association): the figures are
+the declared plots of :data:`~trackfuse.experiments.passive_assoc.FIGURES`; the tables and their
+intervals are described in ``docs/papers/passive_assoc.md``, "Metrics and intervals"."""
 
 from __future__ import annotations
 
@@ -63,9 +49,8 @@ SETTING_KEYS = ("targets.n", "scene.mode", "noise.sigma", "noise.reading", "sens
 
 
 def _setting_words(values: dict[str, Any], config: dict) -> str:
-    """The setting of a point in the declared words (``N = 5, paper's M1-MN, σ = 0.005 rad,
-    σ read as sd, P_D = 0.95``), ``values`` (swept key -> value) over ``config['params']``,
-    and every other swept value (a headline row of a run sweeping p_m names its p_m)."""
+    """A point's setting in words (``N = 5, σ = 0.005 rad, P_D = 0.95``) and every other
+    swept value."""
     p = {**config.get("params", {}), **values}
     keys = [*SETTING_KEYS, *(k for k in values if k not in SETTING_KEYS)]
     return render.setting_words(EXPERIMENT, {k: p[k] for k in keys if k in p})
@@ -97,18 +82,9 @@ RATE_METRICS = ("correct", "at_opt")
 
 
 def gap_interval(gap: ArrayLike, level: float = 0.95) -> tuple[float, float]:
-    """Interval of the mean objective gap ``J* - J`` (nats): the expanded bootstrap-t
-    interval of :func:`trackfuse.stats.bootstrap_t_mean_intervals`
-    (:data:`BOOTSTRAP_RESAMPLES` resamples, generator :data:`BOOTSTRAP_SEED`), the lower
-    bound clipped at 0 since no gap is negative.
-
-    gap : (n,) per-run gaps, each >= 0, exactly 0 for a run at the optimum. All runs at the
-    optimum collapse the interval to 0, a few runs off it leave the upper bound infinite:
-    the Wilson interval of the at-optimum rate then says how sure the run is. NaN for
-    fewer than 2 runs. Its measured coverage (0.951-0.973 for the paper's PGA, far less
-    for variants nearly always at ``J*``): ``docs/papers/passive_assoc.md``, "Metrics and
-    intervals".
-    """
+    """Bootstrap-t interval of the mean gap ``J* - J`` (nats) over ``gap`` (n,), lower end clipped
+    at 0; NaN for fewer than 2 runs. Coverage: ``docs/papers/passive_assoc.md``, "Metrics and
+    intervals"."""
     g = np.asarray(gap, dtype=float)
     low, high = bootstrap_t_mean_intervals([g], level, BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED)[0]
     return max(float(low), 0.0), float(high)
@@ -139,14 +115,8 @@ def _interval_columns(g: pd.DataFrame) -> dict[str, float]:
 
 
 def checkpoint_metrics(trials: pd.DataFrame, config: dict) -> pd.DataFrame:
-    """Every metric per point, algorithm and checkpoint, with its 95 % interval.
-
-    Columns: ``point``, the swept keys, ``algorithm``, ``ops``, ``n`` and, per metric,
-    ``<metric>``, ``<metric>_ci_low``, ``<metric>_ci_high``: Student-t for accuracy, precision and
-    recall (clipped to [0, 1]); Wilson for ``correct`` and ``at_opt``; bootstrap-t for
-    ``gap`` (:func:`gap_interval`; 0 for runs at ``J*``); and the mean number of declared
-    pairs.
-    """
+    """Every metric per point, algorithm and checkpoint with ``<metric>_ci_low``/``_ci_high``
+    (Student-t, Wilson for 0/1 rates, :func:`gap_interval` for ``gap``)."""
     keys = ["point", *[k for k in _grouping_keys(config) if k in trials], "algorithm", "ops"]
     rows = [{**dict(zip(keys, key, strict=True)), **_interval_columns(g)}
             for key, g in succeeded_rows(trials).groupby(keys, sort=True)]
@@ -179,10 +149,8 @@ def _fig2_misses(values: dict[str, Any], config: dict) -> list[str]:
 
 
 def _versus_exact(runs: pd.DataFrame, exact: pd.DataFrame, metric: str) -> dict[str, Any]:
-    """``metric`` of a PGA variant's ``runs`` against the exact optimum on the same trials:
-    the variant's mean and 95 % interval, the exact mean, and the paired difference
-    exact - PGA with its 95 % interval (Student-t; Newcombe's paired score interval for the
-    0/1 ``correct``)."""
+    """``metric`` of a PGA variant against the exact optimum on the same trials: both means and the
+    paired difference exact - PGA with its 95 % interval."""
     both = runs.merge(exact, on="trial", suffixes=("", "_x"))
     v, x = both[metric].to_numpy(float), both[f"{metric}_x"].to_numpy(float)
     n = len(both)
@@ -206,10 +174,8 @@ FIG2_METRICS = {"accuracy": "measurement-level accuracy", "recall": "pair recall
 
 def _fig2_points(trials: pd.DataFrame, config: dict) -> list[tuple[int, dict, str, pd.DataFrame,
                                                                    pd.DataFrame]]:
-    """``(point, values, variant, its rows at the last checkpoint, exact rows)`` for every
-    point at the paper's setting and every variant of :data:`COMPARED` run there; a variant
-    once per setting (points of a swept ``algorithms`` list that share the rest run it on
-    the same draws: model.py's random streams)."""
+    """``(point, values, variant, last-checkpoint rows, exact rows)`` at the paper's setting, each
+    variant once per setting."""
     out, seen = [], set()
     if "exact" not in set(trials["algorithm"]):
         return out
@@ -228,9 +194,8 @@ def _fig2_points(trials: pd.DataFrame, config: dict) -> list[tuple[int, dict, st
 
 
 def versus_exact(trials: pd.DataFrame, config: dict) -> pd.DataFrame:
-    """Paper Fig. 2 setting: each compared PGA variant at its last checkpoint against the
-    exact optimum on the same trials, per metric of :data:`FIG2_METRICS` (value with its
-    95 % interval, exact mean, paired difference exact - PGA with its 95 % interval)."""
+    """Each compared PGA variant at its last checkpoint against the exact optimum, per metric of
+    :data:`FIG2_METRICS`, at the paper's Fig. 2 setting."""
     rows = []
     for point, values, name, runs, exact in _fig2_points(succeeded_rows(trials), config):
         head = {"point": point, **values, "algorithm": name, "ops": int(runs["ops"].max()),
@@ -245,10 +210,8 @@ def versus_exact(trials: pd.DataFrame, config: dict) -> pd.DataFrame:
 
 def _fig2_headline(values: dict, config: dict, name: str, runs: pd.DataFrame,
                    exact: pd.DataFrame) -> list[dict[str, Any]]:
-    """The two Fig. 2 claims for one variant at one point: a high correct rate (read as
-    within the declared margin of the exact optimum's accuracy, the ceiling of this
-    objective: :func:`~trackfuse.reportkit.verdicts.within`) and the optimum reached (every
-    run at ``J*``)."""
+    """The two Fig. 2 claims for one variant at one point: accuracy within the declared margin of
+    the exact optimum's, and every run at ``J*``."""
     high_rate = PASSIVE_ASSOC.result("high correct rate")
     optimum = PASSIVE_ASSOC.result("optimum reached")
     ops, n = int(runs["ops"].max()), len(runs)
@@ -275,16 +238,8 @@ def _fig2_headline(values: dict, config: dict, name: str, runs: pd.DataFrame,
 
 
 def paper_vs_reproduced(trials: pd.DataFrame, config: dict) -> pd.DataFrame:
-    """What paper 002 claims against what this run measures, in :data:`HEADLINE_COLUMNS`.
-
-    The paper gives no numbers (:data:`trackfuse.reported.PASSIVE_ASSOC`). For every point
-    at the paper's setting (:data:`PAPER_SETTING`) and every variant of :data:`COMPARED`,
-    at its last checkpoint: "converges to a high correct rate" judged by the paired
-    interval of exact - PGA accuracy against the margin declared on the paper's item
-    (:func:`_fig2_headline`); and "a finite number of operations reaches the optimum" when
-    every run reaches ``J*`` (Wilson interval of the fraction shown). One more row answers
-    the claim that the Hungarian method cannot solve the dummy formulation.
-    """
+    """Paper 002's claims against this run, in :data:`HEADLINE_COLUMNS` (the paper gives no
+    numbers; verdict rules: ``docs/statistics.md``, "Verdicts against a paper")."""
     out = []
     for _, values, name, runs, exact in _fig2_points(succeeded_rows(trials), config):
         out += _fig2_headline(values, config, name, runs, exact)
@@ -302,10 +257,8 @@ def paper_vs_reproduced(trials: pd.DataFrame, config: dict) -> pd.DataFrame:
 
 
 def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure | str]:
-    """The ``wanted`` figures, drawn by the report kit from their declared plots
-    (:data:`~trackfuse.experiments.passive_assoc.FIGURES`); a one-line reason string for
-    one this run cannot draw. ``convergence`` is titled as paper 002's Fig. 2 only where the
-    run redraws it (:func:`fig2_title`); ``scale`` draws the paper's scenes as categories."""
+    """The ``wanted`` figures from their declared plots; a one-line reason for one this run cannot
+    draw."""
     plots = {name: spec.plot for name, spec in FIGURES.items()}
     titles = {"convergence": fig2_title(run, "correct association rate vs operations"),
               "at_optimum": fig2_title(run, "runs at the exact optimum vs operations", False)}
@@ -337,9 +290,8 @@ def _scale_problem(config: dict) -> str | None:
 
 
 def fig2_title(run: RunData, subject: str, redraws: bool = True) -> str:
-    """The figure's title: ``Paper 002 Fig. 2 redrawn`` only when the figure ``redraws``
-    it, every point is at its setting and the run sweeps nothing but the target count
-    (a sweep of another setting is this project's study, not the paper's figure)."""
+    """``Paper 002 Fig. 2 redrawn`` only when every point is at its setting and the run sweeps
+    nothing but the target count."""
     points = _points(run.summary, run.config)
     at_setting = all(not _fig2_misses(values, run.config) for _, values in points)
     only_n = set(_grouping_keys(run.config)) <= {"targets.n"}
@@ -355,9 +307,8 @@ NOT_AT_PAPER_SETTING = (
 
 
 def tables(run: RunData) -> dict[str, pd.DataFrame | str]:
-    """``paper_vs_reproduced`` (headline), ``checkpoints``, ``final`` and ``versus_exact``
-    (module docstring), from the trial rows, rounded to 4 digits; ``versus_exact`` is the
-    reason :data:`NOT_AT_PAPER_SETTING` when no point is at the paper's setting."""
+    """``paper_vs_reproduced``, ``checkpoints``, ``final`` and ``versus_exact`` (or the reason
+    :data:`NOT_AT_PAPER_SETTING`), rounded to 4 digits."""
     trials, config = run.trials, run.config
     metrics = checkpoint_metrics(trials, config)
     last = metrics.groupby(["point", "algorithm"])["ops"].transform("max")
