@@ -1,9 +1,6 @@
-"""Interval estimates and tests used by summaries, figures and ``compare``.
-
-Which interval serves where, and its measured coverage: ``docs/statistics.md``. scipy is
-imported on first use (only ``scipy.special`` for the summary). Array arguments broadcast to
-one shape ``S``, which each returned array has unless a function says otherwise.
-"""
+"""Interval estimates and tests for summaries, figures and ``compare``; which serves where and
+its coverage: ``docs/statistics.md``. scipy is imported on first use. Array arguments
+broadcast to one shape ``S``."""
 
 from __future__ import annotations
 
@@ -50,10 +47,8 @@ def t_interval(mean: ArrayLike, std: ArrayLike, n: ArrayLike,
 
 
 def nees_band(dim: int, n_runs: int, level: float = 0.95) -> tuple[float, float]:
-    """Band of the average NEES of ``n_runs`` runs of a ``dim``-state filter.
-
-    ``n_runs * ANEES ~ chi2(n_runs * dim)`` for a consistent filter.
-    """
+    """Band of the average NEES of ``n_runs`` runs of a ``dim``-state filter:
+    ``n_runs * ANEES ~ chi2(n_runs * dim)`` when consistent."""
     dof = dim * n_runs
     alpha = 1 - level
     return chi2_quantile(alpha / 2, dof) / n_runs, chi2_quantile(1 - alpha / 2, dof) / n_runs
@@ -63,10 +58,8 @@ def nees_band(dim: int, n_runs: int, level: float = 0.95) -> tuple[float, float]
 def welch_interval(m1: ArrayLike, s1: ArrayLike, n1: ArrayLike, m2: ArrayLike,
                    s2: ArrayLike, n2: ArrayLike,
                    level: float = 0.95) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Welch interval of ``m2 - m1`` from two samples' means, sds and sizes, and its two-sided p.
-
-    Returns ``(low, high, p_value)``; NaN where a sample has fewer than two values.
-    """
+    """Welch interval of ``m2 - m1`` and its two-sided p, ``(low, high, p_value)``; NaN where a
+    sample has fewer than two values."""
     from scipy import stats  # on first use: see the module docstring
 
     m1, s1, n1, m2, s2, n2 = (np.asarray(v, dtype=float) for v in (m1, s1, n1, m2, s2, n2))
@@ -92,11 +85,8 @@ def _p_value(p_test: ArrayLike, se: ArrayLike, diff: ArrayLike) -> np.ndarray:
 
 
 def no_spread_p(n1: ArrayLike, n2: ArrayLike | None = None) -> np.ndarray:
-    """Two-sided exact p of a difference with no spread: sign test ``2 * 0.5**n1`` for paired
-    differences, or ``2 / C(n1 + n2, n1)`` for two constant samples; at most 1.
-
-    A t test reads 0 there, whatever ``n``.
-    """
+    """Exact two-sided p of a difference with no spread (where a t test reads 0): sign test
+    ``2 * 0.5**n1`` if paired, else ``2 / C(n1 + n2, n1)``; at most 1."""
     from scipy.special import comb  # on first use: see the module docstring
 
     n1 = np.asarray(n1, dtype=float)
@@ -118,11 +108,9 @@ def paired_t_p(diff: ArrayLike, sd: ArrayLike, n: ArrayLike) -> np.ndarray:
 def proportion_difference_interval(k1: ArrayLike, n1: ArrayLike, k2: ArrayLike,
                                    n2: ArrayLike, both: ArrayLike | None = None,
                                    level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
-    """Newcombe's hybrid score interval of ``k2/n2 - k1/n1``, in [-1, 1]; NaN for an empty sample.
-
-    Independent samples (Newcombe 1998, Stat. Med. 17, 873-890, method 10), or paired when
-    ``both`` counts the trials that are 1 in both (Stat. Med. 17, 2635-2650, method 10).
-    """
+    """Newcombe's hybrid score interval of ``k2/n2 - k1/n1`` (Newcombe 1998,
+    Stat. Med. 17, 873-890, method 10; paired, 2635-2650, when ``both`` counts trials 1 in
+    both); NaN if a sample is empty."""
     k1, n1, k2, n2 = (np.asarray(v, dtype=float) for v in (k1, n1, k2, n2))
     with np.errstate(invalid="ignore", divide="ignore"):
         p1, p2 = k1 / n1, k2 / n2
@@ -149,10 +137,8 @@ def _paired_phi(a: np.ndarray, k1: np.ndarray, k2: np.ndarray, n: np.ndarray) ->
 
 
 def holm_adjusted(p_values: ArrayLike) -> np.ndarray:
-    """Holm's step-down adjusted p-values (m,) in input order (Holm 1979, Scand. J. Stat. 6, 65-70).
-
-    Rejecting below ``alpha`` keeps the family-wise error rate at ``alpha`` under any dependence.
-    """
+    """Holm's step-down adjusted p-values (m,) in input order
+    (Holm 1979, Scand. J. Stat. 6, 65-70)."""
     p = np.asarray(p_values, dtype=float)
     order = np.argsort(p, kind="stable")
     m = len(p)
@@ -173,11 +159,8 @@ def mcnemar_p(b: ArrayLike, c: ArrayLike) -> np.ndarray:
 
 
 def median_interval(values: ArrayLike, level: float = 0.95) -> tuple[float, float, float]:
-    """``(median, low, high)``: distribution-free interval ``[x_(j), x_(n+1-j)]`` of the median.
-
-    ``j`` is the largest with ``1 - 2 P(B < j) >= level``, ``B ~ Binomial(n, 1/2)`` (n = 50: the
-    18th and 33rd values). NaN bounds when even ``[min, max]`` covers less (n < 6 at 95 %).
-    """
+    """``(median, low, high)`` with ``[x_(j), x_(n+1-j)]``, ``j`` the largest with
+    ``1 - 2 P(B < j) >= level``, ``B ~ Binomial(n, 1/2)``; NaN bounds when ``n`` is too small."""
     from scipy.special import bdtr  # on first use: see the module docstring
 
     x = np.sort(np.asarray(values, dtype=float))
@@ -191,11 +174,8 @@ def median_interval(values: ArrayLike, level: float = 0.95) -> tuple[float, floa
 
 @dataclass(frozen=True)
 class PairedBinary:
-    """Two 0/1 outcomes ``x``, ``y`` of the same trials compared, every field of shape ``S``.
-
-    Counts, rates, ``diff = rate_y - rate_x`` with Newcombe's paired interval ``(low, high)``
-    and the exact McNemar ``p``.
-    """
+    """Two 0/1 outcomes of the same trials, fields of shape ``S``: counts, rates,
+    ``diff = rate_y - rate_x`` with Newcombe's paired ``(low, high)`` and exact McNemar ``p``."""
 
     n: np.ndarray
     k_x: np.ndarray
@@ -224,10 +204,8 @@ class PairedBinary:
 
 
 def paired_binary(x: ArrayLike, y: ArrayLike, level: float = 0.95) -> PairedBinary:
-    """:class:`PairedBinary` of ``y`` against ``x``, 0/1 arrays (trials, *S), NaN = no row.
-
-    Each comparison counts only the trials where both have a row.
-    """
+    """:class:`PairedBinary` of ``y`` against ``x``, 0/1 arrays (trials, *S), NaN = no row; each
+    comparison counts only trials where both have a row."""
     x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
     ok = ~(np.isnan(x) | np.isnan(y))
     x, y = np.where(ok, x, 0.0), np.where(ok, y, 0.0)
@@ -259,12 +237,9 @@ def two_proportion_p(k1: ArrayLike, n1: ArrayLike, k2: ArrayLike, n2: ArrayLike)
 
 def bootstrap_t_mean_intervals(groups: Sequence[ArrayLike], level: float = 0.95,
                                resamples: int = 2000, seed: int = 0) -> np.ndarray:
-    """Expanded bootstrap-t interval of the mean of each group, (len(groups), 2).
-
-    Method (Hesterberg's expanded ``alpha'``) and coverage: ``docs/statistics.md``. Non-finite
-    values are dropped; groups of equal size share one resampling draw (generator ``seed``). A
-    bound can be infinite; no spread gives ``(mean, mean)``; NaN below 2 values.
-    """
+    """Expanded bootstrap-t interval (len(groups), 2) of each group's mean
+    (``docs/statistics.md``); non-finite values dropped, equal-size groups share one draw
+    from ``seed``; NaN below 2 values."""
     from scipy.special import ndtr, stdtrit  # on first use: see the module docstring
 
     clean = [np.asarray(g, dtype=float)[np.isfinite(np.asarray(g, dtype=float))]
@@ -287,10 +262,8 @@ def bootstrap_t_mean_intervals(groups: Sequence[ArrayLike], level: float = 0.95,
 
 def percentile_mean_intervals(samples: np.ndarray, resamples: int = 2000,
                               seed: int = 0) -> np.ndarray:
-    """95 % percentile-bootstrap interval (R, 2) of the mean of each row of ``samples`` (R, n).
-
-    Kept only to measure the bootstrap-t against (``examples/interval_coverage.py``).
-    """
+    """95 % percentile-bootstrap interval (R, 2) of each row's mean of ``samples`` (R, n), the
+    baseline of ``examples/interval_coverage.py``."""
     n = samples.shape[1]
     means = samples @ _resample_counts(n, resamples, seed).T / n  # (R, resamples)
     return np.quantile(means, [0.025, 0.975], axis=1).T
@@ -304,10 +277,8 @@ def _resample_counts(n: int, resamples: int, seed: int) -> np.ndarray:
 
 
 def _bootstrap_t(x: np.ndarray, counts: np.ndarray) -> np.ndarray:
-    """(groups, resamples) t values ``(mean* - mean) / (s* / sqrt(n))`` of ``x`` (groups, n).
-
-    ``+-inf`` (0 at the mean) where a resample has no spread.
-    """
+    """(groups, resamples) ``(mean* - mean) / (s* / sqrt(n))`` of ``x`` (groups, n); ``+-inf`` (0 at
+    the mean) where a resample has no spread."""
     n = x.shape[1]
     centred = x - x.mean(axis=1, keepdims=True)  # smaller cancellation than raw values
     scale = np.abs(centred).max(axis=1, keepdims=True)
@@ -324,10 +295,7 @@ def _bootstrap_t(x: np.ndarray, counts: np.ndarray) -> np.ndarray:
 
 def rmse_intervals(squared_errors: Sequence[ArrayLike], level: float = 0.95,
                    resamples: int = 2000, seed: int = 0) -> np.ndarray:
-    """Interval (len, 2) of ``sqrt(mean(e^2))`` from squared errors, in the error's unit.
-
-    The bootstrap-t interval of the mean square, clipped at 0, square-rooted; assumes neither
-    zero-mean nor Gaussian errors.
-    """
+    """Interval (len, 2) of ``sqrt(mean(e^2))`` from squared errors: the bootstrap-t interval of
+    the mean square, clipped at 0, square-rooted."""
     mse = bootstrap_t_mean_intervals(squared_errors, level, resamples, seed)
     return np.sqrt(np.clip(mse, 0.0, None))

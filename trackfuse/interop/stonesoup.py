@@ -1,11 +1,5 @@
-"""Stone Soup adapter: our simulated angle returns in, our estimate arrays out.
-
-Converts orders and types (CV state ``(x, y, z, vx, vy, vz)`` against ``(x, vx, y, vy, z,
-vz)``; ``(azimuth, elevation)`` against ``(Elevation, Bearing)``; seconds against
-``datetime``), and seeds every Stone Soup random draw from the trial's common stream so a
-particle filter is a pure function of the trial. Stone Soup is optional: this module imports
-without it. See ``docs/stonesoup.md``.
-"""
+"""Stone Soup adapter: our angle returns in, our estimate arrays out, every random draw seeded
+from the trial (``docs/stonesoup.md``); imports without Stone Soup installed."""
 
 from __future__ import annotations
 
@@ -29,9 +23,8 @@ STONESOUP_MISSING = ("Stone Soup is not installed: pip install 'trackfuse[stones
 
 @lru_cache(maxsize=1)
 def stonesoup_types() -> SimpleNamespace:
-    """Stone Soup's classes used here, imported on first use (about 1 s, which ``list`` and
-    ``validate`` must not pay); ImportError with :data:`STONESOUP_MISSING` when absent.
-    """
+    """Stone Soup's classes, imported on first use (about 1 s); ImportError with
+    :data:`STONESOUP_MISSING` when absent."""
     try:
         from stonesoup.models.measurement.nonlinear import CartesianToElevationBearing
         from stonesoup.models.transition.linear import (
@@ -47,11 +40,7 @@ def stonesoup_types() -> SimpleNamespace:
         raise ImportError(STONESOUP_MISSING) from None
 
     class ElevationBearingExactJacobian(CartesianToElevationBearing):
-        """``CartesianToElevationBearing`` with the analytic Jacobian (no rotation offset).
-
-        Stone Soup's forward difference is about 1 % wrong in a column at 100 km ranges
-        (``docs/stonesoup.md``).
-        """
+        """``CartesianToElevationBearing`` with the analytic Jacobian (``docs/stonesoup.md``)."""
 
         def jacobian(self, state, **kwargs) -> np.ndarray:
             """``H`` (2, 6) rad/m, rows (elevation, bearing), Stone Soup state order."""
@@ -140,10 +129,7 @@ def transition_model(F: np.ndarray, Q: np.ndarray,
 def angle_model(sensor: np.ndarray, R: np.ndarray,
                 random_state: np.random.RandomState | None = None,
                 exact_jacobian: bool = False):
-    """Azimuth/elevation model of a sensor at ``sensor`` (3,) m with our ``R`` (2, 2) rad^2.
-
-    ``exact_jacobian`` uses :class:`ElevationBearingExactJacobian` instead of the finite difference.
-    """
+    """Azimuth/elevation model of a sensor at ``sensor`` (3,) m with ``R`` (2, 2) rad^2."""
     T = stonesoup_types()
     kind = T.ElevationBearingExactJacobian if exact_jacobian else T.CartesianToElevationBearing
     model = kind(ndim_state=6, mapping=(0, 2, 4),
@@ -153,10 +139,7 @@ def angle_model(sensor: np.ndarray, R: np.ndarray,
 
 
 def detections(z: np.ndarray, t: float, model) -> list:
-    """Detections of ``z`` (M, 2) rad at ``t`` s, as a list in the given order.
-
-    Not a set: the order fixes the floating-point sums of the association weights.
-    """
+    """Detections of ``z`` (M, 2) rad at ``t`` s, as a list: the order fixes the weights' sums."""
     T = stonesoup_types()
     when = timestamp(t)
     return [T.Detection(T.StateVector(zi[::-1]), timestamp=when, measurement_model=model)
@@ -164,19 +147,13 @@ def detections(z: np.ndarray, t: float, model) -> list:
 
 
 def measurement_gate(prediction) -> tuple[np.ndarray, np.ndarray]:
-    """Centre (2,) rad (azimuth first) and innovation covariance ``S`` (2, 2) of a measurement
-    prediction (for particles, their weighted mean and covariance).
-    """
+    """Centre (2,) rad and innovation covariance ``S`` (2, 2) of a measurement prediction."""
     centre = np.asarray(prediction.mean, dtype=float).reshape(2)[::-1].copy()
     return centre, np.asarray(prediction.covar, dtype=float)[::-1, ::-1].copy()
 
 
 def algorithm_random_state(common: np.random.Generator, algorithm: str) -> np.random.RandomState:
-    """A ``RandomState`` for Stone Soup, a function of (root seed, trial, algorithm) only.
-
-    A child of the common stream's seed sequence under a fixed spawn-key branch; the trial's
-    own draws are unchanged.
-    """
+    """A ``RandomState`` that depends on (root seed, trial, algorithm) only."""
     seq = common.bit_generator.seed_seq
     key = (*seq.spawn_key, _STREAM_KEY, zlib.crc32(algorithm.encode()))
     return np.random.RandomState(np.random.PCG64(np.random.SeedSequence(seq.entropy,
@@ -184,11 +161,8 @@ def algorithm_random_state(common: np.random.Generator, algorithm: str) -> np.ra
 
 
 class SeededSystematicResampler:
-    """Systematic resampling (Kitagawa 1996) from its own ``random_state``.
-
-    Drop-in for Stone Soup's ``SystematicResampler`` (which draws from global ``numpy.random``);
-    resamples only when the ESS ``1 / sum w^2`` is below ``ess_fraction`` times the count.
-    """
+    """Systematic resampling (Kitagawa 1996) from its own ``random_state``, only when the ESS
+    ``1 / sum w^2`` is below ``ess_fraction`` times the count."""
 
     def __init__(self, random_state: np.random.RandomState, ess_fraction: float = 0.5):
         self.random_state = random_state
@@ -210,12 +184,8 @@ class SeededSystematicResampler:
 
 
 def gaussian_pda_update(hypotheses: Sequence, updater):
-    """PDA update of a Gaussian prediction, as Stone Soup's ``PDAUpdater(gm_method=True)``.
-
-    Every hypothesis is updated by ``updater`` (any Kalman-family one), then collapsed with
-    ``beta_h`` (:func:`collapse`, in floats: Stone Soup's sums on ``Probability`` objects took
-    half the scan time).
-    """
+    """PDA update of a Gaussian prediction, as Stone Soup's ``PDAUpdater(gm_method=True)``: each
+    hypothesis updated by ``updater``, then collapsed with ``beta_h`` in floats."""
     T = stonesoup_types()
     states = [updater.update(h) if h else h.prediction for h in hypotheses]
     beta = np.array([float(h.probability) for h in hypotheses])
@@ -236,11 +206,7 @@ def collapse(x: np.ndarray, P: np.ndarray, weights: np.ndarray) -> tuple[np.ndar
 
 
 def particle_pda_update(hypotheses: Sequence, updater, resampler: SeededSystematicResampler):
-    """PDA update of a particle prediction: weights ``sum_h beta_h w_h``, then ``resampler``.
-
-    ``w_h`` are the weights updated on hypothesis ``h`` (prior weights for a miss); with exact
-    ``beta_h`` this is Bayes' rule for the PDA likelihood.
-    """
+    """PDA update of a particle prediction: weights ``sum_h beta_h w_h``, then ``resampler``."""
     T = stonesoup_types()
     prediction = hypotheses[0].prediction
     terms = []

@@ -1,11 +1,5 @@
-"""Paper 001's settings and claims judged against an ``esm_radar`` run: the headline table
-(:func:`paper_vs_reproduced`, in :data:`trackfuse.reports.HEADLINE_COLUMNS`).
-
-The paper's numbers and margins are declared in :data:`trackfuse.reported.ESM_RADAR`; each
-claim is judged by the report kit's shared verdicts (:mod:`trackfuse.reportkit.verdicts`,
-:mod:`trackfuse.reportkit.sweepclaims`) on the saved trials; this module only names the
-paper's items, settings and docs sections.
-"""
+"""Paper 001's claims against an ``esm_radar`` run (:func:`paper_vs_reproduced`); numbers and
+margins are in :data:`trackfuse.reported.ESM_RADAR`, rules in ``docs/statistics.md``."""
 
 from __future__ import annotations
 
@@ -64,10 +58,8 @@ def setting_words(point: Mapping[str, Any], keys: Sequence[str]) -> str:
 
 
 def _table3_rows(run: RunData) -> list[dict[str, Any]]:
-    """Paper Table 3 correct rates against every point of the run at the paper's setting:
-    ours against the paper's count of its 500 runs as two samples
-    (:func:`~trackfuse.reportkit.verdicts.against_paper_sample`); ``reproduced`` is our rate
-    with its Wilson interval."""
+    """Paper Table 3 correct rates against every point at the paper's setting, as two samples;
+    ``reproduced`` is our rate with its Wilson interval."""
     trials, out = run.trials, []
     swept = swept_keys(run.config)
     keys = [k for k in swept if k not in PAPER_TABLE3_SETTING]
@@ -94,10 +86,8 @@ def _table3_rows(run: RunData) -> list[dict[str, Any]]:
 
 
 def _ahp_rows() -> list[dict[str, Any]]:
-    """Paper Table 1 numbers against the exact root-method computation, compared as printed
-    (:func:`~trackfuse.reportkit.verdicts.as_printed_verdict`; an exact value has no
-    interval: ``ci_low``, ``ci_high`` NaN). The paper's CI is computed from its printed
-    lambda_max, so ours is too: from our lambda_max rounded as the paper prints it."""
+    """Paper Table 1 against the exact AHP computation, compared as printed (CI from our lambda_max
+    rounded as printed; ``docs/papers/esm_radar.md``, Table 1)."""
     B = ahp.PAPER_001_JUDGEMENT
     lam = ahp.lambda_max(B)
     lam_printed = round(lam, printed_decimals(ESM_RADAR.result("AHP lambda_max").value))
@@ -128,9 +118,8 @@ def _correct_by_point(trials: pd.DataFrame, name: str) -> pd.DataFrame:
 
 
 def _sweep_groups(run: RunData, x: str) -> list[tuple[str, str, list[tuple[float, int]]]]:
-    """Points of the run grouped by the swept keys other than ``x``: ``(words, setting,
-    [(x value, point), ...] sorted by x)`` per group, ``setting`` in the machine form of
-    :func:`~trackfuse.reportkit.verdicts.setting_text`."""
+    """Points grouped by the swept keys other than ``x``:
+    ``(words, setting, [(x, point), ...])``."""
     others = [k for k in swept_keys(run.config) if k != x]
     groups: dict[tuple, list[tuple[float, int]]] = {}
     for point, params in enumerate(run.points):
@@ -148,9 +137,7 @@ def _fmt_x(x: str, value: float) -> str:
 def _gap_rows(item: str, anchor: str, x: str, setting: str, imp: pd.DataFrame,
               trad: pd.DataFrame, xs: list[tuple[float, int]], at: str = ""
               ) -> list[dict[str, Any]]:
-    """Claims on the gap improved - traditional along ``x`` (``at``: the group's setting,
-    machine form): clearly higher at the first value and narrowing (Fig. 3 only,
-    :func:`_narrowing_row`), higher at every value (:func:`_always_higher_row`)."""
+    """Claims on the gap improved - traditional along ``x``: narrowing (Fig. 3), always higher."""
     gaps = [(xv, paired_binary(trad[p].to_numpy(), imp[p].to_numpy())) for xv, p in xs]
     n, where = len(imp), f" ({setting})" if setting else ""
     out = []
@@ -173,9 +160,8 @@ def _gap_rows(item: str, anchor: str, x: str, setting: str, imp: pd.DataFrame,
 def _narrowing_row(item: str, anchor: str, x: str, where: str, imp: pd.DataFrame,
                    trad: pd.DataFrame, xs: list[tuple[float, int]], at: str = ""
                    ) -> dict[str, Any]:
-    """"The gap narrows as separation grows"
-    (:func:`~trackfuse.reportkit.sweepclaims.narrows`: the gap at the closest separation
-    minus at the widest, same trials, against the declared margin)."""
+    """"The gap narrows as separation grows": closest minus widest gap, same trials, against the
+    declared margin."""
     gap = {xv: imp[p].to_numpy() - trad[p].to_numpy() for xv, p in xs}
     claim = ESM_RADAR.result("gap narrows")
     v = narrows(gap, claim.margin, lambda value: _fmt_x(x, value))
@@ -188,9 +174,8 @@ def _narrowing_row(item: str, anchor: str, x: str, where: str, imp: pd.DataFrame
 
 def _always_higher_row(item: str, anchor: str, x: str, where: str, n: int,
                        gaps: list[tuple[float, PairedBinary]], at: str = "") -> dict[str, Any]:
-    """"Always higher" (abstract, over separation) / "higher throughout" (Fig. 4):
-    :func:`~trackfuse.reportkit.sweepclaims.higher_everywhere` of improved against
-    traditional (``gaps``: per x value); ``reproduced`` is the smallest gap."""
+    """"Always higher" / "higher throughout": improved against traditional at every x;
+    ``reproduced`` is the smallest gap."""
     v = higher_everywhere(gaps, lambda value: _fmt_x(x, value))
     xm, _ = min(gaps, key=lambda xg: xg[1].diff)
     separation = x == "target.separation"
@@ -204,9 +189,8 @@ def _always_higher_row(item: str, anchor: str, x: str, where: str, n: int,
 
 def _trend_rows(item: str, anchor: str, x: str, setting: str, rates: dict[str, pd.DataFrame],
                 xs: list[tuple[float, int]], at: str = "") -> list[dict[str, Any]]:
-    """"Both degrade" claims: rate at the hardest end minus rate at the easiest end of
-    ``x`` per algorithm (paired over the trials, one pre-specified comparison), judged
-    against the declared margin (:func:`~trackfuse.reportkit.verdicts.at_least`)."""
+    """"Both degrade": rate at the hardest end minus at the easiest end, paired, against the
+    declared margin."""
     hard, easy = (xs[0], xs[-1]) if x == "target.separation" else (xs[-1], xs[0])
     claim = ESM_RADAR.result("both degrade when close" if x == "target.separation"
                              else "both decline with range error")
@@ -247,28 +231,15 @@ def _curve_rows(run: RunData) -> list[dict[str, Any]]:
 
 
 def paper_vs_reproduced(run: RunData) -> pd.DataFrame:
-    """What paper 001 reports against this run, in :data:`HEADLINE_COLUMNS`.
-
-    * Table 3: correct rate of ``improved`` and ``traditional`` at every point at the paper's
-      setting (:data:`PAPER_TABLE3_SETTING`), 95 % Wilson interval; judged against the
-      paper's 370 / 276 of 500 runs as two samples (:func:`_table3_rows`).
-    * Table 1: lambda_max, CI, CR and the five AHP weights, computed exactly; compared as
-      printed (:func:`_ahp_rows`).
-    * Fig. 3 / Fig. 4 / abstract, when separation or radar range error is swept: the claims
-      as paired differences over the same trials (trials share their random numbers across
-      sweep points), judged against the margins declared on the paper's items
-      (:data:`trackfuse.reported.ESM_RADAR`; :func:`_trend_rows`, :func:`_gap_rows`,
-      :func:`_narrowing_row`, :func:`_always_higher_row`).
-    """
+    """Paper 001's Table 3, Table 1 and (when separation or radar range error is swept) Fig. 3,
+    Fig. 4 and abstract claims against this run, in :data:`HEADLINE_COLUMNS`."""
     rows = _table3_rows(run) + _ahp_rows() + _curve_rows(run)
     table = pd.DataFrame(rows, columns=list(HEADLINE_COLUMNS))
     return table.astype({"trials": "Int64"})
 
 
 def value_words(key: str, value: Any) -> str:
-    """A swept value in the experiment's declared words: its word (a quoted word after the
-    key's label: ``radar factors 'derived' (from position)``), else ``label value``
-    (``T1–T2 separation 200 m``)."""
+    """A swept value in the experiment's declared words (``T1–T2 separation 200 m``)."""
     shown = render.quantity(EXPERIMENT, key)
     word = dict(shown.words).get(value)
     if word:
