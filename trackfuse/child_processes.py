@@ -1,16 +1,7 @@
-"""Setup of the processes a run forks: pool workers and drawing processes.
-
-Ctrl-C in a terminal reaches every process of the group. The main process stops the run
-(one line, exit 130) and ends its children, so they ignore it: otherwise each printed its
-own ``KeyboardInterrupt`` traceback. (The fork server starts with it ignored:
-:mod:`trackfuse.executors`.)
-
-A main process that is killed (``kill -9``, out of memory), or interrupted while its pool was
-still starting a worker, cannot end every child, and an idle pool worker waits for work
-forever: it holds a copy of its own task queue, so the queue never reports that the other end
-is gone, and it keeps the fork server alive too (multiprocessing hands every child the fork
-server's keep-alive pipe). So each child watches the main process and ends when it does.
-"""
+"""Setup of the processes a run forks (pool workers, drawing processes): they ignore Ctrl-C,
+which the main process handles (``docs/runner.md``), and each watches the main process and
+ends when it does, since an idle pool worker would otherwise wait forever after a
+``kill -9``."""
 
 from __future__ import annotations
 
@@ -51,9 +42,8 @@ def _exit_with(pid: int) -> None:
 
 
 def process_alive(pid: int) -> bool:
-    """Whether process ``pid`` runs on this host: it exists and, where ``/proc`` tells, has
-    not ended (a killed process stays a zombie until its parent reaps it; ``trackfuse runs``
-    listed a run killed by ``kill -9`` as running until then)."""
+    """Whether process ``pid`` runs on this host: it exists and, where ``/proc`` tells, is not a
+    zombie."""
     another_user = False
     try:
         os.kill(pid, 0)
@@ -77,14 +67,9 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 @contextmanager
 def ctrl_c_held(held_words: str | None = None) -> Iterator[None]:
-    """Hold a Ctrl-C or SIGTERM that arrives inside the block until the block ends, then
-    raise it as the handler in place would. Around what starts a child process (a pool's
-    ``submit``, the first submit of a fork pool): one arriving inside ``Process.start`` or
-    ``os.fork`` left a worker the pool did not know of, which printed a traceback after the
-    command had exited, or was raised inside a fork hook, printed as "Exception ignored" and
-    lost (the run went on and exited 0). ``held_words``, if given, go to standard error as
-    the first signal is held (a block that can last seconds). Only in the main thread
-    (elsewhere a no-op)."""
+    """Hold a Ctrl-C or SIGTERM that arrives inside the block, then raise it as the handler would:
+    around what starts a child, where one would leave a worker the pool does not know.
+    ``held_words`` go to standard error when the first is held. Main thread only."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return

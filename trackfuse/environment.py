@@ -1,8 +1,5 @@
 """What a run's numbers depend on besides config, seed and code: library versions and the CPU.
-
-Kept out of the modules the code fingerprint hashes (``trackfuse.fingerprint.NUMBERS_PATH``),
-so that editing this module does not change every run id. See ``docs/runner.md`` (run id).
-"""
+Kept out of the fingerprinted modules so editing it changes no run id."""
 
 from __future__ import annotations
 
@@ -53,11 +50,8 @@ def _numpy_simd() -> list[str] | None:
 
 
 def _numpy_blas() -> list[str] | None:
-    """The BLAS numpy calls and the kernel it chose for this CPU, e.g. ``["openblas
-    SkylakeX"]`` (threadpoolctl's view of the loaded libraries; OpenBLAS picks its kernels
-    when it loads, and another kernel can round linear algebra differently). numpy's own
-    copy when it bundles one (a wheel), so that what else is loaded does not change it;
-    ``None`` when no BLAS is found."""
+    """The BLAS numpy calls and the kernel it chose for this CPU (``["openblas SkylakeX"]``),
+    numpy's bundled copy when it has one; ``None`` when no BLAS is found."""
     found = threadpoolctl.threadpool_info()
     blas = [lib for lib in found if lib.get("user_api") == "blas"]
     home = Path(np.__file__).resolve().parent
@@ -69,10 +63,8 @@ def _numpy_blas() -> list[str] | None:
 
 
 def cpu() -> dict[str, Any]:
-    """This machine's CPU: ``model``, ``numpy_simd`` (:func:`_numpy_simd`), ``blas``
-    (:func:`_numpy_blas`) and ``settings`` (the :data:`ROUNDING_VARIABLES` that are set).
-    Another CPU can round the last bit of some results differently (numpy's ``exp``,
-    ``arctan2`` with AVX-512 or without; OpenBLAS's kernels)."""
+    """This CPU's ``model``, ``numpy_simd``, ``blas`` and the set :data:`ROUNDING_VARIABLES`:
+    another CPU can round the last bit of some results differently."""
     model = platform.processor() or platform.machine()
     with contextlib.suppress(OSError):
         for line in Path("/proc/cpuinfo").read_text().splitlines():
@@ -92,9 +84,7 @@ def recorded_cpus(recorded: Any) -> list[dict[str, Any]]:
 
 def unseen_cpus(current: list[dict[str, Any]],
                 seen: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """The CPUs of ``current`` (:func:`cpu`) that round unlike every one of ``seen``: that
-    differ in some key both record (a run recorded before ``blas`` was, is compared on the
-    rest)."""
+    """The CPUs of ``current`` that differ from every one of ``seen`` in a key both record."""
     def alike(one: dict[str, Any], other: dict[str, Any]) -> bool:
         return all(one[key] == other[key] for key in one.keys() & other.keys())
     return [c for c in current if not any(alike(c, s) for s in seen)]
@@ -112,10 +102,7 @@ def cpu_words(machine: dict[str, Any]) -> str:
 
 
 def worker_environment(experiment: Experiment) -> dict[str, Any]:
-    """What this process computes ``experiment``'s numbers with: ``code`` (the sha256 of
-    :func:`trackfuse.fingerprint.code_fingerprint`), ``libraries``
-    (:func:`library_versions`) and ``cpu`` (:func:`cpu`). Run on each dask worker, which
-    imports its own installation."""
+    """``code`` fingerprint, ``libraries`` and ``cpu`` of this process, run on each dask worker."""
     return {"code": code_fingerprint(experiment).digest, "libraries": library_versions(),
             "cpu": cpu()}
 

@@ -1,20 +1,9 @@
-"""Run an experiment in memory: trials and summary frames from params, a sweep and a seed.
-
-The harness is the real runner on a throw-away folder (serial executor, no report), so its
-numbers are the numbers ``trackfuse run`` writes for the same config, seeding, batching,
-summary and intervals included::
+"""Run an experiment in memory: the real runner (serial, no report) on a throw-away folder, so
+its numbers are those ``trackfuse run`` writes for the same config (``docs/plugins.md``)::
 
     from trackfuse import harness
     trials, summary = harness.run("twin_sensor", params={"scan.count": 5},
-                                  sweep={"clutter.mean": [0, 4]}, trials=20, seed=1)
-
-:func:`run_data` keeps the folder and returns it as :class:`~trackfuse.rundata.RunData`,
-which is what report modules read (figure tests draw from it).
-
-A plugin is named as in a config (``"coin:EXPERIMENT"``, found on the Python path) or by
-its file from any folder (``"examples/plugin_example/coin.py:EXPERIMENT"``): the file's
-folder is added to the end of the Python path and the run records ``coin:EXPERIMENT``.
-"""
+                                  sweep={"clutter.mean": [0, 4]}, trials=20, seed=1)"""
 
 from __future__ import annotations
 
@@ -53,18 +42,12 @@ def run_data(out: str | Path, experiment: str | Experiment,
              params: Mapping[str, Any] | None = None,
              sweep: Mapping[str, list[Any]] | None = None, *, trials: int = 10, seed: int = 0,
              sweep_mode: str = "grid", batch_size: int | None = None) -> RunData:
-    """Run ``experiment`` (a name, a plugin's ``module:ATTR`` or ``path/module.py:ATTR``, or
-    an :class:`Experiment`) into ``out`` and return the
-    complete run. ``params`` override defaults (dotted keys; a swept key's value is
-    ignored); ``sweep`` maps a key to its values; ``trials`` per sweep point; ``seed`` the
-    root seed; ``batch_size`` default: the experiment's.
+    """Run ``experiment`` (a name, ``module:ATTR``, ``path/module.py:ATTR`` or an
+    :class:`Experiment`, run as given) into ``out`` and return the complete run. ``params`` are
+    dotted overrides, ``sweep`` maps a key to its values, ``trials`` per point.
 
-    An :class:`Experiment` object is run as it is, never looked up by its name (two objects
-    of one name, or a ``dataclasses.replace`` of a built-in, each run their own code), and
-    the returned run's :attr:`~trackfuse.rundata.RunData.experiment` is that object. The
-    folder records the name only, and the run id covers the config and the source files,
-    not the object: give two objects of one name, defined in one module, their own
-    ``out`` (as :func:`run` does), or the second resumes the first's finished run."""
+    The run id covers the name, not the object: two objects of one name need their own ``out``,
+    or the second resumes the first's run."""
     config = _config(experiment, params, sweep, trials, seed, sweep_mode, batch_size)
     runner = Runner(config, Path(out), workers=1, executor="serial", plots=False,
                     progress=False, command=["trackfuse.harness"])

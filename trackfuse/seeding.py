@@ -1,17 +1,6 @@
-"""The one seeding rule: which random numbers a Monte Carlo trial sees.
-
-Each trial gets two PCG64 generators, told apart by the ``spawn_key`` of a
-:class:`numpy.random.SeedSequence` (domain 0 or 1), so no stream can equal another:
-
-* ``common``, of (root seed, trial): the same at every sweep point (common random numbers),
-  for truth, initial estimate, measurement noise and algorithm randomness;
-* ``point``, of (root seed, trial, draw point): what a swept parameter changes, such as the
-  clutter. Points that differ only in ``Param(draws=False)`` keys share a draw point.
-
-Nothing else (worker, executor, batch, order) enters, so every schedule writes the same
-numbers. Domain 2 seeds numpy's global generator before each trial
-(:func:`seed_numpy_global`). See ``docs/runner.md`` (seeding).
-"""
+"""The one seeding rule (``docs/runner.md``, "Seeding"): each trial gets two PCG64 generators
+told apart by ``SeedSequence`` spawn keys, ``common`` of (root seed, trial) and ``point`` of
+(root seed, trial, draw point); nothing else (worker, executor, batch, order) enters."""
 
 from __future__ import annotations
 
@@ -36,9 +25,8 @@ class TrialStreams:
 
 
 def draw_points(points: Sequence[SweepPoint], drawing: Collection[str]) -> list[int]:
-    """The draw point of every sweep point, in point order: the index of the first point
-    whose values of the swept keys in ``drawing`` (the parameters that change what is
-    simulated) equal its own. With every swept key drawing, each point is its own."""
+    """The draw point of every sweep point: the index of the first point whose values of the
+    swept keys in ``drawing`` equal its own."""
     first: dict[tuple[Any, ...], int] = {}
     return [first.setdefault(_hashable([v for k, v in p.values.items() if k in drawing]),
                              p.index) for p in points]
@@ -58,10 +46,8 @@ def trial_streams(seed: int, point: int, trial: int) -> TrialStreams:
 
 
 def seed_numpy_global(seed: int, point: int, trial: int) -> None:
-    """Seed numpy's global generator (``np.random.normal`` and the like, which a plugin
-    must not use) for trial ``trial`` of draw point ``point``: from a third domain of the
-    same seed sequence, so a plugin that uses it anyway draws the same numbers on every
-    executor and worker, and neither trial stream is touched."""
+    """Seed numpy's global generator for trial ``trial`` of draw point ``point`` from a third
+    domain, so a plugin that uses it draws the same numbers on every executor."""
     state = np.random.SeedSequence(seed, spawn_key=(_GLOBAL, trial, point)).generate_state(1)
     np.random.seed(int(state[0]))
 

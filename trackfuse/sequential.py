@@ -1,14 +1,7 @@
-"""Sequential trial counts: add trials to a sweep point until its intervals are narrow enough.
-
-``trials: {min: 100, max: 20000, until: {metric: correct, half_width: 0.01}}``: each point
-starts with ``min`` trials and stops at the first look where the 95 % interval of ``metric``
-(as :func:`trackfuse.summary.summarize` computes it) has a half-width of at most
-``half_width`` in every cell of the point, or at ``max``. The looks are fixed in advance
-(:meth:`SequentialRule.looks`: ``min``, then doubling, in whole batches), and the rule reads
-only the rows of trials ``0 .. n - 1``, so every number is the same for any worker count,
-executor and resume. Rules, records and measured coverage: ``docs/runner.md``, "Sequential
-trial counts".
-"""
+"""Sequential trial counts (``docs/runner.md``, "Sequential trial counts"): add trials to a
+point, at looks fixed in advance, until the 95 % interval of ``metric`` has half-width at
+most ``half_width`` in every cell, or ``max`` is reached. Reads only trials ``0 .. n - 1``,
+so the result is the same for any executor and resume."""
 
 from __future__ import annotations
 
@@ -30,9 +23,8 @@ class SequentialRule:
     half_width: float
 
     def looks(self, batch_size: int) -> list[int]:
-        """The trial counts per point at which the rule is evaluated, increasing, the last
-        ``max``: ``min`` then doubling, each rounded up to a multiple of ``batch_size`` (so
-        every look ends on a batch boundary) and capped at ``max``."""
+        """Trial counts per point at which the rule is read: ``min``, then doubling, rounded up to
+        whole batches, the last ``max``."""
         def whole(n: int) -> int:
             return min(math.ceil(n / batch_size) * batch_size, self.max)
 
@@ -53,10 +45,8 @@ class SequentialRule:
 
 
 def widest_half_width(summary: pd.DataFrame, rule: SequentialRule) -> float:
-    """The largest half-width ``(ci_high - ci_low) / 2`` of ``rule.metric`` over the cells
-    of ``summary`` (one point's rows summarized as ``summary.csv`` is:
-    :func:`trackfuse.summary.summarize`); ``inf`` when a cell has no interval (fewer than
-    two values) or there is no cell (every trial failed)."""
+    """The largest ``(ci_high - ci_low) / 2`` of ``rule.metric`` over the cells of ``summary``;
+    ``inf`` when a cell has no interval or there is no cell."""
     mine = summary[summary["metric"] == rule.metric]
     if mine.empty:
         return math.inf
