@@ -1,12 +1,5 @@
-"""Open a file found inside a run folder only if it is a regular file, without ever waiting.
-
-Opening a FIFO for reading waits for a writer, for ever if none comes; a device may block
-or never end. A file the user names on the command line may be one (``trackfuse run
-<(generate)``), but a file trackfuse finds in a run folder (its manifest, a part, the
-lock's holder file, a sibling run's manifest) must be the regular file trackfuse wrote:
-:func:`open_regular` opens it without blocking and raises :class:`NotARegularFile` for
-anything else, so the command stops with one line instead of hanging.
-"""
+"""Open a file found inside a run folder only if it is a regular file, without blocking: a
+FIFO or device there would hang the command, so it stops with one line instead."""
 
 from __future__ import annotations
 
@@ -33,9 +26,8 @@ def _kind(mode: int) -> str:
 
 
 def open_regular(path: str | Path) -> BinaryIO:
-    """``path`` opened for binary reading if it is (or links to) a regular file; raises
-    :class:`NotARegularFile` (an ``OSError`` naming ``path``) for anything else, and the
-    usual ``OSError`` (``FileNotFoundError``...) when it cannot be opened. Never blocks."""
+    """``path`` opened for binary reading if it is (or links to) a regular file, else
+    :class:`NotARegularFile`; the usual ``OSError`` when it cannot be opened. Never blocks."""
     fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
     try:
         mode = os.fstat(fd).st_mode

@@ -1,15 +1,6 @@
-"""What the three reproduced papers themselves report, for "paper vs reproduced" tables.
-
-Only what each paper states: numbers, the shape of its figures, and its claims. These values
-are for comparison and are never used to tune a model. ``docs/papers/*.md`` discusses where
-we agree and where we differ.
-
-Each :class:`Reported` item names the paper's figure or table, the quantity, the paper's
-value (a number, or ``None`` when the paper gives only words) and the paper's words; an item
-that a report judges also declares, before any run, the smallest effect that counts as its
-claim (``margin``) and the config that answers it (``answer``): the shared verdict rules
-(:mod:`trackfuse.reportkit.verdicts`) read them from here, never from report code.
-"""
+"""What the three reproduced papers report (numbers, figure shapes, claims), for "paper vs
+reproduced" tables; never used to tune a model. Margins and answering configs are declared
+here, before any run, and read by :mod:`trackfuse.reportkit.verdicts`."""
 
 from __future__ import annotations
 
@@ -21,10 +12,8 @@ from trackfuse.association.ahp import PAPER_001_WEIGHTS
 
 @dataclass(frozen=True)
 class Answer:
-    """Which headline row answers a paper item: the rows of the shipped config ``config``
-    (file stem) for ``algorithm`` (every algorithm when empty) at the swept ``setting``
-    (param key -> value; every setting when empty). Several such rows (one per target
-    count, say) combine into one verdict (:func:`trackfuse.reportkit.verdicts.combined`)."""
+    """The headline rows that answer a paper item: shipped config ``config`` (file stem), for
+    ``algorithm`` (all when empty) at ``setting`` (param key -> value; all when empty)."""
 
     config: str
     algorithm: str = ""
@@ -33,9 +22,8 @@ class Answer:
 
 @dataclass(frozen=True)
 class Beside:
-    """A paper figure told whole in the reproduction report: the figure of the paper's own
-    scenario (config ``paper``) beside an ``analogue`` config where the effect shows, drawn
-    by ``draw`` (``"module:function"`` taking the two runs) for the paper item ``item``."""
+    """A paper figure told whole: the paper's own scenario (config ``paper``) beside an
+    ``analogue`` config, drawn by ``draw`` (``"module:function"``) for ``item``."""
 
     item: str
     paper: str
@@ -45,17 +33,10 @@ class Beside:
 
 @dataclass(frozen=True)
 class Reported:
-    """One reported result of a paper.
-
-    ``where``: the paper's figure or table (e.g. ``"Table 3"``). ``quantity``: what is
-    measured, in our words. ``value``: the paper's number (``None`` if it gives only text).
-    ``unit``: unit of ``value``. ``runs``: Monte Carlo runs behind it, when stated.
-    ``claim``: the paper's statement, paraphrased. ``margin``: the smallest effect that
-    counts as the claim, in the unit the report compares it in (a fraction for rates;
-    negative for a claimed decline), declared in advance, with ``margin_why`` saying why
-    that size. ``answer``: the config whose rows give the item's one verdict (``None``: an
-    item the report does not judge, such as the counts behind a rate).
-    """
+    """One reported result: ``where`` in the paper, ``quantity``, ``value`` (``None`` for words
+    only) in ``unit``, ``runs`` behind it, ``claim`` paraphrased; ``margin`` is the smallest
+    effect that counts as the claim (a fraction for rates, negative for a decline, why in
+    ``margin_why``) and ``answer`` the config giving its verdict (``None``: not judged)."""
 
     where: str
     quantity: str

@@ -1,11 +1,6 @@
-"""A batch's rows as columns: what a vectorized ``run_batch`` may return instead of dicts.
-
-A :class:`RowTable` keeps one array per column and writes the CSV column by column, with
-exactly the cells :func:`~trackfuse.rowformat.format_value` writes, so ``trials.csv`` is
-byte-identical to what dict rows give, at a fraction of the cost (8,000 rows per twin-sensor
-batch). ``table[i]`` is trial ``i``'s rows as dicts. Timings belong to the batch, so they are
-a separate small table, ``timings`` (one ``timings.csv`` row per entry, ``docs/outputs.md``).
-"""
+"""A batch's rows as columns, which a vectorized ``run_batch`` may return instead of dicts: the
+CSV is written column by column, byte-identical to dict rows and far cheaper. Timings are
+the batch's, in a separate small table (``docs/outputs.md``, ``timings.csv``)."""
 
 from __future__ import annotations
 
@@ -70,12 +65,8 @@ def _csv_text(header: list[str], cells: Sequence[Sequence[str]]) -> str:
 
 
 def frame_csv(frame) -> str:
-    """``frame.to_csv(index=False)``, byte for byte, written column by column: about twice
-    as fast for the float columns of summaries and tables. ``frame`` is a
-    :class:`pandas.DataFrame`; floats are written by ``repr`` and NaN as an empty cell, as
-    pandas writes them. A frame with another column type than float64, numpy integers and
-    strings that need no quoting, or whose column names are not distinct plain strings, or
-    with fewer than two columns, is written by pandas."""
+    """``frame.to_csv(index=False)`` byte for byte, about twice as fast for float columns; frames
+    with other column types, unusual names or fewer than two columns are written by pandas."""
     names = list(frame.columns)
     if len(names) < 2 or len(set(names)) < len(names) \
             or not all(type(n) is str for n in names) or not _plain_texts(names):
@@ -104,14 +95,10 @@ def _plain_texts(texts) -> bool:
 
 @dataclass(frozen=True)
 class RowTable(Sequence[list[dict[str, Any]]]):
-    """Rows of a batch of ``N`` trials as columns.
-
-    Attributes: ``trial`` (R,) int, the position in the batch (``0..N-1``) of each row's trial,
-    non-decreasing, every trial with at least one row. ``columns`` name -> (R,) values (float, int,
-    bool or str arrays), in column order: the experiment's row keys (``algorithm``, ...) and
-    metrics, never runner columns or ``*_time_s`` columns. ``timings`` name -> (T,) values: the
-    batch's timing table (e.g. ``algorithm`` and ``cpu_time_s``), one row per timed unit of the
-    whole batch; may be empty."""
+    """Rows of a batch of ``N`` trials as columns: ``trial`` (R,) int, each row's trial
+    (``0..N-1``, non-decreasing, every trial present); ``columns`` name -> (R,) values of the row
+    keys and metrics (no runner or ``*_time_s`` columns); ``timings`` name -> (T,) values, one per
+    timed unit of the batch, may be empty."""
 
     trial: np.ndarray
     columns: dict[str, np.ndarray]

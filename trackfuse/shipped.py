@@ -1,13 +1,5 @@
-"""The paper configs shipped with the package, and how a config NAME is found.
-
-The top-level ``configs/`` folder of the repository installs as the data package
-``trackfuse.configs`` (see ``pyproject.toml``). :func:`config_path` lets the command line
-accept a config by name (``trackfuse run twin_sensor_orbit``, ``ci/twin_sensor_ci``) wherever
-it is run: the working directory's ``./configs/<name>.yaml`` when it exists (a checkout,
-whose configs may have been edited: the folder ``trackfuse reproduce`` runs by default),
-else the shipped one. :func:`close_config_names` suggests names for one that matches
-nothing.
-"""
+"""The paper configs shipped with the package (``configs/`` installs as ``trackfuse.configs``)
+and how a config NAME is found (``docs/configs.md``)."""
 
 from __future__ import annotations
 
@@ -41,9 +33,8 @@ def config_folders() -> list[Path]:
 
 
 def config_path(given: Path) -> Path:
-    """``given`` if it exists; else the config of that name (with or without ``.yaml``,
-    subfolders such as ``ci/`` allowed) in ``./configs``, else among the shipped configs;
-    else ``given`` unchanged (the loader reports it, :func:`close_config_names` helps)."""
+    """``given`` if it exists; else the config of that name in ``./configs``, else among the
+    shipped ones; else ``given`` unchanged for the loader to report."""
     if given.exists() or given.is_absolute():
         return given
     name = given if given.suffix == ".yaml" else given.with_name(f"{given.name}.yaml")
@@ -64,9 +55,8 @@ def config_names() -> list[str]:
 
 
 def close_config_names(given: Path, most: int = 3) -> list[str]:
-    """Config names close to ``given``, a path or name that matches no file: those of the
-    same file name in another folder (``ci/twin_sensor_ci`` for ``twin_sensor_ci``), else
-    the ``most`` most similar."""
+    """Config names close to ``given``: the same file name in another folder, else the ``most``
+    most similar."""
     text = given.as_posix().removesuffix(".yaml")
     names = [n for n in config_names() if n != text]
     same = [n for n in names if n.rpartition("/")[2] == text.rpartition("/")[2]]

@@ -1,15 +1,7 @@
-"""Summaries of ``trials.csv``: per point x row keys x metric, n, mean, std and a 95 % CI.
-
-The CSV is read in fixed-size chunks and the per-chunk (n, mean, M2) are combined exactly
-(Chan, Golub & LeVeque 1979), so memory stays flat for any number of trials and the result
-does not depend on how the trials were scheduled. Rows of failed trials (``status ==
-"failed"``) are left out and counted separately.
-
-A metric summarized as a root mean square (:attr:`~trackfuse.experiments.base.Metric.aggregate`
-``"rms"``: a per-trial error ``e``) gets ``mean = sqrt(mean(e^2))`` with the expanded
-bootstrap-t interval of :func:`trackfuse.stats.rmse_intervals`, the built-in reports' RMSE
-interval; its squared values are kept per group (one float per trial) for the resampling.
-"""
+"""Summaries of ``trials.csv``: per point x row keys x metric, n, mean, std and a 95 % interval
+(columns: ``docs/outputs.md``). The CSV is read in chunks whose (n, mean, M2) combine exactly
+(Chan, Golub & LeVeque 1979), so memory stays flat and the result does not depend on the
+schedule; failed trials' rows are left out and counted."""
 
 from __future__ import annotations
 
@@ -44,15 +36,10 @@ def summarize(source: Path | pd.DataFrame, keys: Sequence[str], binary: Sequence
               chunk_rows: int = CHUNK_ROWS, suffix: str = "", skip: Sequence[str] = (),
               bounds: Mapping[str, tuple[float, float]] | tuple[float, float] | None = None,
               rms: Sequence[str] = ()) -> tuple[pd.DataFrame, int]:
-    """Return ``(summary, failed_rows)`` for the CSV at ``source``, or for the CSV already
-    read whole (``pd.read_csv(path, low_memory=False)``), taken in the same chunks.
-
-    ``keys`` are the grouping columns (``point``, swept keys, the experiment's row keys);
-    every other numeric column whose name ends in ``suffix`` and is not in ``skip`` (labels
-    such as a chosen track's index) is a metric. ``binary`` metrics get Wilson intervals, the
-    rest Student-t intervals, clipped to a metric's ``bounds`` ``(low, high)`` if given
-    (one pair: every metric's); ``rms`` metrics their root mean square with a bootstrap-t
-    interval (``std`` NaN, ``interval`` ``"bootstrap-t rms"``)."""
+    """``(summary, failed_rows)`` of the CSV at ``source`` (or of that CSV already read whole).
+    ``keys`` group; every other numeric column ending in ``suffix`` and not in ``skip`` is a
+    metric: Wilson intervals for ``binary``, root mean square for ``rms``, else Student-t, clipped
+    to ``bounds`` ``(low, high)`` if given."""
     partial: list[pd.DataFrame] = []
     squares: dict[tuple, list[np.ndarray]] = {}
     failed = 0
@@ -119,9 +106,8 @@ def _keep_squares(chunk: pd.DataFrame, group: list[str], metrics: list[str],
 
 def _as_rms(out: pd.DataFrame, group: list[str], squares: dict[tuple, list[np.ndarray]]
             ) -> None:
-    """Turn the rows of ``out`` (grouped by ``group``: the keys, then ``metric``) that have
-    ``squares`` (their mean is a mean of squares) into a root mean square with its
-    bootstrap-t interval, in place."""
+    """Turn the rows of ``out`` that have ``squares`` into a root mean square with its bootstrap-t
+    interval, in place."""
     keys = [tuple(row) for row in out[group].itertuples(index=False)]  # (*keys, metric)
     rows = [i for i, key in enumerate(keys) if key in squares]
     if not rows:
@@ -135,10 +121,8 @@ def _as_rms(out: pd.DataFrame, group: list[str], squares: dict[tuple, list[np.nd
 
 
 def _chunk_stats(chunk: pd.DataFrame, group: list[str], metrics: list[str]) -> pd.DataFrame:
-    """``(*group, metric, n, mean, m2)`` of one chunk: one row per group and metric with at
-    least one value, metric by metric, each metric's groups in the order of their first
-    value (the long format's order). ``n``, ``mean`` and the variance come from pandas'
-    grouped count, mean and var over the chunk's rows in order."""
+    """``(*group, metric, n, mean, m2)`` of one chunk, one row per group and metric with a value, in
+    the long format's order."""
     values = chunk[metrics]
     keys = [chunk[k] for k in group]
     grouped = values.groupby(keys, sort=False, dropna=False)

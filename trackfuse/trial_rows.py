@@ -1,13 +1,6 @@
-"""What a trial may return, checked one way for both forms (row dicts and a RowTable).
-
-A trial's rows must be a non-empty list of plain dicts with string column names that carry
-every declared metric (a real number) and row key, name no parameter and no runner column
-(:data:`~trackfuse.rowformat.RUNNER_COLUMNS`), hold one row per combination of row keys, and
-write as UTF-8. Anything else (including a result whose own methods raise) fails the trial
-with a :class:`TypeError` naming the column. A RowTable is checked column by column first
-(:func:`table_problem`, :func:`table_suspect`); a suspect table is read trial by trial through
-:func:`checked_rows` to find the trials at fault.
-"""
+"""What a trial may return (rules: ``docs/plugins.md``, ``run_trial``), checked one way for row
+dicts and a RowTable: anything else fails the trial with a :class:`TypeError` naming the
+column. A RowTable is checked by column first, and trial by trial only when suspect."""
 
 from __future__ import annotations
 
@@ -25,18 +18,16 @@ NUMBER_TYPES = (int, float, bool)
 
 
 def _is_number(value: Any) -> bool:
-    """Whether ``value`` is a real number CSV writes as one: a plain ``int``, ``float``
-    or ``bool`` or a numpy integer, float or bool (a float subclass may print anything, a
-    complex number is not a quantity the summary can average)."""
+    """Whether ``value`` is a real number CSV writes as one: a plain or numpy ``int``, ``float`` or
+    ``bool`` (no float subclass, no complex)."""
     return value is None or type(value) in NUMBER_TYPES or \
         isinstance(value, np.integer | np.floating | np.bool_)
 
 
 def checked_rows(result: Any, producer: str, experiment: Experiment
                  ) -> list[dict[str, str]] | BaseException:
-    """``result`` as rows of CSV cells (every value formatted as ``trials.csv`` writes it)
-    if it is what a trial must return (module docstring), else the error it is or the
-    ``TypeError`` saying what is wrong, returned: the trial's failure."""
+    """``result`` as rows of ``trials.csv`` cells if it is a valid trial result, else the error
+    (returned, not raised): the trial's failure."""
     if isinstance(result, BaseException):
         return result
     try:
@@ -87,10 +78,8 @@ def _shown(value: Any) -> str:
 
 def column_problem(experiment: Experiment, columns: list[Any], producer: str
                    ) -> TypeError | None:
-    """A ``TypeError`` naming what is wrong with the column names of a trial's (or a batch's)
-    rows, else ``None``: a name that is not a string, a missing declared metric or row key (it
-    would drop out of the summary, or pool rows into one cell), or a column named like a
-    parameter or a runner column (it would overwrite a swept value or forge a failure)."""
+    """A ``TypeError`` naming what is wrong with the column names of rows (not a string, a missing
+    metric or row key, a parameter's or runner column's name), else ``None``."""
     if odd := [_shown(c) for c in columns if type(c) is not str]:
         return TypeError(f"{producer} returned rows with column names that are not strings: "
                          f"{', '.join(odd)}; allowed: str")
@@ -156,9 +145,8 @@ def table_problem(experiment: Experiment, table: RowTable, producer: str) -> Typ
 
 
 def table_suspect(experiment: Experiment, table: RowTable) -> bool:
-    """Whether a RowTable's values may break the rules of :func:`checked_rows` (a metric
-    column not of numbers, a text that is not UTF-8, two rows of one trial with the same
-    row keys): its trials are then checked one by one."""
+    """Whether a RowTable's values may break the rules of :func:`checked_rows`, so that its trials
+    must be checked one by one."""
     metrics = {m.name for m in experiment.metrics}
     for name, values in table.columns.items():
         array = np.asarray(values)
