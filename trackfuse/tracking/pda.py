@@ -1,16 +1,11 @@
-"""Probabilistic data association for one or two passive az/el sensors (numba-compiled).
-
-Per trial and scan: predict, place each sensor's returns (target and clutter), gate, and
-update. Hypotheses ``theta_ij`` (0 = no target return from that sensor) are weighted as the
-parallel multisensor PDA; the state is the exact collapse of the per-hypothesis MGEKF (or
-EKF) updates, computed from weighted moments. Variants (``method``): ``mspda_parallel``,
-``mspda_sequential``, ``nn`` and ``paper_approx`` (a labelled reconstruction of paper 000's
-eq. 26-28, W000-1). Equations and implementation notes: ``docs/papers/twin_sensor.md``,
-"Two-sensor PDA". The numpy oracle is ``tests/pda_reference.py`` (pinned to 1e-9).
+"""Probabilistic data association for one or two passive az/el sensors (numba-compiled):
+per scan predict, place each sensor's returns, gate, and update with the exact collapse of
+the per-hypothesis MGEKF (or EKF) updates. Variants (``method``): ``mspda_parallel``,
+``mspda_sequential``, ``nn``, ``paper_approx`` (W000-1). Equations: ``docs/papers/twin_sensor.md``,
+"Two-sensor PDA"; numpy oracle ``tests/pda_reference.py`` (pinned to 1e-9).
 
 References: Bar-Shalom & Fortmann, *Tracking and Data Association*, 1988; Bar-Shalom & Li,
-*Multitarget-Multisensor Tracking*, 1995, ch. 8; Pao & Frei, Proc. ACC, 1995.
-"""
+*Multitarget-Multisensor Tracking*, 1995, ch. 8; Pao & Frei, Proc. ACC, 1995."""
 
 from __future__ import annotations
 
@@ -37,11 +32,8 @@ _FIRST_ROWS, _SECOND_ROWS = np.int64(0), np.int64(2)
 
 
 def run_filter(sc, b, options: PDAOptions) -> Estimates:
-    """Run one algorithm over every trial of batch ``b`` in scenario ``sc``: :class:`Estimates`.
-
-    ``sc`` is a twin_sensor ``Scenario`` (``P0, F, Q_filter`` (6, 6), ``sensor_pos`` (K+1, S, 3),
-    ``R`` (S, 2, 2), ``P_D`` (S,), gate and clutter settings); ``b`` its simulated ``Batch``.
-    """
+    """Run one algorithm over every trial of batch ``b`` (a twin_sensor ``Batch``) in scenario
+    ``sc`` (a twin_sensor ``Scenario``): :class:`Estimates`."""
     N, K, S = b.detected.shape
     out = Estimates(np.empty((N, K, 6)), np.empty((N, K, 6, 6)), np.empty((N, K, S), np.int64),
                     np.empty((N, K), dtype=bool))
@@ -66,9 +58,8 @@ D, ZH, DET, AREA, LAM = 0, 3, 5, 6, 7
 def _filter_batch(x0, P0, F, Q, sensor_pos, R, P_D, los, z_target, detected, clutter,
                   clutter_ok, gamma, P_G, in_gate, clutter_mean, window_density, method, mgekf,
                   joint_full, nonparametric, mg_combined, X_out, P_out, m_out, inside_out):
-    """Filter every trial; writes ``X_out`` (N, K, 6), ``P_out`` (N, K, 6, 6) (NaN once a trial
-    diverges), ``m_out`` (N, K, S), ``inside_out`` (N, K). ``sensor_pos`` (K, S, 3): scans 1..K.
-    """
+    """Filter every trial into ``X_out`` (N, K, 6), ``P_out`` (N, K, 6, 6) (NaN once diverged),
+    ``m_out`` (N, K, S), ``inside_out`` (N, K); ``sensor_pos`` (K, S, 3) for scans 1..K."""
     N, K, S = detected.shape
     M = clutter.shape[3] + 1  # the target return first, then the clutter slots
     lin, mom = Linearized(S, M), Moments()
@@ -135,9 +126,7 @@ _Lin = namedtuple("_Lin", "geom H PHt Sm Si Kg nu G log_n ok m w B")
 
 @njit(**INNER)
 def _copy_state(X, P, X_to, P_to):
-    """``X_to = X`` (6,), ``P_to = P`` (6, 6) element by element: an array assignment would compile
-    numba's shape-mismatch message (about 5 s of the first run).
-    """
+    """``X_to = X`` (6,), ``P_to = P`` (6, 6) element by element (cheaper to compile)."""
     for i in range(6):
         X_to[i] = X[i]
         for j in range(6):
@@ -310,9 +299,8 @@ def _log_null(lin, s, P_D, P_G):
 
 @njit(**INNER)
 def _log(x):
-    """``math.log(x)`` as compiled code computes it: ``-inf`` at zero, NaN below zero or at
-    NaN. Python's ``math.log`` raises at zero and below, and it runs the kernel under
-    ``NUMBA_DISABLE_JIT=1`` (a zero clutter density or detection probability)."""
+    """``math.log(x)`` as compiled code computes it (``-inf`` at 0, NaN below), also under
+    ``NUMBA_DISABLE_JIT=1``."""
     if x > 0:
         return math.log(x)
     return -np.inf if x == 0 else np.nan
@@ -427,9 +415,8 @@ def _clear_class(mom):
 
 @njit(**INNER)
 def _single_moments(lin, s, w, P, mom, off):
-    """Add sensor ``s``'s weighted moments with weights ``w (M,)`` to rows and columns
-    ``off, off + 1`` of ``mom``; returns ``sum w``
-    (oracle: ``pda_reference._single_moments``)."""
+    """Add sensor ``s``'s moments with weights ``w (M,)`` to rows ``off, off + 1`` of ``mom``;
+    returns ``sum w`` (oracle: ``pda_reference._single_moments``)."""
     nu, G, ok = lin.nu[s], lin.G[s], lin.ok[s]
     nub, NN, Gbar, C = mom.nub, mom.NN, mom.Gbar, mom.C
     bsum = 0.0
@@ -493,10 +480,8 @@ def _collapse(X, P, b0, mom):
 
 @njit(**INNER)
 def _pair_update(Xp, Pp, R, P_D, P_G, method, joint_full, mg_combined, lin, mom, X, P):
-    """Two-sensor PDA update of ``(Xp, Pp)`` into ``(X, P)`` (oracle: ``_pair_update``).
-
-    Returns the null hypothesis's weight, which the IPDA existence update reads.
-    """
+    """Two-sensor PDA update of ``(Xp, Pp)`` into ``(X, P)``; returns the null hypothesis's weight
+    (oracle: ``_pair_update``)."""
     H, PHt = lin.H, lin.PHt
     Cx = np.empty((2, 2))  # H1 P H2'
     for i in range(2):
@@ -616,10 +601,8 @@ def _pair_log_weights(lin, S12inv, det12, P_D, P_G, method, joint_full):
 
 @njit(**INNER)
 def _normalize_pair(lin, log00, top, nearest):
-    """Turn the log weights in ``lin.w`` and ``lin.B`` into probabilities in place and return
-    the null's. When every weight is zero all mass goes to the null; ``nearest`` puts all
-    mass on the first largest weight in the oracle's order (null, sensor 1, sensor 2,
-    pairs row by row)."""
+    """Log weights in ``lin.w``, ``lin.B`` to probabilities in place; returns the null's. All zero:
+    all mass to the null; ``nearest``: all mass on the first largest, in the oracle's order."""
     ok, m, w, B = lin.ok, lin.m, lin.w, lin.B
     m1, m2 = m[0], m[1]
     if not math.isfinite(top):
@@ -688,13 +671,9 @@ def _pair_at_combined(lin):
 
 @njit(**INNER)
 def _pair_moments(lin, P, mom):
-    """Weighted moments of the joint hypotheses ``(i, j)`` with weights ``lin.B`` into
-    ``mom`` (4 rows); returns ``sum B`` (oracle: ``pda_reference._pair_moments``).
-
-    The diagonal blocks are the one-sensor moments with the row sums ``r_i = sum_j B_ij``
-    and column sums ``c_j = sum_i B_ij``; the cross blocks are ``sum B_ij nu_1i nu_2j'`` and
-    ``sum_i G_1i P33 (sum_j B_ij G_2j)'``.
-    """
+    """Moments of the joint hypotheses ``(i, j)`` weighted by ``lin.B`` into ``mom`` (4 rows);
+    returns ``sum B`` (oracle: ``pda_reference._pair_moments``). Cross blocks:
+    ``sum B_ij nu_1i nu_2j'`` and ``sum_i G_1i P33 (sum_j B_ij G_2j)'``."""
     ok, m, nu, G, B = lin.ok, lin.m, lin.nu, lin.G, lin.B
     M = B.shape[0]
     r, c = np.zeros(M), np.zeros(M)

@@ -1,16 +1,7 @@
-"""Figures and report tables of the ``esm_radar`` experiment (paper 001: Zhang Xiaoqiang et
-al., "An ESM-radar track correlation algorithm based on improved fuzzy comprehensive
-evaluation", J. Air Force Eng. Univ. (Nat. Sci.) 18(1), 2017, 44-49).
-
-Reads saved runs only (``trials.csv``, ``summary.csv``); only the noise-free geometry and the
-static AHP weights are recomputed, from the config. The rate figures are the report kit's
-declared plots (:data:`trackfuse.experiments.esm_radar.FIGURES`, their captions say what
-each draws) with the x chosen per run (:func:`rate_axis`); ``trajectory`` and ``manoeuvre``
-are drawn here from the per-scan columns. A figure a run cannot draw is a one-line reason.
-
-Tables (:func:`tables`): those of :mod:`.tables` and the headline table of :mod:`.paper`
-(``paper_vs_reproduced``: the paper's claims judged against the run).
-"""
+"""Figures and report tables of ``esm_radar`` (paper 001, ESM-radar fuzzy track correlation),
+from the saved ``trials.csv`` and ``summary.csv``. Rate figures are the declared plots of
+:data:`~trackfuse.experiments.esm_radar.FIGURES`; ``trajectory`` and ``manoeuvre`` are drawn
+here; the tables come from :mod:`.tables` and :mod:`.paper`."""
 
 from __future__ import annotations
 
@@ -158,9 +149,8 @@ def counting_design_rate(params: Mapping[str, Any]) -> float:
 
 
 def _history_figure(run: RunData) -> Figure | str:
-    """Correct, false and missed association rates of the tests over the track history
-    beside the single-scan reference and the fuzzy methods (:data:`HISTORY_RATES`), the
-    counting test's design rate dotted in the false-association panel."""
+    """Correct, false and missed association rates of the track-history tests beside the
+    single-scan reference and the fuzzy methods (:data:`HISTORY_RATES`)."""
     if not set(HISTORY_TESTS) & set(run.summary["algorithm"]):
         return "neither of the tests over the track history (counting, sprt) was run"
     x, categories = rate_axis(run)
@@ -289,9 +279,8 @@ TRAJECTORY_SIZE = (SLOTS["double"], 5.4)
 
 
 def _trajectory_figure(run: RunData) -> Figure | str:
-    """Paper 001 Figs. 1-2 from ``trials.csv``: the first saved trial of the first point
-    with the paper's weave (:data:`PAPER_SCENARIO`; the paper's figures redrawn), else of
-    the first point."""
+    """Paper 001 Figs. 1-2: the first trial of the first point with the paper's weave, else of the
+    first point."""
     esm = _esm_rows(run.trials)
     if esm.empty:
         return NO_SERIES
@@ -388,9 +377,8 @@ def _index_references(ax: Axes, settings: Sequence[Mapping[str, Any]]) -> list[s
 
 
 def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure | str]:
-    """The ``wanted`` figures among :data:`GROUPS` (from ``summary.csv``, drawn by the
-    report kit), ``trajectory`` and ``manoeuvre`` (from the per-scan columns of
-    ``trials.csv``); a one-line reason string for a wanted figure this run cannot draw."""
+    """The ``wanted`` figures among :data:`GROUPS`, ``trajectory`` and ``manoeuvre``; a one-line
+    reason for one this run cannot draw."""
     drawers: dict[str, Callable[[], Figure | str]] = {
         **{g: (lambda g=g: _rate_figure(run, g)) for g in GROUPS},
         "history_rates": lambda: _history_figure(run),
