@@ -1,15 +1,6 @@
-"""Dask workers started through a batch system (SLURM, PBS) by dask-jobqueue.
-
-``trackfuse run CONFIG --cluster slurm`` (or ``pbs``) starts a dask scheduler in the
-``trackfuse`` process and submits jobs whose workers connect back to it; the run then goes as
-on any dask cluster (workers checked against the run id, results ordered by (point, batch)).
-Settings: the config's ``cluster`` section
-(:class:`~trackfuse.cluster_settings.ClusterSettings`), falling back to dask's jobqueue
-configuration; it is not part of the resolved config, so it changes no number or run id.
-Workers retire before their job's walltime and a lost batch is run again elsewhere (a batch
-is a pure function of its task). ``--cluster local`` runs the jobs as local processes (the
-tests). See ``docs/cluster.md``.
-"""
+"""Dask workers started through SLURM or PBS by dask-jobqueue (``--cluster slurm|pbs``;
+``local`` for tests): the run then goes as on any dask cluster. Settings, walltime and lost
+batches: ``docs/cluster.md``."""
 
 from __future__ import annotations
 
@@ -65,10 +56,8 @@ class JobqueueExecutor(DaskExecutor):
         self.kind_of_cluster = kind
 
     def worker_environments(self, probe: Callable[[], dict[str, Any]]) -> dict[str, Any]:
-        """``{worker address: probe()}`` of the worker that runs ``probe`` as a task: an
-        adaptive cluster may have no worker until work is queued (the task makes it submit
-        a job, which a queue may hold a while: the run waits for it). Workers that join
-        later are not checked, as on any dask cluster."""
+        """``{worker address: probe()}`` of the worker that runs ``probe`` as a task (an adaptive
+        cluster submits a job for it); workers that join later are not checked."""
         from distributed import get_worker
 
         def located() -> tuple[str, dict[str, Any]]:

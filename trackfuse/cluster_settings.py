@@ -1,12 +1,6 @@
-"""Settings of a batch-system cluster (the config's ``cluster`` section), checked without
-importing dask: what ``--cluster slurm|pbs|local`` asks dask-jobqueue for
-(:mod:`trackfuse.cluster`).
-
-Each setting left out falls back to dask's own configuration (``jobqueue.slurm.*`` /
-``jobqueue.pbs.*``, e.g. in ``~/.config/dask/jobqueue.yaml``). A job's workers retire
-:data:`LIFETIME_MARGIN_S` before its walltime (``--lifetime``, staggered), so the batch
-system's kill at the walltime finds them gone and their batches handed back.
-"""
+"""The config's ``cluster`` section, checked without importing dask (``docs/cluster.md``); a
+setting left out falls back to dask's jobqueue configuration, and workers retire
+:data:`LIFETIME_MARGIN_S` before the walltime."""
 
 from __future__ import annotations
 
@@ -39,10 +33,8 @@ class ClusterSettings:
     interface: str | None = None
 
     def job_kwargs(self, kind: str) -> dict[str, Any]:
-        """Keyword arguments of the dask-jobqueue cluster of ``kind``: the settings given
-        (one process of one thread per core unless ``processes`` is given), a worker
-        lifetime ending before the walltime, and :data:`PROLOGUE` (not for ``local``, whose
-        workers inherit this process's environment)."""
+        """Keyword arguments of the dask-jobqueue cluster of ``kind``: the settings,
+        a lifetime ending before the walltime, and :data:`PROLOGUE` (not for ``local``)."""
         given = {"cores": self.cores, "memory": self.memory, "walltime": self.walltime,
                  "interface": self.interface,
                  "processes": self.processes or self.cores}

@@ -33,9 +33,8 @@ SLOW_START_WORDS = "first run compiles"
 
 
 def duration_text(seconds: float, tenths: bool = False) -> str:
-    """``"42 s"``, ``"3:05"`` (min:s) or ``"1:02:03"`` (h:min:s); ``"unknown"`` if not
-    finite. With ``tenths``, below 10 s in tenths (``"0.3 s"``: a phase of a small run, which
-    would read "0 s"); an ETA keeps whole seconds."""
+    """``"42 s"``, ``"3:05"`` or ``"1:02:03"``; ``"unknown"`` if not finite. ``tenths``: below 10 s
+    in tenths (``"0.3 s"``)."""
     if not math.isfinite(seconds) or seconds < 0:
         return "unknown"
     if tenths and round(seconds, 1) < 10:
@@ -59,15 +58,9 @@ def fit_label(label: str, width: int) -> str:
 
 
 class RunProgress:
-    """Trials done / total with rate and ETA. Use as a context manager.
-
-    ``console`` (default: standard error) decides between the bar (a terminal) and plain
-    lines; the label is shortened so the count and ETA always fit the console's width.
-    The rate is timed from the moment the first finished batch started, so the workers'
-    start-up (loading, or on a first run compiling, the kernels) does not skew the ETA. If
-    ``loading()`` (the executor's) still says so ``slow_start_s`` seconds after the start, the
-    bar (or one plain line) says that a first run compiles.
-    """
+    """Trials done / total with rate and ETA, as a context manager: a bar on a terminal, else
+    plain lines. The rate is timed from the first finished batch's start, so start-up does not
+    skew the ETA; after ``slow_start_s`` of ``loading()`` it says a first run compiles."""
 
     def __init__(self, total: int, done: int, label: str, enabled: bool = True,
                  console: Console | None = None, loading: Callable[[], bool] | None = None,

@@ -1,11 +1,7 @@
-"""One writer per run folder: an advisory lock held while a process writes the folder.
-
-``trackfuse run`` and ``trackfuse plot`` hold :class:`RunLock` (``<run>/.lock``, ``filelock``:
-``flock`` on POSIX, released by the OS when the holder dies); a second process stops with one
-line naming the holder. The holder records itself in ``<run>/.lock.holder.json`` and removes
-it on release, so that file beside a free lock means the previous holder was killed: the new
-process takes over with a warning. See ``docs/runner.md``, "One writer per run folder".
-"""
+"""One writer per run folder (``docs/runner.md``, "One writer per run folder"): ``run`` and
+``plot`` hold a ``filelock`` on ``<run>/.lock`` and record the holder in
+``<run>/.lock.holder.json``; that file beside a free lock means a killed holder, taken over
+with a warning."""
 
 from __future__ import annotations
 
@@ -46,11 +42,9 @@ def _describe(holder: dict[str, Any] | None) -> str:
 
 
 class RunLock:
-    """Hold the lock of run folder ``path`` (created if needed) inside a ``with`` block.
-
-    ``warn`` receives a one-line message when a lock left by a killed process is taken over.
-    Raises :class:`RunFolderBusy` if another process holds it, :class:`RunFolderError` if the
-    folder cannot be created or locked."""
+    """Hold the lock of run folder ``path`` (created if needed) in a ``with`` block; ``warn`` gets a
+    line when a killed process's lock is taken over. Raises :class:`RunFolderBusy` or
+    :class:`RunFolderError`."""
 
     def __init__(self, path: Path, warn: Callable[[str], None]):
         self.path, self.warn = Path(path), warn
@@ -138,9 +132,8 @@ def creation_problem(path: Path) -> str | None:
 
 
 def _stores_no_folders(folder: Path) -> str | None:
-    """Why no new folder can be made in ``folder`` whatever the permissions say: a
-    read-only file system, or one that stores no files at all (no blocks and no inodes:
-    ``/proc``, ``/sys``); ``None`` otherwise, or where the system cannot tell."""
+    """Why no folder can be made in ``folder`` whatever the permissions say (read-only, or a file
+    system without blocks and inodes such as ``/proc``), else ``None``."""
     try:
         fs = os.statvfs(folder)
     except (AttributeError, OSError):
@@ -153,10 +146,8 @@ def _stores_no_folders(folder: Path) -> str | None:
 
 
 def busy_problem(path: Path) -> str | None:
-    """The line :class:`RunLock` would stop with if another process holds run folder
-    ``path``'s lock now, else ``None``; asked of the operating system without taking the
-    lock (a shared, non-blocking ``flock`` on the lock file, released at once; ``None``
-    where there is no lock file or ``flock``)."""
+    """The line :class:`RunLock` would stop with if another process holds ``path``'s lock now, else
+    ``None``, asked without taking the lock."""
     try:
         import fcntl
         fd = os.open(path / LOCK_FILE, os.O_RDONLY | os.O_NONBLOCK)  # a FIFO: no wait
@@ -172,9 +163,8 @@ def busy_problem(path: Path) -> str | None:
 
 
 def held_by_a_live_process(path: Path) -> bool:
-    """Whether run folder ``path`` looks held, read from its holder file alone (a listing
-    must not take the lock, which would get in the way of a run starting): a holder is
-    recorded and, on this host, its process is alive; on another host it is taken as alive."""
+    """Whether run folder ``path`` looks held, from its holder file alone (a listing must not take
+    the lock); a holder on another host is taken as alive."""
     holder = RunLock(path, lambda _: None).holder()
     if holder is None:
         return False

@@ -1,13 +1,7 @@
-"""Parse untrusted YAML text with bounds: no duplicate keys, no alias bombs, no huge files.
-
-``yaml.safe_load`` builds no arbitrary objects, but it silently keeps the last of two equal
-keys, and a few hundred bytes of nested aliases ("billion laughs") describe a value with
-billions of leaves: harmless while shared, ruinous once anything walks or prints it. This
-loader composes the node graph first, measures its expanded size (every alias counted as a
-copy) and refuses it beyond :data:`MAX_NODES` or if an alias refers to itself, and rejects a
-mapping that names one key twice. Every problem is a :class:`YamlInputError` whose message
-is one line.
-"""
+"""Parse untrusted YAML with bounds (``docs/configs.md``, "Limits and one-line errors"):
+duplicate keys, recursive aliases, more than :data:`MAX_NODES` nodes once aliases are
+expanded ("billion laughs") and files over :data:`MAX_BYTES` are refused with a one-line
+:class:`YamlInputError`."""
 
 from __future__ import annotations
 
@@ -56,10 +50,8 @@ class _StrictLoader(yaml.SafeLoader):
 
 
 def expanded_size(root: yaml.Node, limit: int = MAX_NODES) -> int:
-    """Number of nodes of ``root`` with every alias expanded (stops counting past ``limit``).
-
-    Raises :class:`YamlInputError` if a node contains itself (a recursive alias).
-    """
+    """Number of nodes of ``root`` with every alias expanded (counting stops past ``limit``);
+    :class:`YamlInputError` for a recursive alias."""
     sizes: dict[int, int] = {}
     active: set[int] = set()
     stack: list[tuple[yaml.Node, bool]] = [(root, False)]
@@ -89,10 +81,8 @@ def _children(node: yaml.Node) -> list[yaml.Node]:
 
 
 def load_yaml(text: str) -> Any:
-    """Parse one YAML document with the bounds of this module.
-
-    Raises :class:`YamlInputError` (one line, naming the line and column when known).
-    """
+    """Parse one YAML document within this module's bounds; :class:`YamlInputError` names the line
+    and column when known."""
     if len(text) > MAX_BYTES:
         raise YamlInputError(f"larger than {MAX_BYTES} bytes")
     try:
@@ -121,14 +111,9 @@ def load_yaml(text: str) -> Any:
 
 
 def read_yaml_file(path: str | Path, regular_only: bool = False) -> Any:
-    """Parse the YAML file at ``path``: at most :data:`MAX_BYTES` bytes of UTF-8 text, with
-    the bounds of :func:`load_yaml`. ``regular_only``: a file found in a run folder, refused
-    (:class:`~trackfuse.regular_files.NotARegularFile`) unless it is a regular file, where a
-    FIFO the user names (``<(generate)``) is read like a file.
-
-    Raises :class:`YamlInputError` (one line, without the file name) for a file too large,
-    not UTF-8 or refused by :func:`load_yaml`, and ``OSError`` when it cannot be read.
-    """
+    """Parse the UTF-8 YAML file at ``path`` within this module's bounds. ``regular_only`` refuses
+    anything but a regular file (a file found in a run folder). Raises :class:`YamlInputError`
+    (one line, no file name) or ``OSError``."""
     with (open_regular(path) if regular_only else open(path, "rb")) as fh:
         data = fh.read(MAX_BYTES + 1)
     if len(data) > MAX_BYTES:

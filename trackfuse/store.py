@@ -1,11 +1,6 @@
-"""Where a run keeps its trial rows: ``trials.csv`` (the default) or ``trials.parquet``.
-
-With ``outputs.store: parquet`` (pyarrow, the ``parquet`` extra) the merged ``trials.csv`` is
-converted in chunks of :data:`CHUNK_ROWS` rows, with the column types ``pandas.read_csv``
-would give, and removed: the same rows in the same order, byte-identical for any worker
-count (pyarrow writes no time stamp). Every reader of a run's rows goes through
-:func:`trials_file`, :func:`read_trials` and :func:`chunks` (``docs/outputs.md``).
-"""
+"""Where a run keeps its trial rows: ``trials.csv``, or ``trials.parquet`` converted from it in
+chunks with ``read_csv``'s column types (``docs/outputs.md``). Every reader goes through
+:func:`trials_file`, :func:`read_trials` and :func:`chunks`."""
 
 from __future__ import annotations
 
@@ -72,10 +67,8 @@ def chunks(path: Path, chunk_rows: int = CHUNK_ROWS,
 
 
 def _common_dtype(kinds: set[str]) -> str:
-    """The type of a column whose chunks read as ``kinds`` (numpy kind letters, ``O`` for
-    text), as reading the whole CSV types it: one kind stays, integers with floats are
-    float, anything else (text beside missing values, booleans beside numbers) is text or
-    object."""
+    """The type of a column whose chunks read as ``kinds`` (numpy kind letters), as reading the
+    whole CSV would type it."""
     if len(kinds) == 1:
         return next(iter(kinds))
     if kinds <= {"i", "f"}:

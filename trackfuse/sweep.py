@@ -1,10 +1,5 @@
-"""Sweep axes: value parsing, command-line overrides, and expansion into points.
-
-An axis is a list of values or ``"range(start, stop[, step])"`` (stop excluded; floats
-allowed). Axes combine as a grid (the last axis varies fastest) or, with ``sweep_mode: zip``,
-element by element. Overrides: ``--set a.b=1``, ``--sweep a.b=0,5,10`` (values parsed as YAML
-scalars; a comma separates values only outside brackets and quotes). See ``docs/configs.md``.
-"""
+"""Sweep axes: value parsing, ``--set``/``--sweep`` overrides, and expansion into points (grid,
+last axis fastest, or ``sweep_mode: zip``); syntax in ``docs/configs.md``."""
 
 from __future__ import annotations
 
@@ -45,9 +40,7 @@ def _number(text: str) -> float | int:
 
 def parse_range(text: str) -> list[float | int]:
     """Expand ``"range(a, b, s)"``: integers as Python's ``range``, floats as the decimals
-    ``a + i * s`` (computed in decimal, so ``range(0, 1, 0.1)`` gives 0.3, not
-    0.30000000000000004, at any magnitude: rounding to 12 decimals made
-    ``range(3e-13, 4e-13, 1e-13)`` 0.0), each the float nearest to it."""
+    ``a + i * s`` computed in decimal, each the float nearest to it."""
     match = _RANGE.match(text)
     if not match:
         raise SweepError(f"got {text!r}; allowed: a list or 'range(start, stop, step)'")
@@ -123,9 +116,8 @@ def split_values(text: str) -> list[str]:
 
 
 def parse_scalar(text: str) -> Any:
-    """Parse an override value as a YAML scalar or flow list, as a config file's value is
-    read, except that an unquoted decimal number in exponent form (``1e-3``, a string to
-    YAML) becomes a float; a quoted value (``'nan'``, ``"1.5"``) stays a string."""
+    """Parse an override value as a config file's YAML scalar or flow list, except that ``1e-3``
+    becomes a float; a quoted value stays a string."""
     text = text.strip()
     try:
         value = load_yaml(text) if text else ""

@@ -1,12 +1,6 @@
-"""What plugin code may not do to the process that runs it: end it, outlast its time limit, or
-hold up its exit with a thread it left running.
-
-``os._exit`` called by a trial (or a report) in the thread that runs it raises
-:class:`PluginExit`; a trial running past ``trial_timeout`` gets :class:`TrialTimeout` in its
-thread (``SIGALRM`` in a main thread, between bytecodes elsewhere; compiled code when it
-returns); non-daemon threads a trial left running are listed by :func:`threads_left`. See
-``docs/runner.md``, "Failed trials".
-"""
+"""What plugin code may not do to its process (``docs/runner.md``, "Failed trials"): ``os._exit``
+raises :class:`PluginExit`, a trial past ``trial_timeout`` gets :class:`TrialTimeout`, and
+non-daemon threads it left are listed by :func:`threads_left`."""
 
 from __future__ import annotations
 
@@ -59,9 +53,8 @@ def _timeout_of(limit: float) -> type[TrialTimeout]:
 
 
 def timeouts() -> int:
-    """How many trials this process has interrupted at their time limit: a worker that
-    did is replaced once idle (:class:`~trackfuse.executors.ProcessExecutor`), since the
-    trial was stopped wherever it was."""
+    """How many trials this process has stopped at their time limit; such a worker is replaced once
+    idle."""
     return _timeouts
 
 
@@ -158,9 +151,8 @@ def _alarm(limit: float) -> Iterator[None]:
 
 @contextmanager
 def _async_alarm(limit: float) -> Iterator[None]:
-    """:class:`TrialTimeout` raised in this (non-main) thread by a timer thread; a timer
-    that fires as the block ends is cancelled under a lock, and an exception it set but
-    this thread has not raised yet is withdrawn."""
+    """:class:`TrialTimeout` raised in this (non-main) thread by a timer, withdrawn if the block
+    ends first."""
     ident, lock, state = threading.get_ident(), threading.Lock(), {"active": True}
 
     def expire() -> None:

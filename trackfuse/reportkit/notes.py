@@ -1,13 +1,7 @@
-"""The notes on each paper (``docs/papers/*.md``) as HTML pages beside a report.
-
-A report's reasons link into these notes (``docs/papers/esm_radar.md#table-3``). A browser
-shows a Markdown file as raw text, where an anchor never lands, and an installed package
-has no ``docs/``; so the notes ship as the data package ``trackfuse.papers`` (see
-``pyproject.toml``) and :func:`write_notes` renders them with markdown-it-py (CommonMark and
-tables) into ``<out>/notes/<name>.html``, each heading with the id GitHub gives it, so the
-same anchors land. A link in a note to a file that is not rendered beside it (``../runner.md``)
-keeps its text and loses the link, so no link of the page leads nowhere.
-"""
+"""The notes on each paper (``docs/papers/*.md``, shipped as ``trackfuse.papers``) rendered as
+HTML beside a report, so a reason's link such as ``esm_radar.md#table-3`` lands in a browser
+and in an installed package. Headings get GitHub's ids; links to files not rendered beside
+a note keep their text only."""
 
 from __future__ import annotations
 
@@ -93,10 +87,8 @@ def render_note(text: str, title: str, rendered: set[str], back: str) -> str:
 
 
 def write_notes(out: Path, back: str, only: Collection[str] | None = None) -> dict[str, str]:
-    """Render the notes into ``out/notes/`` (pages link ``back``, relative to that folder,
-    to the report): every note, or ``only`` those named (``docs/papers/<name>.md``, an
-    anchor allowed); returns ``{"docs/papers/<name>.md": "notes/<name>.html"}`` for the
-    notes written (empty when none is found)."""
+    """Render every note, or ``only`` those named, into ``out/notes/`` with links ``back`` to the
+    report; returns ``{"docs/papers/<name>.md": "notes/<name>.html"}``."""
     folder = notes_folder()
     wanted = None if only is None else {str(d).partition("#")[0] for d in only}
     sources = [p for p in sorted(folder.glob("*.md")) if wanted is None
