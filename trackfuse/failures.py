@@ -31,9 +31,8 @@ def _describe(row: pd.Series, swept: Sequence[str]) -> str:
 
 
 def first_failure(source: Path | pd.DataFrame, swept: Sequence[str]) -> str | None:
-    """The first failed trial of ``trials.csv`` (its path, or the file read) in words
-    (:func:`_describe`), or ``None`` when no trial failed. A path (``trials.csv`` or
-    ``trials.parquet``) is read in chunks, its columns as written."""
+    """The first failed trial of ``trials.csv`` (path or frame) in words, or ``None``; a path is
+    read in chunks."""
     chunks: Iterable[pd.DataFrame]
     if isinstance(source, pd.DataFrame):
         chunks = [source]

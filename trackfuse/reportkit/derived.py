@@ -1,12 +1,6 @@
-"""Rates a report derives from a run's 0/1 columns, drawn by the kit like any metric.
-
-A :class:`Rate` is a 0/1 outcome of each row computed from the row's own columns (a false
-association: decided but not correct), so ``summary.csv`` stays what the runner wrote:
-:func:`with_rates` returns a view of a run whose summary has each rate's rows appended in
-``summary.csv``'s long form (mean, 95 % Wilson interval, as the runner gives a binary
-metric) and whose experiment declares each as a binary metric, so a
-:class:`~trackfuse.reportkit.spec.Plot` names it as it names a metric of the run.
-"""
+"""Rates a report derives from a run's 0/1 columns (a false association: decided but not
+correct), appended to a view of the run's summary as binary metrics, so a plot names them as
+it names a metric; ``summary.csv`` itself stays as the runner wrote it."""
 
 from __future__ import annotations
 
@@ -24,11 +18,9 @@ from trackfuse.stats import wilson_interval
 
 @dataclass(frozen=True)
 class Rate:
-    """A 0/1 outcome per row: ``name`` (the metric name the plot uses), ``label`` (its axis
-    label), ``of`` (the rows' frame to a 0/1 (or boolean) series, one value per row) and
-    ``algorithms``: the only ones it is computed for (``()``: every one), so a rate that is
-    0 by construction for the others (no decision of a method that always decides) draws
-    no curve for them."""
+    """A 0/1 outcome per row: ``name`` and axis ``label``, ``of`` (rows -> 0/1 series), and
+    ``algorithms`` it is computed for (``()``: every one), so a rate 0 by construction draws no
+    curve."""
 
     name: str
     label: str
@@ -38,9 +30,8 @@ class Rate:
 
 def rate_rows(trials: pd.DataFrame, keys: Sequence[str], rates: Sequence[Rate]
               ) -> pd.DataFrame:
-    """Each rate's mean and 95 % Wilson interval per group of ``keys`` (``point``, the
-    swept keys, the row keys), in ``summary.csv``'s long form (``metric``, ``n``,
-    ``mean``, ``std``, ``ci_low``, ``ci_high``, ``interval``)."""
+    """Each rate's mean and 95 % Wilson interval per group of ``keys``, in ``summary.csv``'s long
+    form."""
     keys = [k for k in keys if k in trials]
     out = []
     for rate in rates:
@@ -59,9 +50,8 @@ def rate_rows(trials: pd.DataFrame, keys: Sequence[str], rates: Sequence[Rate]
 
 
 def with_rates(run: RunData, rates: Sequence[Rate]) -> RunData:
-    """A view of ``run`` (the same folder, read once) whose ``summary`` has the rows of
-    ``rates`` appended (:func:`rate_rows` over the run's succeeded rows) and whose
-    experiment declares each as a binary metric with its label."""
+    """A view of ``run`` whose ``summary`` has the rows of ``rates`` appended and whose experiment
+    declares each as a binary metric."""
     keys = ["point", *run.sweep, *run.experiment.row_keys]
     extra = rate_rows(succeeded_rows(run.trials), list(dict.fromkeys(keys)), rates)
     metrics = tuple(Metric(r.name, "1", r.label, binary=True, label=r.label) for r in rates)

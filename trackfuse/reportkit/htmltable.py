@@ -1,12 +1,6 @@
-"""Tables on a report page: prose left-aligned, numbers right-aligned, one number format.
-
-A cell is a number when it is one (shown with three significant figures,
-:func:`~trackfuse.reportkit.numberformat.sig3`) or text that starts like one
-(``74.0 % (71.7–79.2)``,
-``[0.5, 7.25]``); such cells get the class ``num``, which the page's style sets right.
-Everything else (reasons, names) is prose and stays left, so a reason wraps at the page's
-width rather than at ten characters.
-"""
+"""Tables on a report page: cells that are or start like a number (``74.0 % (71.7–79.2)``) get
+class ``num`` and are right-aligned with three significant figures; prose stays left so it
+wraps at the page's width."""
 
 from __future__ import annotations
 
@@ -50,9 +44,8 @@ def is_number(text: str) -> bool:
 
 def html_table(headers: Sequence[str], rows: Sequence[Sequence[Any]],
                raw: Sequence[int] = (), row_class: Sequence[str] | None = None) -> str:
-    """An HTML table: ``rows`` of cells under ``headers``; the cells of the columns in
-    ``raw`` are HTML already (links), every other cell is escaped. A column whose every
-    non-empty cell reads as a number is right-aligned, header included."""
+    """An HTML table of ``rows`` under ``headers``; cells of the ``raw`` columns are HTML already,
+    the rest escaped; all-number columns are right-aligned."""
     texts = [[c if j in raw else html.escape(cell_text(c)) for j, c in enumerate(row)]
              for row in rows]
     numeric = [bool(rows) and j not in raw and all(

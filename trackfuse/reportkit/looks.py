@@ -1,17 +1,5 @@
-"""How each algorithm is drawn: one colour, marker and fill per method in every figure.
-
-An experiment declares a :class:`Look` per algorithm on its ``Experiment.looks``. The role
-sets the emphasis:
-
-* ``paper``: the paper's own method (thick, vermillion squares by convention);
-* ``paper_baseline``: the baseline the paper compares against (thick);
-* ``ours``: this project's improvement (thick, green circles by convention);
-* ``reference``: a bound or an exact optimum (black, dashed, no marker);
-* ``variant``: other variants and ablations (thin, drawn behind).
-
-Colours follow the Okabe-Ito palette, distinct under colour-vision deficiency. Pure data:
-no matplotlib.
-"""
+"""How each algorithm is drawn: one colour, marker, fill and emphasis (:data:`ROLES`) per method
+in every figure (``docs/plugins.md``, roles and palette). Pure data: no matplotlib."""
 
 from __future__ import annotations
 
@@ -28,9 +16,8 @@ EMPHASISED = ("paper", "paper_baseline", "ours")
 
 @dataclass(frozen=True)
 class Look:
-    """How one algorithm is drawn. ``label``: its legend entry (short: detail goes to the
-    caption); ``marker``: a matplotlib marker (``""`` for none); ``open``: the marker drawn
-    hollow (one fill per method, the same in every figure); ``role``: one of :data:`ROLES`."""
+    """How one algorithm is drawn: ``label`` (short legend entry), ``marker`` (matplotlib, ``""``
+    for none), ``open`` (hollow marker), ``role`` (one of :data:`ROLES`)."""
 
     label: str
     colour: str
@@ -59,9 +46,8 @@ class Look:
 
 
 def look_of(looks: Mapping[str, Look], name: str) -> Look:
-    """The look of ``name`` in ``looks``; an ``association/filter`` name without a look of
-    its own takes its association's (named ``association, filter``); an undeclared name a
-    grey dot labelled with the name itself."""
+    """The look of ``name`` in ``looks``: else its association's for an ``association/filter``
+    name, else a grey dot labelled ``name``."""
     if name in looks:
         return looks[name]
     base, _, variant = name.partition("/")

@@ -1,9 +1,6 @@
-"""One number format for every table a reader sees: three significant figures, rates in %.
-
-A value with its 95 % interval reads ``74.0 % (71.7–79.2)``; a difference of two rates reads
-in percentage points, signed: ``+1.60 points (−3.90 to +7.00)``. Figures label rates in % as
-well, so a table and the figure beside it show the same numbers.
-"""
+"""One number format for every table and figure: three significant figures, rates in %
+(``74.0 % (71.7–79.2)``), rate differences in signed percentage points
+(``+1.60 points (−3.90 to +7.00)``)."""
 
 from __future__ import annotations
 
@@ -13,9 +10,8 @@ MINUS = "\u2212"
 
 
 def sig3(value: float, signed: bool = False) -> str:
-    """``value`` with three significant figures and no exponent (``74.0``, ``0.0594``,
-    ``130``, ``1230``), a true minus sign, ``+`` before a positive one when ``signed``; ``""``
-    for NaN."""
+    """``value`` with three significant figures and no exponent (``0.0594``, ``1230``), a true
+    minus sign, ``+`` when ``signed``; ``""`` for NaN."""
     if not math.isfinite(value):
         return "" if math.isnan(value) else ("∞" if value > 0 else f"{MINUS}∞")
     if value == 0:

@@ -10,9 +10,8 @@ import pandas as pd
 
 def per_point(summary: pd.DataFrame, keys: Sequence[str],
               wanted: Mapping[tuple[str, str], str]) -> pd.DataFrame:
-    """Per point (``point`` and the swept ``keys``): for each ``(metric, algorithm) ->
-    column`` of ``wanted`` found there, the mean as ``column`` and its interval as
-    ``<column>_ci_low``/``<column>_ci_high`` (as ``summary.csv`` gives it)."""
+    """Per point: the mean of each ``(metric, algorithm) -> column`` of ``wanted`` as ``column``,
+    with ``<column>_ci_low``/``_ci_high`` from ``summary.csv``."""
     out = []
     for point, g in summary.groupby("point", sort=True):
         row = {"point": point, **{k: g[k].iloc[0] for k in keys}}

@@ -1,10 +1,6 @@
-"""Claims along a sweep judged on paired trials (trials share their random numbers across
-sweep points): "higher at every value" and "the gap narrows from one end to the other".
-
-Each function takes the paired comparisons per x value and a ``words`` function naming an x
-value (``200 m``), and returns a :class:`~trackfuse.reportkit.verdicts.Verdict` whose
-reason is one line in plain words; an experiment's report turns it into its headline row.
-"""
+"""Claims along a sweep judged on paired trials (shared random numbers across points): "higher
+at every value" and "the gap narrows", each a
+:class:`~trackfuse.reportkit.verdicts.Verdict` with a one-line reason."""
 
 from __future__ import annotations
 
@@ -28,10 +24,9 @@ Words = Callable[[float], str]
 
 
 def higher_everywhere(gaps: Sequence[tuple[float, PairedBinary]], words: Words) -> Verdict:
-    """``agrees`` when the paired interval of the gap lies above 0 at every value (each must
-    be shown, so no adjustment); ``differs`` when the method is shown *lower* somewhere
-    (exact McNemar, Holm over the values); else ``inconclusive``. ``gaps``: ``(x, method
-    against its rival)`` per value; the estimate is the smallest gap, for display."""
+    """``agrees`` when the paired interval of the gap is above 0 at every value, ``differs`` when
+    the method is shown lower somewhere (exact McNemar, Holm); else ``inconclusive``. ``gaps``:
+    ``(x, comparison)`` per value; the estimate is the smallest gap."""
     not_shown = [(xv, g) for xv, g in gaps if not g.low > 0]
     holm = holm_adjusted([g.p for _, g in gaps])
     lower = [xv for (xv, g), q in zip(gaps, holm, strict=True)
@@ -68,12 +63,9 @@ def _pair_tests(gap: Mapping[float, np.ndarray]) -> list[tuple[float, float, flo
 
 
 def narrows(gap: Mapping[float, np.ndarray], margin: float, words: Words) -> Verdict:
-    """"The gap narrows from the first value to the last", decided by the one comparison
-    fixed in advance: the gap (per trial, one 0/1 outcome minus the other) at the first
-    value minus at the last, with its 95 % paired t interval, against ``margin``
-    (:func:`~trackfuse.reportkit.verdicts.at_least`). ``gap``: x -> per-trial gaps, in
-    sweep order. Every other pair is searched too (paired t, Holm over all pairs); a pair
-    found widening goes into the reason as exploration, never into the verdict."""
+    """"The gap narrows from the first value to the last": first-value gap minus last-value gap
+    (paired t) against ``margin``; ``gap`` maps x to per-trial gaps in sweep order. Other pairs
+    found widening (paired t, Holm) are reported as exploration only."""
     tests = _pair_tests(gap)
     holm = holm_adjusted([t[-1] for t in tests])
     x0, x1 = next(iter(gap)), list(gap)[-1]

@@ -1,8 +1,5 @@
-"""Units and labels as a reader expects them in print: ``m²/s⁴``, ``√q T²/(rσ)``, ``%``.
-
-Declarations write units in plain ASCII (``"m^2/s^4"``, ``"1"`` for dimensionless);
-:func:`unit_text` turns them into print. Pure string work: no matplotlib.
-"""
+"""Units and labels as print shows them (``m²/s⁴``, ``√q T²/(rσ)``) from the declarations' ASCII
+(``"m^2/s^4"``, ``"1"`` for dimensionless). Pure string work: no matplotlib."""
 
 from __future__ import annotations
 
