@@ -256,10 +256,8 @@ def sensor_noise(params: Mapping[str, Any]) -> tuple[ESMNoise, RadarNoise]:
 
 def manoeuvre_alpha(params: Mapping[str, Any], x_esm: np.ndarray, P_esm: np.ndarray,
                     index: str) -> np.ndarray:
-    """Manoeuvre index ``alpha`` (N, K) of the ESM track from ``x_esm`` (N, K, 5) and ``P_esm``.
-
-    ``index`` ``"nis_tdoa"`` or ``"literal"``; NaN at start-up or without an ESM range.
-    """
+    """Manoeuvre index ``alpha`` (N, K) of the ESM track from ``x_esm`` (N, K, 5) and ``P_esm``
+    (``index`` ``"nis_tdoa"`` or ``"literal"``); NaN at start-up or without an ESM range."""
     T, window = params["esm.period"], params["alpha.window"]
     if index == "nis_tdoa":
         nu, S = ca_innovations(C * x_esm[..., 3], C**2 * P_esm[..., 3, 3], T,
@@ -315,11 +313,8 @@ def esm_times(params: Mapping[str, Any]) -> np.ndarray:
 
 
 def simulate(params: Mapping[str, Any], streams: Sequence[TrialStreams]) -> Simulated:
-    """Draw and align the sensor data of one trial per stream.
-
-    Fixed-shape standard normals from each trial's common stream, scaled afterwards: the data
-    never depend on the algorithms run, and separation or accuracy sweeps share the noise.
-    """
+    """Draw and align one trial's sensor data per stream: fixed-shape standard normals from the
+    common stream, scaled afterwards, so sweeps of separation or accuracy share the noise."""
     scen = scenario(params)
     A1 = np.zeros(2)
     A2 = np.array([params["geometry.baseline"], 0.0])
@@ -452,10 +447,8 @@ def baseline_variance(diff: Differences, rule: str) -> np.ndarray:
 
 def membership(kind: str, d: np.ndarray, diff: Differences, idx: Sequence[int],
                params: Mapping[str, Any]) -> np.ndarray:
-    """Memberships ``R`` (N, K, F, J) of one fuzzy algorithm from ``d`` (N, K, J, F).
-
-    ``kind`` ``gaussian`` (spread by ``baseline.spread``), ``posterior``, ``l1`` or ``l2``.
-    """
+    """Memberships ``R`` (N, K, F, J) of one fuzzy algorithm from ``d`` (N, K, J, F); ``kind``
+    ``gaussian``, ``posterior``, ``l1`` or ``l2``."""
     dd = np.swapaxes(d, -1, -2)
     if kind == "gaussian":
         var = baseline_variance(diff, params["baseline.spread"])[..., idx]

@@ -52,10 +52,9 @@ def table3(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
 
 
 def ablation(trials: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
-    """Each algorithm against ``improved`` on the same trials
-    (:func:`~trackfuse.reportkit.paired.against_reference` of ``correct``: paired gain,
-    exact McNemar test, Holm over a point's variants and over the sweep), each described by
-    its factors, membership and weights. Empty when ``improved`` was not run."""
+    """Each algorithm against ``improved`` on the same trials (paired gain in ``correct``, exact
+    McNemar, Holm over a point's variants and the sweep), described by factors, membership and
+    weights; empty when ``improved`` was not run."""
     table = against_reference(trials, swept_keys(config), "correct", "improved")
     if table.empty:
         return table
@@ -74,11 +73,9 @@ def _described(name: str, params: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def manoeuvre_table(summary: pd.DataFrame, config: Mapping[str, Any]) -> pd.DataFrame:
-    """Per point: the ESM track's manoeuvre index (``alpha_mean``, its mean over the scans
-    where it is defined, then over the trials) and the mean range weight of ``improved``
-    (``improved_range_weight``), each with its 95 % Student-t interval from ``summary.csv``
-    (columns ``<q>_ci_low``/``<q>_ci_high``). The index is the same for every algorithm of a
-    trial; it is read from the first algorithm's rows."""
+    """Per point: the ESM track's mean manoeuvre index ``alpha_mean`` (over defined scans, then
+    trials) and ``improved``'s mean range weight, each with its 95 % Student-t interval from
+    ``summary.csv``."""
     first = summary["algorithm"].iloc[0]
     return per_point(summary, swept_keys(config),
                      {("alpha_mean", first): "alpha_mean",
@@ -86,12 +83,8 @@ def manoeuvre_table(summary: pd.DataFrame, config: Mapping[str, Any]) -> pd.Data
 
 
 def ahp_table() -> pd.DataFrame:
-    """Paper 001 Table 1 weights by the root and eigenvector methods, with consistency.
-
-    One row per factor set (all five, and the traditional method's three) and method:
-    weights by factor name, ``lambda_max``, ``CI`` and ``CR``, plus the paper's printed
-    rounded weights and consistency numbers for comparison.
-    """
+    """Paper 001 Table 1 weights by the root and eigenvector methods, per factor set (all five, the
+    traditional three): weights, ``lambda_max``, ``CI``, ``CR`` and the paper's printed values."""
 
     out = []
     for names in (FACTORS, THREE):

@@ -1,17 +1,11 @@
-"""Experiment ``passive_sd``: S-D assignment of S >= 2 passive sensors, beside two sensors.
+"""Experiment ``passive_sd``: S-D assignment of ``sensors.n`` >= 2 passive sensors in one scan,
+solved by ``sd_lagrangian``, ``sd_exact`` (integer program, the reference) and ``exact_2d``
+(sensors 1 and 2 alone). Scene, metrics and streams: ``docs/papers/sd_assignment.md``,
+"Experiment passive_sd".
 
-One trial simulates one scan of ``sensors.n`` angle-only sensors (sensors 1 and 2 see the
-scan ``passive_assoc`` simulates with ``scene.mode: random``), builds the tuple costs
-(:func:`trackfuse.association.sd_costs.tuple_costs`; ``assoc.position`` ``fitted`` or
-``marginal`` over :data:`PRIOR_VOLUME`) and solves with ``sd_lagrangian``, ``sd_exact`` (the
-integer program, the reference) and ``exact_2d`` (sensors 1 and 2 alone). Sensor positions,
-metrics and results: ``docs/papers/sd_assignment.md``, "Experiment passive_sd".
-
-Random streams: ``truth, noise, shuffle`` are the first three children of the trial's common
-stream (as in ``passive_assoc``); the false alarms come from the point stream, in sensor
-order. ``sensor3.baseline`` is ``draws=False`` (its false alarms are the same draws scaled to
-its field of view), so a geometry sweep is a paired comparison.
-"""
+Streams: ``truth, noise, shuffle`` are the first three children of the common stream (as in
+``passive_assoc``); false alarms come from the point stream in sensor order, sensor 3's
+scaled to its field of view (``sensor3.baseline`` is ``draws=False``)."""
 
 from __future__ import annotations
 
@@ -116,9 +110,8 @@ def _true_tuple(labels: tuple[np.ndarray, ...]) -> dict[tuple[int, int], frozens
 
 def score(tuples: np.ndarray, labels: tuple[np.ndarray, ...], n_targets: int
           ) -> dict[str, float]:
-    """Accuracy, ghosts and found targets of a partition ``tuples`` (K, S) of the
-    measurements whose target labels are ``labels`` (one (m_s,) array per sensor, -1 for a
-    false alarm)."""
+    """Accuracy, ghosts and found targets of a partition ``tuples`` (K, S) given the target
+    ``labels`` (one (m_s,) array per sensor, -1 for a false alarm)."""
     truth = _true_tuple(labels)
     hits, ghosts, declared, found = 0, 0, 0, set()
     for row in tuples:

@@ -1,9 +1,5 @@
-"""Load the compiled kernels of the S-D assignment once, in the process pool's fork server
-(``Experiment.preload``): the tail minimum of the relaxation
-(:mod:`trackfuse.association.sd_assignment`) and the tuple chi-square
-(:mod:`trackfuse.association.sd_costs`), loaded from numba's on-disk cache or compiled on the
-first run on a machine, here once; every worker inherits them instead of loading or
-compiling them itself."""
+"""Load the S-D assignment's compiled kernels (the relaxation's tail minimum, the tuple
+chi-square) once, in the fork server (``Experiment.preload``), for every worker to inherit."""
 
 from __future__ import annotations
 

@@ -1,15 +1,7 @@
-"""Figures and tables of ``passive_sd`` runs, drawn from the saved CSVs only.
-
-Figures (:data:`trackfuse.experiments.passive_sd.FIGURES`, declared plots drawn by the report
-kit from ``summary.csv``): ``accuracy``, ``ghosts`` and ``found`` of the S-D relaxation
-beside the exact two-sensor assignment, the exact S-D optimum dashed; the relaxation's
-``duality_gap`` with the configured stopping gap; each solver's ``time``. Their x is the
-swept sensor-3 baseline or, without it, the first swept key of :data:`X_KEYS`.
-
-Tables: ``final`` (every metric's mean and interval per point and algorithm) and
-``versus_exact`` (per point: how often the relaxation reached the exact optimum, its mean
-and largest duality gap and its mean iterations).
-"""
+"""Figures and tables of ``passive_sd`` runs from the saved CSVs: the declared plots of
+:data:`~trackfuse.experiments.passive_sd.FIGURES` at the run's x (:func:`x_key`), and the
+tables ``final`` and ``versus_exact`` (``docs/papers/sd_assignment.md``, "Experiment
+passive_sd")."""
 
 from __future__ import annotations
 
@@ -36,9 +28,8 @@ def x_key(config: dict[str, Any]) -> str | None:
 
 
 def figures(run: RunData, wanted: Collection[str]) -> dict[str, Figure | str]:
-    """The ``wanted`` figures drawn by the kit from their declared plots, at the run's x
-    (:func:`x_key`), the stopping gap dotted on ``duality_gap``; a one-line reason for one
-    not drawn."""
+    """The ``wanted`` figures at the run's x, the stopping gap dotted on ``duality_gap``; a
+    one-line reason for one not drawn."""
     x = x_key(run.config)
     out: dict[str, Figure | str] = {}
     for name in (n for n in FIGURES if n in wanted):
