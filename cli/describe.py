@@ -1,9 +1,5 @@
 """What ``trackfuse list`` prints: the experiments, or one experiment's parameters, metrics,
-algorithms and figures as a table, a commented YAML template or JSON.
-
-Keys are never cut: each heads its own line, its description wrapped below (80 columns
-when piped).
-"""
+algorithms and figures as a table (keys never cut), a commented YAML template or JSON."""
 
 from __future__ import annotations
 
@@ -31,9 +27,8 @@ def print_listing(listed: list[Listed], width: int | None = None) -> None:
 
 
 def listing_data(listed: list[Listed]) -> list[dict[str, str]]:
-    """:func:`print_listing` as plain JSON-ready data: each experiment's ``name``,
-    ``origin``, ``reference`` (module, or ``module:ATTRIBUTE`` of a plugin) and
-    ``description``."""
+    """:func:`print_listing` as JSON-ready data: each experiment's ``name``, ``origin``,
+    ``reference`` and ``description``."""
     return [{"name": item.name, "origin": item.origin, "reference": item.reference,
              "description": item.description} for item in listed]
 

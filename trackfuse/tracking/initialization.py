@@ -1,8 +1,5 @@
-"""Track initialization from a coarse range cue (``docs/papers/twin_sensor.md``, Initialization).
-
-``P0`` is built in the sensor's line-of-sight frame and initialises both the filters and the
-PCRLB (``J0 = P0^-1``), which keeps the bound consistent.
-"""
+"""Track initialization from a coarse range cue (``docs/papers/twin_sensor.md``,
+Initialization); ``P0`` also gives the PCRLB's ``J0 = P0^-1``."""
 
 from __future__ import annotations
 
@@ -22,9 +19,8 @@ def range_cue_sd(cue: str, d: np.ndarray, sigma_range: float, fraction: float) -
 
 def los_prior_covariance(d: np.ndarray, sigma_range: float, sigma_angle: float,
                          sigma_velocity: float) -> np.ndarray:
-    """``P0`` (6, 6) for target-minus-sensor ``d`` (3,) m: ``sigma_range`` m along the line of
-    sight, ``r sigma_angle`` across it per axis, ``sigma_velocity`` m/s per velocity axis.
-    """
+    """``P0`` (6, 6) for ``d`` (3,) m: ``sigma_range`` m along the line of sight, ``r sigma_angle``
+    across, ``sigma_velocity`` m/s per velocity axis."""
     r = float(np.linalg.norm(d))
     u = d / r
     az = np.arctan2(d[1], d[0])

@@ -1,8 +1,5 @@
-"""Nearly-constant-velocity (CV) target model in 3-D: state ``[x, y, z, vx, vy, vz]`` (m, m/s).
-
-Discrete white-noise acceleration (Bar-Shalom, Li & Kirubarajan 2001, sec. 6.3.2);
-equations in ``docs/papers/twin_sensor.md``, Scenario. ``Q`` has rank 3, never inverted.
-"""
+"""Nearly-constant-velocity target model, state ``[x, y, z, vx, vy, vz]`` (m, m/s), discrete
+white-noise acceleration (``docs/papers/twin_sensor.md``, Scenario); ``Q`` has rank 3."""
 
 from __future__ import annotations
 

@@ -1,7 +1,5 @@
-"""What the PDA filter (:mod:`trackfuse.tracking.pda`) is asked and what it returns.
-
-Apart from the filter so that reading options (config checks, report names) imports no numba.
-"""
+"""What the PDA filter is asked and returns, apart from it so that reading options imports no
+numba."""
 
 from __future__ import annotations
 
@@ -20,14 +18,9 @@ MG_AT = ("hypothesis", "combined")
 
 @dataclass(frozen=True)
 class PDAOptions:
-    """How the PDA filter associates and updates; every choice in one place.
-
-    ``method`` one of :data:`METHODS`; ``covariance`` ``"mgekf"`` (modified rows, Joseph form) or
-    ``"ekf_joseph"``; ``joint_cov`` the joint innovation covariance in ``w_ij``; ``density`` the
-    caller's clutter density or ``m_s / V_s``; ``mg_at`` MGEKF rows at each hypothesis's returns
-    or at the combined return (W000-4); ``P_G`` gate probability; ``gamma`` =
-    ``chi2_{n_z}^-1(P_G)``, derived.
-    """
+    """How the PDA filter associates and updates: ``method`` (:data:`METHODS`), ``covariance``
+    (``"mgekf"`` or ``"ekf_joseph"``), ``joint_cov`` in ``w_ij``, clutter ``density``, ``mg_at``
+    (W000-4), gate probability ``P_G`` and derived ``gamma = chi2_{n_z}^-1(P_G)``."""
 
     method: str = "mspda_parallel"
     covariance: str = "mgekf"
@@ -53,11 +46,8 @@ class PDAOptions:
 
 @dataclass(frozen=True)
 class Estimates:
-    """Per-scan filter output over ``N`` trials and ``K`` scans, in our state order.
-
-    ``X`` (N, K, 6), ``P`` (N, K, 6, 6) (NaN after a failure), ``n_valid`` (N, K, S) validated
-    returns, ``inside`` (N, K) whether the noise-free return lay in any gate.
-    """
+    """Filter output over ``N`` trials and ``K`` scans: ``X`` (N, K, 6), ``P`` (N, K, 6, 6) (NaN
+    after a failure), ``n_valid`` (N, K, S), ``inside`` (N, K) noise-free return in a gate."""
 
     X: np.ndarray
     P: np.ndarray

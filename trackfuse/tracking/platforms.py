@@ -1,9 +1,5 @@
-"""Sensor platform trajectories, known without error as in paper 000.
-
-A climbing orbit (radius and phase from the start point: the paper's scenario gives 200 km
-and -40 deg, ``docs/papers/twin_sensor.md``, Scenario), straight flight, and the formation
-offset of a second platform.
-"""
+"""Sensor platform trajectories, known without error as in paper 000: a climbing orbit,
+straight flight, and a formation offset (``docs/papers/twin_sensor.md``, Scenario)."""
 
 from __future__ import annotations
 
@@ -12,10 +8,8 @@ import numpy as np
 
 def orbit_positions(t: np.ndarray, start: np.ndarray, centre_xy: np.ndarray, speed: float,
                     climb: float, direction: int = 1) -> np.ndarray:
-    """Positions (K, 3) m on a climbing horizontal orbit about ``centre_xy`` at times ``t`` (K,) s.
-
-    ``speed`` along the arc and ``climb`` in m/s; ``direction`` +1 counter-clockwise from above.
-    """
+    """Positions (K, 3) m on a climbing orbit about ``centre_xy`` at ``t`` (K,) s; ``speed`` and
+    ``climb`` m/s, ``direction`` +1 counter-clockwise."""
     t = np.asarray(t, dtype=float)
     rel = np.asarray(start[:2], dtype=float) - np.asarray(centre_xy, dtype=float)
     radius = float(np.hypot(rel[0], rel[1]))
@@ -33,8 +27,7 @@ def straight_positions(t: np.ndarray, start: np.ndarray, speed: float, heading: 
 
 
 def baseline_offset(los_azimuth: float, baseline: float, angle: float) -> np.ndarray:
-    """Horizontal offset (3,) m of a formation platform: length ``baseline``, at ``angle`` rad
-    from the line-of-sight azimuth (``pi/2``: broadside, the best triangulation geometry).
-    """
+    """Horizontal offset (3,) m of length ``baseline`` at ``angle`` rad from the line-of-sight
+    azimuth (``pi/2``: broadside)."""
     a = los_azimuth + angle
     return np.array([baseline * np.cos(a), baseline * np.sin(a), 0.0])

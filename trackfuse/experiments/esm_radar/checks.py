@@ -1,10 +1,6 @@
-"""Last check of an ``esm_radar`` config: what the schema's per-key limits cannot see.
-
-A config is refused before any trial runs when, at some sweep point, an algorithm with
-dynamic weights needs ``alpha_max`` and ``alpha.max_mode`` cannot give it for the chosen
-``alpha.index`` (:func:`~.model.alpha_max_problem`, the rule :func:`~.model.alpha_max`
-enforces); every such trial would fail otherwise.
-"""
+"""Last check of an ``esm_radar`` config: refused before any trial runs when a dynamic-weights
+algorithm needs an ``alpha_max`` that ``alpha.max_mode`` cannot give for ``alpha.index``
+(:func:`~.model.alpha_max_problem`)."""
 
 from __future__ import annotations
 

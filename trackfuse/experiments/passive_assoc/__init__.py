@@ -1,11 +1,5 @@
-"""Paper 002: two-sensor passive association by an improved partheno-genetic algorithm
-(``passive_assoc``).
-
-The science (scene, pair weights, exact and PGA solvers, scoring) is :mod:`.model`; the
-figures and tables are :mod:`.report`, which reads saved runs only; :mod:`.preload` loads the
-compiled PGA loop once in the process pool's fork server. See
-``docs/papers/passive_assoc.md``.
-"""
+"""Paper 002: two-sensor passive association by an improved partheno-genetic algorithm: science
+in :mod:`.model`, figures and tables in :mod:`.report` (``docs/papers/passive_assoc.md``)."""
 
 from __future__ import annotations
 

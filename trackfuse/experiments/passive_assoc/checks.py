@@ -1,9 +1,5 @@
-"""Last check of a ``passive_assoc`` config: what the schema's per-key limits cannot see.
-
-``targets.n`` may be up to 2000 for random scenes, but the paper's scene has only its ten
-targets M1-M10 (:data:`~trackfuse.association.passive_scene.PAPER_TARGETS`): a config asking
-the paper scene for more is refused before any trial runs, every one of which would fail.
-"""
+"""Last check of a ``passive_assoc`` config: the paper's scene has only its ten targets, so a
+config asking it for more is refused before any trial runs."""
 
 from __future__ import annotations
 

@@ -1,19 +1,11 @@
-"""Experiment ``passive_assoc``: paper 002, two-sensor passive association by (improved) PGA.
+"""Experiment ``passive_assoc``: paper 002, two-sensor passive association. One trial is one
+scan: the exact dummy-augmented assignment (``exact``, ``ops = 0``) and each PGA variant of
+:data:`VARIANTS` on the same weights, one row per checkpoint; ``gap`` and ``at_opt`` are
+against that trial's ``J*``. Model and metrics: ``docs/papers/passive_assoc.md``.
 
-One trial simulates one scan of the two infrared sensors (paper 002's targets M1..Mn, or
-``n`` random targets in the same box), computes the assignment weights, solves the
-dummy-augmented 2-D assignment exactly (``exact``: one row, ``ops = 0``) and runs each
-requested PGA variant (:data:`VARIANTS`) on the same weights, one row per checkpoint of the
-operation count. ``gap`` and ``at_opt`` are relative to the exact optimum ``J*`` of the same
-trial; a PGA above ``J*`` fails the trial (:class:`ExactSolverError`). Model, variants,
-metrics and defaults: ``docs/papers/passive_assoc.md``.
-
-Random streams: ``truth, noise, shuffle, algo`` are children of the trial's common stream;
-the false alarms come from its point stream (angle noise and detection probability are
-``draws=False``: they scale or threshold common draws). The PGA variants take fixed children
-of ``algo`` by their position in :data:`VARIANTS` (append new ones at the end), so changing
-the algorithm list changes no other number.
-"""
+Streams: ``truth, noise, shuffle, algo`` are children of the common stream, false alarms come
+from the point stream; each variant takes a fixed child of ``algo`` by its position in
+:data:`VARIANTS` (append new ones at the end), so the algorithm list changes no other number."""
 
 from __future__ import annotations
 
@@ -109,9 +101,8 @@ def sigma_of(params: dict[str, Any]) -> float:
 
 def score(partner1: np.ndarray, partner2: np.ndarray, truth1: np.ndarray,
           truth2: np.ndarray) -> dict[str, float]:
-    """Accuracy, pair precision/recall and whole-solution correctness of an assignment.
-
-    partner1 (m1,), partner2 (m2,): assigned partners (-1 = dummy); truth1, truth2 likewise."""
+    """Accuracy, pair precision/recall and correctness of ``partner1`` (m1,), ``partner2`` (m2,)
+    (-1 = dummy) against ``truth1``, ``truth2``."""
     n_meas = len(partner1) + len(partner2)
     hits = int(np.sum(partner1 == truth1) + np.sum(partner2 == truth2))
     declared = int(np.sum(partner1 >= 0))
@@ -134,10 +125,8 @@ def _partner2(partner1: np.ndarray, m2: int) -> np.ndarray:
 
 
 def run_trial(params: dict[str, Any], streams: TrialStreams) -> list[dict[str, Any]]:
-    """One scan: simulate, weigh, solve exactly and by each PGA variant; rows per checkpoint.
-
-    The PGA runs compiled (:func:`trackfuse.association.pga_search.pga`, bit for
-    bit :func:`trackfuse.association.pga.pga`)."""
+    """One scan: simulate, weigh, solve exactly and by each (compiled) PGA variant; rows per
+    checkpoint."""
     import scipy.optimize  # noqa: F401 - on use, and before the exact solve is timed
 
     from trackfuse.association.pga_search import pga  # numba: on use
