@@ -1,10 +1,6 @@
-"""What the ``trackfuse`` commands share: option declarations, choices, and one-line errors.
-
-Every error, usage errors from the option parser included (a bad value, a missing
-argument), is printed as one line ``error: ...`` on stderr; usage errors exit with status 2.
-A closed standard output (``| head``) is silent and changes no exit status
-(:class:`QuietClosedStdout`).
-"""
+"""What the ``trackfuse`` commands share: option declarations, choices, and one-line
+``error: ...`` messages on stderr (usage errors exit 2); a closed stdout (``| head``) is
+silent (:class:`QuietClosedStdout`)."""
 
 from __future__ import annotations
 
@@ -38,9 +34,7 @@ def _forget_caught_ctrl_c() -> None:
 
 
 class QuietClosedStdout:
-    """``sys.stdout`` for a command: once its reader has gone (``| head``) output is dropped
-    silently and the exit status is the command's own, as for ``cat``.
-    """
+    """``sys.stdout`` that drops output silently once its reader has gone, as ``cat`` does."""
 
     def __init__(self, stream):
         self.stream = stream
@@ -197,9 +191,8 @@ Sweeps = Annotated[list[str], typer.Option(
     help="Sweep an axis: clutter.mean=0,5,10 or 'clutter.mean=range(0,21,2)'; lists in "
          "brackets: 'algorithms=\\[a,b],\\[c]' (repeatable).")]
 def whole_number(low: int, high: int | None = None) -> Callable[[str | int], int]:
-    """The parser of an integer option from ``low`` to ``high`` (no limit: ``None``): digits
-    with an optional sign, so ``--trials 2.0`` is refused as a config's ``trials: 10.0`` is
-    (typer read it as 2)."""
+    """Parser of an integer option in ``[low, high]`` (``None``: no limit): digits with an optional
+    sign, so ``--trials 2.0`` is refused like ``trials: 10.0``."""
     def parse(text: str | int) -> int:
         if isinstance(text, int):  # the option's default
             return text

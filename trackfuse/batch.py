@@ -1,9 +1,6 @@
-"""One batch of trials, run in a worker: seeds, the experiment's code, CSV text.
-
-Whatever a trial raises or wrongly returns becomes one ``failed`` row with the error; the
-run goes on. A batch form that raises is rerun trial by trial. Workers load this module, so
-it imports no pandas, matplotlib or run orchestration.
-"""
+"""One batch of trials, run in a worker: seeds, the experiment's code, CSV text. Whatever a
+trial raises or wrongly returns becomes one ``failed`` row; workers load this module, so it
+imports no pandas, matplotlib or orchestration."""
 
 from __future__ import annotations
 
@@ -36,9 +33,8 @@ _sigint_watched = threading.Event()
 
 @dataclass(frozen=True)
 class BatchTask:
-    """Everything a worker needs for one batch (picklable): ``draw_point`` keys the point streams,
-    ``span.point`` names the rows, ``trial_timeout`` limits one trial (s, ``None``: no limit).
-    """
+    """Everything a worker needs for one batch (picklable); ``trial_timeout`` limits one trial (s,
+    ``None``: no limit)."""
 
     experiment: Experiment
     params: dict[str, Any]
@@ -79,9 +75,8 @@ def _marking(handler: Callable[[int, object], None]) -> Callable[[int, object], 
 
 @contextmanager
 def watch_sigint() -> Iterator[None]:
-    """Mark Ctrl-C (and SIGTERM turned into one) as the user's, so a trial's own
-    ``KeyboardInterrupt`` can be contained.
-    """
+    """Mark Ctrl-C (and SIGTERM) as the user's, so a trial's own ``KeyboardInterrupt`` is
+    contained."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -130,9 +125,8 @@ def _failure(prefix: dict[str, Any], err: BaseException) -> dict[str, Any]:
 
 def _table_trials(experiment: Experiment, table: RowTable, producer: str
                   ) -> RowTable | list[Any]:
-    """``table`` if it passes the column checks of :mod:`trackfuse.trial_rows`, else each trial's
-    rows or the error that fails them all, for the per-trial check to name what is wrong.
-    """
+    """``table`` if it passes the column checks, else each trial's rows or the error failing them
+    all."""
     try:
         if problem := table_problem(experiment, table, producer):
             return [problem] * table.trials
@@ -171,11 +165,8 @@ def _numpy_global_kept() -> Iterator[None]:
 
 
 def _run_trials(task: BatchTask, trials: range) -> tuple[Any, str]:
-    """What the batch's trials returned (lists or a RowTable) and which function returned it.
-
-    ``run_batch`` runs seeded from its first trial under the summed time limit; if it raises,
-    times out or returns the wrong count, each trial reruns on its own seed and limit.
-    """
+    """What the batch's trials returned and which function returned it: ``run_batch`` first; if it
+    raises, times out or miscounts, each trial reruns on its own seed and limit."""
     if task.experiment.run_batch is not None:
         limit = task.trial_timeout and task.trial_timeout * len(trials)
         try:
@@ -195,12 +186,8 @@ def _run_trials(task: BatchTask, trials: range) -> tuple[Any, str]:
 
 
 def execute_batch(task: BatchTask) -> BatchResult:
-    """Run one batch in a worker; failed trials become ``failed`` rows.
-
-    A batch form that raises is rerun trial by trial; one whose rows lack a declared metric
-    fails all its trials (a retry would hide the bug). A trial stopped at its time limit asks
-    for a new worker (``renew_worker``).
-    """
+    """Run one batch in a worker; failed trials become ``failed`` rows, a missing declared metric
+    fails all, and a trial stopped at its limit asks for a new worker (``renew_worker``)."""
     before = timeouts()
     result = _execute(task)
     return replace(result, renew_worker=True) if timeouts() > before else result
@@ -232,9 +219,8 @@ def _execute(task: BatchTask) -> BatchResult:
 
 
 def _table_result(task: BatchTask, table: RowTable, t0: float) -> BatchResult:
-    """CSV parts of a :class:`~trackfuse.rowtable.RowTable` batch: the same trial rows as dict rows
-    would give, and one timings row per entry of its timing table.
-    """
+    """CSV parts of a :class:`~trackfuse.rowtable.RowTable` batch: the trial rows and one timings
+    row per entry of its timing table."""
     span = task.span
     swept = {k: Constant(v) for k, v in task.swept.items()}
     metrics = {k: v for k, v in table.columns.items() if not k.endswith(TIME_SUFFIX)}

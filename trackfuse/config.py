@@ -1,12 +1,8 @@
-"""Load a YAML scenario config, apply command-line overrides, and validate it.
+"""Load a YAML scenario config, apply command-line overrides, and validate it
+(``docs/configs.md``). Every problem is one :class:`ConfigError` line naming the file (or
+option), the dotted key, what was given and what is allowed::
 
-Every problem raises :class:`ConfigError`: one line naming the file (or ``--set``/``--sweep``),
-the dotted key, what was given and what is allowed::
-
-    configs/x.yaml: params.clutter.mean: got -1; allowed: a number >= 0
-
-The config layout and the override syntax are in docs/configs.md.
-"""
+    configs/x.yaml: params.clutter.mean: got -1; allowed: a number >= 0"""
 
 from __future__ import annotations
 
@@ -127,9 +123,8 @@ _KEY_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_.-]{0,39}$")
 
 
 def _check_top_level(source: str, raw: dict[Any, Any]) -> None:
-    """Refuse an unknown top-level key, named with a did-you-mean; a key that is no key
-    name means the file is not a config (a password file parses as a mapping): it is
-    refused without echoing any of its text."""
+    """Refuse an unknown top-level key with a did-you-mean; a file whose keys are not key names is
+    not a config and is refused without echoing its text."""
     for key in raw:
         if key not in TOP_LEVEL and not (isinstance(key, str) and _KEY_NAME.match(key)):
             raise ConfigError(source, "", "not a trackfuse config: a top-level key is not a "
@@ -217,11 +212,8 @@ def check_value(p: Param, value: Any) -> Any:
 
 
 def flatten(mapping: Mapping, prefix: str = "") -> dict[str, Any]:
-    """Flatten nested mappings into dotted keys: ``{a: {b: 1}} -> {"a.b": 1}``.
-
-    Raises :class:`KeyError` with the dotted key that two spellings give (``a.b: 1`` beside
-    ``a: {b: 2}``), of which the last would otherwise win unseen.
-    """
+    """Flatten nested mappings into dotted keys (``{a: {b: 1}} -> {"a.b": 1}``); :class:`KeyError`
+    for a key two spellings give (``a.b: 1`` beside ``a: {b: 2}``)."""
     flat: dict[str, Any] = {}
     for key, value in mapping.items():
         dotted = f"{prefix}{key}"
@@ -333,12 +325,9 @@ MAX_TRIAL_TIMEOUT = 86_400.0
 def build(raw: Any, source: str, sets: Mapping[str, Any] | None = None,
           sweeps: Mapping[str, Any] | None = None, *,
           experiment: Experiment | None = None) -> Config:
-    """Validate a parsed YAML document plus overrides into a :class:`Config`.
-
-    ``sets`` (``--set``; setting a swept key removes that axis) and ``sweeps`` (``--sweep``,
-    replacing the file's) are blamed on the option, not the file. ``experiment`` bypasses the
-    lookup of ``raw["experiment"]``.
-    """
+    """Validate a parsed YAML document plus ``sets`` (``--set``; a swept key loses its axis) and
+    ``sweeps`` (``--sweep``) into a :class:`Config`, blaming the option, not the file.
+    ``experiment`` bypasses the lookup of ``raw["experiment"]``."""
     if raw is None:
         raise ConfigError(source, "", "the file is empty; expected a mapping with at least "
                                       "'experiment'")
@@ -472,9 +461,7 @@ def _sweep(source: str, exp: Experiment, sweep_raw: Any, sweeps: dict[str, Any],
 
 def _check_set_once(source: str, exp: Experiment, params: Mapping[str, Any],
                     params_raw: Mapping, sweep_raw: Mapping, overridden: set[str]) -> None:
-    """Refuse a file that both sets a parameter away from its default and sweeps it; an override
-    settles it.
-    """
+    """Refuse a file that both sets a parameter away from its default and sweeps it."""
     flat = flatten(params_raw)
     both = [key for key in map(str, sweep_raw) if key in flat and key not in overridden
             and params[key] != exp.schema[key].default]
@@ -500,9 +487,8 @@ def _sweep_mode(source: str, mode: Any, sweep: dict[str, list[Any]]) -> str:
 
 def _check_distinct(source: str, sweep: dict[str, list[Any]], mode: str,
                     from_options: set[str]) -> None:
-    """Refuse a sweep with two equal points: a value repeated on a grid axis, or a repeated
-    combination of zipped axes. Two such points would repeat one setting (with the same
-    numbers: they share their draw point) and be read as two settings."""
+    """Refuse a sweep with two equal points (a repeated grid value or zipped combination), which
+    would be read as two settings."""
     if mode == "zip":
         seen: set[str] = set()
         for values in zip(*sweep.values(), strict=True):
@@ -601,9 +587,8 @@ def _store(source: str, store: Any) -> str:
 
 
 def read_yaml(path: str | Path) -> Any:
-    """Parse a YAML config file, every problem a :class:`ConfigError`. A FIFO is read; a run
-    folder's ``config.yaml`` must be a regular file.
-    """
+    """Parse a YAML config file, every problem a :class:`ConfigError`; a run folder's
+    ``config.yaml`` must be a regular file."""
     in_run_folder = os.path.lexists(Path(path).parent / MANIFEST)
     try:
         return read_yaml_file(path, regular_only=in_run_folder)
