@@ -5,8 +5,7 @@
 "Improved fuzzy evaluation" and W001-5.
 
 References: Saaty T. L., J. Math. Psychol. 15(3), 1977, 234-281; Saaty T. L., *The Analytic
-Hierarchy Process*, 1980.
-"""
+Hierarchy Process*, 1980."""
 
 from __future__ import annotations
 

@@ -7,8 +7,7 @@ weights (:data:`COSTS`: ``paper``, ``printed``, ``pattipati``) give pair gains
 "Weights", "Departure from eq. 17 as printed" and "Exact optimum".
 
 References: Pattipati K. R. et al., IEEE Trans. Automatic Control 37(2), 1992; Deb S. et al.,
-IEEE Trans. AES 33(2), 1997; Crouse D. F., IEEE Trans. AES 52(4), 2016.
-"""
+IEEE Trans. AES 33(2), 1997; Crouse D. F., IEEE Trans. AES 52(4), 2016."""
 
 from __future__ import annotations
 
@@ -29,8 +28,7 @@ BRUTE_FORCE = "enumerate"
 @dataclass(frozen=True)
 class PairWeights:
     """Weights of one scan: ``a`` (m1, m2) log-likelihood of each pair, ``a_i0`` (m1,) and ``a_0j``
-    (m2,) of leaving one unpaired, ``chi2`` (m1, m2) at the triangulated point.
-    """
+    (m2,) of leaving one unpaired, ``chi2`` (m1, m2) at the triangulated point."""
 
     a: np.ndarray
     a_i0: np.ndarray
@@ -48,8 +46,7 @@ class PairWeights:
 @dataclass(frozen=True)
 class Assignment:
     """Pairs and singletons: ``partner1`` (m1,) and ``partner2`` (m2,) (-1: unpaired), ``objective``
-    the summed pair gains.
-    """
+    the summed pair gains."""
 
     partner1: np.ndarray
     partner2: np.ndarray
@@ -76,8 +73,7 @@ def pair_weights(z1: np.ndarray, z2: np.ndarray, s1: np.ndarray, s2: np.ndarray,
     """:class:`PairWeights` of a scan: ``z1`` (m1, 2), ``z2`` (m2, 2) rad, ``s1``, ``s2`` (3,) m.
 
     ``cost`` one of :data:`COSTS` (``p_f`` for ``paper``/``printed``, ``psi`` (2,) rad^2 for
-    ``pattipati``); ``tri`` the triangulation method.
-    """
+    ``pattipati``); ``tri`` the triangulation method."""
     chi2 = pair_chi2(z1, z2, s1, s2, sigma_a, sigma_b, tri)
     m1, m2 = chi2.shape
     log_norm = np.log(2.0 * np.pi * sigma_a * sigma_b)

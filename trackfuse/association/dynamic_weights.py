@@ -1,8 +1,7 @@
 """Manoeuvre-dependent factor weights (paper 001 eq. 14-16, corrected; W001-3).
 
 ``a'_1(k+1) = a_1(1) exp(-(alpha(k) / alpha_max)^2)``; all weights are then renormalised to
-sum to 1. See ``docs/papers/esm_radar.md``, "Improved fuzzy evaluation".
-"""
+sum to 1. See ``docs/papers/esm_radar.md``, "Improved fuzzy evaluation"."""
 
 from __future__ import annotations
 

@@ -5,8 +5,7 @@ phase (rad). The ESM sees T2 only; its range comes from the TDOA-DF inversion. G
 sensor models: ``docs/papers/esm_radar.md``, "Scenario" and "Factors and sensor models".
 
 Reference: Zhang Xiaoqiang et al., J. Air Force Eng. Univ. (Nat. Sci.) 18(1), 2017, 44-49,
-sec. 3.
-"""
+sec. 3."""
 
 from __future__ import annotations
 
@@ -109,8 +108,7 @@ def esm_factors(f_true: np.ndarray, z: np.ndarray, noise: ESMNoise, A1: np.ndarr
 
     ``f_true`` (K, 5) true factors; ``z`` (N, K, 4) scaled standard-normal draws for (angle,
     tdoa, speed, phase). The TDOA-DF range is correlated with angle and tdoa; invalid samples
-    are carried forward.
-    """
+    are carried forward."""
     b = np.asarray(A2, dtype=float) - np.asarray(A1, dtype=float)
     theta = f_true[:, 2] + noise.angle * z[..., 0]
     tdoa = f_true[:, 3] + noise.tdoa * z[..., 1]
@@ -141,8 +139,7 @@ def radar_factors(f_true: np.ndarray, z: np.ndarray, noise: RadarNoise, model: s
     """Radar measurements ``x`` (N, M, J, 5) and covariance ``P`` (N, M, J, 5, 5) of every track.
 
     ``z`` (N, M, J, 5) scaled draws (the ``"derived"`` model ignores the last two). ``P`` is
-    evaluated at the measured range and bearing (what the association algorithm knows).
-    """
+    evaluated at the measured range and bearing (what the association algorithm knows)."""
     sig_r_true = noise.range_coef * f_true[..., 0]
     r = f_true[..., 0] + sig_r_true * z[..., 0]
     speed = f_true[..., 1] + noise.speed * z[..., 1]
@@ -178,8 +175,7 @@ def nominal_sd(f_true: np.ndarray, esm_noise: ESMNoise, radar_noise: RadarNoise,
     """Per-factor sd (5,) of ESM and radar at the noise-free geometry, averaged over scans.
 
     What a designer reads off the specifications for this engagement; independent of any
-    trial's noise. NaN where the TDOA-DF inversion fails at every scan.
-    """
+    trial's noise. NaN where the TDOA-DF inversion fails at every scan."""
     K = f_true.shape[0]
     _, P_e, _ = esm_factors(f_true, np.zeros((1, K, 4)), esm_noise, A1, A2, min_denominator)
     _, P_r = radar_factors(f_true[:, None], np.zeros((1, K, 1, 5)), radar_noise, model, A1,

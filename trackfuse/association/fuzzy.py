@@ -6,8 +6,7 @@ decision picks a track. Functions broadcast over leading axes (a batch is (N, K,
 Equations: ``docs/papers/esm_radar.md``, "Traditional baseline", "Improved fuzzy evaluation".
 
 References: He You et al., *Multisensor Information Fusion with Applications*, 2000, ch. 7;
-Zhang Xiaoqiang et al., J. Air Force Eng. Univ. (Nat. Sci.) 18(1), 2017, 44-49.
-"""
+Zhang Xiaoqiang et al., J. Air Force Eng. Univ. (Nat. Sci.) 18(1), 2017, 44-49."""
 
 from __future__ import annotations
 
@@ -18,8 +17,7 @@ def inverse_distance_membership(d: np.ndarray, eps: np.ndarray, norm: str = "l1"
     """Inverse-distance membership (paper 001 eq. 4, corrected), (..., J) in (0, 1].
 
     ``d`` (..., J) differences >= 0 floored at ``eps`` > 0 (same unit); ``norm`` "l1" makes rows
-    sum to 1, "l2" gives them unit Euclidean norm.
-    """
+    sum to 1, "l2" gives them unit Euclidean norm."""
     inv = 1.0 / np.maximum(d, eps)
     if norm == "l1":
         return inv / inv.sum(axis=-1, keepdims=True)
@@ -50,8 +48,7 @@ def compose(a: np.ndarray, R: np.ndarray) -> np.ndarray:
 def decide_mean(b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Pick ``argmax_j mean_k b_j(k)`` from ``b`` (..., K, J); ties go to the lowest index.
 
-    Returns the 0-based track index (...,) and the best minus second-best mean (>= 0).
-    """
+    Returns the 0-based track index (...,) and the best minus second-best mean (>= 0)."""
     bbar = b.mean(axis=-2)
     top2 = np.sort(bbar, axis=-1)[..., -2:]
     return np.argmax(bbar, axis=-1), top2[..., 1] - top2[..., 0]
@@ -61,8 +58,7 @@ def decide_vote(b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Majority vote over per-scan argmax decisions of ``b`` (..., K, J).
 
     Vote ties go to the larger mean membership (in [0, 1], so it never beats a one-vote lead).
-    Returns the 0-based track index (...,) and the winner's vote lead as a fraction of K.
-    """
+    Returns the 0-based track index (...,) and the winner's vote lead as a fraction of K."""
     K, J = b.shape[-2:]
     votes = (np.argmax(b, axis=-1)[..., None] == np.arange(J)).sum(axis=-2)
     key = votes + 0.5 * np.clip(b.mean(axis=-2), 0.0, 1.0)

@@ -6,8 +6,7 @@ Default: the windowed NIS of a 1-D nearly-constant-acceleration filter on ``c dt
 ``docs/papers/esm_radar.md``, "Manoeuvre index and dynamic weights" and W001-4.
 
 References: Bar-Shalom, Li, Kirubarajan, *Estimation with Applications to Tracking and
-Navigation*, Wiley, 2001, sec. 5.4.2, 6.3.3, 11.2; Kalata P. R., IEEE Trans. AES 20(2), 1984.
-"""
+Navigation*, Wiley, 2001, sec. 5.4.2, 6.3.3, 11.2; Kalata P. R., IEEE Trans. AES 20(2), 1984."""
 
 from __future__ import annotations
 
@@ -34,8 +33,7 @@ def ca_innovations(z: np.ndarray, R: np.ndarray, T: float,
     """Innovations ``nu`` (m) and variances ``S`` (m^2), (..., K), of a 1-D DWPA Kalman filter.
 
     ``z`` (..., K) m with K >= 4, ``R`` m^2, ``T`` s, ``q`` variance of the acceleration change
-    per period (m^2/s^4). NaN at scans 0-2 (three-point start).
-    """
+    per period (m^2/s^4). NaN at scans 0-2 (three-point start)."""
     z = np.asarray(z, dtype=float)
     R = np.broadcast_to(np.asarray(R, dtype=float), z.shape)
     F = np.array([[1.0, T, T * T / 2], [0.0, 1.0, T], [0.0, 0.0, 1.0]])
@@ -76,8 +74,7 @@ def cv_innovations(z: np.ndarray, R: np.ndarray, T: float,
     """Residuals ``nu`` (m) and variances ``S`` (m^2), (..., K), of a 1-D CV Kalman filter.
 
     ``z`` (..., K) m with K >= 2, ``R`` m^2, ``T`` s, ``q`` white acceleration variance
-    (m^2/s^4). NaN at scans 0 and 1 (two-point start).
-    """
+    (m^2/s^4). NaN at scans 0 and 1 (two-point start)."""
     z = np.asarray(z, dtype=float)
     R = np.broadcast_to(np.asarray(R, dtype=float), z.shape)
     K = z.shape[-1]
@@ -107,8 +104,7 @@ def cv_innovations(z: np.ndarray, R: np.ndarray, T: float,
 def manoeuvre_index(V: np.ndarray, R: np.ndarray, window: int = 5) -> np.ndarray:
     """The paper's literal ``alpha(k)`` (..., K): mean square of recent residuals over ``R(k)``.
 
-    Averages the last ``window`` residuals (fewer at the start); NaN where none exists yet.
-    """
+    Averages the last ``window`` residuals (fewer at the start); NaN where none exists yet."""
     valid = ~np.isnan(V)
     sq = np.where(valid, np.square(np.nan_to_num(V)), 0.0)
     csum = np.cumsum(sq, axis=-1)

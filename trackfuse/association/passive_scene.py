@@ -2,8 +2,7 @@
 
 Detections with ``P_D``, Gaussian az/el errors, Poisson (or Binomial) false alarms uniform
 in a widened field-of-view box; lists shuffled, labels kept for scoring. Geometry and
-defaults: ``docs/papers/passive_assoc.md``, "Model".
-"""
+defaults: ``docs/papers/passive_assoc.md``, "Model"."""
 
 from __future__ import annotations
 
@@ -39,8 +38,7 @@ class PassiveScan:
     """One simultaneous scan of every sensor.
 
     ``targets`` (N, 3) m, ``sensors`` (S, 3) m; per sensor ``z`` (m_s, 2) rad (shuffled) and
-    ``labels`` (m_s,) (target index, -1 false alarm); ``fov`` (S, 4) az and el bounds, rad.
-    """
+    ``labels`` (m_s,) (target index, -1 false alarm); ``fov`` (S, 4) az and el bounds, rad."""
 
     targets: np.ndarray
     sensors: np.ndarray
@@ -79,8 +77,7 @@ def simulate_scan(targets: np.ndarray, sigma_a: float, sigma_b: float, p_d: floa
                   sensors: np.ndarray = SENSORS) -> PassiveScan:
     """Simulate one scan of every sensor, in sensor order (the first sensors' data do not depend on
     later ones). ``rng_noise``, ``rng_clutter``, ``rng_shuffle`` are independent streams;
-    ``p_f`` gives Poisson(p_f N) or Binomial(N, p_f) false alarms; ``margin`` rad.
-    """
+    ``p_f`` gives Poisson(p_f N) or Binomial(N, p_f) false alarms; ``margin`` rad."""
     n = len(targets)
     zs, labels, boxes = [], [], []
     for s in range(len(sensors)):
@@ -108,8 +105,7 @@ def simulate_scan(targets: np.ndarray, sigma_a: float, sigma_b: float, p_d: floa
 
 def true_partners(labels1: np.ndarray, labels2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """True partner (index into the other list) of every measurement, -1 for the dummy (a false
-    alarm, or a target the other sensor missed): ((m1,), (m2,)).
-    """
+    alarm, or a target the other sensor missed): ((m1,), (m2,))."""
     where2 = {int(t): j for j, t in enumerate(labels2) if t >= 0}
     p1 = np.full(len(labels1), -1)
     p2 = np.full(len(labels2), -1)

@@ -7,8 +7,7 @@ move costs O(1). Operators, evaluation and acceptance rules: ``docs/papers/passi
 
 References: Liu H., Dou L., Xin B., Dong L., Control and Decision 23(4), 2008, sec. 3; Li M. J.,
 Tong T. S., Acta Automatica Sinica 25(1), 1999; Rudolph G., IEEE Trans. Neural Networks 5(1),
-1994; Kirkpatrick S. et al., Science 220, 1983.
-"""
+1994; Kirkpatrick S. et al., Science 220, 1983."""
 
 from __future__ import annotations
 
@@ -27,8 +26,7 @@ _BLOCK = 4096  # operations per block of pre-drawn uniforms
 @dataclass(frozen=True)
 class PGAResult:
     """Best solutions at each checkpoint: ``checkpoints`` (C,) operation counts, ``partner1``
-    (C, m1) (-1: dummy), ``objective`` (C,) summed pair gains, ``elapsed_s`` (C,) wall seconds.
-    """
+    (C, m1) (-1: dummy), ``objective`` (C,) summed pair gains, ``elapsed_s`` (C,) wall seconds."""
 
     checkpoints: np.ndarray
     partner1: np.ndarray
@@ -39,8 +37,7 @@ class PGAResult:
 class Draws(NamedTuple):
     """The eight uniforms on [0, 1) of one operation, in stream order (drawn in blocks; the stream
     does not depend on the block size). Under ``evict``, ``place < 1/2`` picks the evicting
-    re-pair and ``2 place`` (mod 1) the position.
-    """
+    re-pair and ``2 place`` (mod 1) the position."""
 
     first_column: float  # roulette position of the first crossover column
     second_column: float  # roulette (or uniform) position of the second crossover column
@@ -99,8 +96,7 @@ def initial_solution(m1: int, m2: int, init: str, rng: np.random.Generator) -> l
 
 class Schedule(NamedTuple):
     """Checkpoint ``marks`` (``ops`` always one), Metropolis ``anneal``, and ``cool``, the
-    temperature factor per operation (1 without annealing).
-    """
+    temperature factor per operation (1 without annealing)."""
 
     marks: set[int]
     anneal: bool

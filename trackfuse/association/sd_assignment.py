@@ -9,8 +9,7 @@ relaxation". The tail minimum runs in numba; ``tests/sd_reference.py`` is its nu
 
 References: Deb S. et al., IEEE Trans. AES 33(2), 1997, 523-538; Poore A. B., Rijavec N.,
 SIAM J. Optimization 3(3), 1993, 544-563; Held M., Wolfe P., Crowder H. P., Math.
-Programming 6, 1974, 62-88.
-"""
+Programming 6, 1974, 62-88."""
 
 from __future__ import annotations
 
@@ -33,8 +32,7 @@ GAP_SCALE_FLOOR = 1.0
 @dataclass(frozen=True)
 class SDResult:
     """A feasible S-D assignment: ``tuples`` (K, S) (0 = dummy), ``primal`` (upper bound, nats),
-    ``dual`` (lower bound, nats), ``gap`` ``(primal - dual) / max(|primal|, 1)``, ``iterations``.
-    """
+    ``dual`` (lower bound, nats), ``gap`` ``(primal - dual) / max(|primal|, 1)``, ``iterations``."""
 
     tuples: np.ndarray
     primal: float
@@ -50,8 +48,7 @@ class SDResult:
 
 def checked_costs(cost: np.ndarray) -> np.ndarray:
     """``min(cost, 0)``, C-contiguous; ValueError for S < 2, NaN, or a nonzero cost on a tuple
-    with at most one real index.
-    """
+    with at most one real index."""
     cost = np.asarray(cost, dtype=float)
     if cost.ndim < 2:
         raise ValueError(f"an S-D cost tensor needs S >= 2 dimensions, got {cost.ndim}")
@@ -93,8 +90,7 @@ def tail_sum(multipliers: list[np.ndarray]) -> np.ndarray:
 def _dummy_matching(low: np.ndarray) -> tuple[np.ndarray, float]:
     """Exact 2-D assignment on ``low`` (R+1, n+1); last row and column 0 are dummies.
 
-    Returns ``(row, column)`` pairs (row R = dummy) and their summed cost.
-    """
+    Returns ``(row, column)`` pairs (row R = dummy) and their summed cost."""
     r = low.shape[0] - 1
     gain = low[:r, :1] + low[r:, 1:] - low[:r, 1:]
     match = solve_exact(gain)
@@ -173,8 +169,7 @@ def relative_gap(primal: float, dual: float) -> float:
 def solve_sd(cost: np.ndarray, max_gap: float = 0.01, max_iter: int = 100) -> SDResult:
     """Minimum-cost feasible S-D assignment of ``cost`` (n_1 + 1, ..., n_S + 1) in nats.
 
-    Stops at relative gap ``max_gap``, a feasible relaxed solution, or ``max_iter`` iterations.
-    """
+    Stops at relative gap ``max_gap``, a feasible relaxed solution, or ``max_iter`` iterations."""
     cost = checked_costs(cost)
     u = [np.zeros(n) for n in cost.shape[2:]]
     best_primal, best_dual, best = np.inf, -np.inf, None

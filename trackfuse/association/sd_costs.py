@@ -3,8 +3,7 @@
 ``c = -[sum_{s real} g_s - chi2 / 2 + (S - k) ln(1 - P_D)]`` at the LS intersection of the
 tuple's ``k >= 2`` lines of sight; 0 for at most one real index, ``+inf`` for parallel lines.
 With ``volume`` the position is integrated out (Laplace). Equations:
-``docs/papers/sd_assignment.md``, "Costs". The loop runs compiled (numba, cached on disk).
-"""
+``docs/papers/sd_assignment.md``, "Costs". The loop runs compiled (numba, cached on disk)."""
 
 from __future__ import annotations
 
@@ -41,8 +40,7 @@ def subset_fit(z: Sequence[np.ndarray], sensors: np.ndarray, sigma_a: float,
     """Chi-square at the LS intersection (``+inf`` if undefined) and log-determinant of the
     position information (1/m^2; ``-inf`` if singular), each (m_1, ..., m_S'), of every
     combination. ``z``: S' arrays (m_s, 2) rad; ``sensors`` (S', 3) m. Oracle:
-    ``tests/sd_reference.py``.
-    """
+    ``tests/sd_reference.py``."""
     shape = tuple(len(zs) for zs in z)
     if 0 in shape:
         return np.zeros(shape), np.zeros(shape)
@@ -61,8 +59,7 @@ def subset_fit(z: Sequence[np.ndarray], sensors: np.ndarray, sigma_a: float,
 @njit(**JIT)
 def _combination_fit(rows, rhs, angles, sensors, counts, inv_a, inv_b):
     """Chi-square and information log-determinant, C order over the combinations, from rows
-    (k, m, 2, 3), rhs (k, m, 2), angles (k, m, 2) rad and sensors (k, 3) m.
-    """
+    (k, m, 2, 3), rhs (k, m, 2), angles (k, m, 2) rad and sensors (k, 3) m."""
     k = counts.shape[0]
     total = 1
     for s in range(k):
@@ -141,8 +138,7 @@ def tuple_costs(z: Sequence[np.ndarray], sensors: np.ndarray, sigma_a: float,
 
     ``z``: S arrays (m_s, 2) rad; ``sensors`` (S, 3) m; ``sigma_a``, ``sigma_b`` rad; ``cost``
     ``"paper"`` or ``"pattipati"`` (``psi`` (S,) FOV areas, rad^2); ``volume`` (m^3) for the
-    marginal position, None for the fitted one.
-    """
+    marginal position, None for the fitted one."""
     n_sensors = len(z)
     gains = sensor_gains(n_sensors, sigma_a, sigma_b, p_d, p_f, cost, psi)
     log_miss = np.log1p(-p_d) if p_d < 1.0 else -np.inf

@@ -4,8 +4,7 @@ With bearing ``theta`` (rad) at A1, baseline ``b = A2 - A1`` (m), range differen
 ``dr = c dt`` (m) and ``u = [cos theta, sin theta]'``: ``r = (|b|^2 - dr^2) / (2 (u'b - dr))``.
 Equations and validity: ``docs/papers/esm_radar.md``, "TDOA-DF range".
 
-Reference: Torrieri D., IEEE Trans. AES 20(2), 1984, 183-198.
-"""
+Reference: Torrieri D., IEEE Trans. AES 20(2), 1984, 183-198."""
 
 from __future__ import annotations
 
@@ -19,8 +18,7 @@ def tdoa_df_range(theta: np.ndarray, dr: np.ndarray, b: np.ndarray,
     """Range from A1 (m), NaN where ``|2 (u'b - dr)| < min_denominator`` (m) or ``r <= 0``.
 
     ``theta`` (...,) rad, ``dr`` (...,) ``|p - A1| - |p - A2|`` m, ``b`` (2,) m. Returns
-    ``r`` (...,) and ``valid`` (...,) bool.
-    """
+    ``r`` (...,) and ``valid`` (...,) bool."""
     theta = np.asarray(theta, dtype=float)
     dr = np.asarray(dr, dtype=float)
     D = 2.0 * (np.cos(theta) * b[0] + np.sin(theta) * b[1] - dr)
@@ -52,8 +50,7 @@ def tdoa_df_range_sigma(theta: np.ndarray, dr: np.ndarray, b: np.ndarray, sigma_
 def carry_forward(x: np.ndarray, valid: np.ndarray) -> np.ndarray:
     """Replace invalid samples (..., K) by the last valid one before them.
 
-    Leading invalid samples take the row's first valid value; a row with none stays NaN.
-    """
+    Leading invalid samples take the row's first valid value; a row with none stays NaN."""
     K = x.shape[-1]
     idx = np.where(valid, np.arange(K), -1)
     idx = np.maximum.accumulate(idx, axis=-1)

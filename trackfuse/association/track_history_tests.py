@@ -4,8 +4,7 @@ Both read whether ``m2_k = d_k' S_k^-1 d_k`` falls inside the chi-square gate ``
 competing tracks and "no decision" (-1) as in ``docs/papers/esm_radar.md``, "Tests over the
 track history".
 
-References: Sagild, Hem, Brekke, FUSION 2021; Wald A., Ann. Math. Statist. 16(2), 1945.
-"""
+References: Sagild, Hem, Brekke, FUSION 2021; Wald A., Ann. Math. Statist. 16(2), 1945."""
 
 from __future__ import annotations
 

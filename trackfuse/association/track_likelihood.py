@@ -4,8 +4,7 @@ ML picks the radar track ``j`` minimising ``L_j = sum_k [d_kj' S_kj^-1 d_kj + lo
 with ``S_kj = P_E(k) + P_Rj(k)``. See ``docs/papers/esm_radar.md``, "ML reference".
 
 References: Bar-Shalom Y., IEEE Trans. AC 26(2), 1981, 571-572; Bar-Shalom Y., Li X. R.,
-*Multitarget-Multisensor Tracking*, 1995, sec. 8.4.
-"""
+*Multitarget-Multisensor Tracking*, 1995, sec. 8.4."""
 
 from __future__ import annotations
 
@@ -18,8 +17,7 @@ def gaussian_nll_terms(d: np.ndarray, S: np.ndarray) -> tuple[np.ndarray, np.nda
     """``d' S^-1 d`` and ``log |S|`` (...,) for ``d`` (..., F), ``S`` (..., F, F).
 
     ``S`` is scaled to a correlation matrix (factor units differ by ~20 orders of magnitude) and
-    solved by LU: with the TDOA-DF range it can be near singular (condition up to 1e17).
-    """
+    solved by LU: with the TDOA-DF range it can be near singular (condition up to 1e17)."""
     s = np.sqrt(np.diagonal(S, axis1=-2, axis2=-1))
     Cn = S / (s[..., :, None] * s[..., None, :])
     e = d / s
@@ -32,8 +30,7 @@ def ml_track_decision(d: np.ndarray, S: np.ndarray) -> tuple[np.ndarray, np.ndar
     """ML choice of radar track from ``d`` (..., K, J, F) and ``S`` (..., K, J, F, F).
 
     Returns the 0-based index (...,), the log-likelihood ratio of best over second best (>= 0),
-    and the chi-square distances ``D`` (..., J).
-    """
+    and the chi-square distances ``D`` (..., J)."""
     m2, logdet = gaussian_nll_terms(d, S)
     D = m2.sum(axis=-2)
     L = D + logdet.sum(axis=-2)
@@ -46,8 +43,7 @@ def abstaining_decision(j: np.ndarray, log_lr: np.ndarray, D_best: np.ndarray, d
     """The ML choice ``j``, or -1 where it fails the gate or the ambiguity test (W001-6).
 
     Gate: ``D_best`` above the ``1 - gate_alpha`` chi-square quantile with ``dof = K F`` (0: no
-    gate). Ambiguity: ``log_lr < lr_threshold`` (``log(19)``: 95 % posterior between two).
-    """
+    gate). Ambiguity: ``log_lr < lr_threshold`` (``log(19)``: 95 % posterior between two)."""
     ok = log_lr >= lr_threshold
     if gate_alpha > 0:
         ok &= D_best <= chi2_quantile(1.0 - gate_alpha, dof)

@@ -7,8 +7,7 @@ Each LOS gives two linear equations ``A_s p = B_s`` in ``p`` (m), solved by leas
 
 References: Liu H. et al., Control and Decision 23(4), 2008, eq. 4-8; Bar-Shalom, Li,
 Kirubarajan, *Estimation with Applications to Tracking and Navigation*, 2001, ch. 3; Hartley,
-Zisserman, *Multiple View Geometry*, 2nd ed., 2003, ch. 12.
-"""
+Zisserman, *Multiple View Geometry*, 2nd ed., 2003, ch. 12."""
 
 from __future__ import annotations
 
@@ -93,8 +92,7 @@ def triangulate(z1: np.ndarray, z2: np.ndarray, s1: np.ndarray, s2: np.ndarray,
     """Position (K, 3) m of each candidate pair ``z1``, ``z2`` (K, 2) rad; sensors ``s1``, ``s2`` m.
 
     ``sigma`` = ``(sigma_a, sigma_b)`` rad weights ``wls`` and ``ml``; ``iterations`` are
-    Gauss-Newton steps for ``ml``.
-    """
+    Gauss-Newton steps for ``ml``."""
     z1 = np.atleast_2d(np.asarray(z1, dtype=float))
     z2 = np.atleast_2d(np.asarray(z2, dtype=float))
     if method not in METHODS:
@@ -128,8 +126,7 @@ def common_perpendicular_midpoint(z1: np.ndarray, z2: np.ndarray, s1: np.ndarray
     """Midpoint of the common perpendicular of two LOS, (K, 3) m: the unit-normal LS solution.
 
     Lines ``s1 + t u``, ``s2 + v w``, ``d = s1 - s2``, ``c = u.w``:
-    ``t = (c w.d - u.d) / (1 - c^2)``, ``v = (w.d - c u.d) / (1 - c^2)``.
-    """
+    ``t = (c w.d - u.d) / (1 - c^2)``, ``v = (w.d - c u.d) / (1 - c^2)``."""
     def direction(z):
         a, b = z[:, 0], z[:, 1]
         return np.stack([np.cos(b) * np.cos(a), np.cos(b) * np.sin(a), np.sin(b)], -1)

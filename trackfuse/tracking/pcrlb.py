@@ -5,8 +5,7 @@ enter through the information-reduction factor ``q2`` (Niu et al. 2001). Equatio
 stored ``q2`` table: ``docs/papers/twin_sensor.md``, "PCRLB".
 
 References: Tichavsky, Muravchik, Nehorai, IEEE TSP 46(5), 1998; Niu, Willett, Bar-Shalom,
-IEEE TSP 49(7), 2001; Zhang, Willett, Bar-Shalom, IEEE TAES 41(4), 2005.
-"""
+IEEE TSP 49(7), 2001; Zhang, Willett, Bar-Shalom, IEEE TAES 41(4), 2005."""
 
 from __future__ import annotations
 
@@ -28,8 +27,7 @@ def measurement_information(x_true: np.ndarray, sensor_pos: np.ndarray,
     """Expected clutter-free information ``E[H' R^-1 H]`` per sensor, (K, S, 6, 6).
 
     ``x_true`` (K, 6), or (M, K, 6) truth samples averaged; ``sensor_pos`` (K, S, 3) m; ``R``
-    (S, 2, 2) rad^2.
-    """
+    (S, 2, 2) rad^2."""
     x = x_true if x_true.ndim == 3 else x_true[None]
     d = x[:, :, None, :3] - sensor_pos[None]  # (M, K, S, 3)
     H = azel_jacobian(d)  # (M, K, S, 2, 6)
@@ -43,8 +41,7 @@ def information_recursion(J0: np.ndarray, F: np.ndarray, Q: np.ndarray, Jz: np.n
     """Bound covariances ``J_k^-1`` (K+1, 6, 6), ``k = 0..K``, from prior information ``J0``.
 
     ``Jz`` (K, S, 6, 6) from :func:`measurement_information`; ``q2`` (K, S), or ``q2(k, Pp) ->
-    (S,)`` when the clutter density depends on the gate, or ``None`` (no clutter, ``P_D = 1``).
-    """
+    (S,)`` when the clutter density depends on the gate, or ``None`` (no clutter, ``P_D = 1``)."""
     out = np.empty((Jz.shape[0] + 1,) + J0.shape)
     Jinv = np.linalg.inv(J0)
     out[0] = Jinv
@@ -80,8 +77,7 @@ def irf_q2(lam_w: float, P_D: float = 1.0, n_samples: int = 1_000_000,
 
     ``lam_w`` clutter per unit whitened area (Poisson, uniform on a square). Each sample weighs
     "no clutter" and "at least one point" exactly, uses the square's symmetry and a control
-    variate; the target draws are common to every ``lam_w``.
-    """
+    variate; the target draws are common to every ``lam_w``."""
     if lam_w <= 0.0 or P_D <= 0.0:  # no clutter, or no detection: nothing to estimate
         return float(P_D), 0.0
     mu = lam_w * (2.0 * half_width) ** 2

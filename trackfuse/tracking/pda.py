@@ -112,8 +112,7 @@ def Linearized(S, M):  # noqa: N802 (builds a record, read as a type)
     innovation covariance and its inverse, ``Kg (S, 6, 2)`` gain. Hypotheses
     (:func:`_linearize`): ``nu (S, M, 2)``, ``G (S, M, 2, 3)``, ``log_n (S, M)`` of each
     validated return, whose indices are the first ``m (S,)`` entries of ``ok (S, M)``; then
-    the weights ``w (S, M)`` of the one-sensor hypotheses and ``B (M, M)`` of the pairs.
-    """
+    the weights ``w (S, M)`` of the one-sensor hypotheses and ``B (M, M)`` of the pairs."""
     return _Lin(np.empty((S, 8)), np.empty((S, 2, 3)), np.empty((S, 6, 2)),
                 np.empty((S, 2, 2)), np.empty((S, 2, 2)), np.empty((S, 6, 2)),
                 np.empty((S, M, 2)), np.empty((S, M, 2, 3)), np.empty((S, M)),
@@ -178,8 +177,7 @@ def _mahalanobis2(n0, n1, Si):
 @njit(**INNER)
 def _geometry(X, P, pos, R, lin, s):
     """Sensor ``s`` seen from ``(X, P)``: relative position, predicted angles, ``H``,
-    ``PHt = P[:, :3] H'``, ``S`` and its inverse, gate area and gain, into ``lin``.
-    """
+    ``PHt = P[:, :3] H'``, ``S`` and its inverse, gate area and gain, into ``lin``."""
     g, H, PHt, Sm, Si, Kg = lin.geom[s], lin.H[s], lin.PHt[s], lin.Sm[s], lin.Si[s], lin.Kg[s]
     dx, dy, dz = X[0] - pos[0], X[1] - pos[1], X[2] - pos[2]
     g[D], g[D + 1], g[D + 2] = dx, dy, dz

@@ -5,8 +5,7 @@ Fixed Cartesian frame, z up; ``d`` is target minus sensor (m). ``h`` and ``H`` a
 ``docs/papers/twin_sensor.md``, "Measurements" and "MGEKF".
 
 References: Song T. L., Speyer J. L., IEEE TAC 30(10), 1985; Bar-Shalom Y., Fortmann T. E.,
-*Tracking and Data Association*, 1988, sec. 2.3.
-"""
+*Tracking and Data Association*, 1988, sec. 2.3."""
 
 from __future__ import annotations
 
@@ -42,8 +41,7 @@ def azel_jacobian(d: np.ndarray) -> np.ndarray:
 
 def modified_rows(z: np.ndarray, d_bar: np.ndarray) -> np.ndarray:
     """Song-Speyer modified rows (..., 2, 6) rad/m at measured angles ``z`` (..., 2) rad and
-    predicted ``d_bar`` (..., 3) m. The tests' reference; the package uses the position columns.
-    """
+    predicted ``d_bar`` (..., 3) m. The tests' reference; the package uses the position columns."""
     g3 = modified_position_rows(z, d_bar)
     return np.concatenate([g3, np.zeros(g3.shape)], axis=-1)
 
@@ -105,8 +103,7 @@ def disk_points(u_radius: np.ndarray, u_angle: np.ndarray) -> np.ndarray:
 
 def inv2(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Inverse and determinant of ``S`` (..., 2, 2); never raises (a singular ``S`` gives
-    non-finite entries, so one diverged trial cannot stop a batch).
-    """
+    non-finite entries, so one diverged trial cannot stop a batch)."""
     a, b, c, d = S[..., 0, 0], S[..., 0, 1], S[..., 1, 0], S[..., 1, 1]
     det = a * d - b * c
     inv = np.empty(S.shape)
@@ -131,7 +128,6 @@ def chol2(S: np.ndarray) -> np.ndarray:
 
 def ellipse_points(u: np.ndarray, centre: np.ndarray, S: np.ndarray, gamma: float) -> np.ndarray:
     """Map unit-disk points ``u`` (N, M, 2) into the gates ``nu' S^-1 nu <= gamma`` about ``centre``
-    (N, 2) with ``S`` (N, 2, 2): (N, M, 2) rad, still uniform (the map is linear).
-    """
+    (N, 2) with ``S`` (N, 2, 2): (N, M, 2) rad, still uniform (the map is linear)."""
     L = chol2(S)
     return centre[:, None, :] + np.sqrt(gamma) * (u @ L.transpose(0, 2, 1))

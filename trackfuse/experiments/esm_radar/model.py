@@ -3,8 +3,7 @@
 One trial simulates the snake/crossing scenario; every algorithm (:data:`ALGORITHMS`) picks
 a radar track from the same data (the truth is track 2). Model, algorithms, row metrics and
 the per-scan columns (:data:`SCAN_SERIES`): ``docs/papers/esm_radar.md``. Figures and
-tables: :mod:`.report`.
-"""
+tables: :mod:`.report`."""
 
 from __future__ import annotations
 
@@ -71,8 +70,7 @@ class Variant:
     """How one algorithm evaluates the association: ``factors`` (or ``"baseline"``), ``membership``
     (``gaussian``, ``l1``, ``l2``, ``posterior``, ``"param"``; ``chi2``/``chi2_lrt`` for ML),
     ``dynamic`` weights, ``decision``, a one-line ``summary`` and ``subset_weights`` (``ahp``
-    of the sub-block or ``rescaled``).
-    """
+    of the sub-block or ``rescaled``)."""
 
     factors: tuple[str, ...] | str
     membership: str
@@ -354,8 +352,7 @@ def simulate(params: Mapping[str, Any], streams: Sequence[TrialStreams]) -> Simu
 
 def static_weights(factors: Sequence[str], method: str) -> np.ndarray:
     """AHP weights of ``factors`` from Table 1: ``root_exact`` or ``eigen`` on the sub-matrix, or
-    ``paper_rounded`` (full set only; subsets fall back to the root method).
-    """
+    ``paper_rounded`` (full set only; subsets fall back to the root method)."""
     idx = [FACTORS.index(f) for f in factors]
     if method == "paper_rounded" and len(idx) == len(FACTORS):
         return np.array(ahp.PAPER_001_WEIGHTS)
@@ -384,8 +381,7 @@ def factor_names(variant: Variant, params: Mapping[str, Any]) -> tuple[str, ...]
 @dataclass
 class Differences:
     """ESM-minus-radar factor differences of a batch, computed once for every algorithm, with the
-    per-scan summed variances ``var`` and the static spreads (:func:`static_spreads`).
-    """
+    per-scan summed variances ``var`` and the static spreads (:func:`static_spreads`)."""
 
     d: np.ndarray               # (N, K, J, 5) differences, angle and phase wrapped
     var: np.ndarray             # (N, K, J, 5) summed ESM + radar variances, per scan
@@ -403,8 +399,7 @@ def _summed_variance(sd_esm: np.ndarray, sd_radar: np.ndarray) -> np.ndarray:
 
 def static_spreads(sim: Simulated) -> tuple[np.ndarray, np.ndarray]:
     """Static spreads of the traditional grade: ``var_nominal`` (5,) and ``var_trial_mean``
-    (N, 1, 1, 5) (``docs/papers/esm_radar.md``, "Traditional baseline").
-    """
+    (N, 1, 1, 5) (``docs/papers/esm_radar.md``, "Traditional baseline")."""
     var_nominal = _summed_variance(sim.sd_nominal[0], sim.sd_nominal[1])
     # Invalid TDOA-DF samples are carried forward, so a trial's ESM range sd is NaN at
     # every scan or at none: its time mean is NaN exactly when the trial has no ESM range.
@@ -434,8 +429,7 @@ def differences(sim: Simulated) -> Differences:
 
 def baseline_variance(diff: Differences, rule: str) -> np.ndarray:
     """``sigma_E^2 + sigma_R^2`` of the traditional grade by ``rule`` (``nominal``, ``trial_mean``,
-    ``per_sample``; W001-8), broadcastable to (N, K, J, 5).
-    """
+    ``per_sample``; W001-8), broadcastable to (N, K, J, 5)."""
     if rule == "nominal":
         return diff.var_nominal
     if rule == "trial_mean":
@@ -464,8 +458,7 @@ def evaluate(variant: Variant, diff: Differences, alpha: np.ndarray,
              params: Mapping[str, Any]) -> dict[str, np.ndarray]:
     """Run one algorithm on a batch: dict of (N,) ``chosen`` (0-based), ``margin``,
     ``range_weight_mean``, ``range_weight_min``; fuzzy variants add ``weights`` (N, K, F) and
-    ``range_weights`` (N, K).
-    """
+    ``range_weights`` (N, K)."""
     names = factor_names(variant, params)
     idx = [FACTORS.index(f) for f in names]
     N, K = alpha.shape

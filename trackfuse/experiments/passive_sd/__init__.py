@@ -4,8 +4,7 @@
 The science (sensor geometry, tuple costs, Lagrangian relaxation, the exact optimum, scoring)
 is :mod:`.model`; the figures and tables are :mod:`.report`, which reads saved runs only;
 :mod:`.preload` loads the compiled kernel once in the process pool's fork server. See
-``docs/papers/sd_assignment.md``.
-"""
+``docs/papers/sd_assignment.md``."""
 
 from __future__ import annotations
 
