@@ -1,5 +1,8 @@
-"""Paper 002: two-sensor passive association by an improved partheno-genetic algorithm: science
-in :mod:`.model`, figures and tables in :mod:`.report` (``docs/papers/passive_assoc.md``)."""
+"""Paper 002: two-sensor passive association by an improved partheno-genetic algorithm
+(``passive_assoc``).
+
+Science in :mod:`.model`, figures and tables in :mod:`.report`
+(``docs/papers/passive_assoc.md``)."""
 
 from __future__ import annotations
 

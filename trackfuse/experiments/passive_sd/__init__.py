@@ -1,10 +1,8 @@
 """S-D assignment of three or more passive sensors beside the two-sensor exact assignment
 (``passive_sd``).
 
-The science (sensor geometry, tuple costs, Lagrangian relaxation, the exact optimum, scoring)
-is :mod:`.model`; the figures and tables are :mod:`.report`, which reads saved runs only;
-:mod:`.preload` loads the compiled kernel once in the process pool's fork server. See
-``docs/papers/sd_assignment.md``."""
+Science in :mod:`.model`, figures and tables in :mod:`.report`
+(``docs/papers/sd_assignment.md``)."""
 
 from __future__ import annotations
 
