@@ -419,7 +419,7 @@ def _params(source: str, exp: Experiment, params_raw: Any) -> dict[str, Any]:
 def _check_key_names(source: str, section: str, exp: Experiment, mapping: Mapping,
                      prefix: str = "") -> None:
     """Refuse a key that is not a string (YAML's ``~:`` or ``1:``) at any depth of
-    ``mapping``: it was reported as the unknown parameter ``params.None``."""
+    ``mapping``, naming it as written."""
     for key, value in mapping.items():
         if not isinstance(key, str):
             got = "a null key (~)" if key is None else f"the key {_describe(key)}"
