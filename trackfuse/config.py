@@ -35,8 +35,7 @@ MAX_TRIALS = 10**9
 
 
 class ConfigError(ValueError):
-    """A config problem; ``str(err)`` is the one-line message shown to the user,
-    ``source: key: message``, where the message reads ``got X; allowed: Y`` when it can."""
+    """A config problem; ``str(err)`` is the one line shown: ``source: key: got X; allowed: Y``."""
 
     def __init__(self, source: str, key: str, message: str):
         self.source, self.key, self.message = source, key, message
@@ -193,8 +192,7 @@ def _scalar(p: Param, value: Any, kind: type) -> Any:
 
 
 def _element_kind(p: Param) -> type:
-    """The type of each item of a list parameter: strings when its choices are strings,
-    else its ``item_kind``."""
+    """The type of each item of a list parameter."""
     return str if p.choices is not None and isinstance(p.choices[0], str) else p.item_kind
 
 
@@ -227,8 +225,7 @@ def flatten(mapping: Mapping, prefix: str = "") -> dict[str, Any]:
 
 
 def _validated(source: str, exp: Experiment, where: str, key: str, value: Any) -> Any:
-    """``value`` checked against parameter ``key``; errors name ``source`` and
-    ``where.key`` (just ``key`` when ``where`` is empty: a command-line override)."""
+    """``value`` checked against parameter ``key``; errors name ``source`` and ``where.key``."""
     p = exp.schema.get(key)
     if p is None:
         raise ConfigError(source, _dotted(where, key),
@@ -243,8 +240,7 @@ def _validated(source: str, exp: Experiment, where: str, key: str, value: Any) -
 
 
 def _sweep_hint(source: str, p: Param, value: Any) -> str:
-    """``"; to run each value, sweep it: --sweep KEY=A,B"`` for several values given to
-    ``--set`` a parameter that takes one (``clutter.mean=0,5,10``), else ``""``."""
+    """A hint to sweep a parameter given several values by ``--set``, else ``""``."""
     if source != SET or p.kind is list:
         return ""
     if isinstance(value, list) and len(value) > 1:
@@ -257,8 +253,7 @@ def _sweep_hint(source: str, p: Param, value: Any) -> str:
 
 
 def _bad_part(p: Param, value: Any) -> str:
-    """``value`` described for an error: a list by its first item that is not allowed
-    (a long list would be cut before it), with a did-you-mean among the choices."""
+    """``value`` described for an error: a list by its first bad item, with a did-you-mean."""
     if p.kind is not list or not isinstance(value, list) or not value:
         return _describe(value)
     for item in value:
@@ -282,8 +277,7 @@ SEQUENTIAL_KEYS, UNTIL_KEYS = ("min", "max", "until"), ("metric", "half_width")
 
 
 def _trials(source: str, exp: Experiment, value: Any) -> tuple[int, SequentialRule | None]:
-    """``trials``: a count, or a sequential rule (:mod:`trackfuse.sequential`) whose ``max``
-    is the count planned."""
+    """``trials``: a count, or a sequential rule whose ``max`` is the count planned."""
     if not isinstance(value, Mapping):
         return _int(source, "trials", value, 1), None
     _known_keys(source, "trials", value, SEQUENTIAL_KEYS)
@@ -388,8 +382,7 @@ def _trial_timeout(source: str, value: Any) -> float | None:
 
 def _check_experiment(exp: Experiment, params: dict[str, Any], sweep: dict[str, list[Any]],
                       mode: str, source: str, sets: set[str], sweeps: set[str]) -> None:
-    """The experiment's own last check (``Experiment.check``), its problem blamed where the
-    key's value came from (``--sweep``, ``--set`` or the file), as a bad value is."""
+    """``Experiment.check``, its problem blamed where the key's value came from."""
     problem = exp.check(params, sweep, mode) if exp.check is not None else None
     if problem is None:
         return
@@ -432,8 +425,8 @@ def _check_key_names(source: str, section: str, exp: Experiment, mapping: Mappin
 
 def _sweep(source: str, exp: Experiment, sweep_raw: Any, sweeps: dict[str, Any],
            dropped: set[str]) -> dict[str, list[Any]]:
-    """Every sweep axis (the config's, then ``--sweep`` ones replacing them, without the
-    ``dropped`` keys that ``--set`` fixed) parsed and validated against the schema."""
+    """Every sweep axis (the config's, replaced by ``--sweep``, less keys ``--set`` fixed),
+    validated."""
     if not isinstance(sweep_raw, Mapping):
         raise ConfigError(source, "sweep", f"got {_describe(sweep_raw)}; allowed: a mapping of "
                                            "parameter names to value lists or 'range(a, b, s)'")
@@ -514,8 +507,8 @@ def _allowed_experiments() -> str:
 
 
 def unknown_experiment(name: str) -> str:
-    """What a config's ``experiment`` and ``trackfuse list`` say of a name that is neither a
-    registered experiment nor a plugin: the closest name, and what is allowed."""
+    """The error for a name that is neither an experiment nor a plugin: the closest name, and what
+    is allowed."""
     return (f"unknown experiment {_describe(name)}{did_you_mean(name, experiments.names())}"
             f"; allowed: {_allowed_experiments()}")
 

@@ -1,9 +1,6 @@
-"""Experiment ``esm_radar``: paper 001, ESM-to-radar track association.
-
-One trial simulates the snake/crossing scenario; every algorithm (:data:`ALGORITHMS`) picks
-a radar track from the same data (the truth is track 2). Model, algorithms, row metrics and
-the per-scan columns (:data:`SCAN_SERIES`): ``docs/papers/esm_radar.md``. Figures and
-tables: :mod:`.report`."""
+"""Experiment ``esm_radar``: paper 001, ESM-to-radar track association. Every algorithm of
+:data:`ALGORITHMS` picks a radar track from one trial's data (the truth is track 2); model
+and metrics: ``docs/papers/esm_radar.md``."""
 
 from __future__ import annotations
 
@@ -269,9 +266,8 @@ def manoeuvre_alpha(params: Mapping[str, Any], x_esm: np.ndarray, P_esm: np.ndar
 
 
 def alpha_max_problem(params: Mapping[str, Any]) -> str | None:
-    """Why ``alpha.max_mode`` cannot be used with ``alpha.index`` (one line, naming what is
-    allowed), else ``None``: ``chi2`` mode needs the ``nis_tdoa`` index, whose no-manoeuvre
-    distribution it uses."""
+    """Why ``alpha.max_mode`` cannot be used with ``alpha.index`` (one line), else ``None``:
+    ``chi2`` mode needs the ``nis_tdoa`` index."""
     if params["alpha.max_mode"] == "chi2" and params["alpha.index"] != "nis_tdoa":
         return (f"'chi2' needs alpha.index 'nis_tdoa', not {params['alpha.index']!r}; allowed "
                 "with the 'literal' index: 'fixed' (alpha.max) or 'running_max'")
@@ -279,14 +275,12 @@ def alpha_max_problem(params: Mapping[str, Any]) -> str | None:
 
 
 def uses_alpha_max(variant: Variant, names: tuple[str, ...]) -> bool:
-    """Whether ``variant`` on the factors ``names`` (:func:`factor_names`) cuts its range
-    weight by the manoeuvre index, so needs :func:`alpha_max`."""
+    """Whether ``variant`` cuts its range weight by the manoeuvre index."""
     return variant.dynamic and names[0] == "range"
 
 
 def alpha_max(params: Mapping[str, Any]) -> tuple[float, str]:
-    """``alpha_max`` (1) and the :func:`dynamic_weights` mode for ``params``; ``ValueError``
-    for the pairs :func:`alpha_max_problem` refuses."""
+    """``alpha_max`` and the :func:`dynamic_weights` mode for ``params``, or ``ValueError``."""
     problem = alpha_max_problem(params)
     if problem is not None:
         raise ValueError(f"alpha.max_mode: {problem}")
@@ -297,8 +291,7 @@ def alpha_max(params: Mapping[str, Any]) -> tuple[float, str]:
 
 
 def scenario(params: Mapping[str, Any]) -> SnakeCross:
-    """The noise-free three-target scenario of ``params`` (``target.*``, ``snake.*``,
-    ``crossing.time``)."""
+    """The noise-free three-target scenario of ``params``."""
     return SnakeCross(separation=params["target.separation"],
                       amplitude=params["snake.amplitude"],
                       snake_period=params["snake.period"], speed=params["snake.speed"],
@@ -361,9 +354,8 @@ def static_weights(factors: Sequence[str], method: str) -> np.ndarray:
 
 
 def variant_weights(variant: Variant, names: Sequence[str], method: str) -> np.ndarray:
-    """Static weights (F,) of ``variant`` on its factors ``names``: :func:`static_weights`
-    of the subset, or for ``subset_weights = "rescaled"`` the five-factor weights of
-    ``names`` rescaled to sum to 1."""
+    """Static weights (F,) of ``variant`` on ``names``: of the subset, or the five-factor weights
+    rescaled (``subset_weights = "rescaled"``)."""
     if variant.subset_weights == "ahp":
         return static_weights(names, method)
     five = static_weights(FACTORS, method)
@@ -372,16 +364,14 @@ def variant_weights(variant: Variant, names: Sequence[str], method: str) -> np.n
 
 
 def factor_names(variant: Variant, params: Mapping[str, Any]) -> tuple[str, ...]:
-    """The factor names ``variant`` uses, in :data:`FACTORS` order (``params`` needs only
-    ``baseline.factors``, read when ``variant.factors == "baseline"``)."""
+    """The factor names ``variant`` uses, in :data:`FACTORS` order."""
     names = params["baseline.factors"] if variant.factors == "baseline" else variant.factors
     return tuple(f for f in FACTORS if f in set(names))
 
 
 @dataclass
 class Differences:
-    """ESM-minus-radar factor differences of a batch, computed once for every algorithm, with the
-    per-scan summed variances ``var`` and the static spreads (:func:`static_spreads`)."""
+    """ESM-minus-radar factor differences of a batch, with summed variances ``var`` and spreads."""
 
     d: np.ndarray               # (N, K, J, 5) differences, angle and phase wrapped
     var: np.ndarray             # (N, K, J, 5) summed ESM + radar variances, per scan
@@ -528,8 +518,7 @@ SCAN_SERIES = {
 
 
 def encode_series(values: np.ndarray, fmt: str) -> list[str]:
-    """Per-scan CSV cells: each row of ``values`` (N, K) formatted with ``fmt`` and joined
-    by ``;``, non-finite values written ``nan``; a list of N strings."""
+    """Per-scan CSV cells: each row of ``values`` (N, K) as ``fmt`` joined by ``;`` (N strings)."""
     a = np.asarray(values, dtype=float)
     a = np.where(np.isfinite(a), a, np.nan)  # %-formatting writes inf as inf
     line = ";".join([f"%{fmt}"] * a.shape[-1])
@@ -542,8 +531,8 @@ def decode_series(cells: Sequence[str]) -> np.ndarray:
 
 
 def esm_errors(sim: Simulated) -> tuple[np.ndarray, np.ndarray]:
-    """ESM TDOA-DF range error (m) and bearing error (rad, wrapped) of target 2 per scan,
-    measured minus true, each (N, K); NaN where no ESM range was ever computed."""
+    """ESM range error (m) and wrapped bearing error (rad) of target 2, (N, K) each; NaN without a
+    range."""
     truth = sim.truth_p[:, TRUE_TRACK]                                  # (K, 2), A1 at 0
     r_true = np.hypot(truth[:, 0], truth[:, 1])
     theta_true = np.arctan2(truth[:, 1], truth[:, 0])
@@ -551,8 +540,7 @@ def esm_errors(sim: Simulated) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _esm_track_columns(sim: Simulated) -> dict[str, np.ndarray | list[str]]:
-    """Per-trial columns of the ESM track shared by every algorithm, each (N,): summaries,
-    then the per-scan series of :data:`SCAN_SERIES` (written on each trial's first row)."""
+    """Per-trial columns (N,) of the ESM track: summaries, then :data:`SCAN_SERIES`."""
     alpha = np.nan_to_num(sim.alpha, nan=0.0)
     defined = np.isfinite(sim.alpha).sum(axis=-1)
     dr, dtheta = esm_errors(sim)
