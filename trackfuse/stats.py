@@ -277,8 +277,8 @@ def _resample_counts(n: int, resamples: int, seed: int) -> np.ndarray:
 
 
 def _bootstrap_t(x: np.ndarray, counts: np.ndarray) -> np.ndarray:
-    """(groups, resamples) ``(mean* - mean) / (s* / sqrt(n))`` of ``x`` (groups, n); ``+-inf`` (0 at
-    the mean) where a resample has no spread."""
+    """``(mean* - mean) / (s* / sqrt(n))`` (groups, resamples) of ``x`` (groups, n); ``+-inf``
+    (0 at the mean) without spread."""
     n = x.shape[1]
     centred = x - x.mean(axis=1, keepdims=True)  # smaller cancellation than raw values
     scale = np.abs(centred).max(axis=1, keepdims=True)

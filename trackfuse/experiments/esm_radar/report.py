@@ -98,8 +98,7 @@ def _paper_points(run: RunData) -> tuple[int, ...]:
 
 
 def _rate_title(group: str, x: str, categories: bool, paper: bool) -> str:
-    """The figure's title: the paper item redrawn (``correct_rate`` against the paper's
-    axis, or Table 3 at its setting), else what is drawn."""
+    """The title: the paper item redrawn (Fig. axis or Table 3 setting), else what is drawn."""
     item = PAPER_FIGURE.get(x) if not categories else ("Table 3" if paper else "")
     if group == "correct_rate" and item:
         return f"Paper 001 {item} redrawn: correct association rate"
@@ -107,8 +106,7 @@ def _rate_title(group: str, x: str, categories: bool, paper: bool) -> str:
 
 
 def _rate_figure(run: RunData, group: str) -> Figure | str:
-    """One correct-rate figure (``group`` of :data:`GROUPS`), from ``summary.csv`` by the
-    report kit: chance dotted, the paper's Table 3 values as open stars (``correct_rate``)."""
+    """One correct-rate figure of :data:`GROUPS`: chance dotted, paper Table 3 as open stars."""
     present = set(run.summary.loc[run.summary["metric"] == "correct", "algorithm"])
     names = tuple(n for n in GROUPS[group] if n in present)
     if group != "correct_rate" and not set(names) - set(PAPER_PAIR):
@@ -149,8 +147,7 @@ def counting_design_rate(params: Mapping[str, Any]) -> float:
 
 
 def _history_figure(run: RunData) -> Figure | str:
-    """Correct, false and missed association rates of the track-history tests beside the
-    single-scan reference and the fuzzy methods (:data:`HISTORY_RATES`)."""
+    """Association rates of the track-history tests beside the single-scan and fuzzy methods."""
     if not set(HISTORY_TESTS) & set(run.summary["algorithm"]):
         return "neither of the tests over the track history (counting, sprt) was run"
     x, categories = rate_axis(run)
@@ -185,8 +182,7 @@ def _esm_rows(trials: pd.DataFrame) -> pd.DataFrame:
 
 def _weight_series(trials: pd.DataFrame, point: int, trial_ids: Sequence[int]
                    ) -> tuple[str, np.ndarray] | None:
-    """``(algorithm, (N, K) range weights)`` of ``improved`` (else the first dynamic-weight
-    algorithm) at ``point`` for ``trial_ids``, or None if no such rows."""
+    """``(algorithm, (N, K) range weights)`` of ``improved`` (or a dynamic one), or None."""
     if "range_weight_per_scan" not in trials:
         return None
     rows = trials[(trials["point"] == point) & trials["range_weight_per_scan"].notna()
@@ -226,8 +222,7 @@ def _tracks_panel(ax: Axes, params: Mapping[str, Any], row: pd.Series) -> None:
 
 
 def _index_panel(ax: Axes, run: RunData, row: pd.Series, params: Mapping[str, Any]) -> None:
-    """One trial's manoeuvre index (log) and, on a twin axis, its range weight per scan;
-    the legend in two columns in headroom above the curves."""
+    """One trial's manoeuvre index (log) and, on a twin axis, its range weight per scan."""
     t = esm_times(params)
     ax.plot(t, decode_series([row["alpha_per_scan"]])[0], color="0.2",
             label=f"index α(k), "
@@ -279,8 +274,7 @@ TRAJECTORY_SIZE = (SLOTS["double"], 5.4)
 
 
 def _trajectory_figure(run: RunData) -> Figure | str:
-    """Paper 001 Figs. 1-2: the first trial of the first point with the paper's weave, else of the
-    first point."""
+    """Paper 001 Figs. 1-2: the first trial of the first point with the paper's weave, else any."""
     esm = _esm_rows(run.trials)
     if esm.empty:
         return NO_SERIES
@@ -306,8 +300,7 @@ def _trajectory_figure(run: RunData) -> Figure | str:
 
 
 def _esm_groups(run: RunData, esm: pd.DataFrame) -> list[tuple[str, int, pd.DataFrame]]:
-    """``(words, point, first rows)`` per setting of the swept keys that change the ESM
-    track (:data:`ESM_TRACK_KEYS`), at its first point."""
+    """``(words, point, first rows)`` per setting of :data:`ESM_TRACK_KEYS`, at its first point."""
     keys = [k for k in swept_keys(run.config) if k.startswith(ESM_TRACK_KEYS)]
     seen: dict[tuple, int] = {}
     for point, params in enumerate(run.points):
@@ -318,8 +311,7 @@ def _esm_groups(run: RunData, esm: pd.DataFrame) -> list[tuple[str, int, pd.Data
 
 
 def _manoeuvre_figure(run: RunData) -> Figure | str:
-    """Mean manoeuvre index and mean range weight per scan, from ``trials.csv``; the index
-    panel alone when no dynamic-weight algorithm was run."""
+    """Mean manoeuvre index and range weight per scan (index alone without dynamic weights)."""
     esm = _esm_rows(run.trials)
     if esm.empty:
         return NO_SERIES
@@ -363,8 +355,7 @@ def _manoeuvre_figure(run: RunData) -> Figure | str:
 
 
 def _index_references(ax: Axes, settings: Sequence[Mapping[str, Any]]) -> list[str]:
-    """Draw the no-manoeuvre expectation (NIS index) and each fixed ``alpha_max`` of the
-    ``settings`` (point params); return the indices used, in order of appearance."""
+    """Draw the NIS expectation and each fixed ``alpha_max``; return the indices used."""
     indices = list(dict.fromkeys(p["alpha.index"] for p in settings))
     if "nis_tdoa" in indices:
         ax.axhline(1.0, color="0.5", linestyle="--", linewidth=1.0,

@@ -39,8 +39,7 @@ BOUNDED = ("accuracy", "precision", "recall", "correct", "at_opt")
 
 
 def _grouping_keys(config: dict) -> list[str]:
-    """Swept keys that group rows into points: every one except the ``algorithms`` list
-    (whose rows are told apart by the ``algorithm`` row key)."""
+    """Swept keys that group rows into points: all but the ``algorithms`` list."""
     return [k for k in swept_keys(config) if k != "algorithms"]
 
 
@@ -49,8 +48,7 @@ SETTING_KEYS = ("targets.n", "scene.mode", "noise.sigma", "noise.reading", "sens
 
 
 def _setting_words(values: dict[str, Any], config: dict) -> str:
-    """A point's setting in words (``N = 5, σ = 0.005 rad, P_D = 0.95``) and every other
-    swept value."""
+    """A point's setting in words (``N = 5, σ = 0.005 rad, P_D = 0.95``)."""
     p = {**config.get("params", {}), **values}
     keys = [*SETTING_KEYS, *(k for k in values if k not in SETTING_KEYS)]
     return render.setting_words(EXPERIMENT, {k: p[k] for k in keys if k in p})
@@ -139,8 +137,7 @@ FIG2_WORDS = {"scene.mode": "M1-MN scenes", "noise.sigma": "sigma = 0.005 rad",
 
 
 def _fig2_misses(values: dict[str, Any], config: dict) -> list[str]:
-    """What of paper 002's Fig. 2 setting (:data:`PAPER_SETTING`, 5, 7 or 10 targets) a
-    point (``values`` over ``config['params']``) lacks, in :data:`FIG2_WORDS`; empty at it."""
+    """What of paper 002's Fig. 2 setting a point lacks, in :data:`FIG2_WORDS`; empty at it."""
     p = {**config.get("params", {}), **values}
     keys = [k for k, v in PAPER_SETTING.items() if p[k] != v]
     if int(p["targets.n"]) not in (5, 7, 10):
@@ -149,8 +146,7 @@ def _fig2_misses(values: dict[str, Any], config: dict) -> list[str]:
 
 
 def _versus_exact(runs: pd.DataFrame, exact: pd.DataFrame, metric: str) -> dict[str, Any]:
-    """``metric`` of a PGA variant against the exact optimum on the same trials: both means and the
-    paired difference exact - PGA with its 95 % interval."""
+    """``metric`` of a PGA variant and the exact optimum, with the paired difference's interval."""
     both = runs.merge(exact, on="trial", suffixes=("", "_x"))
     v, x = both[metric].to_numpy(float), both[f"{metric}_x"].to_numpy(float)
     n = len(both)
@@ -174,8 +170,7 @@ FIG2_METRICS = {"accuracy": "measurement-level accuracy", "recall": "pair recall
 
 def _fig2_points(trials: pd.DataFrame, config: dict) -> list[tuple[int, dict, str, pd.DataFrame,
                                                                    pd.DataFrame]]:
-    """``(point, values, variant, last-checkpoint rows, exact rows)`` at the paper's setting, each
-    variant once per setting."""
+    """``(point, values, variant, last-checkpoint rows, exact rows)`` at the paper's setting."""
     out, seen = [], set()
     if "exact" not in set(trials["algorithm"]):
         return out
@@ -210,8 +205,7 @@ def versus_exact(trials: pd.DataFrame, config: dict) -> pd.DataFrame:
 
 def _fig2_headline(values: dict, config: dict, name: str, runs: pd.DataFrame,
                    exact: pd.DataFrame) -> list[dict[str, Any]]:
-    """The two Fig. 2 claims for one variant at one point: accuracy within the declared margin of
-    the exact optimum's, and every run at ``J*``."""
+    """Fig. 2's claims for one variant: accuracy within the margin of the optimum's, all at J*."""
     high_rate = PASSIVE_ASSOC.result("high correct rate")
     optimum = PASSIVE_ASSOC.result("optimum reached")
     ops, n = int(runs["ops"].max()), len(runs)
