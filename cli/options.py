@@ -20,8 +20,7 @@ from typer.core import TyperGroup
 
 
 def _stop(signum: int, frame: object) -> None:
-    """A termination request (``kill``, a batch scheduler's time limit, ``docker stop``)
-    stops a command as Ctrl-C does: saved work stays resumable, one line, exit 130."""
+    """SIGTERM stops a command as Ctrl-C does: saved work resumable, one line, exit 130."""
     raise KeyboardInterrupt
 
 
@@ -139,8 +138,7 @@ class Executor(StrEnum):
 
 
 class ClusterKind(StrEnum):
-    """The batch systems ``--cluster`` starts workers through
-    (``trackfuse.cluster_settings.CLUSTER_KINDS``)."""
+    """The batch systems ``--cluster`` starts workers through."""
 
     slurm = "slurm"
     pbs = "pbs"
@@ -219,8 +217,7 @@ OutDir = Annotated[str, typer.Option("--out", metavar="FOLDER", help="Output roo
 
 
 def out_folder(text: str) -> Path:
-    """The ``--out`` folder; an empty value (such as an unset shell variable) is refused
-    rather than read as the working directory."""
+    """The ``--out`` folder; an empty value (an unset shell variable) is refused."""
     if not text.strip():
         fail("--out: got an empty folder name; allowed: a folder path (default: results)")
     return Path(text)

@@ -33,8 +33,7 @@ _sigint_watched = threading.Event()
 
 @dataclass(frozen=True)
 class BatchTask:
-    """Everything a worker needs for one batch (picklable); ``trial_timeout`` limits one trial (s,
-    ``None``: no limit)."""
+    """Everything a worker needs for one batch (picklable); ``trial_timeout`` in s or ``None``."""
 
     experiment: Experiment
     params: dict[str, Any]
@@ -65,8 +64,7 @@ def _on_sigint(signum: int, frame: object) -> None:
 
 
 def _marking(handler: Callable[[int, object], None]) -> Callable[[int, object], None]:
-    """``handler`` (the command line's SIGTERM, which raises ``KeyboardInterrupt``), first
-    marking the stop as the user's."""
+    """``handler`` (the command line's SIGTERM), first marking the stop as the user's."""
     def mark_then_stop(signum: int, frame: object) -> None:
         _user_interrupt.set()
         handler(signum, frame)
@@ -75,8 +73,7 @@ def _marking(handler: Callable[[int, object], None]) -> Callable[[int, object], 
 
 @contextmanager
 def watch_sigint() -> Iterator[None]:
-    """Mark Ctrl-C (and SIGTERM) as the user's, so a trial's own ``KeyboardInterrupt`` is
-    contained."""
+    """Mark Ctrl-C and SIGTERM as the user's, so a trial's own ``KeyboardInterrupt`` is kept."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -117,16 +114,14 @@ def _is_user_interrupt(err: BaseException) -> bool:
 
 
 def _failure(prefix: dict[str, Any], err: BaseException) -> dict[str, Any]:
-    """The ``failed`` row of a trial that raised (or returned) ``err``; its text escaped
-    where it is not valid Unicode (a lone surrogate cannot be written to the CSV)."""
+    """The ``failed`` row of a trial that raised or returned ``err``, its text made valid UTF-8."""
     text = one_line(err, ERROR_CHARS).encode("utf-8", "backslashreplace").decode("utf-8")
     return {**prefix, "algorithm": "", "status": FAILED_ROW, "error": text}
 
 
 def _table_trials(experiment: Experiment, table: RowTable, producer: str
                   ) -> RowTable | list[Any]:
-    """``table`` if it passes the column checks, else each trial's rows or the error failing them
-    all."""
+    """``table`` if its columns pass, else each trial's rows or the error failing them all."""
     try:
         if problem := table_problem(experiment, table, producer):
             return [problem] * table.trials
@@ -155,8 +150,7 @@ def _one_trial(task: BatchTask, trial: int) -> Any:
 
 @contextmanager
 def _numpy_global_kept() -> Iterator[None]:
-    """Restore numpy's global generator after the trials reseeded it (a serial run's own
-    process, or a notebook's running the harness, keeps its sequence)."""
+    """Restore numpy's global generator after the trials reseeded it."""
     state = np.random.get_state()
     try:
         yield
@@ -219,8 +213,7 @@ def _execute(task: BatchTask) -> BatchResult:
 
 
 def _table_result(task: BatchTask, table: RowTable, t0: float) -> BatchResult:
-    """CSV parts of a :class:`~trackfuse.rowtable.RowTable` batch: the trial rows and one timings
-    row per entry of its timing table."""
+    """CSV parts of a RowTable batch: the trial rows and one timings row per timing entry."""
     span = task.span
     swept = {k: Constant(v) for k, v in task.swept.items()}
     metrics = {k: v for k, v in table.columns.items() if not k.endswith(TIME_SUFFIX)}

@@ -23,8 +23,7 @@ STONESOUP_MISSING = ("Stone Soup is not installed: pip install 'trackfuse[stones
 
 @lru_cache(maxsize=1)
 def stonesoup_types() -> SimpleNamespace:
-    """Stone Soup's classes, imported on first use (about 1 s); ImportError with
-    :data:`STONESOUP_MISSING` when absent."""
+    """Stone Soup's classes, imported on first use; ImportError with :data:`STONESOUP_MISSING`."""
     try:
         from stonesoup.models.measurement.nonlinear import CartesianToElevationBearing
         from stonesoup.models.transition.linear import (

@@ -32,8 +32,7 @@ _FIRST_ROWS, _SECOND_ROWS = np.int64(0), np.int64(2)
 
 
 def run_filter(sc, b, options: PDAOptions) -> Estimates:
-    """Run one algorithm over every trial of batch ``b`` (a twin_sensor ``Batch``) in scenario
-    ``sc`` (a twin_sensor ``Scenario``): :class:`Estimates`."""
+    """Run one algorithm over every trial of twin_sensor batch ``b`` in scenario ``sc``."""
     N, K, S = b.detected.shape
     out = Estimates(np.empty((N, K, 6)), np.empty((N, K, 6, 6)), np.empty((N, K, S), np.int64),
                     np.empty((N, K), dtype=bool))
@@ -207,8 +206,7 @@ def _gate_area(gamma, det):
 
 @njit(**INNER)
 def _in_gate(los, lin, s, gamma):
-    """Whether the noise-free target return ``los`` lies in sensor ``s``'s gate (the gate
-    rule's input), at the geometry in ``lin``."""
+    """Whether the noise-free target return ``los`` lies in sensor ``s``'s gate at ``lin``."""
     g = lin.geom[s]
     n0, n1 = _wrap(los[0] - g[ZH]), _wrap(los[1] - g[ZH + 1])
     return _mahalanobis2(n0, n1, lin.Si[s]) <= gamma
@@ -243,9 +241,7 @@ def _place_returns(z_target, detected, clutter, clutter_ok, gamma, in_gate, clut
 
 @njit(**INNER)
 def _modified_rows(z0, z1, g, G):
-    """Song-Speyer modified position rows ``G (2, 3)`` at measured angles ``(z0, z1)`` and
-    the relative position in the geometry row ``g``
-    (``trackfuse.tracking.sensors.modified_position_rows``)."""
+    """Song-Speyer modified position rows ``G (2, 3)`` at angles ``(z0, z1)``, geometry ``g``."""
     c_th, s_th = math.cos(z0), math.sin(z0)
     c_ph, s_ph = math.cos(z1), math.sin(z1)
     rho = g[D] * c_th + g[D + 1] * s_th
@@ -297,8 +293,7 @@ def _log_null(lin, s, P_D, P_G):
 
 @njit(**INNER)
 def _log(x):
-    """``math.log(x)`` as compiled code computes it (``-inf`` at 0, NaN below), also under
-    ``NUMBA_DISABLE_JIT=1``."""
+    """``math.log(x)`` as compiled code computes it (``-inf`` at 0, NaN below), also without JIT."""
     if x > 0:
         return math.log(x)
     return -np.inf if x == 0 else np.nan
@@ -341,9 +336,8 @@ def _beats(value, best):
 
 @njit(**INNER)
 def _single_update(X, P, R, P_D, P_G, nearest, mg_combined, lin, s, mom):
-    """Single-sensor PDA update of ``(X, P)`` in place with sensor ``s``, linearized at them
-    (oracle: ``pda_reference._single_update``); returns the null hypothesis's weight (the
-    existence update of :mod:`trackfuse.tracking.ipda` reads it)."""
+    """Single-sensor PDA update of ``(X, P)`` in place with sensor ``s``; returns the null
+    hypothesis's weight (oracle: ``pda_reference._single_update``)."""
     ok, w, m = lin.ok[s], lin.w[s], lin.m[s]
     log0 = _log_null(lin, s, P_D, P_G)
     log_pd = _log(P_D)
@@ -478,8 +472,7 @@ def _collapse(X, P, b0, mom):
 
 @njit(**INNER)
 def _pair_update(Xp, Pp, R, P_D, P_G, method, joint_full, mg_combined, lin, mom, X, P):
-    """Two-sensor PDA update of ``(Xp, Pp)`` into ``(X, P)``; returns the null hypothesis's weight
-    (oracle: ``_pair_update``)."""
+    """Two-sensor PDA update of ``(Xp, Pp)`` into ``(X, P)``; returns the null's weight."""
     H, PHt = lin.H, lin.PHt
     Cx = np.empty((2, 2))  # H1 P H2'
     for i in range(2):
@@ -541,9 +534,8 @@ def _block_inverse(A, Bx, D_, out):
 
 @njit(**INNER)
 def _pair_log_weights(lin, S12inv, det12, P_D, P_G, method, joint_full):
-    """Log weights of the two-sensor hypotheses into ``lin.w`` (one sensor's return) and
-    ``lin.B`` (both); returns the null's and the largest (NaN-propagating)
-    (oracle: ``pda_reference.pair_weights``, ``_log_joint``, ``_paper_logs``)."""
+    """Log weights of the two-sensor hypotheses into ``lin.w`` (one return) and ``lin.B`` (both);
+    returns the null's and the largest (oracle: ``pda_reference.pair_weights``)."""
     ok, m, log_n, nu, w, B, geom = lin.ok, lin.m, lin.log_n, lin.nu, lin.w, lin.B, lin.geom
     m1, m2 = m[0], m[1]
     if method == PAPER_APPROX:
