@@ -73,7 +73,7 @@ def _marking(handler: Callable[[int, object], None]) -> Callable[[int, object], 
 
 @contextmanager
 def watch_sigint() -> Iterator[None]:
-    """Mark Ctrl-C and SIGTERM as the user's, so a trial's own ``KeyboardInterrupt`` is kept."""
+    """Mark Ctrl-C and SIGTERM as the user's, unlike a trial's own ``KeyboardInterrupt``."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
