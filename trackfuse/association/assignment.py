@@ -45,8 +45,7 @@ class PairWeights:
 
 @dataclass(frozen=True)
 class Assignment:
-    """Pairs and singletons: ``partner1`` (m1,) and ``partner2`` (m2,) (-1: unpaired), ``objective``
-    the summed pair gains."""
+    """Pairs: ``partner1`` (m1,), ``partner2`` (m2,) (-1: unpaired); ``objective`` summed gains."""
 
     partner1: np.ndarray
     partner2: np.ndarray

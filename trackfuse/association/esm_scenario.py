@@ -172,10 +172,8 @@ def radar_factors(f_true: np.ndarray, z: np.ndarray, noise: RadarNoise, model: s
 def nominal_sd(f_true: np.ndarray, esm_noise: ESMNoise, radar_noise: RadarNoise, model: str,
                A1: np.ndarray, A2: np.ndarray, d_over_lambda: float,
                min_denominator: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
-    """Per-factor sd (5,) of ESM and radar at the noise-free geometry, averaged over scans.
-
-    What a designer reads off the specifications for this engagement; independent of any
-    trial's noise. NaN where the TDOA-DF inversion fails at every scan."""
+    """Per-factor sd (5,) of ESM and radar at the noise-free geometry, averaged over scans (no
+    trial's noise); NaN where the TDOA-DF inversion fails at every scan."""
     K = f_true.shape[0]
     _, P_e, _ = esm_factors(f_true, np.zeros((1, K, 4)), esm_noise, A1, A2, min_denominator)
     _, P_r = radar_factors(f_true[:, None], np.zeros((1, K, 1, 5)), radar_noise, model, A1,

@@ -81,8 +81,7 @@ def pga(weights: PairWeights, rng: np.random.Generator, ops: int = 1000,
 @njit(**JIT)
 def _search(draws, w, rank, cur, best, q, state, p_m, roulette_second, repair_moves, staged,
             evict, anneal, cool):
-    """Run the operations of ``draws`` (n, 8) from ``cur`` (m2,), updating ``cur``, ``q``,
-    ``best`` and ``state`` (J, best J, temperature) in place (the oracle's ``operate``)."""
+    """Run the operations of ``draws`` (n, 8) from ``cur`` (m2,) in place (oracle: ``operate``)."""
     m1, m2 = w.shape[0] - 1, w.shape[1]
     J, J_best, T = state[J_CUR], state[J_BEST], state[TEMPERATURE]
     child, cum, touched = cur.copy(), np.cumsum(q), np.empty(3, np.int64)
@@ -136,8 +135,7 @@ def _accepted(dJ, u, anneal, T):
 
 @njit(**INNER)
 def _commit(J, J_best, child_paired, cur, child, best, q, rank, touched, n_touched):
-    """Accept the offspring: copy its touched columns and roulette weights, keep it as ``best`` if
-    better. Returns ``J``, best ``J``, the pair count and the roulette's stale flag."""
+    """Accept the offspring, keep it as ``best`` if better: ``J``, best ``J``, pairs, stale flag."""
     for k in range(n_touched):
         j = touched[k]
         cur[j] = child[j]
@@ -151,8 +149,7 @@ def _commit(J, J_best, child_paired, cur, child, best, q, rank, touched, n_touch
 
 @njit(**INNER)
 def _cumulative_sum(q, out):
-    """``out = np.cumsum(q)`` element by element (an array assignment would compile numba's
-    shape-mismatch message, about 3 s of the first run)."""
+    """``out = np.cumsum(q)`` element by element (cheaper to compile)."""
     acc = 0
     for j in range(q.shape[0]):
         acc += q[j]
@@ -199,8 +196,7 @@ def _columns(cum, q, u1, u2, roulette_second):
 
 @njit(**INNER)
 def _mutate(child, w, d, child_paired, repair_moves, evict, scratch, seen):
-    """Re-pair (plain or evicting) or unpair in place (the oracle's ``_mutate``): gain, touched
-    column (-1: none), pair count."""
+    """Re-pair or unpair in place (oracle's ``_mutate``): gain, touched column (-1: none), pairs."""
     m1, m2 = w.shape[0] - 1, w.shape[1]
     if repair_moves and d[REPAIR] < 0.5 and child_paired < m1:
         seen[:] = False

@@ -88,9 +88,7 @@ def tail_sum(multipliers: list[np.ndarray]) -> np.ndarray:
 
 
 def _dummy_matching(low: np.ndarray) -> tuple[np.ndarray, float]:
-    """Exact 2-D assignment on ``low`` (R+1, n+1); last row and column 0 are dummies.
-
-    Returns ``(row, column)`` pairs (row R = dummy) and their summed cost."""
+    """Exact 2-D assignment on ``low`` (R+1, n+1), dummies last row and column 0: pairs and cost."""
     r = low.shape[0] - 1
     gain = low[:r, :1] + low[r:, 1:] - low[:r, 1:]
     match = solve_exact(gain)
@@ -167,9 +165,8 @@ def relative_gap(primal: float, dual: float) -> float:
 
 
 def solve_sd(cost: np.ndarray, max_gap: float = 0.01, max_iter: int = 100) -> SDResult:
-    """Minimum-cost feasible S-D assignment of ``cost`` (n_1 + 1, ..., n_S + 1) in nats.
-
-    Stops at relative gap ``max_gap``, a feasible relaxed solution, or ``max_iter`` iterations."""
+    """Minimum-cost feasible S-D assignment of ``cost`` (n_1 + 1, ..., n_S + 1) nats, stopping at
+    relative gap ``max_gap``, a feasible relaxed solution, or ``max_iter`` iterations."""
     cost = checked_costs(cost)
     u = [np.zeros(n) for n in cost.shape[2:]]
     best_primal, best_dual, best = np.inf, -np.inf, None

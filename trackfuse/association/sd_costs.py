@@ -58,7 +58,7 @@ def subset_fit(z: Sequence[np.ndarray], sensors: np.ndarray, sigma_a: float,
 
 @njit(**JIT)
 def _combination_fit(rows, rhs, angles, sensors, counts, inv_a, inv_b):
-    """Chi-square and information log-determinant, C order over the combinations, from rows
+    """Chi-square and information log-determinant of each combination, C order, from rows
     (k, m, 2, 3), rhs (k, m, 2), angles (k, m, 2) rad and sensors (k, 3) m."""
     k = counts.shape[0]
     total = 1
