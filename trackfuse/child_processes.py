@@ -21,16 +21,14 @@ def ignore_ctrl_c() -> None:
 
 
 def setup_child(main_pid: int) -> None:
-    """A pool worker's or drawing process's start: ignore Ctrl-C, and end when the process
-    ``main_pid`` (the run's main process) ends."""
+    """A pool worker's or drawing process's start: ignore Ctrl-C, end when ``main_pid`` ends."""
     ignore_ctrl_c()
     threading.Thread(target=_exit_with, args=(main_pid,), name="trackfuse-exit-with-main",
                      daemon=True).start()
 
 
 def _exit_with(pid: int) -> None:
-    """Wait (without using the CPU where Linux's pidfd exists) until process ``pid`` has
-    ended, then end this process at once."""
+    """Wait (via pidfd where Linux has it) until process ``pid`` has ended, then end at once."""
     try:
         handle = os.pidfd_open(pid)
     except (AttributeError, OSError):  # not Linux, or ``pid`` is gone already
@@ -42,8 +40,7 @@ def _exit_with(pid: int) -> None:
 
 
 def process_alive(pid: int) -> bool:
-    """Whether process ``pid`` runs on this host: it exists and, where ``/proc`` tells, is not a
-    zombie."""
+    """Whether process ``pid`` runs on this host: it exists and (per ``/proc``) no zombie."""
     another_user = False
     try:
         os.kill(pid, 0)

@@ -58,8 +58,7 @@ _WALLTIME = re.compile(r"^(?:(\d+)-)?(?:(\d+):)?(\d+):(\d+)$")
 
 
 def walltime_seconds(text: str | None) -> int | None:
-    """Seconds of a walltime written ``[D-]HH:MM:SS`` or ``MM:SS`` (SLURM, PBS), else
-    ``None``."""
+    """Seconds of a walltime ``[D-]HH:MM:SS`` or ``MM:SS`` (SLURM, PBS), else ``None``."""
     match = _WALLTIME.match(str(text or "").strip())
     if not match:
         return None
@@ -70,8 +69,7 @@ def walltime_seconds(text: str | None) -> int | None:
 
 
 def settings_problem(section: dict[str, Any]) -> tuple[str, str] | None:
-    """``(key, what is allowed)`` for the first bad entry of a ``cluster`` section, else
-    ``None``."""
+    """``(key, what is allowed)`` of the first bad entry of a ``cluster`` section, or ``None``."""
     texts = ("queue", "account", "memory", "walltime", "interface")
     for key, value in section.items():
         if key not in SETTING_KEYS:

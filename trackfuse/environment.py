@@ -40,8 +40,7 @@ def library_versions() -> dict[str, str | None]:
 
 
 def _numpy_simd() -> list[str] | None:
-    """The vector extensions numpy dispatches to on this CPU (numpy's own list; no public
-    API, so ``None`` where this numpy does not expose it)."""
+    """The vector extensions numpy dispatches to on this CPU; ``None`` where not exposed."""
     for module in ("numpy._core._multiarray_umath", "numpy.core._multiarray_umath"):
         with contextlib.suppress(ImportError, AttributeError):
             umath = importlib.import_module(module)
@@ -91,8 +90,7 @@ def unseen_cpus(current: list[dict[str, Any]],
 
 
 def cpu_words(machine: dict[str, Any]) -> str:
-    """One CPU of :func:`cpu` in words: model, numpy's extensions, BLAS kernel, rounding
-    settings."""
+    """One CPU of :func:`cpu` in words: model, numpy extensions, BLAS kernel, rounding settings."""
     simd = machine.get("numpy_simd")
     words = f"{machine.get('model')}, numpy {'/'.join(simd) if simd else 'baseline'}"
     if blas := machine.get("blas"):

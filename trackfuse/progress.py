@@ -48,8 +48,7 @@ def duration_text(seconds: float, tenths: bool = False) -> str:
 
 
 def fit_label(label: str, width: int) -> str:
-    """``label`` cut to ``width`` characters: first its trailing ``" [...]"`` (the run id),
-    then with an ellipsis."""
+    """``label`` cut to ``width``: first its trailing ``" [...]"`` run id, then with an ellipsis."""
     if len(label) <= width:
         return label
     if label.endswith("]") and " [" in label:
@@ -103,8 +102,7 @@ class RunProgress:
             self._line()
 
     def rate(self) -> float:
-        """Trials per second in this session since the first finished batch started; 0
-        before a batch has finished."""
+        """Trials per second since the first finished batch started; 0 before one has finished."""
         if self._t0 is None:
             return 0.0
         return (self.done - self.start_done) / max(time.monotonic() - self._t0, 1e-9)

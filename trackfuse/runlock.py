@@ -85,8 +85,7 @@ class RunLock:
         return self
 
     def _current_holder(self) -> dict[str, Any] | None:
-        """The holder, waiting up to :data:`HOLDER_WAIT_S` for a new holder to say who it is
-        (it writes the holder file just after taking the lock)."""
+        """The holder, waiting up to :data:`HOLDER_WAIT_S` for a new one to record itself."""
         deadline = time.monotonic() + HOLDER_WAIT_S
         while (holder := self.holder()) is None and time.monotonic() < deadline:
             time.sleep(0.05)

@@ -25,8 +25,7 @@ class TrialStreams:
 
 
 def draw_points(points: Sequence[SweepPoint], drawing: Collection[str]) -> list[int]:
-    """The draw point of every sweep point: the index of the first point whose values of the
-    swept keys in ``drawing`` equal its own."""
+    """The draw point of each sweep point: the first point equal to it in the ``drawing`` keys."""
     first: dict[tuple[Any, ...], int] = {}
     return [first.setdefault(_hashable([v for k, v in p.values.items() if k in drawing]),
                              p.index) for p in points]

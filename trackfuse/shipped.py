@@ -47,16 +47,14 @@ def config_path(given: Path) -> Path:
 
 
 def config_names() -> list[str]:
-    """Every config name :func:`config_path` finds (``twin_sensor_orbit``,
-    ``ci/twin_sensor_ci``), ``./configs`` first, each once."""
+    """Every config name :func:`config_path` finds, ``./configs`` first, each once."""
     names = [p.relative_to(folder).with_suffix("").as_posix()
              for folder in config_folders() for p in sorted(folder.rglob("*.yaml"))]
     return list(dict.fromkeys(names))
 
 
 def close_config_names(given: Path, most: int = 3) -> list[str]:
-    """Config names close to ``given``: the same file name in another folder, else the ``most``
-    most similar."""
+    """Config names close to ``given``: that file name elsewhere, else the ``most`` most similar."""
     text = given.as_posix().removesuffix(".yaml")
     names = [n for n in config_names() if n != text]
     same = [n for n in names if n.rpartition("/")[2] == text.rpartition("/")[2]]

@@ -67,8 +67,7 @@ def chunks(path: Path, chunk_rows: int = CHUNK_ROWS,
 
 
 def _common_dtype(kinds: set[str]) -> str:
-    """The type of a column whose chunks read as ``kinds`` (numpy kind letters), as reading the
-    whole CSV would type it."""
+    """The type of a column whose chunks read as ``kinds``, as the whole CSV would type it."""
     if len(kinds) == 1:
         return next(iter(kinds))
     if kinds <= {"i", "f"}:
@@ -77,8 +76,7 @@ def _common_dtype(kinds: set[str]) -> str:
 
 
 def _column_kinds(csv_path: Path) -> tuple[dict[str, str], dict[str, Any]]:
-    """For each column of ``csv_path``: its common kind over all chunks and the dtype of a
-    chunk where it has that kind (the whole-file type)."""
+    """Each column's common kind over all chunks of ``csv_path`` and its whole-file dtype."""
     kinds: dict[str, set[str]] = {}
     example: dict[str, Any] = {}
     for chunk in chunks(csv_path):

@@ -21,8 +21,7 @@ CHUNK_ROWS = 200_000
 def _clipped(metrics: pd.Series, low: np.ndarray, high: np.ndarray,
              bounds: Mapping[str, tuple[float, float]] | tuple[float, float] | None
              ) -> tuple[np.ndarray, np.ndarray]:
-    """Interval ends ``low, high`` (one per row of ``metrics``) clipped to each metric's
-    ``bounds`` (one pair: every metric's)."""
+    """Interval ends ``low, high`` (per row of ``metrics``) clipped to each metric's ``bounds``."""
     if isinstance(bounds, tuple):
         bounds = dict.fromkeys(metrics.unique(), bounds)
     for metric, (lo, hi) in (bounds or {}).items():
@@ -84,8 +83,7 @@ def summarize(source: Path | pd.DataFrame, keys: Sequence[str], binary: Sequence
 
 
 def _chunks(source: Path | pd.DataFrame, chunk_rows: int) -> Iterable[pd.DataFrame]:
-    """``source`` (a CSV or Parquet file, or a frame already read) in chunks of
-    ``chunk_rows`` rows."""
+    """``source`` (CSV, Parquet or a frame) in chunks of ``chunk_rows`` rows."""
     if isinstance(source, pd.DataFrame):
         return (source.iloc[i:i + chunk_rows] for i in range(0, len(source), chunk_rows))
     return store.chunks(Path(source), chunk_rows)
@@ -93,8 +91,7 @@ def _chunks(source: Path | pd.DataFrame, chunk_rows: int) -> Iterable[pd.DataFra
 
 def _keep_squares(chunk: pd.DataFrame, group: list[str], metrics: list[str],
                   squares: dict[tuple, list[np.ndarray]]) -> None:
-    """Append each group's squared values of each of ``metrics`` (NaN dropped), in row
-    order, to ``squares[(*group values, metric)]``."""
+    """Append each group's squared values of ``metrics`` (NaN dropped) to ``squares``."""
     for metric in metrics:
         grouped = chunk.groupby(group, sort=False, dropna=False)[metric] if group \
             else [((), chunk[metric])]
@@ -106,8 +103,7 @@ def _keep_squares(chunk: pd.DataFrame, group: list[str], metrics: list[str],
 
 def _as_rms(out: pd.DataFrame, group: list[str], squares: dict[tuple, list[np.ndarray]]
             ) -> None:
-    """Turn the rows of ``out`` that have ``squares`` into a root mean square with its bootstrap-t
-    interval, in place."""
+    """Turn the rows of ``out`` that have ``squares`` into an RMS with its interval, in place."""
     keys = [tuple(row) for row in out[group].itertuples(index=False)]  # (*keys, metric)
     rows = [i for i, key in enumerate(keys) if key in squares]
     if not rows:
@@ -121,8 +117,7 @@ def _as_rms(out: pd.DataFrame, group: list[str], squares: dict[tuple, list[np.nd
 
 
 def _chunk_stats(chunk: pd.DataFrame, group: list[str], metrics: list[str]) -> pd.DataFrame:
-    """``(*group, metric, n, mean, m2)`` of one chunk, one row per group and metric with a value, in
-    the long format's order."""
+    """``(*group, metric, n, mean, m2)`` of one chunk, in the long format's order."""
     values = chunk[metrics]
     keys = [chunk[k] for k in group]
     grouped = values.groupby(keys, sort=False, dropna=False)

@@ -45,16 +45,14 @@ PLUGIN_FAILURES = (Exception, SystemExit, PluginExit)
 
 
 def _timeout_of(limit: float) -> type[TrialTimeout]:
-    """:class:`TrialTimeout` for ``limit``, built without arguments (as an exception set
-    in another thread is)."""
+    """:class:`TrialTimeout` for ``limit``, built without arguments as a cross-thread one is."""
     def init(self: TrialTimeout) -> None:
         TrialTimeout.__init__(self, limit)
     return type("TrialTimeout", (TrialTimeout,), {"__init__": init})
 
 
 def timeouts() -> int:
-    """How many trials this process has stopped at their time limit; such a worker is replaced once
-    idle."""
+    """How many trials this process has stopped at their time limit (then replaced)."""
     return _timeouts
 
 
@@ -151,8 +149,7 @@ def _alarm(limit: float) -> Iterator[None]:
 
 @contextmanager
 def _async_alarm(limit: float) -> Iterator[None]:
-    """:class:`TrialTimeout` raised in this (non-main) thread by a timer, withdrawn if the block
-    ends first."""
+    """:class:`TrialTimeout` raised in this thread by a timer, withdrawn if the block ends first."""
     ident, lock, state = threading.get_ident(), threading.Lock(), {"active": True}
 
     def expire() -> None:
