@@ -52,7 +52,7 @@ def _timeout_of(limit: float) -> type[TrialTimeout]:
 
 
 def timeouts() -> int:
-    """How many trials this process has stopped at their time limit (then replaced)."""
+    """How many trials this process has stopped at their time limit (its worker is replaced)."""
     return _timeouts
 
 
