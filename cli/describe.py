@@ -27,8 +27,7 @@ def print_listing(listed: list[Listed], width: int | None = None) -> None:
 
 
 def listing_data(listed: list[Listed]) -> list[dict[str, str]]:
-    """:func:`print_listing` as JSON-ready data: each experiment's ``name``, ``origin``,
-    ``reference`` and ``description``."""
+    """:func:`print_listing` as JSON-ready data: name, origin, reference, description."""
     return [{"name": item.name, "origin": item.origin, "reference": item.reference,
              "description": item.description} for item in listed]
 
@@ -107,8 +106,7 @@ def _param_lines(p: Param) -> list[str]:
 
 
 def config_template(exp: Experiment, reference: str) -> str:
-    """A commented config naming ``reference`` with every parameter at its default, which
-    ``trackfuse validate`` accepts as it is."""
+    """A commented config of ``reference`` with every parameter at its default (valid as it is)."""
     figures = ", ".join(exp.figures) or "none"
     lines = [
         f"# {_comment(exp.title)}",

@@ -31,8 +31,7 @@ def _describe(row: pd.Series, swept: Sequence[str]) -> str:
 
 
 def first_failure(source: Path | pd.DataFrame, swept: Sequence[str]) -> str | None:
-    """The first failed trial of ``trials.csv`` (path or frame) in words, or ``None``; a path is
-    read in chunks."""
+    """The first failed trial of ``trials.csv`` (path or frame) in words, or ``None``."""
     chunks: Iterable[pd.DataFrame]
     if isinstance(source, pd.DataFrame):
         chunks = [source]

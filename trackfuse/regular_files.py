@@ -11,8 +11,7 @@ from typing import BinaryIO
 
 
 class NotARegularFile(OSError):
-    """A path that is a FIFO, socket, device or folder where a regular file belongs;
-    ``strerror`` says which kind."""
+    """A FIFO, socket, device or folder where a regular file belongs; ``strerror`` says which."""
 
 
 def _kind(mode: int) -> str:
@@ -42,8 +41,7 @@ def open_regular(path: str | Path) -> BinaryIO:
 
 
 def non_regular(path: str | Path) -> str | None:
-    """What ``path`` is if it exists and is neither a regular file nor a link to one
-    (``a FIFO (named pipe)``), else ``None``; looks without opening it."""
+    """What ``path`` is if it exists and is no regular file (``a FIFO (named pipe)``), or None."""
     try:
         mode = os.stat(path).st_mode
     except OSError:

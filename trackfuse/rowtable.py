@@ -14,8 +14,7 @@ from trackfuse.rowformat import csv_cell, format_value
 
 
 def column_cells(values: np.ndarray | Sequence[Any]) -> list[str]:
-    """The CSV fields ``(R,)`` of one column, as :func:`~trackfuse.rowformat.format_value`
-    formats each value (floats by ``repr``, which writes NaN as ``nan`` too)."""
+    """The CSV fields ``(R,)`` of one column, as ``format_value`` writes each value."""
     a = np.asarray(values)
     if a.dtype.kind == "b":
         return np.where(a, "1", "0").tolist()
@@ -43,8 +42,7 @@ class Constant:
 
 
 def columns_csv(columns: Mapping[str, np.ndarray | Sequence[Any] | Constant], rows: int) -> str:
-    """CSV text (header line first) of ``rows`` rows with ``columns`` in order, each
-    ``(rows,)`` values or a :class:`Constant`."""
+    """CSV text, header first, of ``rows`` rows of ``columns`` ((rows,) arrays or Constants)."""
     cells: list[Sequence[str]] = []
     for name, values in columns.items():
         if isinstance(values, Constant):
@@ -115,8 +113,7 @@ class RowTable(Sequence[list[dict[str, Any]]]):
         return len(self.trial)
 
     def check(self, trials: int) -> None:
-        """Raise ``TypeError`` unless the table holds rows of exactly ``trials`` trials in
-        order and every column is one-dimensional with one value per row."""
+        """Raise ``TypeError`` unless the table holds ``trials`` trials in order, a value a row."""
         counts = np.bincount(np.asarray(self.trial, dtype=int), minlength=trials) \
             if len(self.trial) and int(np.min(self.trial)) >= 0 else np.zeros(0, dtype=int)
         if len(counts) != trials or not (counts > 0).all() or \

@@ -22,8 +22,7 @@ class YamlInputError(ValueError):
 
 
 class _StrictLoader(yaml.SafeLoader):
-    """A safe loader that refuses a mapping naming one key, or the merge key ``<<``,
-    twice."""
+    """A safe loader that refuses a mapping naming one key (or the merge key ``<<``) twice."""
 
     def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
         seen: set[Any] = set()
@@ -81,8 +80,7 @@ def _children(node: yaml.Node) -> list[yaml.Node]:
 
 
 def load_yaml(text: str) -> Any:
-    """Parse one YAML document within this module's bounds; :class:`YamlInputError` names the line
-    and column when known."""
+    """Parse one YAML document within this module's bounds, or :class:`YamlInputError`."""
     if len(text) > MAX_BYTES:
         raise YamlInputError(f"larger than {MAX_BYTES} bytes")
     try:

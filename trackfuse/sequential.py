@@ -23,8 +23,7 @@ class SequentialRule:
     half_width: float
 
     def looks(self, batch_size: int) -> list[int]:
-        """Trial counts per point at which the rule is read: ``min``, then doubling, rounded up to
-        whole batches, the last ``max``."""
+        """Counts at which the rule is read: ``min``, doubling in whole batches, to ``max``."""
         def whole(n: int) -> int:
             return min(math.ceil(n / batch_size) * batch_size, self.max)
 
@@ -45,8 +44,7 @@ class SequentialRule:
 
 
 def widest_half_width(summary: pd.DataFrame, rule: SequentialRule) -> float:
-    """The largest ``(ci_high - ci_low) / 2`` of ``rule.metric`` over the cells of ``summary``;
-    ``inf`` when a cell has no interval or there is no cell."""
+    """The largest ``(ci_high - ci_low) / 2`` of ``rule.metric`` over the cells, or inf."""
     mine = summary[summary["metric"] == rule.metric]
     if mine.empty:
         return math.inf

@@ -18,16 +18,14 @@ NUMBER_TYPES = (int, float, bool)
 
 
 def _is_number(value: Any) -> bool:
-    """Whether ``value`` is a real number CSV writes as one: a plain or numpy ``int``, ``float`` or
-    ``bool`` (no float subclass, no complex)."""
+    """Whether ``value`` is a plain or numpy ``int``, ``float`` or ``bool`` (or None)."""
     return value is None or type(value) in NUMBER_TYPES or \
         isinstance(value, np.integer | np.floating | np.bool_)
 
 
 def checked_rows(result: Any, producer: str, experiment: Experiment
                  ) -> list[dict[str, str]] | BaseException:
-    """``result`` as rows of ``trials.csv`` cells if it is a valid trial result, else the error
-    (returned, not raised): the trial's failure."""
+    """``result`` as ``trials.csv`` cells if valid, else the error (returned, not raised)."""
     if isinstance(result, BaseException):
         return result
     try:
@@ -112,8 +110,7 @@ def _duplicate_problem(experiment: Experiment, cells: list[dict[str, str]], prod
 
 
 def _text_problem(texts: list[str], producer: str) -> TypeError | None:
-    """A ``TypeError`` if one of ``texts`` (column names and cells) cannot be written as
-    UTF-8 (a lone surrogate)."""
+    """A ``TypeError`` if one of ``texts`` cannot be written as UTF-8 (a lone surrogate)."""
     try:
         "".join(texts).encode("utf-8")
     except UnicodeEncodeError:
@@ -145,8 +142,7 @@ def table_problem(experiment: Experiment, table: RowTable, producer: str) -> Typ
 
 
 def table_suspect(experiment: Experiment, table: RowTable) -> bool:
-    """Whether a RowTable's values may break the rules of :func:`checked_rows`, so that its trials
-    must be checked one by one."""
+    """Whether a RowTable's values may break the rules, so its trials are checked one by one."""
     metrics = {m.name for m in experiment.metrics}
     for name, values in table.columns.items():
         array = np.asarray(values)
@@ -162,7 +158,6 @@ def table_suspect(experiment: Experiment, table: RowTable) -> bool:
 
 
 def _key_values(values: np.ndarray) -> list[Any]:
-    """A row key column's values, comparable as its CSV cells compare (floats as cells:
-    NaN is one key)."""
+    """A row key column's values, comparable as its CSV cells (NaN is one key)."""
     array = np.asarray(values)
     return column_cells(array) if array.dtype.kind == "f" else array.tolist()

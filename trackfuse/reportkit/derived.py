@@ -30,8 +30,7 @@ class Rate:
 
 def rate_rows(trials: pd.DataFrame, keys: Sequence[str], rates: Sequence[Rate]
               ) -> pd.DataFrame:
-    """Each rate's mean and 95 % Wilson interval per group of ``keys``, in ``summary.csv``'s long
-    form."""
+    """Each rate's mean and 95 % Wilson interval per group of ``keys``, as ``summary.csv`` rows."""
     keys = [k for k in keys if k in trials]
     out = []
     for rate in rates:
@@ -50,8 +49,7 @@ def rate_rows(trials: pd.DataFrame, keys: Sequence[str], rates: Sequence[Rate]
 
 
 def with_rates(run: RunData, rates: Sequence[Rate]) -> RunData:
-    """A view of ``run`` whose ``summary`` has the rows of ``rates`` appended and whose experiment
-    declares each as a binary metric."""
+    """A view of ``run`` with ``rates`` appended to its summary and declared as binary metrics."""
     keys = ["point", *run.sweep, *run.experiment.row_keys]
     extra = rate_rows(succeeded_rows(run.trials), list(dict.fromkeys(keys)), rates)
     metrics = tuple(Metric(r.name, "1", r.label, binary=True, label=r.label) for r in rates)

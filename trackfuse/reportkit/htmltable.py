@@ -24,8 +24,7 @@ _NUMBER = re.compile(r"^[\[(]?[+\-\u2212]?(\d|\.\d)")
 
 
 def cell_text(value: Any) -> str:
-    """A cell's text: numbers with three significant figures (integers as they are), empty
-    for a missing value."""
+    """A cell's text: numbers with three significant figures, empty for a missing value."""
     if value is None or value is pd.NA or (isinstance(value, float) and math.isnan(value)):
         return ""
     if isinstance(value, bool | np.bool_):
@@ -44,8 +43,7 @@ def is_number(text: str) -> bool:
 
 def html_table(headers: Sequence[str], rows: Sequence[Sequence[Any]],
                raw: Sequence[int] = (), row_class: Sequence[str] | None = None) -> str:
-    """An HTML table of ``rows`` under ``headers``; cells of the ``raw`` columns are HTML already,
-    the rest escaped; all-number columns are right-aligned."""
+    """An HTML table of ``rows`` under ``headers`` (``raw`` columns are HTML already)."""
     texts = [[c if j in raw else html.escape(cell_text(c)) for j, c in enumerate(row)]
              for row in rows]
     numeric = [bool(rows) and j not in raw and all(

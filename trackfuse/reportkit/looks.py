@@ -46,8 +46,7 @@ class Look:
 
 
 def look_of(looks: Mapping[str, Look], name: str) -> Look:
-    """The look of ``name`` in ``looks``: else its association's for an ``association/filter``
-    name, else a grey dot labelled ``name``."""
+    """The look of ``name``, else its association's, else a grey dot labelled ``name``."""
     if name in looks:
         return looks[name]
     base, _, variant = name.partition("/")

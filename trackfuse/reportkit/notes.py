@@ -56,8 +56,7 @@ def _heading_ids(tokens: list[Token]) -> None:
 
 
 def _local_links(tokens: list[Token], rendered: set[str]) -> None:
-    """Point a link to another rendered note at its page; unlink one to a file that is not
-    rendered beside it (its text stays)."""
+    """Point links to rendered notes at their pages; unlink those to files not rendered."""
     for token in (t for t in tokens for t in [t, *(t.children or [])]):
         if token.type != "link_open":
             continue

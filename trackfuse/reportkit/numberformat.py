@@ -61,8 +61,7 @@ def pd_isna(value: object) -> bool:
 
 
 def with_interval(value: float, low: float, high: float, unit: str) -> str:
-    """``value`` and its 95 % interval in the house format (module docstring); the interval
-    left out when it is NaN; differences signed."""
+    """``value`` and its 95 % interval in the house format (interval left out when NaN)."""
     if not math.isfinite(value):
         return ""
     signed = shown_unit(unit) == "points"

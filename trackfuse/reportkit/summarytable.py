@@ -10,8 +10,7 @@ import pandas as pd
 
 def per_point(summary: pd.DataFrame, keys: Sequence[str],
               wanted: Mapping[tuple[str, str], str]) -> pd.DataFrame:
-    """Per point: the mean of each ``(metric, algorithm) -> column`` of ``wanted`` as ``column``,
-    with ``<column>_ci_low``/``_ci_high`` from ``summary.csv``."""
+    """Per point: each ``(metric, algorithm) -> column`` of ``wanted`` with its interval."""
     out = []
     for point, g in summary.groupby("point", sort=True):
         row = {"point": point, **{k: g[k].iloc[0] for k in keys}}

@@ -100,14 +100,12 @@ def within(estimate: float, low: float, high: float, margin: float, claim: str) 
 
 
 def exploration(pairs: int, found: str) -> str:
-    """Words for a comparison found by searching ``pairs`` pairs (rule 3): reported, never
-    deciding."""
+    """Words for a comparison found by searching ``pairs`` pairs (rule 3): never deciding."""
     return f"exploration only, not the verdict (searched {pairs} pairs): {found}"
 
 
 def printed_decimals(printed: float) -> int:
-    """Decimals the paper prints ``printed`` with, read from its shortest form (0.053 -> 3,
-    5.2375 -> 4, 130 -> 0)."""
+    """Decimals of the shortest form of ``printed`` (0.053 -> 3, 5.2375 -> 4, 130 -> 0)."""
     text = repr(float(printed)).rstrip("0").rstrip(".")
     return len(text.split(".")[1]) if "." in text else 0
 
@@ -149,8 +147,7 @@ def setting_text(values: Mapping[str, object]) -> str:
 
 
 def matches(setting: str, wanted: Mapping[str, object]) -> bool:
-    """Whether a row's ``setting`` (:func:`setting_text`) holds every ``key=value`` of
-    ``wanted``."""
+    """Whether a row's ``setting`` holds every ``key=value`` of ``wanted``."""
     parts = set(str(setting).split("; ")) if setting else set()
     return set(setting_text(dict(wanted)).split("; ")) <= parts if wanted else True
 

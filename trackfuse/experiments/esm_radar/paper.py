@@ -58,8 +58,7 @@ def setting_words(point: Mapping[str, Any], keys: Sequence[str]) -> str:
 
 
 def _table3_rows(run: RunData) -> list[dict[str, Any]]:
-    """Paper Table 3 correct rates against every point at the paper's setting, as two samples;
-    ``reproduced`` is our rate with its Wilson interval."""
+    """Paper Table 3 correct rates against every point at its setting, as two samples."""
     trials, out = run.trials, []
     swept = swept_keys(run.config)
     keys = [k for k in swept if k not in PAPER_TABLE3_SETTING]
@@ -86,8 +85,7 @@ def _table3_rows(run: RunData) -> list[dict[str, Any]]:
 
 
 def _ahp_rows() -> list[dict[str, Any]]:
-    """Paper Table 1 against the exact AHP computation, compared as printed (CI from our lambda_max
-    rounded as printed; ``docs/papers/esm_radar.md``, Table 1)."""
+    """Paper Table 1 against the exact AHP computation, compared as printed."""
     B = ahp.PAPER_001_JUDGEMENT
     lam = ahp.lambda_max(B)
     lam_printed = round(lam, printed_decimals(ESM_RADAR.result("AHP lambda_max").value))
@@ -111,8 +109,7 @@ def _ahp_rows() -> list[dict[str, Any]]:
 
 
 def _correct_by_point(trials: pd.DataFrame, name: str) -> pd.DataFrame:
-    """``correct`` of ``name`` as a (trial x point) frame: trials share their common random
-    numbers across points, so columns are paired."""
+    """``correct`` of ``name`` as a (trial x point) frame, paired across points."""
     rows = trials[trials["algorithm"] == name]
     return rows.pivot(index="trial", columns="point", values="correct").sort_index()
 
@@ -160,8 +157,7 @@ def _gap_rows(item: str, anchor: str, x: str, setting: str, imp: pd.DataFrame,
 def _narrowing_row(item: str, anchor: str, x: str, where: str, imp: pd.DataFrame,
                    trad: pd.DataFrame, xs: list[tuple[float, int]], at: str = ""
                    ) -> dict[str, Any]:
-    """"The gap narrows as separation grows": closest minus widest gap, same trials, against the
-    declared margin."""
+    """"The gap narrows as separation grows": closest minus widest gap against the margin."""
     gap = {xv: imp[p].to_numpy() - trad[p].to_numpy() for xv, p in xs}
     claim = ESM_RADAR.result("gap narrows")
     v = narrows(gap, claim.margin, lambda value: _fmt_x(x, value))
@@ -189,8 +185,7 @@ def _always_higher_row(item: str, anchor: str, x: str, where: str, n: int,
 
 def _trend_rows(item: str, anchor: str, x: str, setting: str, rates: dict[str, pd.DataFrame],
                 xs: list[tuple[float, int]], at: str = "") -> list[dict[str, Any]]:
-    """"Both degrade": rate at the hardest end minus at the easiest end, paired, against the
-    declared margin."""
+    """"Both degrade": hardest-end rate minus easiest-end rate, paired, against the margin."""
     hard, easy = (xs[0], xs[-1]) if x == "target.separation" else (xs[-1], xs[0])
     claim = ESM_RADAR.result("both degrade when close" if x == "target.separation"
                              else "both decline with range error")

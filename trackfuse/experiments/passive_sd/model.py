@@ -183,8 +183,7 @@ def run_trial(params: dict[str, Any], streams: TrialStreams) -> list[dict[str, A
 
 def _sd_row(name: str, result, elapsed: float, optimum: float, scan, n: int,
             costs_time: float) -> dict[str, Any]:
-    """The row of an S-D solver; raises :class:`ExactSolverError` when it beats the
-    optimum ``optimum`` (a cost, nats)."""
+    """The row of an S-D solver; :class:`ExactSolverError` when it beats the ``optimum`` (nats)."""
     tol = AT_OPT_RTOL * max(1.0, abs(optimum))
     if result.primal < optimum - tol:
         raise ExactSolverError(f"{name} reached the cost {result.primal!r}, below the "
