@@ -13,8 +13,7 @@ LOCAL_CONFIGS = Path("configs")
 
 
 def configs_folder() -> Path | None:
-    """The shipped configs: ``trackfuse/configs`` of an installed package, else a source
-    checkout's ``configs/`` beside the package; ``None`` if neither holds a config."""
+    """The shipped configs: installed ``trackfuse/configs``, else a checkout's ``configs/``."""
     package = Path(trackfuse.__file__).resolve().parent
     for folder in (package / "configs", package.parent / "configs"):
         if folder.is_dir() and any(folder.glob("*.yaml")):
@@ -23,8 +22,7 @@ def configs_folder() -> Path | None:
 
 
 def config_folders() -> list[Path]:
-    """Where a config name is looked up, in order: ``./configs`` (if it is a folder), then
-    the shipped configs (once, when they are that same folder)."""
+    """Where a config name is looked up, in order: ``./configs``, then the shipped configs."""
     found = [LOCAL_CONFIGS] if LOCAL_CONFIGS.is_dir() else []
     shipped = configs_folder()
     if shipped is not None and not (found and LOCAL_CONFIGS.resolve() == shipped):

@@ -31,15 +31,13 @@ def parquet_problem() -> str | None:
 
 
 def trials_file(folder: Path) -> Path:
-    """The file holding the run's rows in ``folder``: ``trials.parquet`` when there is one,
-    else ``trials.csv`` (which may be missing: the reader says so)."""
+    """The run's rows in ``folder``: ``trials.parquet`` if there is one, else ``trials.csv``."""
     parquet = Path(folder) / TRIALS_PARQUET
     return parquet if parquet.is_file() else Path(folder) / TRIALS
 
 
 def read_trials(path: Path) -> pd.DataFrame:
-    """The whole of ``trials.csv`` or ``trials.parquet`` at ``path``, with the types
-    ``pandas.read_csv(low_memory=False)`` gives the CSV."""
+    """All of ``trials.csv`` or ``trials.parquet`` at ``path``, typed as ``read_csv`` would."""
     import pandas as pd
     if path.suffix == ".parquet":
         return pd.read_parquet(path)

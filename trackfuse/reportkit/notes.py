@@ -26,8 +26,7 @@ _CSS = ("body{font-family:sans-serif;max-width:50em;margin:2em auto;padding:0 1e
 
 
 def notes_folder() -> Path | None:
-    """The notes: ``trackfuse/papers`` of an installed package, else a checkout's
-    ``docs/papers`` beside the package; ``None`` if neither holds one."""
+    """The notes: ``trackfuse/papers`` installed, else a checkout's ``docs/papers``, else None."""
     package = Path(trackfuse.__file__).resolve().parent
     for folder in (package / "papers", package.parent / "docs" / "papers"):
         if folder.is_dir() and any(folder.glob("*.md")):
@@ -108,8 +107,7 @@ def write_notes(out: Path, back: str, only: Collection[str] | None = None) -> di
 
 
 def note_href(docs: str, written: dict[str, str]) -> str:
-    """The link of a report's ``docs`` entry (``docs/papers/<name>.md#<anchor>``) to its
-    rendered note, relative to the report; ``""`` when the note was not rendered."""
+    """The link of a ``docs/papers/<name>.md#<anchor>`` entry to its rendered note, or ``""``."""
     page, _, anchor = str(docs).partition("#")
     target = written.get(page)
     return "" if target is None else target + (f"#{anchor}" if anchor else "")

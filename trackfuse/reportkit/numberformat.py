@@ -27,14 +27,12 @@ def sig3(value: float, signed: bool = False) -> str:
 
 
 def scaled(value: float, unit: str) -> float:
-    """``value`` in the unit it is shown in: a fraction or a difference of fractions times
-    100 (``%`` or points), anything else as it is."""
+    """``value`` in its shown unit: fractions and their differences times 100, else as it is."""
     return 100 * value if unit in ("fraction", "fraction difference") else value
 
 
 def shown_unit(unit: str) -> str:
-    """The unit written after a shown value: ``%`` for a rate, ``points`` for a difference of
-    rates, nothing for a dimensionless ``1``, else the unit itself."""
+    """The unit after a shown value: ``%``, ``points``, nothing for ``1``, else the unit."""
     if unit in ("fraction", "%"):
         return "%"
     if unit in ("points", "fraction difference"):

@@ -48,8 +48,7 @@ def higher_everywhere(gaps: Sequence[tuple[float, PairedBinary]], words: Words) 
 
 def _pair_tests(gap: Mapping[float, np.ndarray]) -> list[tuple[float, float, float, float,
                                                                 float, float]]:
-    """``(x_a, x_b, mean, low, high, p)``: the gap at ``x_a`` minus at ``x_b`` for every
-    pair of values in order, mean over trials with its paired t interval and p-value."""
+    """``(x_a, x_b, mean, low, high, p)``: gap at ``x_a`` minus at ``x_b``, each pair, paired t."""
     xs, tests = list(gap), []
     for i, xa in enumerate(xs):
         for xb in xs[i + 1:]:

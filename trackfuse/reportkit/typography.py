@@ -39,8 +39,7 @@ MATH_LETTERS = {r"\sigma": "σ", r"\lambda": "λ", r"\alpha": "α"}
 
 
 def plain(text: str) -> str:
-    """``text`` with its mathtext unwrapped for a table cell: ``$P_D$`` -> ``P_D``,
-    ``$\\sigma_R/R$`` -> ``σ_R/R``."""
+    """``text`` with its mathtext unwrapped for a table cell (``$P_D$`` -> ``P_D``)."""
     for command, letter in MATH_LETTERS.items():
         text = text.replace(command, letter)
     return re.sub(r"[${}\\]", "", text)

@@ -40,8 +40,7 @@ class Verdict:
 
 
 def points(value: float) -> str:
-    """A difference of two rates (fractions) in percentage points, signed, 3 significant
-    figures: ``+1.60``, ``−8.20``, ``0``."""
+    """A difference of two rates in signed percentage points, 3 significant figures (``+1.60``)."""
     return sig3(100 * value, signed=True) if math.isfinite(value) else "n/a"
 
 
@@ -123,8 +122,8 @@ def as_printed_verdict(ours: float, printed: float) -> Verdict:
 
 
 def claim_verdict(shown: bool, opposite_shown: bool) -> str:
-    """:data:`AGREES` when the data show a claim, else :data:`DIFFERS` when they show its
-    opposite, else :data:`INCONCLUSIVE` (absence of evidence is never ``differs``)."""
+    """:data:`AGREES` when the data show a claim, :data:`DIFFERS` when they show its opposite,
+    else :data:`INCONCLUSIVE`."""
     return AGREES if shown else DIFFERS if opposite_shown else INCONCLUSIVE
 
 
@@ -140,8 +139,7 @@ def combined(words: Sequence[str]) -> str:
 
 
 def setting_text(values: Mapping[str, object]) -> str:
-    """A row's setting in the machine form :func:`bottom_line` matches on:
-    ``key=value; key=value`` in the given order (numbers in their shortest form)."""
+    """A row's setting as :func:`bottom_line` matches it: ``key=value; key=value``."""
     return "; ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
                      for k, v in values.items())
 

@@ -52,8 +52,7 @@ def at_paper_setting(params: Mapping[str, Any]) -> bool:
 
 
 def setting_words(point: Mapping[str, Any], keys: Sequence[str]) -> str:
-    """The swept settings of a point in words (:func:`value_words`), so a headline row
-    says which setting (which radar-factor model) it judges."""
+    """A point's swept settings in words, so a headline row says which setting it judges."""
     return "; ".join(value_words(k, point[k]) for k in keys)
 
 
@@ -209,8 +208,7 @@ PAPER_CURVES = {"target.separation": ("Fig. 3", "fig-3-separation"),
 
 
 def _curve_rows(run: RunData) -> list[dict[str, Any]]:
-    """Fig. 3 / Fig. 4 / abstract claims, for each such axis swept over at least 2 values
-    with both of the paper's methods run."""
+    """Fig. 3 / Fig. 4 / abstract claims per such axis swept over 2+ values, both methods run."""
     trials, out = run.trials, []
     if not set(PAPER_PAIR) <= set(trials["algorithm"]):
         return out
