@@ -38,8 +38,7 @@ _SUMMED_UP = {"binary": "0/1, Wilson interval", "mean": "mean, t interval",
 
 
 def print_experiment(exp: Experiment, width: int | None = None) -> None:
-    """Parameters, metrics, algorithms and figures of ``exp``: each name on its own line in
-    full, its description wrapped below it to ``width`` (default: the terminal's)."""
+    """Parameters, metrics, algorithms and figures of ``exp``, each name in full on its own line."""
     width = width or shutil.get_terminal_size().columns
     out = _Wrapper(width)
     out.line(f"{exp.name}: {exp.title}")

@@ -152,8 +152,7 @@ def plain_line(label: str, done: int, total: int, rate: float) -> str:
 
 
 class PhaseLog:
-    """Announces the phases after the last trial on standard error, one line each, with the
-    time the previous phase took: pass it as the runner's ``on_phase``."""
+    """Announces each phase after the last trial on stderr with the previous phase's time."""
 
     def __init__(self, label: str, enabled: bool = True,
                  write: Callable[[str], None] | None = None):

@@ -46,8 +46,7 @@ def read_trials(path: Path) -> pd.DataFrame:
 
 def chunks(path: Path, chunk_rows: int = CHUNK_ROWS,
            columns: Iterable[str] | None = None) -> Iterator[pd.DataFrame]:
-    """``path`` (CSV or Parquet) in consecutive chunks of at most ``chunk_rows`` rows,
-    only ``columns`` when given (those present); a CSV with no text yields nothing."""
+    """``path`` (CSV or Parquet) in chunks of <= ``chunk_rows`` rows, only ``columns`` if given."""
     import pandas as pd
     wanted = None if columns is None else set(columns)
     if path.suffix == ".parquet":

@@ -72,8 +72,7 @@ def _local_links(tokens: list[Token], rendered: set[str]) -> None:
 
 
 def render_note(text: str, title: str, rendered: set[str], back: str) -> str:
-    """One note (Markdown ``text``) as a standalone HTML page titled ``title``, linking to
-    the other ``rendered`` notes (file names) and ``back`` to the report."""
+    """One note (Markdown ``text``) as an HTML page linking to the other ``rendered`` notes."""
     md = MarkdownIt("commonmark").enable("table")
     tokens = md.parse(text)
     _heading_ids(tokens)

@@ -22,8 +22,7 @@ def unit_text(unit: str) -> str:
 
 
 def axis_label(label: str, unit: str, percent: bool = False, scale: str = "") -> str:
-    """``label (unit)`` for an axis: ``percent`` writes ``%``, a ``scale`` other than linear
-    is named after the unit (``targets (count, log scale)``)."""
+    """``label (unit)`` for an axis, ``%`` for ``percent``, a non-linear ``scale`` named too."""
     shown = "%" if percent else unit_text(unit)
     inside = ", ".join(part for part in (shown, f"{scale} scale" if scale else "") if part)
     return f"{label} ({inside})" if inside else label

@@ -101,8 +101,7 @@ def sigma_of(params: dict[str, Any]) -> float:
 
 def score(partner1: np.ndarray, partner2: np.ndarray, truth1: np.ndarray,
           truth2: np.ndarray) -> dict[str, float]:
-    """Accuracy, pair precision/recall and correctness of ``partner1`` (m1,), ``partner2`` (m2,)
-    (-1 = dummy) against ``truth1``, ``truth2``."""
+    """Accuracy, pair precision/recall and correctness of ``partner1``, ``partner2`` (-1: dummy)."""
     n_meas = len(partner1) + len(partner2)
     hits = int(np.sum(partner1 == truth1) + np.sum(partner2 == truth2))
     declared = int(np.sum(partner1 >= 0))
