@@ -21,7 +21,7 @@ def ignore_ctrl_c() -> None:
 
 
 def setup_child(main_pid: int) -> None:
-    """A pool worker's or drawing process's start: ignore Ctrl-C, end when ``main_pid`` ends."""
+    """A child process's start: ignore Ctrl-C, end when ``main_pid`` ends."""
     ignore_ctrl_c()
     threading.Thread(target=_exit_with, args=(main_pid,), name="trackfuse-exit-with-main",
                      daemon=True).start()

@@ -107,8 +107,7 @@ def worker_environment(experiment: Experiment) -> dict[str, Any]:
 
 def environment_difference(code: str, libraries: dict[str, str | None],
                            found: dict[str, Any]) -> str | None:
-    """How a worker's :func:`worker_environment` ``found`` differs from this run's ``code``
-    digest and ``libraries`` versions, in words; ``None`` when it computes the same."""
+    """How a worker's ``found`` environment differs from this run's, in words, or ``None``."""
     if found.get("code") != code:
         return "runs other trackfuse code (another version or edited source)"
     theirs = found.get("libraries") or {}

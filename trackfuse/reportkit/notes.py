@@ -35,8 +35,7 @@ def notes_folder() -> Path | None:
 
 
 def slug(text: str) -> str:
-    """GitHub's id of a heading: lower case, punctuation other than ``-`` and ``_``
-    dropped, each space a ``-`` (``"W001-2 radar TDOA"`` -> ``"w001-2-radar-tdoa"``)."""
+    """GitHub's id of a heading (``"W001-2 radar TDOA"`` -> ``"w001-2-radar-tdoa"``)."""
     return re.sub(r"[^\w\- ]", "", text.strip().lower()).replace(" ", "-")
 
 

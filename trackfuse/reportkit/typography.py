@@ -11,8 +11,7 @@ WORDS = {"sqrt": "√", "sigma": "σ", "deg": "°"}
 
 
 def unit_text(unit: str) -> str:
-    """The printed form of a declared unit: ``"1"`` and ``""`` print as nothing,
-    ``^2`` as a superscript, ``sqrt``/``sigma`` as symbols (``"m^2/s^4"`` -> ``"m²/s⁴"``)."""
+    """The printed form of a declared unit (``"m^2/s^4"`` -> ``"m²/s⁴"``, ``"1"`` -> nothing)."""
     if unit in ("", "1"):
         return ""
     text = re.sub(r"\^(-?\d+)", lambda m: m.group(1).translate(SUPERSCRIPTS), unit)
