@@ -41,8 +41,7 @@ def shown_unit(unit: str) -> str:
 
 
 def interval_text(low: float, high: float, signed: bool = False) -> str:
-    """A 95 % interval in three significant figures: ``71.7–79.2``, or ``−3.90 to +7.00``
-    when an end is negative (or ``signed``); ``""`` when an end is NaN."""
+    """A 95 % interval to 3 significant figures: ``71.7–79.2``, ``−3.90 to +7.00``; NaN: ``""``."""
     if pd_isna(low) or pd_isna(high):
         return ""
     if low >= 0 and high >= 0 and not signed:

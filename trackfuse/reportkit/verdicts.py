@@ -110,8 +110,7 @@ def printed_decimals(printed: float) -> int:
 
 
 def as_printed_verdict(ours: float, printed: float) -> Verdict:
-    """Our exact ``ours`` against the paper's ``printed`` value (rule 4): "agrees" when ours,
-    rounded half up to the printed decimals (as a table is printed), is the printed value."""
+    """Our exact ``ours`` against the paper's ``printed`` (rule 4): rounded half up as printed."""
     decimals = printed_decimals(printed)
     step = Decimal(1).scaleb(-decimals)
     rounded = float(Decimal(repr(float(ours))).quantize(step, rounding=ROUND_HALF_UP))
@@ -133,8 +132,8 @@ COMBINED = (DIFFERS, INCONCLUSIVE, AGREES, NOT_COMPARABLE)
 
 
 def combined(words: Sequence[str]) -> str:
-    """One verdict for a claim about every one of several rows: ``differs`` if any differs,
-    else ``inconclusive`` if any is, else ``agrees`` if any does, else ``not comparable``."""
+    """One verdict over several rows: ``differs`` if any is, else ``inconclusive``, else
+    ``agrees``, else ``not comparable``."""
     return next((w for w in COMBINED if w in words), NOT_COMPARABLE)
 
 

@@ -45,8 +45,7 @@ PAPER_PAIR = ("improved", "traditional")
 
 
 def at_paper_setting(params: Mapping[str, Any]) -> bool:
-    """Whether a point's params are the paper's Table 3 setting and scene
-    (:data:`PAPER_TABLE3_SETTING`, :data:`PAPER_SCENARIO`): where its 74.0 % / 55.2 % apply."""
+    """Whether a point is at the paper's Table 3 setting and scene (its 74.0 % / 55.2 %)."""
     setting = {**PAPER_TABLE3_SETTING, **PAPER_SCENARIO}
     return all(np.isclose(float(params[k]), v) for k, v in setting.items())
 
