@@ -39,6 +39,7 @@ import sys
 import tempfile
 import threading
 import time
+from collections.abc import Callable
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -123,12 +124,15 @@ def timed(argv: list[str], out: Path) -> dict:
     if code != 0:
         raise SystemExit(f"{argv[:3]} failed with exit status {code}")
     text = report.read_text()
-    maxrss = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", text).group(1))
+    def field(name: str) -> float:
+        return float(re.search(rf"{name}: ([0-9.]+)", text).group(1))
     peaks = sorted(((rss / 2**20, role) for rss, role in sampler.peaks.values()
                     if role != "time"), reverse=True)
     return {"wall_s": wall, "load_before": load0, "load_after": os.getloadavg()[0],
             "load_mean": sum(sampler.loads) / max(len(sampler.loads), 1),
-            "max_rss_mib": maxrss / 1024, "process_peaks_mib": peaks,
+            "cpu_s": field(r"User time \(seconds\)") + field(r"System time \(seconds\)"),
+            "max_rss_mib": field(r"Maximum resident set size \(kbytes\)") / 1024,
+            "process_peaks_mib": peaks,
             "peak_disk_bytes": max(sampler.disk, folder_bytes(out))}
 
 
@@ -175,8 +179,9 @@ def to_parquet(folder: Path) -> dict:
             "parquet_s": measured["wall_s"], "parquet_rss_mib": measured["max_rss_mib"]}
 
 
-def measure(total: int, resume: bool, scratch: Path) -> dict:
-    """Every figure of one size (``total`` trials, rounded to a multiple of 16)."""
+def measure(total: int, resume: bool, scratch: Path, save: Callable[[dict], None]) -> None:
+    """Every figure of one size (``total`` trials, rounded to a multiple of 16), saved as
+    each step ends (a run of 10^6 trials takes an hour or more on a shared machine)."""
     per_level = max(1, round(total / LEVELS))
     out = Path(tempfile.mkdtemp(prefix=f"scale{total}-", dir=scratch))
     record = {"trials": per_level * LEVELS, "per_level": per_level,
@@ -186,6 +191,7 @@ def measure(total: int, resume: bool, scratch: Path) -> dict:
     record["csv_bytes"] = (folder / "trials.csv").stat().st_size
     with open(folder / "trials.csv", "rb") as fh:
         record["rows"] = sum(1 for _ in fh) - 1
+    save(record)
     if resume:
         other = Path(tempfile.mkdtemp(prefix=f"resume{total}-", dir=scratch))
         record.update(killed_and_resumed(per_level, other))
@@ -193,19 +199,37 @@ def measure(total: int, resume: bool, scratch: Path) -> dict:
         record["resume_identical"] = all(identical(folder / n, again / n)
                                          for n in ("trials.csv", "summary.csv"))
         subprocess.run(["rm", "-rf", str(other)], check=True)
+        save(record)
     record.update(to_parquet(folder))
+    save(record)
     subprocess.run(["rm", "-rf", str(out)], check=True)
-    return record
 
 
-def fit(records: list[dict]) -> tuple[float, float]:
-    """Least-squares (start-up s, s per trial) of wall = a + b x trials."""
-    xs = [r["trials"] for r in records]
-    ys = [r["wall_s"] for r in records]
-    mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
-    spread = sum((x - mx) ** 2 for x in xs)
-    b = sum((x - mx) * (y - my) for x, y in zip(xs, ys, strict=True)) / spread
-    return my - b * mx, b
+def saver(path: Path) -> Callable[[dict], None]:
+    """A function that writes a record into the JSON lines at ``path``, replacing the
+    record of the same number of trials."""
+    def save(record: dict) -> None:
+        kept = [r for r in read_records(path) if r["trials"] != record["trials"]]
+        path.write_text("".join(json.dumps(r) + "\n" for r in [*kept, record]))
+    return save
+
+
+def read_records(path: Path) -> list[dict]:
+    """The records at ``path`` (none if it does not exist)."""
+    if not path.exists():
+        return []
+    return [json.loads(line) for line in path.read_text().splitlines() if line]
+
+
+def fit(records: list[dict], key: str = "wall_s") -> tuple[float, float]:
+    """``(start-up s, s per trial)`` of ``key`` = a + b x trials, fitted to the records by
+    least squares on the relative residuals (each point's error as a share of its value)."""
+    import numpy as np
+    trials = np.array([r["trials"] for r in records], float)
+    seconds = np.array([r[key] for r in records], float)
+    design = np.column_stack([np.ones_like(trials), trials]) / seconds[:, None]
+    (a, b), *_ = np.linalg.lstsq(design, np.ones_like(trials), rcond=None)
+    return float(a), float(b)
 
 
 def figure(records: list[dict], png: Path) -> None:
@@ -213,25 +237,32 @@ def figure(records: list[dict], png: Path) -> None:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import numpy as np
     records = sorted(records, key=lambda r: r["trials"])
     n = [r["trials"] for r in records]
-    a, b = fit(records)
-    fig, axes = plt.subplots(1, 3, figsize=(7.16, 2.4), layout="constrained")
-    axes[0].loglog(n, [r["wall_s"] for r in records], "o", label="measured")
-    line = [min(n), max(n)]
-    axes[0].loglog(line, [a + b * x for x in line], "-", lw=0.8,
-                   label=f"{a:.1f} s + {b * 1e3:.2f} ms/trial")
-    axes[0].set(xlabel="trials", ylabel="wall time (s)", title="time")
+    fig, axes = plt.subplots(1, 3, figsize=(7.16, 2.5), layout="constrained")
+    line = np.geomspace(min(n), max(n), 50)
+    timed = [r for r in records if "cpu_s" in r]
+    for key, name, mark, these in (("wall_s", "wall", "o", records),
+                                   ("cpu_s", "CPU", "s", timed)):
+        if len(these) < 2:
+            continue
+        a, b = fit(these, key)
+        dots = axes[0].loglog([r["trials"] for r in these], [r[key] for r in these], mark,
+                              label=f"{name}: {a:.0f} s + {b * 1e3:.2f} ms/trial")
+        axes[0].loglog(line, a + b * line, "-", lw=0.8, color=dots[0].get_color())
+    axes[0].set(xlabel="trials", ylabel="seconds", title="time")
     axes[1].semilogx(n, [r["process_peaks_mib"][0][0] for r in records], "o-",
                      label="largest process")
     axes[1].semilogx(n, [sum(p for p, _ in r["process_peaks_mib"]) for r in records], "s--",
-                     label="all processes")
+                     label="sum of the processes' peaks")
     axes[1].set(xlabel="trials", ylabel="peak RSS (MiB)", title="memory", ylim=(0, None))
     axes[2].loglog(n, [r["csv_bytes"] / 1e6 for r in records], "o-", label="trials.csv")
     axes[2].loglog(n, [r["peak_disk_bytes"] / 1e6 for r in records], "^:",
                    label="run folder, peak")
-    axes[2].loglog(n, [r["parquet_bytes"] / 1e6 for r in records], "s--",
-                   label="trials.parquet")
+    converted = [r for r in records if "parquet_bytes" in r]
+    axes[2].loglog([r["trials"] for r in converted],
+                   [r["parquet_bytes"] / 1e6 for r in converted], "s--", label="trials.parquet")
     axes[2].set(xlabel="trials", ylabel="MB", title="disk")
     for ax in axes:
         ax.legend(fontsize=6, frameon=False)
@@ -243,6 +274,12 @@ def report(records: list[dict]) -> None:
     """One line a size, and each size's deviation from the fitted line."""
     a, b = fit(records) if len(records) > 1 else (0.0, 0.0)
     print(f"fit: wall = {a:.2f} s + trials x {b * 1e3:.3f} ms")
+    timed = [r for r in records if "cpu_s" in r]
+    if len(timed) > 1:
+        c, d = fit(timed, "cpu_s")
+        off = [f"{r['trials']:,d}: {(r['cpu_s'] / (c + d * r['trials']) - 1) * 100:+.1f} %"
+               for r in timed]
+        print(f"fit: CPU = {c:.2f} s + trials x {d * 1e3:.3f} ms; {', '.join(off)}")
     for r in sorted(records, key=lambda r: r["trials"]):
         model = a + b * r["trials"]
         peaks = ", ".join(f"{role} {mib:.0f}" for mib, role in r["process_peaks_mib"])
@@ -253,8 +290,20 @@ def report(records: list[dict]) -> None:
               f"{r['load_mean']:.1f}/{r['load_after']:.1f}): {r['wall_s']:.1f} s "
               f"(fit {(r['wall_s'] / model - 1) * 100 if model > 0 else 0:+.1f} %); peak RSS "
               f"MiB {peaks}; csv {r['csv_bytes'] / 1e6:.1f} MB, folder peak "
-              f"{r['peak_disk_bytes'] / 1e6:.1f} MB, parquet {r['parquet_bytes'] / 1e6:.1f} MB "
-              f"({r['parquet_s']:.1f} s, {r['parquet_rss_mib']:.0f} MiB){resume}")
+              f"{r['peak_disk_bytes'] / 1e6:.1f} MB{parquet(r)}{resume}")
+
+
+def cpu(record: dict) -> str:
+    """`` (CPU s of the whole process tree)`` of a record, if measured."""
+    return f" ({record['cpu_s']:.0f} CPU-s)" if "cpu_s" in record else ""
+
+
+def parquet(record: dict) -> str:
+    """``, parquet SIZE (TIME, MEMORY)`` of a record, if its CSV was converted."""
+    if "parquet_bytes" not in record:
+        return ""
+    return (f", parquet {record['parquet_bytes'] / 1e6:.1f} MB ({record['parquet_s']:.1f} s, "
+            f"{record['parquet_rss_mib']:.0f} MiB)")
 
 
 def main() -> None:
@@ -263,17 +312,14 @@ def main() -> None:
     parser.add_argument("--sizes", type=int, nargs="+", default=[1000, 10_000, 100_000])
     parser.add_argument("--resume", type=int, nargs="*", default=[10_000],
                         help="sizes whose run is also killed at half-way and resumed")
-    parser.add_argument("--record", type=Path, required=True, help="JSON lines, appended")
+    parser.add_argument("--record", type=Path, required=True, help="JSON lines, one a size")
     parser.add_argument("--scratch", type=Path, default=Path(tempfile.gettempdir()))
     parser.add_argument("--png", type=Path)
     args = parser.parse_args()
     if args.action == "run":
         for total in args.sizes:
-            record = measure(total, total in args.resume, args.scratch)
-            with args.record.open("a") as fh:
-                fh.write(json.dumps(record) + "\n")
-            report([record])
-    records = [json.loads(line) for line in args.record.read_text().splitlines() if line]
+            measure(total, total in args.resume, args.scratch, saver(args.record))
+    records = read_records(args.record)
     report(records)
     if args.png is not None:
         figure(records, args.png)
