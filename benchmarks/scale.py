@@ -2,8 +2,9 @@
 
 Runs the orbit scenario (``configs/twin_sensor_orbit.yaml``: 16 clutter levels, 20 scans a
 trial) with two algorithms (nearest neighbour and parallel PDA, both MGEKF; 40 per-scan rows
-a trial) as ``trackfuse run --workers 2 --no-plots`` under ``/usr/bin/time -v``, for each
-``--sizes`` total number of trials (16 x the trials per level, so 1,000 is rounded to 992).
+a trial) as ``trackfuse run --workers 2 --no-plots`` under ``/usr/bin/time -v`` (with
+``--executor dask``: on a dask LocalCluster of 2 workers), for each ``--sizes`` total number
+of trials (16 x the trials per level, so 1,000 is rounded to 992).
 For each size it records, as one JSON line in ``--record``:
 
 * wall seconds and the 1-minute load average before and after (the machine is shared),
@@ -51,10 +52,14 @@ ALGORITHMS = "algorithms=[nn/mgekf,mspda_parallel/mgekf]"
 TRACKFUSE = str(Path(sys.executable).with_name("trackfuse"))
 
 
+EXECUTOR = ["--executor", "process"]  # --executor dask: a 2-worker dask LocalCluster
+
+
 def command(per_level: int, out: Path) -> list[str]:
     """The measured ``trackfuse run`` of ``per_level`` trials at each clutter level."""
     return [TRACKFUSE, "run", "twin_sensor_orbit", "--trials", str(per_level), "--set",
-            ALGORITHMS, "--workers", "2", "--out", str(out), "--no-plots", "--no-progress"]
+            ALGORITHMS, "--workers", "2", *EXECUTOR, "--out", str(out), "--no-plots",
+            "--no-progress"]
 
 
 def folder_bytes(folder: Path) -> int:
@@ -315,7 +320,9 @@ def main() -> None:
     parser.add_argument("--record", type=Path, required=True, help="JSON lines, one a size")
     parser.add_argument("--scratch", type=Path, default=Path(tempfile.gettempdir()))
     parser.add_argument("--png", type=Path)
+    parser.add_argument("--executor", choices=["process", "dask"], default="process")
     args = parser.parse_args()
+    EXECUTOR[1] = args.executor
     if args.action == "run":
         for total in args.sizes:
             measure(total, total in args.resume, args.scratch, saver(args.record))
