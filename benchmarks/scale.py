@@ -73,12 +73,14 @@ def folder_bytes(folder: Path) -> int:
 
 
 class Sampler(threading.Thread):
-    """Peak RSS of each process under ``pid`` (bytes, by pid) and peak bytes under ``out``."""
+    """Peak RSS and last-seen CPU seconds of each process under ``pid`` (by pid), and peak
+    bytes under ``out``."""
 
     def __init__(self, pid: int, out: Path):
         super().__init__(daemon=True)
         self.root, self.out, self.stop = psutil.Process(pid), out, threading.Event()
         self.peaks: dict[int, tuple[int, str]] = {}
+        self.cpu: dict[int, float] = {}
         self.disk, self.loads = 0, []
 
     def role(self, proc: psutil.Process) -> str:
@@ -103,6 +105,7 @@ class Sampler(threading.Thread):
                 for proc in [self.root, *self.root.children(recursive=True)]:
                     with contextlib.suppress(psutil.Error):
                         rss = proc.memory_info().rss
+                        self.cpu[proc.pid] = sum(proc.cpu_times()[:2])
                         old = self.peaks.get(proc.pid)
                         if old is None or rss > old[0]:
                             self.peaks[proc.pid] = (rss, old[1] if old else self.role(proc))
@@ -138,6 +141,9 @@ def timed(argv: list[str], out: Path) -> dict:
             "cpu_s": field(r"User time \(seconds\)") + field(r"System time \(seconds\)"),
             "max_rss_mib": field(r"Maximum resident set size \(kbytes\)") / 1024,
             "process_peaks_mib": peaks,
+            "process_cpu_s": sorted(((cpu, sampler.peaks[pid][1]) for pid, cpu in
+                                     sampler.cpu.items() if sampler.peaks[pid][1] != "time"),
+                                    reverse=True),
             "peak_disk_bytes": max(sampler.disk, folder_bytes(out))}
 
 
