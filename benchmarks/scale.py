@@ -7,7 +7,9 @@ a trial) as ``trackfuse run --workers 2 --no-plots`` under ``/usr/bin/time -v`` 
 of trials (16 x the trials per level, so 1,000 is rounded to 992).
 For each size it records, as one JSON line in ``--record``:
 
-* wall seconds and the 1-minute load average before and after (the machine is shared),
+* wall seconds and the 1-minute load average before, during (mean) and after, and CPU
+  seconds of every process (the machine is shared: CPU seconds are what the load does not
+  stretch),
 * peak resident memory of every process of the run's tree (sampled every 0.2 s; the command,
   the fork server, the two workers), and the largest single process as the kernel counts it,
 * disk: ``trials.csv``, the run folder's peak while running (parts plus merged file), and
@@ -138,7 +140,6 @@ def timed(argv: list[str], out: Path) -> dict:
                     if role != "time"), reverse=True)
     return {"wall_s": wall, "load_before": load0, "load_after": os.getloadavg()[0],
             "load_mean": sum(sampler.loads) / max(len(sampler.loads), 1),
-            "cpu_s": field(r"User time \(seconds\)") + field(r"System time \(seconds\)"),
             "max_rss_mib": field(r"Maximum resident set size \(kbytes\)") / 1024,
             "process_peaks_mib": peaks,
             "process_cpu_s": sorted(((cpu, sampler.peaks[pid][1]) for pid, cpu in
@@ -229,7 +230,11 @@ def read_records(path: Path) -> list[dict]:
     """The records at ``path`` (none if it does not exist)."""
     if not path.exists():
         return []
-    return [json.loads(line) for line in path.read_text().splitlines() if line]
+    records = [json.loads(line) for line in path.read_text().splitlines() if line]
+    for record in records:  # CPU of the whole tree: /usr/bin/time misses the pool's workers
+        if "process_cpu_s" in record:
+            record["cpu_s"] = sum(cpu for cpu, _ in record["process_cpu_s"])
+    return records
 
 
 def fit(records: list[dict], key: str = "wall_s") -> tuple[float, float]:
@@ -281,32 +286,34 @@ def figure(records: list[dict], png: Path) -> None:
     fig.savefig(png, dpi=200)
 
 
+def deviations(records: list[dict], key: str) -> dict[int, float]:
+    """Each record's ``key`` against the fitted start-up + per-trial line, in percent, by
+    trials (printed with the fit)."""
+    a, b = fit(records, key)
+    print(f"fit: {key} = {a:.2f} s + trials x {b * 1e3:.4f} ms")
+    return {r["trials"]: (r[key] / (a + b * r["trials"]) - 1) * 100 for r in records}
+
+
 def report(records: list[dict]) -> None:
-    """One line a size, and each size's deviation from the fitted line."""
-    a, b = fit(records) if len(records) > 1 else (0.0, 0.0)
-    print(f"fit: wall = {a:.2f} s + trials x {b * 1e3:.3f} ms")
+    """One line a size, with its deviations from the fitted lines (two sizes or more)."""
+    records = sorted(records, key=lambda r: r["trials"])
     timed = [r for r in records if "cpu_s" in r]
-    if len(timed) > 1:
-        c, d = fit(timed, "cpu_s")
-        off = [f"{r['trials']:,d}: {(r['cpu_s'] / (c + d * r['trials']) - 1) * 100:+.1f} %"
-               for r in timed]
-        print(f"fit: CPU = {c:.2f} s + trials x {d * 1e3:.3f} ms; {', '.join(off)}")
-    for r in sorted(records, key=lambda r: r["trials"]):
-        model = a + b * r["trials"]
-        peaks = ", ".join(f"{role} {mib:.0f}" for mib, role in r["process_peaks_mib"])
+    wall = deviations(records, "wall_s") if len(records) > 1 else {}
+    cpu = deviations(timed, "cpu_s") if len(timed) > 1 else {}
+    for r in records:
+        shown = [(mib, role) for mib, role in r["process_peaks_mib"] if mib >= 5]
+        peaks = ", ".join(f"{role} {mib:.0f}" for mib, role in shown)
+        used = ", ".join(f"{role} {s:.1f}" for s, role in r.get("process_cpu_s", []) if s >= 0.1)
         resume = (f"; resume after kill -9 at {r['parts_at_kill']} parts: "
                   f"{'identical' if r['resume_identical'] else 'DIFFERENT'}"
                   if "resume_identical" in r else "")
         print(f"{r['trials']:>9,d} trials ({r['date']}, load {r['load_before']:.1f}/"
-              f"{r['load_mean']:.1f}/{r['load_after']:.1f}): {r['wall_s']:.1f} s "
-              f"(fit {(r['wall_s'] / model - 1) * 100 if model > 0 else 0:+.1f} %); peak RSS "
-              f"MiB {peaks}; csv {r['csv_bytes'] / 1e6:.1f} MB, folder peak "
+              f"{r['load_mean']:.1f}/{r['load_after']:.1f}): wall {r['wall_s']:.1f} s"
+              f" ({wall.get(r['trials'], 0):+.1f} %)"
+              + (f", CPU {r['cpu_s']:.1f} s ({cpu.get(r['trials'], 0):+.1f} %): {used}"
+                 if "cpu_s" in r else "")
+              + f"; peak RSS MiB {peaks}; csv {r['csv_bytes'] / 1e6:.1f} MB, folder peak "
               f"{r['peak_disk_bytes'] / 1e6:.1f} MB{parquet(r)}{resume}")
-
-
-def cpu(record: dict) -> str:
-    """`` (CPU s of the whole process tree)`` of a record, if measured."""
-    return f" ({record['cpu_s']:.0f} CPU-s)" if "cpu_s" in record else ""
 
 
 def parquet(record: dict) -> str:
