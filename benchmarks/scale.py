@@ -10,9 +10,11 @@ For each size it records, as one JSON line in ``--record``:
 * wall seconds and the 1-minute load average before, during (mean) and after, and CPU
   seconds of every process (the machine is shared: CPU seconds are what the load does not
   stretch),
-* peak resident memory of every process of the run's tree (sampled every 0.2 s; the command,
-  the fork server, the two workers), and the largest single process as the kernel counts it,
-* disk: ``trials.csv``, the run folder's peak while running (parts plus merged file), and
+* peak resident memory of every process of the run's tree (sampled every 0.2 s: the
+  command, the fork server, the two workers), and the largest single process as the kernel
+  counts it,
+* disk: ``trials.csv``, the run folder's peak while running (parts plus merged file; sampled
+  every 5 s), and
   ``trials.parquet`` written from that CSV by :func:`trackfuse.store.write_parquet` (what
   ``outputs.store: parquet`` runs at the end of a run), with the conversion's time and memory,
 * for sizes in ``--resume``: a second run killed with SIGKILL (the whole process group) once
@@ -111,7 +113,7 @@ class Sampler(threading.Thread):
                         old = self.peaks.get(proc.pid)
                         if old is None or rss > old[0]:
                             self.peaks[proc.pid] = (rss, old[1] if old else self.role(proc))
-            if tick % 10 == 0:
+            if tick % 25 == 0:  # every 5 s: walking 10^4 parts costs CPU the run shares
                 self.disk = max(self.disk, folder_bytes(self.out))
                 self.loads.append(os.getloadavg()[0])
             tick += 1
