@@ -4,7 +4,7 @@ pyproject.toml).
 After the package files are copied into the build tree, ``python -m trackfuse.precompile``
 runs on them, so numba's on-disk cache (``__pycache__/*.nbi, *.nbc`` beside each kernel
 module) is packed with them and the first run after ``pip install .`` loads the kernels
-instead of compiling them (docs/benchmarks.md, "First run and whole trial"). An editable
+instead of compiling them (docs/benchmarks.md, "First run after installing"). An editable
 install compiles on first use instead; a kernel that fails to compile here only warns: it
 compiles on first use.
 """
