@@ -16,6 +16,7 @@ from conftest import trackfuse
 from trackfuse import harness
 from trackfuse.config import SET, ConfigError, load
 from trackfuse.experiments.base import Metric
+from trackfuse.runfiles import read_run
 from trackfuse.stats import rmse_intervals
 from trackfuse.summary import summarize
 
@@ -92,8 +93,9 @@ def test_plot_and_compare_find_the_plugin_from_the_run_wherever_they_run(plugin_
         ran = trackfuse("run", "rms.yaml", f"sigma={sigma}", "--out", out, "--no-plots",
                         "--no-progress", "--workers", "1", cwd=plugin_folder)
         assert ran.returncode == 0, ran.stderr
-    base, new = sorted((out / "rms").iterdir(), key=lambda p: json.loads(
-        (p / "manifest.json").read_text())["started"])
+    # by sigma: two runs can start within the manifest's one-second resolution
+    base, new = sorted((out / "rms").iterdir(),
+                       key=lambda p: float(read_run(p).config["params"]["sigma"]))
     assert json.loads((base / "manifest.json").read_text())["plugin_folder"] == \
         str(plugin_folder.resolve())
     elsewhere = tmp_path / "elsewhere"
