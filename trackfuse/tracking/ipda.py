@@ -26,11 +26,9 @@ from trackfuse.tracking.pda import (
     Linearized,
     Moments,
     _copy_state,
-    _geometry,
-    _in_gate,
     _linearize,
+    _observe,
     _pair_update,
-    _place_returns,
     _predict,
     _single_update,
     _symmetrize_and_check,
@@ -87,15 +85,12 @@ def _ipda_batch(x0, P0, F, Q, sensor_pos, R, P_D, los, z_target, detected, clutt
                 psi_out[n, k] = np.nan
                 continue
             _predict(X, P, F, Q, Xp, Pp)
-            inside = False
+            inside_out[n, k] = _observe(
+                Xp, Pp, sensor_pos[k], R, los[n, k], z_target[n, k], detected[n, k],
+                clutter[n, k], clutter_ok[n, k], gamma, in_gate, clutter_mean, window_density,
+                lin, z, valid, lam_true)
             for s in range(S):
-                _geometry(Xp, Pp, sensor_pos[k, s], R[s], lin, s)
-                inside |= _in_gate(los[n, k, s], lin, s, gamma)
-                lam_true[s] = _place_returns(
-                    z_target[n, k, s], detected[n, k, s], clutter[n, k, s], clutter_ok[n, k, s],
-                    gamma, in_gate, clutter_mean, window_density, lin, s, z[s], valid[s])
                 _linearize(z[s], valid[s], lam_true[s], gamma, mgekf, nonparametric, lin, s)
-            inside_out[n, k] = inside
             if S == 2:
                 b_null = _pair_update(Xp, Pp, R, P_D, P_G, PARALLEL, joint_full, mg_combined,
                                       lin, mom, X, P)

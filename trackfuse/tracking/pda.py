@@ -73,14 +73,10 @@ def _filter_batch(x0, P0, F, Q, sensor_pos, R, P_D, los, z_target, detected, clu
                 X_out[n, k], P_out[n, k], m_out[n, k], inside_out[n, k] = np.nan, np.nan, 0, False
                 continue
             _predict(X, P, F, Q, Xp, Pp)
-            inside = False
-            for s in range(S):
-                _geometry(Xp, Pp, sensor_pos[k, s], R[s], lin, s)
-                inside |= _in_gate(los[n, k, s], lin, s, gamma)
-                lam_true[s] = _place_returns(
-                    z_target[n, k, s], detected[n, k, s], clutter[n, k, s], clutter_ok[n, k, s],
-                    gamma, in_gate, clutter_mean, window_density, lin, s, z[s], valid[s])
-            inside_out[n, k] = inside
+            inside_out[n, k] = _observe(
+                Xp, Pp, sensor_pos[k], R, los[n, k], z_target[n, k], detected[n, k],
+                clutter[n, k], clutter_ok[n, k], gamma, in_gate, clutter_mean, window_density,
+                lin, z, valid, lam_true)
             if pair:
                 for s in range(S):  # the geometry at the prediction is already in place
                     _linearize(z[s], valid[s], lam_true[s], gamma, mgekf, nonparametric, lin, s)
@@ -171,6 +167,21 @@ def _inv2(A, out):
 def _mahalanobis2(n0, n1, Si):
     """``nu' Si nu`` for ``nu = (n0, n1)`` and a 2x2 ``Si``, summed as the oracle does."""
     return (n0 * Si[0, 0] + n1 * Si[1, 0]) * n0 + (n0 * Si[0, 1] + n1 * Si[1, 1]) * n1
+
+
+@njit(**INNER)
+def _observe(Xp, Pp, sensor_pos, R, los, z_target, detected, clutter, clutter_ok, gamma,
+             in_gate, clutter_mean, window_density, lin, z, valid, lam_true):
+    """One scan's geometry at the prediction and returns placed for gating, every sensor
+    (``sensor_pos`` (S, 3), ``los`` (S, 2), ...); True when the target is in some gate."""
+    inside = False
+    for s in range(len(lam_true)):
+        _geometry(Xp, Pp, sensor_pos[s], R[s], lin, s)
+        inside |= _in_gate(los[s], lin, s, gamma)
+        lam_true[s] = _place_returns(
+            z_target[s], detected[s], clutter[s], clutter_ok[s], gamma, in_gate, clutter_mean,
+            window_density, lin, s, z[s], valid[s])
+    return inside
 
 
 @njit(**INNER)
