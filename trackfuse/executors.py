@@ -1,24 +1,11 @@
-"""Where batches run: in this process, in a local process pool, or on a dask cluster.
+"""Where batches run: in this process, a local forkserver process pool, or dask.
 
-Every executor is an :class:`Executor`: its :meth:`~Executor.imap_unordered` yields results
-as batches finish and keeps at most about twice as many batches submitted as there are
-workers, so memory stays flat however many batches there are. Results carry their own
-(point, batch) identity; the runner orders them, so completion order never reaches the
-output files.
-
-* ``serial``: in this process (debugging, profiling, tiny runs).
-* ``process``: :class:`concurrent.futures.ProcessPoolExecutor` with the ``forkserver``
-  start method (safe next to the progress thread; workers import the package once). If a
-  worker dies, the pool is restarted and the unfinished batches are resubmitted. After a
-  trial was interrupted at its time limit (:mod:`trackfuse.trial_guard`), the batches in
-  flight finish and the workers are replaced before the next is submitted.
-* ``dask``: a ``dask.distributed`` client to a running scheduler (``tcp://host:8786`` or a
-  scheduler file, the HPC way) or a LocalCluster started here. The scheduler retries a batch
-  whose worker died (``distributed.scheduler.allowed-failures``). A scheduler file is read
-  here first (it must exist and hold the scheduler's address): dask itself would wait forever
-  for a missing file to appear.
-* a batch system's jobs (:class:`trackfuse.cluster.JobqueueExecutor`): dask on workers
-  that dask-jobqueue starts.
+Every executor is an :class:`Executor` whose :meth:`~Executor.imap_unordered` yields results as
+batches finish, keeping about twice as many batches submitted as there are workers (memory
+stays flat). Results carry their (point, batch) identity, so completion order never reaches the
+output files. A dead pool worker restarts the pool and its batches are resubmitted; dask
+retries on its own; a scheduler file is checked here first (dask would wait forever for a
+missing one). Details: docs/runner.md and docs/cluster.md.
 """
 
 from __future__ import annotations

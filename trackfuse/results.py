@@ -1,31 +1,9 @@
-"""The run folder on disk: atomic files, verified per-batch parts, the merged CSVs, the manifest.
+"""The run folder on disk: atomic files, verified per-batch parts, the merged CSVs.
 
-Layout of ``<out>/<config-stem>/<run-id>/``::
-
-    config.yaml        resolved config (what produced the numbers)
-    manifest.json      provenance, status ("running", "interrupted" or "complete") and, once
-                       complete, the size and SHA-256 of every final file
-    parts/             one trials part and one timings part per finished batch (resume state)
-    trials.csv         tidy rows, merged from the parts in (point, batch) order
-                       (trials.parquet instead with outputs.store: parquet, trackfuse.store)
-    timings.csv        wall/CPU-time columns (``*_time_s``), kept out of trials.csv
-    summary.csv        per point x row keys x metric: n, mean, std, 95 % CI
-    tables/, figures/  experiment reports
-    .lock, .lock.holder.json   the writer's lock (see :mod:`trackfuse.runlock`)
-
-Every file is written to a temporary name in the same folder and renamed into place, so a
-killed process leaves either the old file or the new one, never half of one.
-
-A part starts with one header line recording what it holds and a checksum taken when it was
-written::
-
-    #trackfuse-part 1 point=0 batch=3 first=21 stop=28 rows=14 bytes=812 sha256=<64 hex>
-
-followed by the CSV text. Resume trusts a part only if its header names its own batch and its
-size matches (:meth:`RunFolder.scan_parts`); the merge reads every part in full and checks the
-checksum, that every row has every column, belongs to the part's point and that the trial
-indices are exactly those of the batch (:func:`read_part`). A part that fails either check
-raises :class:`PartDamaged` and is recomputed, never merged.
+Every file is written to a temporary name in its folder and renamed into place, so a killed
+process leaves the old file or the new one, never half of one. A part that fails its header or
+checksum check raises :class:`PartDamaged` and is recomputed, never merged. The folder's layout
+is in docs/outputs.md ("The run folder"); the part header and its checks in docs/runner.md.
 """
 
 from __future__ import annotations

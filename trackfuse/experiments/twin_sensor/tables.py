@@ -1,20 +1,8 @@
-"""Report tables of the twin_sensor experiment (paper 000), and which sweep points and
-algorithms stand for the paper: read from a finished run (:class:`~trackfuse.rundata.RunData`),
-no trial re-run; only the PCRLB references are recomputed from the config
-(:func:`~trackfuse.experiments.twin_sensor.model.bounds`, deterministic and cached).
-
-``final_scan``: per point and algorithm at the last scan, loss (gate and angle rules) and
-inconsistency rates with 95 % Wilson intervals, range RMSE with a 95 % bootstrap-t interval
-beside the clutter-aware square-root PCRLB (truth model and filter model), RMSE over runs not
-lost, signed range bias at scan 1 and at the last scan with 95 % t intervals, position RMSE,
-ANEES and validated returns (mean over all scans). Intervals are numeric ``<q>_ci_low`` /
-``<q>_ci_high`` columns.
-``paired_loss``: every pair of algorithms on the same trials, per point and 0/1 rule: the
-difference of rates with Newcombe's paired interval, the discordant trials, the exact McNemar
-p-value and its Holm adjustment over the pairs of the point and rule.
-``paper_vs_reproduced``: paper 000's Fig. 1 claims and Fig. 2 against this run, in the
-:data:`trackfuse.reports.HEADLINE_COLUMNS` schema, when the run sweeps ``clutter.mean`` at
-the paper's scenario; verdicts by :mod:`trackfuse.reportkit.verdicts`.
+"""Report tables of the twin_sensor experiment (paper 000), read from a finished run, no
+trial re-run (only the PCRLB references are recomputed from the config, deterministic and
+cached): ``final_scan``, ``paired_loss`` and ``paper_vs_reproduced``, whose columns are
+described in docs/papers/twin_sensor.md ("Reproducing"); verdicts by
+:mod:`trackfuse.reportkit.verdicts`.
 """
 
 from __future__ import annotations
@@ -123,17 +111,10 @@ def _bias(rows: pd.DataFrame) -> pd.DataFrame:
 
 
 def final_scan_table(run: RunData) -> pd.DataFrame:
-    """Per point and algorithm at the last scan (lengths in km, rates in %).
-
-    Columns: the three 0/1 rules with 95 % Wilson intervals; range RMSE with its 95 %
-    bootstrap-t interval beside the clutter-aware square-root PCRLB of the truth model and of
-    the filter's ``q``; the same RMSE over runs not lost (gate rule) and position RMSE, with
-    the same intervals; signed range bias at scan 1 and at the last scan with 95 % t
-    intervals; 6-state ANEES beside the 95 % chi-square band a consistent filter's ANEES
-    falls in (``anees_consistent_low/_high``); validated returns per sensor and scan
-    averaged over all scans, with a 95 % t interval over trials. Intervals:
-    ``<column>_ci_low/_ci_high``.
-    """
+    """Per point and algorithm at the last scan (lengths in km, rates in %): loss and
+    inconsistency rates, RMSEs beside the square-root PCRLBs, bias, ANEES and its chi-square
+    band, validated returns; columns in docs/papers/twin_sensor.md ("Reproducing"), every
+    interval as ``<column>_ci_low/_ci_high``."""
     trials = run.trials
     last = last_scan(trials)
     keys = ["point", "algorithm"]
@@ -170,17 +151,10 @@ def final_scan_table(run: RunData) -> pd.DataFrame:
 
 
 def paired_loss_table(run: RunData) -> pd.DataFrame:
-    """Every pair of algorithms on the same trials, per point and 0/1 rule, at the last scan.
-
-    One row per point, rule of :data:`RULES` and pair ``(algorithm_a, algorithm_b)`` in the
-    run's order: the rates of each (``lost_a_pct``, ``lost_b_pct``), ``b_minus_a_pct`` with
-    Newcombe's paired 95 % interval, the discordant trials ``n_a_only`` (flagged for a
-    only) and ``n_b_only``, the two-sided exact McNemar ``mcnemar_p`` and
-    ``mcnemar_p_holm``, Holm's adjustment over the pairs of that point and rule. Every
-    algorithm of a trial sees the same returns (common random numbers), so overlapping
-    marginal Wilson intervals (``final_scan``) do not mean two algorithms do not differ:
-    this table says whether they do. Empty with fewer than two algorithms.
-    """
+    """Every pair of algorithms on the same trials, per point and 0/1 rule of :data:`RULES`, at
+    the last scan: both rates, ``b_minus_a_pct`` with Newcombe's paired 95 % interval, the
+    discordant trials and the exact McNemar p-value with Holm's adjustment over the pairs of
+    that point and rule. Empty with fewer than two algorithms."""
     last = last_scan(succeeded_rows(run.trials))
     keys = swept_keys(run.config)
     out = []
@@ -323,18 +297,10 @@ def _fig2_row(run: RunData, name: str, rows: pd.DataFrame) -> dict[str, Any]:
 
 
 def paper_vs_reproduced(run: RunData) -> pd.DataFrame:
-    """Paper 000's Fig. 1 claims and Fig. 2 against this run (:data:`HEADLINE_COLUMNS`).
-
-    Rows only for sweep points at the paper's scenario (every key of
-    :data:`PAPER_SETTING_KEYS` at its default, which is the paper's value) with
-    ``clutter.mean`` swept over at least two levels; empty otherwise. Per Fig. 1 main
-    algorithm (:func:`main_algorithms`), by the angle rule: claim 1, loss below 5 % up to 9
-    false returns (the fraction of runs lost at any level up to 9, Wilson interval; "agrees"
-    when the interval lies below 5 %, see :func:`_fig1_rows`); claim 2, the curve rises
-    (the highest level against the lowest on the same runs, exact McNemar test, see
-    :func:`_rise_row`).
-    Fig. 2 for the paper's MGEKF: "not comparable", our RMSE set against the bound.
-    """
+    """Paper 000's Fig. 1 claims (:func:`_fig1_rows`) and Fig. 2 against this run
+    (:data:`HEADLINE_COLUMNS`), only for points at the paper's scenario (every key of
+    :data:`PAPER_SETTING_KEYS` at its default) with ``clutter.mean`` swept over at least two
+    levels; empty otherwise. Fig. 2 is "not comparable": our RMSE is set against the bound."""
     if "clutter.mean" not in swept_keys(run.config):
         return pd.DataFrame(columns=list(HEADLINE_COLUMNS))
     last = last_scan(run.trials)
