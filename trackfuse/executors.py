@@ -161,9 +161,19 @@ class ProcessExecutor:
         self._ctx = multiprocessing.get_context("forkserver")
         # this process's children before the pool: an aborted pool ends only its own
         self._other_children = set(multiprocessing.active_children())
-        self._pool = ProcessPoolExecutor(workers, mp_context=self._ctx,
-                                         initializer=setup_child, initargs=(os.getpid(),))
+        self._pool = self._new_pool()
         self._forked = False
+
+    def _new_pool(self) -> ProcessPoolExecutor:
+        """A pool that starts all its workers at its first ``submit``, before its manager
+        thread runs: started one per ``submit`` instead (Python 3.11 does so under the fork
+        server), a worker can start while the manager thread, a worker having died, iterates
+        over the workers or has closed their queue, which prints a traceback (CPython
+        bpo-43498)."""
+        pool = ProcessPoolExecutor(self.workers, mp_context=self._ctx,
+                                   initializer=setup_child, initargs=(os.getpid(),))
+        pool._safe_to_dynamically_spawn_children = False
+        return pool
 
     def loading(self) -> bool:
         """Whether the fork server is still loading (on a first run, compiling) the
@@ -195,6 +205,7 @@ class ProcessExecutor:
             except BrokenProcessPool:
                 restarts += 1
                 if restarts > MAX_POOL_RESTARTS:
+                    self._pool.shutdown(wait=True, cancel_futures=True)  # see _restart
                     raise ExecutorError(
                         f"the worker processes died {restarts} times (out of memory, or "
                         "killed?); the batches they finished are saved: run the same command "
@@ -237,17 +248,17 @@ class ProcessExecutor:
         return renew
 
     def _restart(self) -> None:
-        """A worker died: replace the pool (unfinished batches are resubmitted by the caller)."""
-        self._pool.shutdown(wait=False, cancel_futures=True)
-        self._pool = ProcessPoolExecutor(self.workers, mp_context=self._ctx,
-                                         initializer=setup_child, initargs=(os.getpid(),))
+        """A worker died: replace the pool (unfinished batches are resubmitted by the caller).
+        The broken pool's manager thread ends its workers itself; waiting for it to finish
+        keeps its queue's feeder thread from writing to a pipe already closed."""
+        self._pool.shutdown(wait=True, cancel_futures=True)
+        self._pool = self._new_pool()
 
     def _renew_workers(self) -> None:
         """Replace the idle pool's workers with fresh ones: a trial was interrupted at its
         time limit in one of them, wherever it was (a lock held, a module half set up)."""
         self._end_workers()
-        self._pool = ProcessPoolExecutor(self.workers, mp_context=self._ctx,
-                                         initializer=setup_child, initargs=(os.getpid(),))
+        self._pool = self._new_pool()
 
     def _end_workers(self) -> None:
         """Shut the pool down and end its workers at once (no other child process)."""
