@@ -155,7 +155,8 @@ def test_reports_import_the_science_never_the_reverse():
 LAYERS: list[dict[str, tuple[str, ...]]] = [
     {"foundation": ("trackfuse", "trackfuse.coerce", "trackfuse.regular_files",
                     "trackfuse.safe_yaml", "trackfuse.chi2", "trackfuse.stats",
-                    "trackfuse.sweep", "trackfuse.seeding", "trackfuse.rowformat",
+                    "trackfuse.sweep", "trackfuse.seeding", "trackfuse.spawned_streams",
+                    "trackfuse.rowformat",
                     "trackfuse.sequential", "trackfuse.trial_guard", "trackfuse.progress",
                     "trackfuse.child_processes", "trackfuse.cluster_settings",
                     "trackfuse.forkserver_freeze", "trackfuse.shipped")},

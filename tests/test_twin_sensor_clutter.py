@@ -10,10 +10,10 @@ from scipy import stats
 
 from trackfuse.config import load
 from trackfuse.experiments.twin_sensor import EXPERIMENT
-from trackfuse.experiments.twin_sensor.clutter import nested_poisson
 from trackfuse.experiments.twin_sensor.model import build_scenario, simulate
 from trackfuse.runner import Runner
 from trackfuse.seeding import trial_streams
+from trackfuse.tracking.nested_clutter import nested_poisson
 
 #: False-alarm rate of each statistical check below (deterministic seeds: a fixed outcome,
 #: but a wrong law fails them with near certainty at these sample sizes).

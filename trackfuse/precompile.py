@@ -18,6 +18,7 @@ from trackfuse.association.pga_search import pga
 from trackfuse.association.sd_assignment import solve_sd
 from trackfuse.association.sd_costs import tuple_costs
 from trackfuse.tracking.ipda import run_ipda
+from trackfuse.tracking.nested_clutter import kept_arrivals
 from trackfuse.tracking.pda import run_filter
 
 
@@ -45,6 +46,11 @@ def load_pda_filter() -> None:
     run_filter(*_tiny_batch())
 
 
+def load_clutter_arrivals() -> None:
+    """Run the nested clutter's arrival count (:mod:`trackfuse.tracking.nested_clutter`)."""
+    kept_arrivals(np.full((1, 2, 2, 3), 0.5), 0.5, np.ones(2, dtype=np.bool_))
+
+
 def load_ipda_filter() -> None:
     """Run the IPDA filter (:mod:`trackfuse.tracking.ipda`) on a tiny batch."""
     run_ipda(*_tiny_batch(), SimpleNamespace(persistence=0.98, initial=0.5))
@@ -68,7 +74,8 @@ def load_sd_kernels() -> None:
 def main() -> int:
     """Load every kernel; one that cannot compile here is named on stderr. Returns their number."""
     failed = 0
-    for load in (load_pda_filter, load_ipda_filter, load_pga, load_sd_kernels):
+    for load in (load_pda_filter, load_clutter_arrivals, load_ipda_filter, load_pga,
+                 load_sd_kernels):
         try:
             load()
         except ImportError as error:

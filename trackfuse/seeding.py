@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Collection, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -13,15 +14,30 @@ import numpy as np
 if TYPE_CHECKING:  # only for annotations: workers load no sweep parsing
     from trackfuse.sweep import SweepPoint
 
-_COMMON, _POINT, _GLOBAL = 0, 1, 2
+COMMON_DOMAIN, POINT_DOMAIN, GLOBAL_DOMAIN = 0, 1, 2
+"""First spawn-key word of the common, point and numpy-global streams."""
 
 
 @dataclass(frozen=True)
 class TrialStreams:
-    """The random streams of one trial (see the module docstring)."""
+    """The random streams of trial ``trial`` at draw point ``draw_point`` under root seed
+    ``seed`` (see the module docstring); each generator is made when first used."""
 
-    common: np.random.Generator
-    point: np.random.Generator
+    seed: int
+    draw_point: int
+    trial: int
+
+    @cached_property
+    def common(self) -> np.random.Generator:
+        """The stream shared by every sweep point of the trial."""
+        return np.random.default_rng(np.random.SeedSequence(
+            self.seed, spawn_key=(COMMON_DOMAIN, self.trial)))
+
+    @cached_property
+    def point(self) -> np.random.Generator:
+        """The stream of the trial at its draw point."""
+        return np.random.default_rng(np.random.SeedSequence(
+            self.seed, spawn_key=(POINT_DOMAIN, self.trial, self.draw_point)))
 
 
 def draw_points(points: Sequence[SweepPoint], drawing: Collection[str]) -> list[int]:
@@ -39,15 +55,13 @@ def _hashable(value: Any) -> Any:
 def trial_streams(seed: int, point: int, trial: int) -> TrialStreams:
     """Streams of trial ``trial`` whose point stream is keyed by sweep point ``point`` (the
     runner passes the point's draw point, :func:`draw_points`) under root seed ``seed``."""
-    common = np.random.SeedSequence(seed, spawn_key=(_COMMON, trial))
-    specific = np.random.SeedSequence(seed, spawn_key=(_POINT, trial, point))
-    return TrialStreams(np.random.default_rng(common), np.random.default_rng(specific))
+    return TrialStreams(seed, point, trial)
 
 
 def seed_numpy_global(seed: int, point: int, trial: int) -> None:
     """Seed numpy's global generator for trial ``trial`` of draw point ``point`` from a third
     domain, so a plugin that uses it draws the same numbers on every executor."""
-    state = np.random.SeedSequence(seed, spawn_key=(_GLOBAL, trial, point)).generate_state(1)
+    state = np.random.SeedSequence(seed, spawn_key=(GLOBAL_DOMAIN, trial, point)).generate_state(1)
     np.random.seed(int(state[0]))
 
 

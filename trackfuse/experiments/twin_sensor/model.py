@@ -28,7 +28,6 @@ import numpy as np
 
 from trackfuse.chi2 import chi2_quantile
 from trackfuse.experiments.base import FRACTION, NON_NEGATIVE, Metric, Param
-from trackfuse.experiments.twin_sensor.clutter import nested_poisson
 from trackfuse.experiments.twin_sensor.stonesoup import (
     STONESOUP_ALGORITHMS,
     STONESOUP_PARAMS,
@@ -37,9 +36,11 @@ from trackfuse.experiments.twin_sensor.stonesoup import (
 )
 from trackfuse.rowtable import RowTable
 from trackfuse.seeding import TrialStreams
+from trackfuse.spawned_streams import SharedStream, spawn_shared
 from trackfuse.tracking.initialization import los_prior_covariance, range_cue_sd
 from trackfuse.tracking.ipda_options import ExistenceModel, track_decisions
 from trackfuse.tracking.models import cv_process_noise, cv_transition, wrap
+from trackfuse.tracking.nested_clutter import nested_poisson
 from trackfuse.tracking.pcrlb import (
     information_recursion,
     irf_q2_interp,
@@ -252,7 +253,8 @@ def build_scenario(params: dict[str, Any]) -> Scenario:
                     float(params["clutter.mean"]), float(params["clutter.window"]))
 
 
-def truth_trajectory(sc: Scenario, rng: np.random.Generator | None) -> np.ndarray:
+def truth_trajectory(sc: Scenario, rng: np.random.Generator | SharedStream | None
+                     ) -> np.ndarray:
     """True states ``(K+1, 6)``; CV with process noise ``q_truth`` when ``rng`` is given.
 
     Closed form of ``x(k+1) = F x(k) + G a(k)``: ``v(k) = v0 + T sum_{j<k} a(j)`` and
@@ -297,7 +299,7 @@ def simulate(sc: Scenario, streams: Sequence[TrialStreams]) -> Batch:
     noise, then the clutter, read last so that the clutter level changes nothing else).
     Detections, noise and clutter are drawn for :data:`MAX_SENSORS` sensors, so a one-sensor
     point sees sensor 1's returns of a two-sensor point; the clutter is nested across levels
-    (:mod:`~trackfuse.experiments.twin_sensor.clutter`). Per trial only the random draws run
+    (:mod:`~trackfuse.tracking.nested_clutter`). Per trial only the random draws run
     in a loop; what is computed from them is computed for the whole batch at once (element
     by element, so a trial's numbers do not depend on the batch it is in).
     """
@@ -308,8 +310,7 @@ def simulate(sc: Scenario, streams: Sequence[TrialStreams]) -> Batch:
         x_true[:] = truth_trajectory(sc, None)
     uniform, normal = np.empty((N, K, MAX_SENSORS)), np.empty((N, K, MAX_SENSORS, 2))
     chol, returns = sc.P0_chol, []
-    for n, trial in enumerate(streams):
-        g_truth, g_init, g_returns = trial.common.spawn(3)
+    for n, (g_truth, g_init, g_returns) in enumerate(spawn_shared(streams, 3)):
         if moving:
             x_true[n] = truth_trajectory(sc, g_truth)
         x0[n] = x_true[n, 0] + chol @ g_init.standard_normal(6)

@@ -7,14 +7,16 @@ Each worker then inherits it instead of loading it (about 0.6 s) or compiling it
 from __future__ import annotations
 
 from trackfuse.experiments.twin_sensor.cold_compile import compile_on_two_cores, kernel_cached
-from trackfuse.precompile import load_pda_filter
+from trackfuse.precompile import load_clutter_arrivals, load_pda_filter
 
 
 def load_kernel() -> None:
-    """Load the filter (compiling it on two cores if numba's cache lacks it)."""
+    """Load the filter (compiling it on two cores if numba's cache lacks it) and the clutter
+    simulation's kernel."""
     if not kernel_cached():
         compile_on_two_cores()
     load_pda_filter()
+    load_clutter_arrivals()
 
 
 load_kernel()

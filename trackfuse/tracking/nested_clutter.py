@@ -13,6 +13,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+from numba import njit
+
+from trackfuse.tracking.pda import JIT
 
 
 def nested_poisson(rngs: Sequence[np.random.Generator], mean: float, cells: int,
@@ -47,13 +50,33 @@ def _arrivals(rounds: np.ndarray, mean: float,
               wanted: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
     """Counts ``(N, cells)`` and uniforms ``(2, total)`` of the arrivals below ``mean`` in
     ``rounds`` (N, R, cells, 3), in the ``wanted`` cells (all if ``None``)."""
+    cells = rounds.shape[2]
+    wanted = np.ones(cells, dtype=np.bool_) if wanted is None else wanted
+    return kept_arrivals(rounds, float(np.exp(-mean)), wanted)
+
+
+@njit(**JIT)
+def kept_arrivals(rounds: np.ndarray, threshold: float,
+                  wanted: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Counts ``(N, cells)`` and position uniforms ``(2, total)`` (trial-, cell-major, then
+    arrival order) of the arrivals of ``rounds`` (N, R, cells, 3) whose product of gap
+    uniforms, taken in round order, is above ``threshold``, in the ``wanted`` (cells,) cells."""
     N, R, cells, _ = rounds.shape
-    product = rounds[..., 0].copy()  # (N, R, cells); a loop over rounds beats cumprod here
-    for r in range(1, R):
-        product[:, r] *= product[:, r - 1]
-    kept = product > np.exp(-mean)  # a prefix of the rounds in each cell
-    if wanted is not None:
-        kept &= wanted
-    trial, cell, arrival = np.nonzero(kept.transpose(0, 2, 1))
-    rows = (trial * R + arrival) * cells + cell  # of rounds as (N * R * cells, 3)
-    return kept.sum(axis=1), np.take(rounds.reshape(-1, 3), rows, axis=0)[:, 1:].T
+    counts = np.zeros((N, cells), dtype=np.int64)
+    for n in range(N):
+        for c in range(cells):
+            if wanted[c]:
+                product, r = rounds[n, 0, c, 0], 0
+                while r < R and product > threshold:
+                    r += 1
+                    if r < R:
+                        product = rounds[n, r, c, 0] * product
+                counts[n, c] = r
+    uniforms = np.empty((2, counts.sum()))
+    i = 0
+    for n in range(N):
+        for c in range(cells):
+            for r in range(counts[n, c]):
+                uniforms[0, i], uniforms[1, i] = rounds[n, r, c, 1], rounds[n, r, c, 2]
+                i += 1
+    return counts, uniforms

@@ -1,0 +1,46 @@
+"""Streams spawned through one shared generator draw what ``trial.common.spawn`` draws."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from trackfuse.seeding import batch_streams, trial_streams
+from trackfuse.spawned_streams import spawn_shared
+
+
+def _draws(stream) -> np.ndarray:
+    """Uniforms, normals, exponentials and uniforms again, interleaved as a model would."""
+    return np.concatenate([stream.random(3), stream.standard_normal(5),
+                           stream.standard_exponential(2), stream.random(4)])
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**140), trials=st.lists(st.integers(0, 2**40), min_size=1,
+                                                     max_size=4),
+       children=st.integers(1, 4), point=st.integers(0, 5))
+def test_shared_streams_draw_the_spawned_generators_numbers(seed, trials, children, point):
+    shared = spawn_shared([trial_streams(seed, point, t) for t in trials], children)
+    for trial, streams in zip(trials, shared, strict=True):
+        spawned = trial_streams(seed, point, trial).common.spawn(children)
+        assert len(streams) == children
+        for ours, numpy_s in zip(streams, spawned, strict=True):
+            np.testing.assert_array_equal(_draws(ours), _draws(numpy_s))
+
+
+def test_streams_of_one_batch_keep_their_own_positions_when_drawn_in_turns():
+    shared = spawn_shared(batch_streams(7, 0, range(3)), 2)
+    spawned = [s.common.spawn(2) for s in batch_streams(7, 0, range(3))]
+    for _ in range(3):  # alternate between trials and children, as simulate does
+        for ours, theirs in zip(shared, spawned, strict=True):
+            for a, b in zip(ours, theirs, strict=True):
+                np.testing.assert_array_equal(a.random(out=np.empty(2)), b.random(2))
+
+
+def test_a_used_common_stream_is_refused():
+    streams = batch_streams(1, 0, range(2))
+    streams[1].common.random()
+    with pytest.raises(ValueError, match="still unused"):
+        spawn_shared(streams, 3)

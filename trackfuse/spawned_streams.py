@@ -1,0 +1,145 @@
+"""The streams ``trial.common.spawn(children)`` of a batch of trials, drawn through one shared
+generator instead of one ``Generator`` per stream (``docs/runner.md``, "Seeding").
+
+Each child's PCG64 state is computed as numpy computes it (``SeedSequence`` entropy
+assembly, hash mixing and ``generate_state``, then PCG64's seeding of its 128-bit state and
+increment), for all trials at once; a draw sets the shared generator to the child's state and
+keeps the state it ends in. The draws are bit for bit those of ``trial.common.spawn(children)``
+(``tests/test_seeding.py``), at a few microseconds per trial instead of about seventy.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from trackfuse.seeding import COMMON_DOMAIN, TrialStreams
+
+_POOL = 4  # SeedSequence's default pool size, 32-bit words
+_INIT_A, _MULT_A, _INIT_B, _MULT_B = 0x43B0D7E5, 0x931E8875, 0x8B51F9DD, 0x58F38DED
+_MIX_L, _MIX_R = 0xCA01F9DD, 0x4973F715
+_MASK32, _MASK128 = (1 << 32) - 1, (1 << 128) - 1
+_PCG_MULT = 0x2360ED051FC65DA44385DF649FCCF645  # PCG64's 128-bit LCG multiplier
+
+
+class SharedStream:
+    """One spawned stream: its PCG64 state, drawn from through a generator shared by many.
+
+    Any method of ``np.random.Generator`` that draws (``random``, ``standard_normal``, ...)
+    can be called on it."""
+
+    __slots__ = ("_generator", "_state")
+
+    def __init__(self, generator: np.random.Generator, state: dict[str, Any]):
+        self._generator, self._state = generator, state
+
+    def __getattr__(self, name: str) -> Callable[..., Any]:
+        method = getattr(self._generator, name)
+
+        def draw(*args: Any, **kwargs: Any) -> Any:
+            bits = self._generator.bit_generator
+            bits.state = self._state
+            try:
+                return method(*args, **kwargs)
+            finally:
+                self._state = bits.state
+
+        return draw
+
+
+def spawn_shared(streams: Sequence[TrialStreams], children: int
+                 ) -> list[tuple[SharedStream, ...]]:
+    """For each trial, ``children`` streams equal to ``trial.common.spawn(children)`` of a
+    common stream not yet used; they share one generator, so use them from one thread."""
+    if any("common" in vars(trial) for trial in streams):
+        raise ValueError("spawn_shared needs trials whose common stream is still unused")
+    generator = np.random.Generator(np.random.PCG64(0))
+    states = _child_states([(t.seed, t.trial) for t in streams], children)
+    return [tuple(SharedStream(generator, state) for state in trial) for trial in states]
+
+
+def _child_states(keys: Sequence[tuple[int, int]], children: int) -> list[list[dict]]:
+    """PCG64 states of ``SeedSequence(seed, spawn_key=(COMMON_DOMAIN, trial)).spawn(children)``
+    for each ``(seed, trial)`` of ``keys``, as ``bit_generator.state`` gives them."""
+    runs = {seed: _run_entropy(seed) for seed in {seed for seed, _ in keys}}
+    domain = _words(COMMON_DOMAIN)
+    rows = [[*runs[seed], *domain, *_words(trial), *_words(child)] for seed, trial in keys
+            for child in range(children)]
+    states: list[dict] = [{}] * len(rows)
+    for width in {len(row) for row in rows}:  # a row's width depends on its ints' size
+        chosen = [i for i, row in enumerate(rows) if len(row) == width]
+        pools = _mixed_pool(np.array([rows[i] for i in chosen], dtype=np.uint32))
+        for i, words in zip(chosen, _seed_words(pools).tolist(), strict=True):
+            states[i] = _pcg64_state(words)
+    return [states[i:i + children] for i in range(0, len(states), children)]
+
+
+def _words(value: int) -> list[int]:
+    """``value`` >= 0 as SeedSequence reads an int: 32-bit words, least significant first."""
+    words = [value & _MASK32]
+    while value := value >> 32:
+        words.append(value & _MASK32)
+    return words
+
+
+def _run_entropy(seed: int) -> list[int]:
+    """SeedSequence's words of ``seed`` before those of a spawn key: padded with zeros to the
+    pool size (each key of the spawn key then adds its own words)."""
+    run = _words(seed)
+    return run + [0] * (_POOL - len(run))
+
+
+def _hashmix(value: np.ndarray, hash_const: int) -> tuple[np.ndarray, int]:
+    """One hash-mix step of (M,) uint32 words; returns them and the next hash constant."""
+    value = value ^ np.uint32(hash_const)
+    hash_const = (hash_const * _MULT_A) & _MASK32
+    value = value * np.uint32(hash_const)
+    return value ^ (value >> np.uint32(16)), hash_const
+
+
+def _mix(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Combine two (M,) uint32 words."""
+    result = np.uint32(_MIX_L) * x - np.uint32(_MIX_R) * y
+    return result ^ (result >> np.uint32(16))
+
+
+def _mixed_pool(entropy: np.ndarray) -> np.ndarray:
+    """SeedSequence's pool ``(M, 4)`` uint32 of entropy rows ``(M, L)`` uint32, L >= 4."""
+    hash_const, pool = _INIT_A, []
+    for i in range(_POOL):
+        word, hash_const = _hashmix(entropy[:, i], hash_const)
+        pool.append(word)
+    for src in range(_POOL):
+        for dst in range(_POOL):
+            if src != dst:
+                word, hash_const = _hashmix(pool[src], hash_const)
+                pool[dst] = _mix(pool[dst], word)
+    for src in range(_POOL, entropy.shape[1]):
+        for dst in range(_POOL):
+            word, hash_const = _hashmix(entropy[:, src], hash_const)
+            pool[dst] = _mix(pool[dst], word)
+    return np.stack(pool, axis=1)
+
+
+def _seed_words(pool: np.ndarray) -> np.ndarray:
+    """``generate_state(4, uint64)`` ``(M, 4)`` uint64 of pools ``(M, 4)`` uint32."""
+    hash_const, out = _INIT_B, []
+    for i in range(8):
+        value = pool[:, i % _POOL] ^ np.uint32(hash_const)
+        hash_const = (hash_const * _MULT_B) & _MASK32
+        value = value * np.uint32(hash_const)
+        out.append(value ^ (value >> np.uint32(16)))
+    words = np.stack(out, axis=1).astype(np.uint64)
+    return words[:, 0::2] | (words[:, 1::2] << np.uint64(32))
+
+
+def _pcg64_state(words: list[int]) -> dict[str, Any]:
+    """``PCG64``'s state after seeding with ``generate_state(4, uint64)`` words: 128-bit
+    initial state (words 0, 1) and stream (words 2, 3), high word first."""
+    initstate, initseq = (words[0] << 64) | words[1], (words[2] << 64) | words[3]
+    inc = ((initseq << 1) | 1) & _MASK128
+    state = (((inc + initstate) * _PCG_MULT) + inc) & _MASK128
+    return {"bit_generator": "PCG64", "state": {"state": state, "inc": inc},
+            "has_uint32": 0, "uinteger": 0}
