@@ -8,13 +8,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from trackfuse.seeding import batch_streams, trial_streams
-from trackfuse.spawned_streams import spawn_shared
+from trackfuse.spawned_streams import drawing, spawn_shared
 
 
 def _draws(stream) -> np.ndarray:
-    """Uniforms, normals, exponentials and uniforms again, interleaved as a model would."""
-    return np.concatenate([stream.random(3), stream.standard_normal(5),
-                           stream.standard_exponential(2), stream.random(4)])
+    """Uniforms, normals, exponentials and uniforms again, in two visits to the stream."""
+    with drawing(stream) as rng:
+        first = [rng.random(3), rng.standard_normal(5)]
+    with drawing(stream) as rng:
+        return np.concatenate([*first, rng.standard_exponential(2), rng.random(4)])
 
 
 @settings(max_examples=60, deadline=None)
@@ -36,7 +38,8 @@ def test_streams_of_one_batch_keep_their_own_positions_when_drawn_in_turns():
     for _ in range(3):  # alternate between trials and children, as simulate does
         for ours, theirs in zip(shared, spawned, strict=True):
             for a, b in zip(ours, theirs, strict=True):
-                np.testing.assert_array_equal(a.random(out=np.empty(2)), b.random(2))
+                with a as rng:
+                    np.testing.assert_array_equal(rng.random(out=np.empty(2)), b.random(2))
 
 
 def test_a_used_common_stream_is_refused():

@@ -10,7 +10,8 @@ keeps the state it ends in. The draws are bit for bit those of ``trial.common.sp
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
+from contextlib import AbstractContextManager, nullcontext
 from typing import Any
 
 import numpy as np
@@ -25,28 +26,29 @@ _PCG_MULT = 0x2360ED051FC65DA44385DF649FCCF645  # PCG64's 128-bit LCG multiplier
 
 
 class SharedStream:
-    """One spawned stream: its PCG64 state, drawn from through a generator shared by many.
-
-    Any method of ``np.random.Generator`` that draws (``random``, ``standard_normal``, ...)
-    can be called on it."""
+    """One spawned stream kept as its PCG64 state. ``with stream as rng:`` sets the generator
+    it shares with other streams to that state and, on leaving, keeps where it ended."""
 
     __slots__ = ("_generator", "_state")
 
     def __init__(self, generator: np.random.Generator, state: dict[str, Any]):
         self._generator, self._state = generator, state
 
-    def __getattr__(self, name: str) -> Callable[..., Any]:
-        method = getattr(self._generator, name)
+    def __enter__(self) -> np.random.Generator:
+        self._generator.bit_generator.state = self._state
+        return self._generator
 
-        def draw(*args: Any, **kwargs: Any) -> Any:
-            bits = self._generator.bit_generator
-            bits.state = self._state
-            try:
-                return method(*args, **kwargs)
-            finally:
-                self._state = bits.state
+    def __exit__(self, *exc: object) -> None:
+        self._state = self._generator.bit_generator.state
 
-        return draw
+
+Stream = np.random.Generator | SharedStream
+"""A generator, or a shared stream drawn from through :func:`drawing`."""
+
+
+def drawing(stream: Stream) -> AbstractContextManager[np.random.Generator]:
+    """``with drawing(stream) as rng:`` draws from ``stream``, a generator or a shared one."""
+    return stream if isinstance(stream, SharedStream) else nullcontext(stream)
 
 
 def spawn_shared(streams: Sequence[TrialStreams], children: int

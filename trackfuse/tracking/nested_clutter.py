@@ -15,10 +15,11 @@ from collections.abc import Sequence
 import numpy as np
 from numba import njit
 
+from trackfuse.spawned_streams import Stream, drawing
 from trackfuse.tracking.pda import JIT
 
 
-def nested_poisson(rngs: Sequence[np.random.Generator], mean: float, cells: int,
+def nested_poisson(rngs: Sequence[Stream], mean: float, cells: int,
                    wanted: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Counts ``(N, cells)`` int, each ``Poisson(mean)``, and position uniforms ``(2, total)`` on
     ``[0, 1)`` (trial-, cell-major, then arrival order), each trial from its generator in
@@ -29,14 +30,16 @@ def nested_poisson(rngs: Sequence[np.random.Generator], mean: float, cells: int,
         return np.zeros((len(rngs), cells), dtype=np.int64), np.empty((2, 0))
     block = int(mean + 4.0 * np.sqrt(mean)) + 2  # one block suffices almost always
     rounds = np.empty((len(rngs), block, cells, 3))
-    for n, rng in enumerate(rngs):
-        rng.random(out=rounds[n])
+    for n, stream in enumerate(rngs):
+        with drawing(stream) as rng:
+            rng.random(out=rounds[n])
     counts, uniforms = _arrivals(rounds, mean, wanted)
     longer = {}
     for n in np.flatnonzero(counts.max(axis=1) >= block):  # a cell may have more arrivals
         drawn = rounds[n]
         while (np.cumprod(drawn[..., 0], axis=0)[-1] > np.exp(-mean)).any():
-            drawn = np.concatenate([drawn, rngs[n].random((block, cells, 3))])
+            with drawing(rngs[n]) as rng:
+                drawn = np.concatenate([drawn, rng.random((block, cells, 3))])
         longer[n] = _arrivals(drawn[None], mean, wanted)
     if longer:  # replace those trials' returns, in trial order
         pieces = np.split(uniforms, np.cumsum(counts.sum(axis=1))[:-1], axis=1)

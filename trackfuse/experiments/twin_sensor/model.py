@@ -36,7 +36,7 @@ from trackfuse.experiments.twin_sensor.stonesoup import (
 )
 from trackfuse.rowtable import RowTable
 from trackfuse.seeding import TrialStreams
-from trackfuse.spawned_streams import SharedStream, spawn_shared
+from trackfuse.spawned_streams import spawn_shared
 from trackfuse.tracking.initialization import los_prior_covariance, range_cue_sd
 from trackfuse.tracking.ipda_options import ExistenceModel, track_decisions
 from trackfuse.tracking.models import cv_process_noise, cv_transition, wrap
@@ -253,8 +253,7 @@ def build_scenario(params: dict[str, Any]) -> Scenario:
                     float(params["clutter.mean"]), float(params["clutter.window"]))
 
 
-def truth_trajectory(sc: Scenario, rng: np.random.Generator | SharedStream | None
-                     ) -> np.ndarray:
+def truth_trajectory(sc: Scenario, rng: np.random.Generator | None) -> np.ndarray:
     """True states ``(K+1, 6)``; CV with process noise ``q_truth`` when ``rng`` is given.
 
     Closed form of ``x(k+1) = F x(k) + G a(k)``: ``v(k) = v0 + T sum_{j<k} a(j)`` and
@@ -310,13 +309,16 @@ def simulate(sc: Scenario, streams: Sequence[TrialStreams]) -> Batch:
         x_true[:] = truth_trajectory(sc, None)
     uniform, normal = np.empty((N, K, MAX_SENSORS)), np.empty((N, K, MAX_SENSORS, 2))
     chol, returns = sc.P0_chol, []
-    for n, (g_truth, g_init, g_returns) in enumerate(spawn_shared(streams, 3)):
+    for n, (truth, init, trial_returns) in enumerate(spawn_shared(streams, 3)):
         if moving:
-            x_true[n] = truth_trajectory(sc, g_truth)
-        x0[n] = x_true[n, 0] + chol @ g_init.standard_normal(6)
-        uniform[n] = g_returns.random((K, MAX_SENSORS))
-        normal[n] = g_returns.standard_normal((K, MAX_SENSORS, 2))
-        returns.append(g_returns)
+            with truth as rng:
+                x_true[n] = truth_trajectory(sc, rng)
+        with init as rng:
+            x0[n] = x_true[n, 0] + chol @ rng.standard_normal(6)
+        with trial_returns as rng:
+            uniform[n] = rng.random((K, MAX_SENSORS))
+            normal[n] = rng.standard_normal((K, MAX_SENSORS, 2))
+        returns.append(trial_returns)
     wanted = np.tile(np.arange(MAX_SENSORS) < S, K)  # clutter cells: scan-, sensor-major
     cell_counts, draws = nested_poisson(returns, sc.clutter_mean, K * MAX_SENSORS, wanted)
     counts = cell_counts.reshape(N, K, MAX_SENSORS)[..., :S]
