@@ -40,7 +40,6 @@ from trackfuse.spawned_streams import spawn_shared
 from trackfuse.tracking.initialization import los_prior_covariance, range_cue_sd
 from trackfuse.tracking.ipda_options import ExistenceModel, track_decisions
 from trackfuse.tracking.models import cv_process_noise, cv_transition, wrap
-from trackfuse.tracking.nested_clutter import nested_poisson
 from trackfuse.tracking.pcrlb import (
     information_recursion,
     irf_q2_interp,
@@ -302,6 +301,8 @@ def simulate(sc: Scenario, streams: Sequence[TrialStreams]) -> Batch:
     in a loop; what is computed from them is computed for the whole batch at once (element
     by element, so a trial's numbers do not depend on the batch it is in).
     """
+    from trackfuse.tracking.nested_clutter import nested_poisson  # numba: on use
+
     N, K, S = len(streams), sc.K, sc.R.shape[0]
     moving = sc.q_truth > 0  # else the truth draws nothing and is the same in every trial
     x_true, x0 = np.empty((N, K + 1, 6)), np.empty((N, 6))
