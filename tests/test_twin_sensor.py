@@ -766,3 +766,27 @@ def test_time_panels_of_a_departure_span_its_clutter_levels(shipped):
     stay at the paper's levels."""
     assert report._time_at(shipped("twin_sensor_close")) == {"clutter.mean": (0, 20, 150)}
     assert report._time_at(shipped("twin_sensor_orbit")) == {"clutter.mean": (0, 9, 15)}
+
+
+def test_a_run_with_ipda_tables_its_existence_rules_for_the_ipda_algorithms(tmp_path):
+    """The IPDA's terminated and confirmed rates sit in the final-scan table beside the loss
+    rules (empty for the PDA), and are paired among the IPDA algorithms only."""
+    base = {**EXPERIMENT.defaults(), "scan.count": 6, "clutter.mean": 3.0,
+            "algorithms": ["mspda_parallel/mgekf", "ipda/mgekf", "ipda/ekf"]}
+    run = harness.run_data(tmp_path, EXPERIMENT, base, {}, trials=12, seed=4)
+    made = report.tables(run)
+    final = made["final_scan"].set_index("algorithm")
+    last = tables.last_scan(run.trials)
+    for rule in tables.EXISTENCE_RULES:
+        assert np.isnan(final.loc["mspda_parallel/mgekf", f"{rule}_pct"])
+        for name in ("ipda/mgekf", "ipda/ekf"):
+            flags = last.loc[last["algorithm"] == name, rule]
+            assert final.loc[name, f"{rule}_pct"] == pytest.approx(100 * flags.mean())
+            assert (final.loc[name, f"{rule}_pct_ci_low"] <= final.loc[name, f"{rule}_pct"]
+                    <= final.loc[name, f"{rule}_pct_ci_high"])
+    pairs = made["paired_loss"]
+    existence = pairs[pairs["rule"].isin(tables.EXISTENCE_RULES)]
+    assert len(existence) == len(tables.EXISTENCE_RULES)
+    assert set(existence["algorithm_a"]) | set(existence["algorithm_b"]) == {"ipda/mgekf",
+                                                                             "ipda/ekf"}
+    assert (pairs.groupby("rule").size()[list(tables.RULES)] == 3).all()

@@ -38,7 +38,16 @@ MAIN_RULE = "lost_angle"
 RULES = ("lost_angle", "lost_gate", "inconsistent_nees")
 """The 0/1 metrics of a trial's last scan: lost by the angle rule, by the gate rule, and
 an inconsistent filter (NEES above its chi-square quantile)."""
+EXISTENCE_RULES = ("lost_existence", "confirmed")
+"""The IPDA's 0/1 metrics of a trial's last scan: terminated by its existence probability, and
+confirmed; in the tables of a run with an IPDA algorithm, for the algorithms that have them."""
 DOCS = "docs/papers/twin_sensor.md"
+
+
+def rules_in(trials: pd.DataFrame) -> tuple[str, ...]:
+    """:data:`RULES`, then the :data:`EXISTENCE_RULES` some row of ``trials`` has a value of."""
+    return RULES + tuple(r for r in EXISTENCE_RULES
+                         if r in trials and trials[r].notna().any())
 
 PAPER_SETTING_KEYS = (
     "scan.period", "scan.count", "target.position", "target.velocity", "target.q",
@@ -123,10 +132,12 @@ def final_scan_table(run: RunData) -> pd.DataFrame:
     table["algorithm"] = table.pop("algorithm")  # after the swept keys
     table["trials"] = grouped.size().to_numpy()
     n = table["trials"].to_numpy()
-    for rule in RULES:
+    for rule in rules_in(trials):
         k = grouped[rule].sum().to_numpy()
-        lo, hi = wilson_interval(k, n)
-        _with_interval(table, f"{rule}_pct", 100 * k / n, 100 * lo, 100 * hi)
+        n_rule = n if rule in RULES else grouped[rule].count().to_numpy()  # IPDA rows only
+        lo, hi = wilson_interval(k, n_rule)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            _with_interval(table, f"{rule}_pct", 100 * k / n_rule, 100 * lo, 100 * hi)
     _with_interval(table, "range_rmse_km", *_rmse_km(grouped["range_sq_err_m2"]))
     params = [run.point_params(int(pt)) for pt in table["point"]]
     table["range_pcrlb_km"] = [bounds(p)[0][-1] / 1e3 for p in params]
@@ -151,18 +162,20 @@ def final_scan_table(run: RunData) -> pd.DataFrame:
 
 
 def paired_loss_table(run: RunData) -> pd.DataFrame:
-    """Every pair of algorithms on the same trials, per point and 0/1 rule of :data:`RULES`, at
-    the last scan: both rates, ``b_minus_a_pct`` with Newcombe's paired 95 % interval, the
-    discordant trials and the exact McNemar p-value with Holm's adjustment over the pairs of
-    that point and rule. Empty with fewer than two algorithms."""
+    """Every pair of algorithms on the same trials, per point and 0/1 rule of :func:`rules_in`
+    (a pair of algorithms that both have it), at the last scan: both rates, ``b_minus_a_pct``
+    with Newcombe's paired 95 % interval, the discordant trials and the exact McNemar p-value
+    with Holm's adjustment over the pairs of that point and rule. Empty with fewer than two
+    algorithms."""
     last = last_scan(succeeded_rows(run.trials))
-    keys = swept_keys(run.config)
+    keys, rules = swept_keys(run.config), rules_in(last)
     out = []
     for point, at in last.groupby("point", sort=True):
         values = {k: at[k].iloc[0] for k in keys}
-        algorithms = list(dict.fromkeys(at["algorithm"]))  # the point's own (may be swept)
-        flags = at.pivot(index="trial", columns="algorithm", values=list(RULES))
-        for rule in RULES:
+        flags = at.pivot(index="trial", columns="algorithm", values=list(rules))
+        for rule in rules:  # the point's own algorithms (may be swept) that have the rule
+            algorithms = [a for a in dict.fromkeys(at["algorithm"])
+                          if flags[rule][a].notna().any()]
             wide = flags[rule][algorithms]
             first = len(out)
             out += [{"point": point, **values, "rule": rule, **counts}
