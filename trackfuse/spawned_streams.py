@@ -3,9 +3,10 @@ generator instead of one ``Generator`` per stream (``docs/runner.md``, "Seeding"
 
 Each child's PCG64 state is computed as numpy computes it (``SeedSequence`` entropy
 assembly, hash mixing and ``generate_state``, then PCG64's seeding of its 128-bit state and
-increment), for all trials at once; a draw sets the shared generator to the child's state and
-keeps the state it ends in. The draws are bit for bit those of ``trial.common.spawn(children)``
-(``tests/test_seeding.py``), at a few microseconds per trial instead of about seventy.
+increment), for all trials at once; ``with stream as rng:`` sets the shared generator to the
+child's state and keeps the state it ends in. The draws are bit for bit those of
+``trial.common.spawn(children)`` (``tests/test_spawned_streams.py``), at a few microseconds
+per trial instead of about seventy.
 """
 
 from __future__ import annotations
