@@ -113,9 +113,11 @@ def rows_to_csv(rows: Sequence[dict[str, Any]]) -> str:
     return "".join(lines)
 
 
-@dataclass(frozen=True, order=True)
+@dataclass(frozen=True, order=True, slots=True)
 class BatchSpan:
-    """One batch: trials ``first .. stop-1`` of sweep point ``point``, batch number ``batch``."""
+    """One batch: trials ``first .. stop-1`` of sweep point ``point``, batch number ``batch``.
+    A run keeps one for each finished batch (the runner's set of them): about 200 bytes a
+    batch in that set."""
 
     point: int
     batch: int

@@ -10,6 +10,7 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from trackfuse.heap import release_free_memory
 from trackfuse.results import TRIALS, TRIALS_PARQUET, sha256_file
 
 if TYPE_CHECKING:  # validating a config (which names the store) loads no pandas
@@ -46,9 +47,20 @@ def read_trials(path: Path) -> pd.DataFrame:
 
 def chunks(path: Path, chunk_rows: int = CHUNK_ROWS,
            columns: Iterable[str] | None = None) -> Iterator[pd.DataFrame]:
-    """``path`` (CSV or Parquet) in chunks of <= ``chunk_rows`` rows, only ``columns`` if given."""
+    """``path`` (CSV or Parquet) in chunks of <= ``chunk_rows`` rows, only ``columns`` if given.
+    The heap's free memory is given back before each next chunk is read
+    (:func:`~trackfuse.heap.release_free_memory`): a caller that drops a chunk before asking
+    for the next keeps one chunk in memory, flat in the number of chunks."""
+    for chunk in _read_chunks(path, chunk_rows, None if columns is None else set(columns)):
+        yield chunk
+        del chunk
+        release_free_memory()
+
+
+def _read_chunks(path: Path, chunk_rows: int, wanted: set[str] | None
+                 ) -> Iterator[pd.DataFrame]:
+    """The chunks of :func:`chunks`, as the CSV or Parquet reader gives them."""
     import pandas as pd
-    wanted = None if columns is None else set(columns)
     if path.suffix == ".parquet":
         import pyarrow.parquet as pq
         reader = pq.ParquetFile(path)

@@ -16,6 +16,30 @@ from trackfuse.rowformat import FAILED_ROW, RUNNER_COLUMNS
 from trackfuse.stats import rmse_intervals, t_interval, wilson_interval
 
 CHUNK_ROWS = 200_000
+#: The statistics of a group and metric in one chunk, which the chunks' pooling needs.
+STAT_COLUMNS = ("n", "mean", "m2")
+
+
+class ChunkStats:
+    """The ``(*group, metric, n, mean, m2)`` rows of every chunk read so far, kept small: a
+    chunk whose groups and metrics are those of the chunk before it (the usual case: rows
+    come point by point, a point spans many chunks) keeps only its three statistics, 24
+    bytes a group and metric, and shares the key columns of the first such chunk."""
+
+    def __init__(self) -> None:
+        self.chunks: list[tuple[pd.DataFrame, list[np.ndarray]]] = []
+
+    def add(self, stats: pd.DataFrame) -> None:
+        """Keep one chunk's ``stats`` (:func:`_chunk_stats`)."""
+        keys = stats.drop(columns=list(STAT_COLUMNS))
+        if self.chunks and self.chunks[-1][0].equals(keys):
+            keys = self.chunks[-1][0]
+        self.chunks.append((keys, [stats[c].to_numpy(copy=True) for c in STAT_COLUMNS]))
+
+    def frame(self) -> pd.DataFrame:
+        """The rows of every chunk, in order, as the chunks gave them."""
+        return pd.concat([keys.assign(**dict(zip(STAT_COLUMNS, values, strict=True)))
+                          for keys, values in self.chunks], ignore_index=True)
 
 
 def _clipped(metrics: pd.Series, low: np.ndarray, high: np.ndarray,
@@ -39,30 +63,18 @@ def summarize(source: Path | pd.DataFrame, keys: Sequence[str], binary: Sequence
     ``keys`` group; every other numeric column ending in ``suffix`` and not in ``skip`` is a
     metric: Wilson intervals for ``binary``, root mean square for ``rms``, else Student-t, clipped
     to ``bounds`` ``(low, high)`` if given."""
-    partial: list[pd.DataFrame] = []
+    partial = ChunkStats()
     squares: dict[tuple, list[np.ndarray]] = {}
     failed = 0
     for chunk in _chunks(source, chunk_rows):
-        if "status" in chunk:
-            bad = chunk["status"].astype(str) == FAILED_ROW
-            failed += int(bad.sum())
-            chunk = chunk[~bad]
-        group = [k for k in keys if k in chunk]
-        metrics = [c for c in chunk.columns if c not in group and c not in RUNNER_COLUMNS
-                   and c not in skip and c.endswith(suffix)
-                   and pd.api.types.is_numeric_dtype(chunk[c])]
-        if chunk.empty or not metrics:
-            continue
-        if mine := [m for m in rms if m in metrics]:
-            chunk = chunk.assign(**{m: chunk[m] ** 2 for m in mine})
-            _keep_squares(chunk, group, mine, squares)
-        partial.append(_chunk_stats(chunk, group, metrics))
-    if not partial:
+        failed += _add_chunk(chunk, keys, suffix, skip, rms, partial, squares)
+        del chunk  # before the next chunk is read: one chunk in memory, not two
+    if not partial.chunks:
         return pd.DataFrame(columns=[*keys, "metric", "n", "mean", "std", "ci_low", "ci_high",
                                      "interval"]), failed
-    stats = pd.concat(partial, ignore_index=True)
-    group = [c for c in stats.columns if c not in ("n", "mean", "m2")]
-    if len(partial) > 1:
+    stats = partial.frame()
+    group = [c for c in stats.columns if c not in STAT_COLUMNS]
+    if len(partial.chunks) > 1:
         stats = _combine(stats, group)
     n = stats["n"].to_numpy(float)
     mean = stats["mean"].to_numpy(float)
@@ -80,6 +92,30 @@ def summarize(source: Path | pd.DataFrame, keys: Sequence[str], binary: Sequence
     if squares:
         _as_rms(out, group, squares)
     return out, failed
+
+
+def _add_chunk(chunk: pd.DataFrame, keys: Sequence[str], suffix: str, skip: Sequence[str],
+               rms: Sequence[str], partial: ChunkStats,
+               squares: dict[tuple, list[np.ndarray]]) -> int:
+    """Append the ``(n, mean, M2)`` of one chunk's rows that did not fail to ``partial`` (and
+    the squares of its ``rms`` metrics to ``squares``); return the number that failed."""
+    failed = 0
+    if "status" in chunk:
+        bad = chunk["status"].astype(str) == FAILED_ROW
+        failed = int(bad.sum())
+        if failed:  # no copy of the chunk when every row is valid
+            chunk = chunk[~bad]
+    group = [k for k in keys if k in chunk]
+    metrics = [c for c in chunk.columns if c not in group and c not in RUNNER_COLUMNS
+               and c not in skip and c.endswith(suffix)
+               and pd.api.types.is_numeric_dtype(chunk[c])]
+    if chunk.empty or not metrics:
+        return failed
+    if mine := [m for m in rms if m in metrics]:
+        chunk = chunk.assign(**{m: chunk[m] ** 2 for m in mine})
+        _keep_squares(chunk, group, mine, squares)
+    partial.add(_chunk_stats(chunk, group, metrics))
+    return failed
 
 
 def _chunks(source: Path | pd.DataFrame, chunk_rows: int) -> Iterable[pd.DataFrame]:
