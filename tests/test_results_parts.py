@@ -4,6 +4,8 @@ they show it fits and line by line otherwise, which names what is wrong (issue 1
 
 from __future__ import annotations
 
+import tracemalloc
+
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -125,3 +127,19 @@ def test_a_trial_of_other_than_ascii_digits_is_damage(tmp_path, trial):
     rows = _rows()[:1] + [f"3,{trial},a/b,1.0,0"] + _rows()[1:]
     with pytest.raises(PartDamaged, match=f"trial '{trial}' is not one of trials 10 to 13"):
         _read(tmp_path, rows, count=len(rows))
+
+
+def test_a_finished_batch_costs_at_most_200_bytes():
+    """The runner keeps a set of the finished batches: 10^4 of them in a 10^6-trial study
+    (issue 43, goal 3), measured with tracemalloc."""
+    batches = 10_000
+    tracemalloc.start()
+    try:
+        before = tracemalloc.get_traced_memory()[0]
+        finished = {BatchSpan(b % 16, b // 16, 100 * (b // 16), 100 * (b // 16) + 100)
+                    for b in range(batches)}
+        used = tracemalloc.get_traced_memory()[0] - before
+    finally:
+        tracemalloc.stop()
+    assert len(finished) == batches
+    assert used / batches <= 200

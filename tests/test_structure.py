@@ -161,7 +161,7 @@ LAYERS: list[dict[str, tuple[str, ...]]] = [
                     "trackfuse.rowformat",
                     "trackfuse.sequential", "trackfuse.trial_guard", "trackfuse.progress",
                     "trackfuse.child_processes", "trackfuse.cluster_settings",
-                    "trackfuse.forkserver_freeze", "trackfuse.shipped")},
+                    "trackfuse.forkserver_freeze", "trackfuse.shipped", "trackfuse.heap")},
     {"disk format": ("trackfuse.results", "trackfuse.manifest", "trackfuse.store",
                      "trackfuse.runlock",
                      "trackfuse.runstate", "trackfuse.runfiles", "trackfuse.catalog",

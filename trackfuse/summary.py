@@ -28,13 +28,17 @@ class ChunkStats:
 
     def __init__(self) -> None:
         self.chunks: list[tuple[pd.DataFrame, list[np.ndarray]]] = []
+        #: The last chunk's key columns, compared with the next chunk's (comparing with the
+        #: kept ones would add to pandas' record of their views, chunk after chunk).
+        self._last: pd.DataFrame | None = None
 
     def add(self, stats: pd.DataFrame) -> None:
         """Keep one chunk's ``stats`` (:func:`_chunk_stats`)."""
         keys = stats.drop(columns=list(STAT_COLUMNS))
-        if self.chunks and self.chunks[-1][0].equals(keys):
-            keys = self.chunks[-1][0]
-        self.chunks.append((keys, [stats[c].to_numpy(copy=True) for c in STAT_COLUMNS]))
+        same = self._last is not None and self._last.equals(keys)
+        self._last = keys
+        kept = self.chunks[-1][0] if same else keys
+        self.chunks.append((kept, [stats[c].to_numpy(copy=True) for c in STAT_COLUMNS]))
 
     def frame(self) -> pd.DataFrame:
         """The rows of every chunk, in order, as the chunks gave them."""
