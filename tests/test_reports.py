@@ -358,3 +358,19 @@ def test_index_md_shows_raw_html_from_titles_and_names_as_text(toy_run, monkeypa
                   "- figure &lt;i&gt;x&lt;/i&gt;: failed", "## Table: &lt;t&gt;",
                   "| &lt;a href='http://example.com'&gt;a&lt;/a&gt; | 1.00 |"):
         assert shown in md
+
+
+def test_a_figure_is_laid_out_once_for_all_its_formats(tmp_path):
+    """Constrained layout ran again for each format (PNG, then PDF), as costly as drawing;
+    the later formats now keep the layout of the first."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(3.5, 2.0), layout="constrained")
+    fig.add_subplot().set_xlabel("x (m)")
+    engine = fig.get_layout_engine()
+    calls = []
+    execute = engine.execute
+    engine.execute = lambda f: calls.append(f) or execute(f)
+    written = reports.save_figure(fig, tmp_path, "f", ["png", "pdf", "svg"])
+    assert [p.name for p in written] == ["f.png", "f.pdf", "f.svg"]
+    assert all(p.stat().st_size > 0 for p in written) and len(calls) == 1
