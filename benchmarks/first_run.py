@@ -94,6 +94,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as stash_root:
         stashes = {v: Path(stash_root) / v for v in homes}
         for version, home in homes.items():
+            reset_cache(home, None)  # so the stash holds what the install wrote, no more
             times[version]["reinstall"].append(reinstall(home))
             stashes[version].mkdir()
             shipped_cache(home, stashes[version])
