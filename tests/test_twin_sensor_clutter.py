@@ -13,11 +13,19 @@ from trackfuse.experiments.twin_sensor import EXPERIMENT
 from trackfuse.experiments.twin_sensor.model import build_scenario, simulate
 from trackfuse.runner import Runner
 from trackfuse.seeding import trial_streams
-from trackfuse.tracking.nested_clutter import nested_poisson
+from trackfuse.tracking.nested_clutter import NestedClutter
 
 #: False-alarm rate of each statistical check below (deterministic seeds: a fixed outcome,
 #: but a wrong law fails them with near certainty at these sample sizes).
 ALPHA = 1e-3
+
+
+def nested_poisson(rngs: list[np.random.Generator], mean: float, cells: int):
+    """Counts ``(N, cells)`` and uniforms ``(2, total)`` of each generator's nested clutter."""
+    clutter = NestedClutter(mean, len(rngs), cells)
+    for trial, rng in enumerate(rngs):
+        clutter.draw(trial, rng)
+    return clutter.counts, clutter.uniforms()
 
 
 def assert_poisson(counts: np.ndarray, mean: float) -> None:
@@ -153,3 +161,19 @@ def test_one_and_two_workers_and_any_batch_size_write_identical_csvs(model, writ
                            progress=False, plots=False).run().folder)
     for name in ("trials.csv", "summary.csv"):
         assert (runs[0] / name).read_bytes() == (runs[1] / name).read_bytes(), name
+
+
+def test_padded_disk_points_are_the_numpy_disk_points_bit_for_bit():
+    """The compiled placement of the in-gate clutter gives exactly the numpy disk points
+    (same square root, sine and cosine) in each cell's first slots, zero after them."""
+    from trackfuse.tracking.nested_clutter import padded_disk_points
+    from trackfuse.tracking.sensors import disk_points
+
+    rng = np.random.default_rng(11)
+    counts = rng.poisson(6.0, (30, 4, 2))
+    uniforms = rng.random((2, counts.sum()))
+    slots = counts.max()
+    points, valid = padded_disk_points(counts, uniforms, slots)
+    np.testing.assert_array_equal(valid, np.arange(slots) < counts[..., None])
+    np.testing.assert_array_equal(points[valid], disk_points(uniforms[0], uniforms[1]))
+    assert not points[~valid].any()

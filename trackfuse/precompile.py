@@ -18,7 +18,7 @@ from trackfuse.association.pga_search import pga
 from trackfuse.association.sd_assignment import solve_sd
 from trackfuse.association.sd_costs import tuple_costs
 from trackfuse.tracking.ipda import run_ipda
-from trackfuse.tracking.nested_clutter import kept_arrivals
+from trackfuse.tracking.nested_clutter import kept_arrivals, padded_disk_points
 from trackfuse.tracking.pda import run_filter
 
 
@@ -47,8 +47,11 @@ def load_pda_filter() -> None:
 
 
 def load_clutter_arrivals() -> None:
-    """Run the nested clutter's arrival count (:mod:`trackfuse.tracking.nested_clutter`)."""
-    kept_arrivals(np.full((1, 2, 2, 3), 0.5), 0.5, np.ones(2, dtype=np.bool_))
+    """Run the nested clutter's arrival count and placement
+    (:mod:`trackfuse.tracking.nested_clutter`)."""
+    kept_arrivals(np.full((2, 2, 3), 0.5), 0.5, np.ones(2, dtype=np.bool_),
+                  np.zeros(2, dtype=np.int64))
+    padded_disk_points(np.ones((1, 1, 1), dtype=np.int64), np.full((2, 1), 0.5), 1)
 
 
 def load_ipda_filter() -> None:

@@ -68,13 +68,17 @@ def _child_states(keys: Sequence[tuple[int, int]], children: int) -> list[list[d
     for each ``(seed, trial)`` of ``keys``, as ``bit_generator.state`` gives them."""
     runs = {seed: _run_entropy(seed) for seed in {seed for seed, _ in keys}}
     domain = _words(COMMON_DOMAIN)
-    rows = [[*runs[seed], *domain, *_words(trial), *_words(child)] for seed, trial in keys
-            for child in range(children)]
-    states: list[dict] = [{}] * len(rows)
-    for width in {len(row) for row in rows}:  # a row's width depends on its ints' size
-        chosen = [i for i, row in enumerate(rows) if len(row) == width]
-        pools = _mixed_pool(np.array([rows[i] for i in chosen], dtype=np.uint32))
-        for i, words in zip(chosen, _seed_words(pools).tolist(), strict=True):
+    parents = [[*runs[seed], *domain, *_words(trial)] for seed, trial in keys]
+    states: list[dict] = [{}] * (len(parents) * children)
+    for width in {len(row) for row in parents}:  # a row's width depends on its ints' size
+        chosen = [i for i, row in enumerate(parents) if len(row) == width]
+        rows = np.repeat(np.array([parents[i] for i in chosen], dtype=np.uint32), children,
+                         axis=0)  # each parent's children, then each child's number
+        entropy = np.column_stack([rows, np.tile(np.arange(children, dtype=np.uint32),
+                                                 len(chosen))])
+        child_rows = (i * children + child for i in chosen for child in range(children))
+        for i, words in zip(child_rows, _seed_words(_mixed_pool(entropy)).tolist(),
+                            strict=True):
             states[i] = _pcg64_state(words)
     return [states[i:i + children] for i in range(0, len(states), children)]
 

@@ -129,8 +129,14 @@ def _copy_state(X, P, X_to, P_to):
 
 @njit(**INNER)
 def _wrap(a):
-    """Angle (rad) mapped to [-pi, pi)."""
-    return (a + math.pi) % TWO_PI - math.pi
+    """Angle (rad) mapped to [-pi, pi), as ``(a + pi) % 2pi - pi`` computes it; an angle
+    within one turn skips the remainder (exact there: ``x`` itself or ``x + 2pi``)."""
+    x = a + math.pi
+    if 0.0 < x < TWO_PI:
+        return x - math.pi
+    if -TWO_PI < x < 0.0:
+        return (x + TWO_PI) - math.pi
+    return x % TWO_PI - math.pi
 
 
 @njit(**INNER)

@@ -52,7 +52,6 @@ from trackfuse.tracking.platforms import baseline_offset, orbit_positions, strai
 from trackfuse.tracking.sensors import (
     azel,
     azel_jacobian,
-    disk_points,
     gate_threshold,
     gate_volume,
 )
@@ -301,7 +300,10 @@ def simulate(sc: Scenario, streams: Sequence[TrialStreams]) -> Batch:
     in a loop; what is computed from them is computed for the whole batch at once (element
     by element, so a trial's numbers do not depend on the batch it is in).
     """
-    from trackfuse.tracking.nested_clutter import nested_poisson  # numba: on use
+    from trackfuse.tracking.nested_clutter import (  # numba: on use
+        NestedClutter,
+        padded_disk_points,
+    )
 
     N, K, S = len(streams), sc.K, sc.R.shape[0]
     moving = sc.q_truth > 0  # else the truth draws nothing and is the same in every trial
@@ -309,7 +311,9 @@ def simulate(sc: Scenario, streams: Sequence[TrialStreams]) -> Batch:
     if not moving:
         x_true[:] = truth_trajectory(sc, None)
     uniform, normal = np.empty((N, K, MAX_SENSORS)), np.empty((N, K, MAX_SENSORS, 2))
-    chol, returns = sc.P0_chol, []
+    wanted = np.tile(np.arange(MAX_SENSORS) < S, K)  # clutter cells: scan-, sensor-major
+    nested = NestedClutter(sc.clutter_mean, N, K * MAX_SENSORS, wanted)
+    chol = sc.P0_chol
     for n, (truth, init, trial_returns) in enumerate(spawn_shared(streams, 3)):
         if moving:
             with truth as rng:
@@ -319,34 +323,34 @@ def simulate(sc: Scenario, streams: Sequence[TrialStreams]) -> Batch:
         with trial_returns as rng:
             uniform[n] = rng.random((K, MAX_SENSORS))
             normal[n] = rng.standard_normal((K, MAX_SENSORS, 2))
-        returns.append(trial_returns)
-    wanted = np.tile(np.arange(MAX_SENSORS) < S, K)  # clutter cells: scan-, sensor-major
-    cell_counts, draws = nested_poisson(returns, sc.clutter_mean, K * MAX_SENSORS, wanted)
-    counts = cell_counts.reshape(N, K, MAX_SENSORS)[..., :S]
+            nested.draw(n, rng)  # last, so the clutter level changes nothing else
+    counts = np.ascontiguousarray(nested.counts.reshape(N, K, MAX_SENSORS)[..., :S])
+    draws = nested.uniforms()
     detected = (uniform < _padded(sc.P_D))[..., :S]
     los = azel(x_true[:, 1:, None, :3] - sc.sensor_pos[1:])
     z_target = wrap(los + sc.noise_sd * normal[:, :, :S])
     C = max(int(counts.max()) if counts.size else 0, 1)
-    ok = np.arange(C) < counts[..., None]
-    clutter = np.zeros(ok.shape + (2,))
-    points = _clutter_points(sc, draws, los, counts)
-    clutter.reshape(-1, 2)[np.flatnonzero(ok)] = points  # trial-, scan-, sensor-major
+    if sc.clutter_model == "in_gate":
+        clutter, ok = padded_disk_points(counts, draws, C)
+    else:
+        clutter, ok = _window_points(sc, draws, los, counts, C)
     return Batch(x_true, x0, detected, los, z_target, clutter, ok)
 
 
-def _clutter_points(sc: Scenario, draws: np.ndarray, los: np.ndarray,
-                    counts: np.ndarray) -> np.ndarray:
-    """Clutter points ``(total, 2)`` of a batch from the uniforms ``(2, total)`` on [0, 1)
-    behind them (concatenated, trial-, scan-, sensor-major), its lines of sight
-    ``(N, K, S, 2)`` (rad) and clutter counts ``(N, K, S)``: points of the unit disk
-    (radius and angle uniforms, ``in_gate``) or azimuth and elevation uniform on
-    ``[-window, window)`` about the line of sight (``window``)."""
-    if sc.clutter_model == "in_gate":
-        return disk_points(draws[0], draws[1])
+def _window_points(sc: Scenario, draws: np.ndarray, los: np.ndarray, counts: np.ndarray,
+                   slots: int) -> tuple[np.ndarray, np.ndarray]:
+    """``window`` clutter ``(N, K, S, slots, 2)`` (rad) and its validity ``(N, K, S, slots)``
+    from the uniforms ``(2, total)`` on [0, 1) behind it (trial-, scan-, sensor-major), the
+    lines of sight ``(N, K, S, 2)`` (rad) and the counts ``(N, K, S)``: azimuth and
+    elevation uniform on ``[-window, window)`` about the line of sight; zero where not
+    valid."""
+    ok = np.arange(slots) < counts[..., None]
+    clutter = np.zeros(ok.shape + (2,))
     centre = np.repeat(los.reshape(-1, 2), counts.ravel(), axis=0)
     points = centre + sc.window * (2.0 * draws.T - 1.0)
     points[:, 0] = wrap(points[:, 0])
-    return points
+    clutter.reshape(-1, 2)[np.flatnonzero(ok)] = points
+    return clutter, ok
 
 
 def _padded(P_D: np.ndarray) -> np.ndarray:
@@ -481,11 +485,13 @@ def _nees(e: np.ndarray, P: np.ndarray) -> np.ndarray:
     finite = np.isfinite(P).all(axis=(-2, -1)) & np.isfinite(e).all(axis=-1)
     out = np.full(e.shape[:-1], np.nan)
     if finite.any():
-        Pf, ef = P[finite], e[finite]
+        n = e.shape[-1]
+        Pf, ef = (P, e) if finite.all() else (P[finite], e[finite])  # no copy if all are
         try:
-            out[finite] = (ef * np.linalg.solve(Pf, ef[..., None])[..., 0]).sum(axis=1)
+            out[finite] = (ef * np.linalg.solve(Pf, ef[..., None])[..., 0]).sum(axis=-1).ravel()
         except np.linalg.LinAlgError:
-            out[finite] = [_nees_one(x, Q) for x, Q in zip(ef, Pf, strict=True)]
+            out[finite] = [_nees_one(x, Q) for x, Q in zip(ef.reshape(-1, n),
+                                                           Pf.reshape(-1, n, n), strict=True)]
     return out
 
 
