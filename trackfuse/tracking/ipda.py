@@ -69,7 +69,7 @@ def _ipda_batch(x0, P0, F, Q, sensor_pos, R, P_D, los, z_target, detected, clutt
     """``pda._filter_batch``'s outputs, same bits, plus ``psi_out`` (N, K) after each update."""
     N, K, S = detected.shape
     M = clutter.shape[3] + 1
-    lin, mom = Linearized(S, M), Moments()
+    lin, mom = Linearized(S, M), Moments(M)
     z, valid, lam_true = np.empty((S, M, 2)), np.empty((S, M), np.bool_), np.empty(S)
     X, P, Xp, Pp = np.empty(6), np.empty((6, 6)), np.empty(6), np.empty((6, 6))
     miss = 1.0  # prod_s (1 - P_Ds P_G)
@@ -84,7 +84,7 @@ def _ipda_batch(x0, P0, F, Q, sensor_pos, R, P_D, los, z_target, detected, clutt
                 X_out[n, k], P_out[n, k], m_out[n, k], inside_out[n, k] = np.nan, np.nan, 0, False
                 psi_out[n, k] = np.nan
                 continue
-            _predict(X, P, F, Q, Xp, Pp)
+            _predict(X, P, F, Q, Xp, Pp, mom.FP)
             inside_out[n, k] = _observe(
                 Xp, Pp, sensor_pos[k], R, los[n, k], z_target[n, k], detected[n, k],
                 clutter[n, k], clutter_ok[n, k], gamma, in_gate, clutter_mean, window_density,

@@ -61,7 +61,7 @@ def _filter_batch(x0, P0, F, Q, sensor_pos, R, P_D, los, z_target, detected, clu
     ``m_out`` (N, K, S), ``inside_out`` (N, K); ``sensor_pos`` (K, S, 3) for scans 1..K."""
     N, K, S = detected.shape
     M = clutter.shape[3] + 1  # the target return first, then the clutter slots
-    lin, mom = Linearized(S, M), Moments()
+    lin, mom = Linearized(S, M), Moments(M)
     z, valid, lam_true = np.empty((S, M, 2)), np.empty((S, M), np.bool_), np.empty(S)
     X, P, Xp, Pp = np.empty(6), np.empty((6, 6)), np.empty(6), np.empty((6, 6))
     pair = S == 2 and method != SEQUENTIAL
@@ -72,7 +72,7 @@ def _filter_batch(x0, P0, F, Q, sensor_pos, R, P_D, los, z_target, detected, clu
             if diverged:  # as the oracle: no return validated, target outside every gate
                 X_out[n, k], P_out[n, k], m_out[n, k], inside_out[n, k] = np.nan, np.nan, 0, False
                 continue
-            _predict(X, P, F, Q, Xp, Pp)
+            _predict(X, P, F, Q, Xp, Pp, mom.FP)
             inside_out[n, k] = _observe(
                 Xp, Pp, sensor_pos[k], R, los[n, k], z_target[n, k], detected[n, k],
                 clutter[n, k], clutter_ok[n, k], gamma, in_gate, clutter_mean, window_density,
@@ -140,9 +140,8 @@ def _wrap(a):
 
 
 @njit(**INNER)
-def _predict(X, P, F, Q, Xp, Pp):
-    """``Xp = F X``, ``Pp = F P F' + Q``."""
-    FP = np.empty((6, 6))
+def _predict(X, P, F, Q, Xp, Pp, FP):
+    """``Xp = F X``, ``Pp = F P F' + Q`` (``FP`` (6, 6): scratch)."""
     for i in range(6):
         acc = 0.0
         for j in range(6):
@@ -391,18 +390,23 @@ def _single_update(X, P, R, P_D, P_G, nearest, mg_combined, lin, s, mom):
     return b0
 
 
-_Mom = namedtuple("_Mom", "nub NN Gbar C dx dP GP KR KA")
+_Mom = namedtuple("_Mom", "nub NN Gbar C dx dP GP KR KA FP Cx S12inv K12 R12 blocks W col r c")
 
 
 @njit(**INNER)
-def Moments():  # noqa: N802 (builds a record, read as a type)
+def Moments(M):  # noqa: N802 (builds a record, read as a type)
     """Weighted moments of one hypothesis class (``n = 2`` or ``4`` rows used):
     ``nub = sum b nu (4,)``, ``NN = sum b nu nu' (4, 4)``, ``Gbar = sum b G (4, 3)``,
-    ``C = sum b G P33 G' (4, 4)``; the update sums ``dx (6,)``, ``dP (6, 6)``; scratch
-    ``GP (4, 6)``, ``KR, KA (6, 4)``."""
+    ``C = sum b G P33 G' (4, 4)``; the update sums ``dx (6,)``, ``dP (6, 6)``; scratch,
+    allocated once for every trial and scan: ``GP (4, 6)``, ``KR, KA (6, 4)``, ``FP (6, 6)``
+    (:func:`_predict`), the pair update's ``Cx (2, 2)``, ``S12inv, R12 (4, 4)``, ``K12 (6,
+    4)``, ``blocks (5, 2, 2)`` (:func:`_block_inverse`), ``W (2, 3)`` and per return slot
+    ``col, r, c (M,)``."""
     return _Mom(np.zeros(4), np.zeros((4, 4)), np.zeros((4, 3)), np.zeros((4, 4)),
                 np.zeros(6), np.zeros((6, 6)), np.zeros((4, 6)), np.zeros((6, 4)),
-                np.zeros((6, 4)))
+                np.zeros((6, 4)), np.zeros((6, 6)), np.zeros((2, 2)), np.zeros((4, 4)),
+                np.zeros((6, 4)), np.zeros((4, 4)), np.zeros((5, 2, 2)), np.zeros((2, 3)),
+                np.zeros(M), np.zeros(M), np.zeros(M))
 
 
 @njit(**INNER)
@@ -453,7 +457,8 @@ def _class_terms(Kg, R, P, bsum, mom):
     ``dP += bsum (P + K R K') - K Gbar P[:3] - (.)' + K (C + NN) K'``
     (oracle: ``pda_reference._class_terms``)."""
     n = Kg.shape[1]
-    nub, NN, Gbar, C, dx, dP, GP, KR, KA = mom
+    nub, NN, Gbar, C, dx, dP = mom.nub, mom.NN, mom.Gbar, mom.C, mom.dx, mom.dP
+    GP, KR, KA = mom.GP, mom.KR, mom.KA
     for r in range(n):
         for c in range(6):
             GP[r, c] = Gbar[r, 0] * P[0, c] + Gbar[r, 1] * P[1, c] + Gbar[r, 2] * P[2, c]
@@ -491,19 +496,19 @@ def _collapse(X, P, b0, mom):
 def _pair_update(Xp, Pp, R, P_D, P_G, method, joint_full, mg_combined, lin, mom, X, P):
     """Two-sensor PDA update of ``(Xp, Pp)`` into ``(X, P)``; returns the null's weight."""
     H, PHt = lin.H, lin.PHt
-    Cx = np.empty((2, 2))  # H1 P H2'
+    Cx = mom.Cx  # H1 P H2'
     for i in range(2):
         for j in range(2):
             Cx[i, j] = (H[0, i, 0] * PHt[1, 0, j] + H[0, i, 1] * PHt[1, 1, j]
                         + H[0, i, 2] * PHt[1, 2, j])
-    S12inv = np.empty((4, 4))
-    det12 = _block_inverse(lin.Sm[0], Cx, lin.Sm[1], S12inv)
-    K12 = np.zeros((6, 4))
+    S12inv, K12 = mom.S12inv, mom.K12
+    det12 = _block_inverse(lin.Sm[0], Cx, lin.Sm[1], S12inv, mom.blocks)
+    K12[:, :] = 0.0
     for i in range(6):
         for j in range(4):
             for a in range(4):
                 K12[i, j] += PHt[a // 2, i, a % 2] * S12inv[a, j]
-    log00, top = _pair_log_weights(lin, S12inv, det12, P_D, P_G, method, joint_full)
+    log00, top = _pair_log_weights(lin, S12inv, det12, P_D, P_G, method, joint_full, mom.col)
     b00 = _normalize_pair(lin, log00, top, method == NEAREST)
     if mg_combined:
         _pair_at_combined(lin)
@@ -513,7 +518,7 @@ def _pair_update(Xp, Pp, R, P_D, P_G, method, joint_full, mg_combined, lin, mom,
         _class_terms(lin.Kg[s], R[s], Pp, bsum, mom)
         _clear_class(mom)
     bsum = _pair_moments(lin, Pp, mom)
-    R12 = np.zeros((4, 4))
+    R12 = mom.R12  # block-diagonal; its other entries stay zero
     for i in range(2):
         for j in range(2):
             R12[i, j], R12[2 + i, 2 + j] = R[0, i, j], R[1, i, j]
@@ -524,11 +529,11 @@ def _pair_update(Xp, Pp, R, P_D, P_G, method, joint_full, mg_combined, lin, mom,
 
 
 @njit(**INNER)
-def _block_inverse(A, Bx, D_, out):
+def _block_inverse(A, Bx, D_, out, blocks):
     """Inverse of ``[[A, Bx], [Bx', D_]]`` (2x2 blocks) into ``out (4, 4)`` by the Schur
-    complement; returns the determinant (oracle: ``pda_reference._block_inverse``)."""
-    Ai, Sc, Sci = np.empty((2, 2)), np.empty((2, 2)), np.empty((2, 2))
-    AiB, TR = np.empty((2, 2)), np.empty((2, 2))
+    complement (``blocks (5, 2, 2)``: scratch); returns the determinant (oracle:
+    ``pda_reference._block_inverse``)."""
+    Ai, Sc, Sci, AiB, TR = blocks[0], blocks[1], blocks[2], blocks[3], blocks[4]
     detA = _inv2(A, Ai)
     for i in range(2):
         for j in range(2):
@@ -550,9 +555,10 @@ def _block_inverse(A, Bx, D_, out):
 
 
 @njit(**INNER)
-def _pair_log_weights(lin, S12inv, det12, P_D, P_G, method, joint_full):
+def _pair_log_weights(lin, S12inv, det12, P_D, P_G, method, joint_full, col):
     """Log weights of the two-sensor hypotheses into ``lin.w`` (one return) and ``lin.B`` (both);
-    returns the null's and the largest (oracle: ``pda_reference.pair_weights``)."""
+    returns the null's and the largest (oracle: ``pda_reference.pair_weights``); ``col``
+    (M,): scratch."""
     ok, m, log_n, nu, w, B, geom = lin.ok, lin.m, lin.log_n, lin.nu, lin.w, lin.B, lin.geom
     m1, m2 = m[0], m[1]
     if method == PAPER_APPROX:
@@ -586,7 +592,7 @@ def _pair_log_weights(lin, S12inv, det12, P_D, P_G, method, joint_full):
     half_logdet12 = 0.5 * math.log(det12) if det12 > 0 else (
         -np.inf if det12 == 0 else np.nan)
     const = 2.0 * LOG_2PI + half_logdet12
-    col = np.empty(m2)  # each sensor-2 return's own term, once (not once per pair)
+    # col: each sensor-2 return's own term, once (not once per pair)
     for b in range(m2):
         j = ok[1, b]
         col[b] = -0.5 * _mahalanobis2(nu[1, j, 0], nu[1, j, 1], S12inv[2:, 2:])
@@ -682,10 +688,10 @@ def _pair_moments(lin, P, mom):
     returns ``sum B`` (oracle: ``pda_reference._pair_moments``). Cross blocks:
     ``sum B_ij nu_1i nu_2j'`` and ``sum_i G_1i P33 (sum_j B_ij G_2j)'``."""
     ok, m, nu, G, B = lin.ok, lin.m, lin.nu, lin.G, lin.B
-    M = B.shape[0]
-    r, c = np.zeros(M), np.zeros(M)
+    r, c, W = mom.r, mom.c, mom.W
+    r[:] = 0.0
+    c[:] = 0.0
     NN, C = mom.NN, mom.C
-    W = np.empty((2, 3))
     for a in range(m[0]):
         i = ok[0, a]
         v0, v1 = 0.0, 0.0  # sum_j B_ij nu_2j
