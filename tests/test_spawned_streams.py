@@ -2,13 +2,20 @@
 
 from __future__ import annotations
 
+from contextlib import nullcontext
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from trackfuse.seeding import batch_streams, trial_streams
-from trackfuse.spawned_streams import drawing, spawn_shared
+from trackfuse.spawned_streams import SharedStream, spawn_shared
+
+
+def drawing(stream: SharedStream | np.random.Generator):
+    """``with drawing(stream) as rng:`` for a shared stream or a generator alike."""
+    return stream if isinstance(stream, SharedStream) else nullcontext(stream)
 
 
 def _draws(stream) -> np.ndarray:

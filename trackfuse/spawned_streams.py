@@ -12,7 +12,6 @@ per trial instead of about seventy.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from contextlib import AbstractContextManager, nullcontext
 from typing import Any
 
 import numpy as np
@@ -27,29 +26,24 @@ _PCG_MULT = 0x2360ED051FC65DA44385DF649FCCF645  # PCG64's 128-bit LCG multiplier
 
 
 class SharedStream:
-    """One spawned stream kept as its PCG64 state. ``with stream as rng:`` sets the generator
-    it shares with other streams to that state and, on leaving, keeps where it ended."""
+    """One spawned stream kept as its PCG64 state, made from its four 64-bit seed words when
+    first used. ``with stream as rng:`` sets the generator it shares with other streams to
+    that state and, on leaving, keeps where it ended."""
 
-    __slots__ = ("_generator", "_state")
+    __slots__ = ("_generator", "_seed_words", "_state")
 
-    def __init__(self, generator: np.random.Generator, state: dict[str, Any]):
-        self._generator, self._state = generator, state
+    def __init__(self, generator: np.random.Generator, seed_words: list[int]):
+        self._generator, self._seed_words = generator, seed_words
+        self._state: dict[str, Any] | None = None
 
     def __enter__(self) -> np.random.Generator:
+        if self._state is None:
+            self._state = _pcg64_state(self._seed_words)
         self._generator.bit_generator.state = self._state
         return self._generator
 
     def __exit__(self, *exc: object) -> None:
         self._state = self._generator.bit_generator.state
-
-
-Stream = np.random.Generator | SharedStream
-"""A generator, or a shared stream drawn from through :func:`drawing`."""
-
-
-def drawing(stream: Stream) -> AbstractContextManager[np.random.Generator]:
-    """``with drawing(stream) as rng:`` draws from ``stream``, a generator or a shared one."""
-    return stream if isinstance(stream, SharedStream) else nullcontext(stream)
 
 
 def spawn_shared(streams: Sequence[TrialStreams], children: int
@@ -59,17 +53,19 @@ def spawn_shared(streams: Sequence[TrialStreams], children: int
     if any("common" in vars(trial) for trial in streams):
         raise ValueError("spawn_shared needs trials whose common stream is still unused")
     generator = np.random.Generator(np.random.PCG64(0))
-    states = _child_states([(t.seed, t.trial) for t in streams], children)
-    return [tuple(SharedStream(generator, state) for state in trial) for trial in states]
+    words = _child_seed_words([(t.seed, t.trial) for t in streams], children)
+    return [tuple(SharedStream(generator, child) for child in trial) for trial in words]
 
 
-def _child_states(keys: Sequence[tuple[int, int]], children: int) -> list[list[dict]]:
-    """PCG64 states of ``SeedSequence(seed, spawn_key=(COMMON_DOMAIN, trial)).spawn(children)``
-    for each ``(seed, trial)`` of ``keys``, as ``bit_generator.state`` gives them."""
+def _child_seed_words(keys: Sequence[tuple[int, int]], children: int
+                      ) -> list[list[list[int]]]:
+    """``generate_state(4, uint64)`` of each of
+    ``SeedSequence(seed, spawn_key=(COMMON_DOMAIN, trial)).spawn(children)`` for each
+    ``(seed, trial)`` of ``keys``."""
     runs = {seed: _run_entropy(seed) for seed in {seed for seed, _ in keys}}
     domain = _words(COMMON_DOMAIN)
     parents = [[*runs[seed], *domain, *_words(trial)] for seed, trial in keys]
-    states: list[dict] = [{}] * (len(parents) * children)
+    seeds: list[list[int]] = [[]] * (len(parents) * children)
     for width in {len(row) for row in parents}:  # a row's width depends on its ints' size
         chosen = [i for i, row in enumerate(parents) if len(row) == width]
         rows = np.repeat(np.array([parents[i] for i in chosen], dtype=np.uint32), children,
@@ -79,8 +75,8 @@ def _child_states(keys: Sequence[tuple[int, int]], children: int) -> list[list[d
         child_rows = (i * children + child for i in chosen for child in range(children))
         for i, words in zip(child_rows, _seed_words(_mixed_pool(entropy)).tolist(),
                             strict=True):
-            states[i] = _pcg64_state(words)
-    return [states[i:i + children] for i in range(0, len(states), children)]
+            seeds[i] = words
+    return [seeds[i:i + children] for i in range(0, len(seeds), children)]
 
 
 def _words(value: int) -> list[int]:

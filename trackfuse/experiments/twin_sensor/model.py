@@ -307,25 +307,25 @@ def simulate(sc: Scenario, streams: Sequence[TrialStreams]) -> Batch:
 
     N, K, S = len(streams), sc.K, sc.R.shape[0]
     moving = sc.q_truth > 0  # else the truth draws nothing and is the same in every trial
-    x_true, x0 = np.empty((N, K + 1, 6)), np.empty((N, 6))
+    x_true, x0_normal = np.empty((N, K + 1, 6)), np.empty((N, 6))
     if not moving:
         x_true[:] = truth_trajectory(sc, None)
     uniform, normal = np.empty((N, K, MAX_SENSORS)), np.empty((N, K, MAX_SENSORS, 2))
     wanted = np.tile(np.arange(MAX_SENSORS) < S, K)  # clutter cells: scan-, sensor-major
     nested = NestedClutter(sc.clutter_mean, N, K * MAX_SENSORS, wanted)
-    chol = sc.P0_chol
     for n, (truth, init, trial_returns) in enumerate(spawn_shared(streams, 3)):
         if moving:
             with truth as rng:
                 x_true[n] = truth_trajectory(sc, rng)
         with init as rng:
-            x0[n] = x_true[n, 0] + chol @ rng.standard_normal(6)
+            rng.standard_normal(out=x0_normal[n])
         with trial_returns as rng:
             uniform[n] = rng.random((K, MAX_SENSORS))
             normal[n] = rng.standard_normal((K, MAX_SENSORS, 2))
             nested.draw(n, rng)  # last, so the clutter level changes nothing else
     counts = np.ascontiguousarray(nested.counts.reshape(N, K, MAX_SENSORS)[..., :S])
     draws = nested.uniforms()
+    x0 = x_true[:, 0] + np.matmul(sc.P0_chol, x0_normal[..., None])[..., 0]  # N(x(0), P0)
     detected = (uniform < _padded(sc.P_D))[..., :S]
     los = azel(x_true[:, 1:, None, :3] - sc.sensor_pos[1:])
     z_target = wrap(los + sc.noise_sd * normal[:, :, :S])
@@ -452,7 +452,8 @@ def score_estimates(sc: Scenario, b: Batch, est: Estimates,
     first non-finite scan, and losses are permanent (both rules on divergence).
     """
     X = est.X.copy()
-    P = 0.5 * (est.P + est.P.transpose(0, 1, 3, 2))
+    P = est.P + est.P.transpose(0, 1, 3, 2)
+    P *= 0.5
     bad = ~(np.isfinite(X).all(axis=2) & np.isfinite(P).all(axis=(2, 3)))
     diverged = np.logical_or.accumulate(bad, axis=1)
     X[diverged], P[diverged] = np.nan, np.nan
