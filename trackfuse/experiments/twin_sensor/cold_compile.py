@@ -56,17 +56,17 @@ def index_stamp(path: Path) -> object:
 
 def callee_args() -> dict:
     """``{dispatcher: args}`` typed as ``_filter_batch`` passes them (only the types are used)."""
-    lin, mom = k.Linearized.py_func(2, 2), k.Moments.py_func()
+    lin, mom = k.Linearized.py_func(2, 2), k.Moments.py_func(2)
     x, P, R, s = np.empty(6), np.empty((6, 6)), np.empty((2, 2)), 0
     z, ok = np.empty((2, 2)), np.empty(2, np.bool_)
     return {
         k._pair_update: (x, P, np.empty((2, 2, 2)), x, 0.0, 0, False, False, lin, mom, x, P),
-        k.Linearized: (2, 2), k.Moments: (),
+        k.Linearized: (2, 2), k.Moments: (2,),
         k._single_update: (x, P, R, 0.0, 0.0, False, False, lin, s, mom),
         k._geometry: (x, P, x, R, lin, s), k._in_gate: (x, lin, s, 0.0),
         k._place_returns: (x, False, z, ok, 0.0, False, 0.0, 0.0, lin, s, z, ok),
         k._linearize: (z, ok, 0.0, 0.0, False, False, lin, s),
-        k._copy_state: (x, P, x, P), k._predict: (x, P, P, P, x, P),
+        k._copy_state: (x, P, x, P), k._predict: (x, P, P, P, x, P, P),
         k._symmetrize_and_check: (x, P),
     }
 
