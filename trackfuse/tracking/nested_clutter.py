@@ -87,17 +87,25 @@ def kept_arrivals(rounds: np.ndarray, threshold: float, wanted: np.ndarray,
     return uniforms, complete
 
 
-@njit(**JIT)
 def padded_disk_points(counts: np.ndarray, uniforms: np.ndarray,
                        slots: int) -> tuple[np.ndarray, np.ndarray]:
     """Unit-disk points ``(N, K, S, slots, 2)`` and their validity ``(N, K, S, slots)`` of
     cells with ``counts`` (N, K, S) returns from the uniforms ``(2, total)`` behind them
-    (trial-, scan-, sensor-major, as :func:`nested_poisson` gives them): radius
+    (trial-, scan-, sensor-major, as :class:`NestedClutter` gives them): radius
     ``sqrt(u0)``, angle ``2 pi u1`` (:func:`trackfuse.tracking.sensors.disk_points`, the
-    same arithmetic); zero where not valid."""
+    same arithmetic); zero where not valid. Allocated by numpy, whose large arrays get
+    huge pages where the system allows (far fewer page faults than compiled code's)."""
+    points = np.zeros(counts.shape + (slots, 2))
+    valid = np.zeros(counts.shape + (slots,), dtype=np.bool_)
+    place_disk_points(counts, uniforms, points, valid)
+    return points, valid
+
+
+@njit(**JIT)
+def place_disk_points(counts: np.ndarray, uniforms: np.ndarray, points: np.ndarray,
+                      valid: np.ndarray) -> None:
+    """Fill :func:`padded_disk_points`'s zeroed ``points`` and ``valid``."""
     N, K, S = counts.shape
-    points = np.zeros((N, K, S, slots, 2))
-    valid = np.zeros((N, K, S, slots), dtype=np.bool_)
     i = 0
     for n in range(N):
         for k in range(K):
@@ -108,4 +116,3 @@ def padded_disk_points(counts: np.ndarray, uniforms: np.ndarray,
                     points[n, k, s, j, 1] = radius * np.sin(angle)
                     valid[n, k, s, j] = True
                     i += 1
-    return points, valid
