@@ -18,8 +18,13 @@ Then the whole ``run_batch`` side by side with a baseline commit (installed as i
 clutter: trials per wall second and per CPU second of the process (on a shared machine the
 CPU figure is the steadier one), median of the repeats, and the ratio current / baseline.
 
+``--breakdown`` prints where a case (b) trial's CPU microseconds go in this checkout (best
+of 7 batches: simulation, compiled filter, scoring, the whole ``run_batch``) and what the
+whole ``run_batch`` costs in the first batch of a process against the next ones (the first
+pays the kernel's page faults as the process's memory grows).
+
 Usage: ``python benchmarks/twin_sensor_speed.py [--trials 2000] [--batch 500] [--profile]
-[--baseline b359dda] [--repeats 3]`` (``--baseline ''`` skips the comparison)
+[--breakdown] [--baseline b359dda] [--repeats 3]`` (``--baseline ''`` skips the comparison)
 """
 
 from __future__ import annotations
@@ -43,6 +48,7 @@ from trackfuse.experiments.twin_sensor.model import (
     FILTERS,
     LossRules,
     build_scenario,
+    score_estimates,
     simulate,
 )
 from trackfuse.seeding import trial_streams
@@ -132,6 +138,55 @@ def side_by_side(baseline: str, trials: int, batch: int, repeats: int) -> None:
                   f" | {cur / base:.2f}x")
 
 
+def breakdown(batch: int, batches: int = 7) -> None:
+    """Print case (b)'s CPU microseconds a trial by phase, best of ``batches`` batches."""
+    p = params(2, "mspda_parallel/mgekf", "in_gate")
+    rules = LossRules.from_params(p)
+    spent: dict[str, list[float]] = {k: [] for k in ("simulation", "filter", "scoring",
+                                                     "whole run_batch")}
+    for rep in range(batches):
+        first = (rep + 1) * batch
+        trials = range(first, first + batch)
+        start = time.process_time()
+        EXPERIMENT.run_batch(p, [trial_streams(1, 0, t) for t in trials])
+        spent["whole run_batch"].append(time.process_time() - start)
+        start = time.process_time()
+        sc = build_scenario(p)
+        data = simulate(sc, [trial_streams(1, 0, t) for t in trials])
+        spent["simulation"].append(time.process_time() - start)
+        assoc, filt = p["algorithms"][0].split("/")
+        options = PDAOptions(assoc, FILTERS[filt], P_G=sc.P_G)
+        start = time.process_time()
+        estimates = run_filter(sc, data, options)
+        spent["filter"].append(time.process_time() - start)
+        start = time.process_time()
+        score_estimates(sc, data, estimates, rules)
+        spent["scoring"].append(time.process_time() - start)
+    best = {k: min(v) / batch * 1e6 for k, v in spent.items()}
+    print(f"case (b), in_gate, CPU us a trial, best of {batches} batches of {batch}: "
+          + ", ".join(f"{k} {v:.1f}" for k, v in best.items())
+          + f"; outside the filter {best['whole run_batch'] - best['filter']:.1f}")
+
+
+def first_batches(batch: int, batches: int = 4) -> None:
+    """Print the whole ``run_batch``'s CPU microseconds a trial in each of the first
+    ``batches`` batches of a fresh process (after an 8-trial warm-up, as ``RATE``)."""
+    code = RATE.split("start, cpu =")[0] + f"""
+import resource
+for first in range(0, {batches * batch}, {batch}):
+    cpu, faults = time.process_time(), resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+    EXPERIMENT.run_batch(p, [trial_streams(1, 0, t) for t in range(first, first + {batch})])
+    print(round((time.process_time() - cpu) / {batch} * 1e6, 1),
+          resource.getrusage(resource.RUSAGE_SELF).ru_minflt - faults)
+"""
+    arg = json.dumps([params(2, "mspda_parallel/mgekf", "in_gate"), 0, batch])
+    out = subprocess.run([sys.executable, "-c", code, arg], check=True, capture_output=True,
+                         text=True).stdout.split("\n")
+    cells = [line.split() for line in out if line.strip()]
+    print("case (b), a fresh process, CPU us a trial (page faults) in batch 1..: "
+          + ", ".join(f"{us} ({faults})" for us, faults in cells))
+
+
 def stonesoup_rate(p: dict, trials: int) -> float:
     """Trials per second of Stone Soup's EKF + PDA (``stonesoup_pda/ekf``, run through
     ``trackfuse.interop.stonesoup``) on the same data as ``ours``; per-trial, so no batching."""
@@ -146,7 +201,13 @@ def main() -> None:
     parser.add_argument("--profile", action="store_true", help="cProfile case (b), in_gate")
     parser.add_argument("--baseline", default="b359dda")
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--breakdown", action="store_true",
+                        help="where case (b)'s CPU goes, by phase and by batch")
     args = parser.parse_args()
+    if args.breakdown:
+        breakdown(args.batch)
+        first_batches(args.batch)
+        return
     print(f"twin_sensor, 20 scans/trial, clutter mean 10, batch {args.batch}, one process; "
           "trials/s of: compiled filter | numpy reference | whole run_batch")
     rates = {}
