@@ -313,3 +313,18 @@ def test_compiled_wrap_is_the_floor_remainder_bit_for_bit():
     both(a, ours, remainder)
     np.testing.assert_array_equal(ours, remainder)
     assert (np.signbit(ours) == np.signbit(remainder)).all()
+
+
+def test_symmetrized_is_numpys_half_sum_and_flags_the_non_finite():
+    """The scoring's compiled symmetrisation gives numpy's ``0.5 * (P + P')`` bit for bit and
+    marks exactly the covariances with a non-finite entry."""
+    from trackfuse.tracking.pda import symmetrized
+
+    rng = np.random.default_rng(9)
+    P = rng.normal(0.0, 1e4, (7, 5, 6, 6))
+    P[2, 3, 1, 4], P[4, 0, 5, 5] = np.nan, np.inf
+    P[6, 4, 0, 2] = P[6, 4, 2, 0] = 1.7e308  # finite, but their sum overflows
+    out, finite = symmetrized(P)
+    np.testing.assert_array_equal(out, 0.5 * (P + P.transpose(0, 1, 3, 2)))
+    np.testing.assert_array_equal(finite, np.isfinite(out).all(axis=(2, 3)))
+    assert finite.sum() == 7 * 5 - 3

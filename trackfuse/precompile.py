@@ -19,7 +19,7 @@ from trackfuse.association.sd_assignment import solve_sd
 from trackfuse.association.sd_costs import tuple_costs
 from trackfuse.tracking.ipda import run_ipda
 from trackfuse.tracking.nested_clutter import kept_arrivals, padded_disk_points
-from trackfuse.tracking.pda import run_filter
+from trackfuse.tracking.pda import run_filter, symmetrized
 
 
 def _tiny_batch() -> tuple[SimpleNamespace, SimpleNamespace, SimpleNamespace]:
@@ -42,8 +42,9 @@ def _tiny_batch() -> tuple[SimpleNamespace, SimpleNamespace, SimpleNamespace]:
 
 
 def load_pda_filter() -> None:
-    """Run the PDA filter (:mod:`trackfuse.tracking.pda`) on a tiny batch."""
-    run_filter(*_tiny_batch())
+    """Run the PDA filter (:mod:`trackfuse.tracking.pda`) on a tiny batch and symmetrise its
+    covariances as the scoring does."""
+    symmetrized(run_filter(*_tiny_batch()).P)
 
 
 def load_clutter_arrivals() -> None:

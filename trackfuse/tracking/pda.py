@@ -724,6 +724,25 @@ def _pair_moments(lin, P, mom):
     return bsum
 
 
+@njit(**JIT)
+def symmetrized(P):
+    """``(P + P') / 2`` of covariances ``P (N, K, n, n)``, and whether each is finite
+    ``(N, K)`` bool: numpy's ``0.5 * (P + P')`` element for element, in one pass."""
+    N, K, n, _ = P.shape
+    out, finite = np.empty(P.shape), np.empty((N, K), np.bool_)
+    for a in range(N):
+        for b in range(K):
+            ok = True
+            for i in range(n):
+                for j in range(i, n):
+                    v = 0.5 * (P[a, b, i, j] + P[a, b, j, i])
+                    out[a, b, i, j] = v
+                    out[a, b, j, i] = v
+                    ok = ok and math.isfinite(v)
+            finite[a, b] = ok
+    return out, finite
+
+
 @njit(**INNER)
 def _symmetrize_and_check(X, P):
     """``P = (P + P') / 2`` in place; True when ``X`` or ``P`` is not finite (diverged)."""

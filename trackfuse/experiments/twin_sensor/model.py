@@ -451,10 +451,11 @@ def score_estimates(sc: Scenario, b: Batch, est: Estimates,
     Ours and another library's are scored alike: ``P`` is symmetrised, a trial is NaN from its
     first non-finite scan, and losses are permanent (both rules on divergence).
     """
+    from trackfuse.tracking.pda import symmetrized  # numba: on use
+
     X = est.X.copy()
-    P = est.P + est.P.transpose(0, 1, 3, 2)
-    P *= 0.5
-    bad = ~(np.isfinite(X).all(axis=2) & np.isfinite(P).all(axis=(2, 3)))
+    P, finite_P = symmetrized(np.ascontiguousarray(est.P, dtype=float))
+    bad = ~(np.isfinite(X).all(axis=2) & finite_P)
     diverged = np.logical_or.accumulate(bad, axis=1)
     X[diverged], P[diverged] = np.nan, np.nan
     scans = np.arange(1, sc.K + 1)
