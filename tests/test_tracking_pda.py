@@ -328,3 +328,44 @@ def test_symmetrized_is_numpys_half_sum_and_flags_the_non_finite():
     np.testing.assert_array_equal(out, 0.5 * (P + P.transpose(0, 1, 3, 2)))
     np.testing.assert_array_equal(finite, np.isfinite(out).all(axis=(2, 3)))
     assert finite.sum() == 7 * 5 - 3
+
+
+def test_predict_skipping_the_transitions_zeros_keeps_every_bit():
+    """The prediction skips the zero entries of F; with finite X and P (zeros and negative
+    zeros among them) it gives exactly the full products ``F X`` and ``F P F' + Q``."""
+    from numba import njit
+
+    from trackfuse.tracking.models import cv_process_noise, cv_transition
+    from trackfuse.tracking.pda import _predict
+
+    @njit
+    def predicted(X, P, F, Q):
+        Xp, Pp, FP = np.empty(6), np.empty((6, 6)), np.empty((6, 6))
+        _predict(X, P, F, Q, Xp, Pp, FP)
+        return Xp, Pp
+
+    @njit
+    def full(X, P, F, Q):  # every product, in the same order
+        Xp, FP, Pp = np.zeros(6), np.zeros((6, 6)), np.zeros((6, 6))
+        for i in range(6):
+            for a in range(6):
+                Xp[i] += F[i, a] * X[a]
+                for j in range(6):
+                    FP[i, j] += F[i, a] * P[a, j]
+        for i in range(6):
+            for j in range(6):
+                acc = 0.0
+                for a in range(6):
+                    acc += FP[i, a] * F[j, a]
+                Pp[i, j] = acc + Q[i, j]
+        return Xp, Pp
+
+    rng = np.random.default_rng(3)
+    F, Q = cv_transition(0.7), cv_process_noise(0.7, 900.0)
+    for _ in range(200):
+        X, P = rng.normal(0.0, 1e4, 6), rng.normal(0.0, 1e3, (6, 6))
+        X[rng.random(6) < 0.3], P[rng.random((6, 6)) < 0.3] = -0.0, 0.0
+        P[rng.random((6, 6)) < 0.2] = -0.0
+        for ours, theirs in zip(predicted(X, P, F, Q), full(X, P, F, Q), strict=True):
+            np.testing.assert_array_equal(ours, theirs)
+            assert (np.signbit(ours) == np.signbit(theirs)).all()

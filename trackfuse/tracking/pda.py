@@ -141,21 +141,28 @@ def _wrap(a):
 
 @njit(**INNER)
 def _predict(X, P, F, Q, Xp, Pp, FP):
-    """``Xp = F X``, ``Pp = F P F' + Q`` (``FP`` (6, 6): scratch)."""
+    """``Xp = F X``, ``Pp = F P F' + Q`` (``FP`` (6, 6): scratch). The zero entries of ``F``
+    are skipped: their products are zeros, which leave a sum started at +0.0 unchanged
+    while ``X``, ``P`` and ``F P`` are finite (a diverged trial is not predicted), so the
+    bits are those of the full products."""
     for i in range(6):
         acc = 0.0
         for j in range(6):
-            acc += F[i, j] * X[j]
-            fp = 0.0
-            for a in range(6):
-                fp += F[i, a] * P[a, j]
-            FP[i, j] = fp
+            FP[i, j] = 0.0
+        for a in range(6):
+            f = F[i, a]
+            if f != 0.0:
+                acc += f * X[a]
+                for j in range(6):
+                    FP[i, j] += f * P[a, j]
         Xp[i] = acc
     for i in range(6):
         for j in range(6):
             acc = 0.0
             for a in range(6):
-                acc += FP[i, a] * F[j, a]
+                f = F[j, a]
+                if f != 0.0:
+                    acc += FP[i, a] * f
             Pp[i, j] = acc + Q[i, j]
 
 
