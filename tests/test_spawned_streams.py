@@ -54,3 +54,14 @@ def test_a_used_common_stream_is_refused():
     streams[1].common.random()
     with pytest.raises(ValueError, match="still unused"):
         spawn_shared(streams, 3)
+
+
+def test_a_stream_spawned_to_be_visited_once_draws_the_same_and_refuses_a_second_visit():
+    [(once,)], [(kept,)] = (spawn_shared(batch_streams(3, 0, range(1)), 1, revisit=revisit)
+                        for revisit in (False, True))
+    with once as rng:
+        first = rng.random(4)
+    with kept as rng:
+        np.testing.assert_array_equal(rng.random(4), first)
+    with pytest.raises(RuntimeError, match="visited once"), once:
+        pass
