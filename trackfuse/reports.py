@@ -273,8 +273,10 @@ def _draw(run: RunData, module: ModuleType, names: Sequence[str],
           formats: Sequence[str]) -> Report:
     """Draw and save the figures ``names``, one at a time (the report's ``figures``,
     ``errors`` and ``not_drawn`` parts for them)."""
-    from trackfuse.reportkit.style import context  # matplotlib: see the module docstring
+    from trackfuse.reportkit.style import context, shared_pdf_font  # matplotlib: docstring
 
+    if "pdf" in formats:
+        shared_pdf_font()
     part, source = Report(), provenance(run)
     for name in names:
         try:

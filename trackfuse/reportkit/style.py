@@ -17,9 +17,11 @@ from functools import cache
 
 import matplotlib
 import numpy as np
+from matplotlib import font_manager
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from trackfuse.reportkit import pdffont
 from trackfuse.reportkit.spec import MAX_ENTRIES, SLOTS
 
 MAX_HEIGHT_IN = 8.5
@@ -111,10 +113,22 @@ def legend_below(fig: Figure, axes: Iterable[Axes]) -> None:
 
 
 @cache
+def shared_pdf_font() -> None:
+    """Subset the house font once for every PDF this process (and its forks) writes
+    (:mod:`.pdffont`; matplotlib's own subsetting where its private API has changed)."""
+    if pdffont.install():
+        with context():
+            pdffont.prepare(font_manager.findfont(font_manager.FontProperties(
+                family=RC["font.family"])))
+
+
+@cache
 def warm_up(formats: tuple[str, ...], dpi: int) -> None:
     """Draw one small figure in the journal style and save it in memory in each format
-    (once per process), so the fonts, the PDF font subsetter and the image writers are
+    (once per process), so the fonts, the PDF font subset and the image writers are
     loaded once before the drawing processes fork, not once in each."""
+    if "pdf" in formats:
+        shared_pdf_font()
     fig, axes = panels(1, 1, "single")
     with context():
         axes[0, 0].plot([0, 1], [0, 1], marker="o", label="a")
