@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -96,12 +97,12 @@ def no_spread_p(n1: ArrayLike, n2: ArrayLike | None = None) -> np.ndarray:
 
 def paired_t_p(diff: ArrayLike, sd: ArrayLike, n: ArrayLike) -> np.ndarray:
     """Two-sided paired t p-value from the mean, sd and count of the differences."""
-    from scipy import stats  # on first use: see the module docstring
+    from scipy.special import stdtr  # scipy.stats.t.sf's own function, without its import
 
     diff, sd, n = (np.asarray(v, dtype=float) for v in (diff, sd, n))
     with np.errstate(invalid="ignore", divide="ignore"):
         se = sd / np.sqrt(n)
-        p = 2 * stats.t.sf(np.abs(diff / se), n - 1)
+        p = 2 * stdtr(n - 1, -np.abs(diff / se))
     return _p_value(p, se, diff)
 
 
@@ -225,14 +226,14 @@ def binomial_above_p(k: ArrayLike, n: ArrayLike, p0: ArrayLike) -> np.ndarray:
 
 def two_proportion_p(k1: ArrayLike, n1: ArrayLike, k2: ArrayLike, n2: ArrayLike) -> np.ndarray:
     """Two-sided p of the 'N-1' chi-square test of equal proportions (Campbell 2007)."""
-    from scipy import stats  # on first use: see the module docstring
+    from scipy.special import chdtrc  # scipy.stats.chi2.sf's own function, without its import
 
     k1, n1, k2, n2 = (np.asarray(v, dtype=float) for v in (k1, n1, k2, n2))
     a, b, c, d = k1, n1 - k1, k2, n2 - k2
     n = n1 + n2
     with np.errstate(invalid="ignore", divide="ignore"):
         chi2 = (a * d - b * c) ** 2 * (n - 1) / (n1 * n2 * (a + c) * (b + d))
-    return np.where(np.isfinite(chi2), stats.chi2.sf(chi2, 1), 1.0)
+    return np.where(np.isfinite(chi2), chdtrc(1, chi2), 1.0)
 
 
 def bootstrap_t_mean_intervals(groups: Sequence[ArrayLike], level: float = 0.95,
@@ -269,11 +270,16 @@ def percentile_mean_intervals(samples: np.ndarray, resamples: int = 2000,
     return np.quantile(means, [0.025, 0.975], axis=1).T
 
 
+@lru_cache(maxsize=16)
 def _resample_counts(n: int, resamples: int, seed: int) -> np.ndarray:
-    """(resamples, n) counts of each value in each resample with replacement."""
+    """(resamples, n) counts of each value in each resample with replacement, read-only;
+    kept for the next group of ``n`` values (a report's tables draw the same few hundred
+    times)."""
     idx = np.random.default_rng(seed).integers(0, n, (resamples, n))
-    return np.bincount((np.arange(resamples)[:, None] * n + idx).ravel(),
-                       minlength=resamples * n).reshape(resamples, n)
+    counts = np.bincount((np.arange(resamples)[:, None] * n + idx).ravel(),
+                         minlength=resamples * n).reshape(resamples, n)
+    counts.flags.writeable = False
+    return counts
 
 
 def _bootstrap_t(x: np.ndarray, counts: np.ndarray) -> np.ndarray:
