@@ -374,3 +374,30 @@ def test_a_figure_is_laid_out_once_for_all_its_formats(tmp_path):
     written = reports.save_figure(fig, tmp_path, "f", ["png", "pdf", "svg"])
     assert [p.name for p in written] == ["f.png", "f.pdf", "f.svg"]
     assert all(p.stat().st_size > 0 for p in written) and len(calls) == 1
+
+
+def test_drawing_processes_leave_the_inherited_objects_to_the_main_process(tmp_path,
+                                                                          monkeypatch):
+    """A forked drawing process's garbage collector never scans what it inherited (it
+    only wrote to memory shared with the main process) and runs less often."""
+    import gc
+
+    run = run_data(tmp_path / "run", "toy_gaussian", sweep={"mu": [0.0, 1.0]}, trials=5,
+                   seed=4)
+    child, seen = reports._drawing_child, tmp_path / "children"
+    seen.mkdir()
+
+    def recording(main_pid: int) -> None:
+        child(main_pid)
+        (seen / str(os.getpid())).write_text(
+            f"{gc.get_freeze_count()} {gc.get_threshold()[0]}")
+
+    monkeypatch.setattr(reports, "_drawing_child", recording)
+    monkeypatch.setattr(reports.threading, "active_count", lambda: 1)  # other tests' threads
+    monkeypatch.setattr(reports.os, "sched_getaffinity", lambda pid: {0, 1})  # any host: 2
+    assert reports.drawing_processes(6) == 2
+    write_report(run, wanted=["estimate", "estimate_vs_sigma"])  # two: drawn in forks
+    states = [p.read_text().split() for p in seen.iterdir()]
+    assert states and all(int(frozen) > 0 for frozen, _ in states)
+    assert all(int(threshold) == reports.DRAWING_GC_THRESHOLD for _, threshold in states)
+    assert gc.get_freeze_count() == 0  # the main process's own collector is left as it was
