@@ -241,10 +241,24 @@ def _cells(axes: np.ndarray, plot: Plot, cells: list[dict[str, Any]]
         ax.set_visible(False)
 
 
+#: The last plot's rows grouped by (metric, algorithm), with the frame they came from:
+#: a figure looks up each panel's curves there instead of filtering every row again.
+_grouped: tuple[pd.DataFrame, dict[tuple[Any, Any], pd.DataFrame]] | None = None
+
+
+def _series_rows(data: pd.DataFrame, metric: str, name: str) -> pd.DataFrame:
+    """The rows of ``data`` of ``metric`` and algorithm ``name``, in their order."""
+    global _grouped
+    if _grouped is None or _grouped[0] is not data:
+        _grouped = (data, dict(tuple(data.groupby(["metric", "algorithm"], sort=False))))
+    found = _grouped[1].get((metric, name))
+    return data.iloc[:0] if found is None else found
+
+
 def _rows(data: pd.DataFrame, metric: str, cell: dict[str, Any], name: str, x: str
           ) -> pd.DataFrame:
     """One algorithm's rows of one panel, sorted by ``x``."""
-    sel = data[(data["metric"] == metric) & (data["algorithm"] == name)]
+    sel = _series_rows(data, metric, name)
     for key, value in cell.items():
         sel = sel[sel[key] == value]
     return sel.sort_values(x)
