@@ -64,11 +64,14 @@ def install() -> bool:
     return True
 
 
-def prepare(fontfile) -> None:
-    """Subset ``fontfile`` (a matplotlib ``FontPath``) to :data:`SUPERSET`, once per process:
-    done before the drawing processes fork, they all share it."""
-    key = (str(fontfile), fontfile.face_index)
-    if key in _subsets or not supported():
+def prepare(fontfile: str) -> None:
+    """Subset ``fontfile`` (matplotlib's ``FontPath``, a path with its ``face_index``) to
+    :data:`SUPERSET`, once per process: done before the drawing processes fork, they all
+    share it."""
+    if not supported():
+        return
+    key = (str(fontfile), getattr(fontfile, "face_index", 0))
+    if key in _subsets:
         return
     from matplotlib.font_manager import get_font
 
@@ -79,7 +82,7 @@ def prepare(fontfile) -> None:
         _subsets[key] = (data, dict(subset.glyph_index_map))
 
 
-def glyphs_subset(fontfile, glyphs: Iterable[int]) -> AbstractContextManager:
+def glyphs_subset(fontfile: str, glyphs: Iterable[int]) -> AbstractContextManager:
     """matplotlib's ``get_glyphs_subset``: the prepared subset of ``fontfile`` when it holds
     every one of ``glyphs``, else matplotlib's own exact subset."""
     global hits
