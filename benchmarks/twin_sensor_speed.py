@@ -21,7 +21,8 @@ CPU figure is the steadier one), median of the repeats, and the ratio current / 
 ``--breakdown`` prints where a case (b) trial's CPU microseconds go in this checkout (best
 of 7 batches: simulation, compiled filter, scoring, the whole ``run_batch``) and what the
 whole ``run_batch`` costs in the first batch of a process against the next ones (the first
-pays the kernel's page faults as the process's memory grows).
+pays the kernel's page faults as the process's memory grows), and with ``--baseline``
+(any value) the same phases of b359dda, goal 2's baseline, in its own venv.
 
 Usage: ``python benchmarks/twin_sensor_speed.py [--trials 2000] [--batch 500] [--profile]
 [--breakdown] [--baseline b359dda] [--repeats 3]`` (``--baseline ''`` skips the comparison)
@@ -168,6 +169,50 @@ def breakdown(batch: int, batches: int = 7) -> None:
           + f"; outside the filter {best['whole run_batch'] - best['filter']:.1f}")
 
 
+#: The same phases in b359dda's code (goal 2's baseline), whose simulation ran per trial and
+#: whose filter lived in ``twin_sensor.kernel``; run in its venv by ``--breakdown``.
+B359DDA_PHASES = """
+import sys, time
+from trackfuse.experiments.twin_sensor import EXPERIMENT
+from trackfuse.experiments.twin_sensor import model as m
+from trackfuse.experiments.twin_sensor.kernel import run_filter_compiled
+from trackfuse.seeding import trial_streams
+p = EXPERIMENT.defaults()
+p.update({"sensors.count": 2, "algorithms": ["mspda_parallel/mgekf"], "clutter.mean": 10.0,
+          "clutter.model": "in_gate"})
+rules, batch = m.LossRules.from_params(p), int(sys.argv[1])
+spent = {k: [] for k in ("simulation", "filter", "scoring", "whole run_batch")}
+EXPERIMENT.run_batch(p, [trial_streams(1, 0, t) for t in range(8)])
+for rep in range(7):
+    trials = range((rep + 1) * batch, (rep + 2) * batch)
+    s = time.process_time()
+    EXPERIMENT.run_batch(p, [trial_streams(1, 0, t) for t in trials])
+    spent["whole run_batch"].append(time.process_time() - s)
+    s = time.process_time()
+    sc = m.build_scenario(p)
+    data = m.stack([m.simulate(sc, trial_streams(1, 0, t)) for t in trials])
+    spent["simulation"].append(time.process_time() - s)
+    s = time.process_time()
+    est = run_filter_compiled(sc, data, m.PDAOptions("mspda_parallel", "mgekf", P_G=sc.P_G))
+    spent["filter"].append(time.process_time() - s)
+    s = time.process_time()
+    m.score_estimates(sc, data, est, rules)
+    spent["scoring"].append(time.process_time() - s)
+best = {k: min(v) / batch * 1e6 for k, v in spent.items()}
+print(", ".join(f"{k} {v:.1f}" for k, v in best.items())
+      + f"; outside the filter {best['whole run_batch'] - best['filter']:.1f}")
+"""
+
+
+def baseline_breakdown(batch: int) -> None:
+    """Print :data:`B359DDA_PHASES` measured in b359dda's own venv."""
+    home = install("b359dda")
+    out = subprocess.run([str(home / "venv" / "bin" / "python"), "-c", B359DDA_PHASES,
+                          str(batch)], cwd=home / "src", check=True, capture_output=True,
+                         text=True).stdout.strip()
+    print(f"b359dda, the same phases: {out}")
+
+
 def first_batches(batch: int, batches: int = 4) -> None:
     """Print the whole ``run_batch``'s CPU microseconds a trial in each of the first
     ``batches`` batches of a fresh process (after an 8-trial warm-up, as ``RATE``)."""
@@ -207,6 +252,8 @@ def main() -> None:
     if args.breakdown:
         breakdown(args.batch)
         first_batches(args.batch)
+        if args.baseline:
+            baseline_breakdown(args.batch)
         return
     print(f"twin_sensor, 20 scans/trial, clutter mean 10, batch {args.batch}, one process; "
           "trials/s of: compiled filter | numpy reference | whole run_batch")
