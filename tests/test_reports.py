@@ -396,8 +396,10 @@ def test_drawing_processes_leave_the_inherited_objects_to_the_main_process(tmp_p
     monkeypatch.setattr(reports.threading, "active_count", lambda: 1)  # other tests' threads
     monkeypatch.setattr(reports.os, "sched_getaffinity", lambda pid: {0, 1})  # any host: 2
     assert reports.drawing_processes(6) == 2
+    before = gc.get_freeze_count(), gc.get_threshold()  # another test may have frozen some
     write_report(run, wanted=["estimate", "estimate_vs_sigma"])  # two: drawn in forks
     states = [p.read_text().split() for p in seen.iterdir()]
-    assert states and all(int(frozen) > 0 for frozen, _ in states)
+    assert states and all(int(frozen) > before[0] for frozen, _ in states)
     assert all(int(threshold) == reports.DRAWING_GC_THRESHOLD for _, threshold in states)
-    assert gc.get_freeze_count() == 0  # the main process's own collector is left as it was
+    # the main process's own collector is left as it was (frozen objects may die, not grow)
+    assert gc.get_freeze_count() <= before[0] and gc.get_threshold() == before[1]
