@@ -18,9 +18,16 @@ def test_resample_counts_are_drawn_once_and_read_only():
     assert not first.flags.writeable
     assert first.shape == (500, 37) and (first.sum(axis=1) == 37).all()
     again = stats.bootstrap_t_mean_intervals([np.arange(37.0) ** 1.5], resamples=500, seed=11)
-    stats._resample_counts.cache_clear()
+    stats._kept_resample_counts.cache_clear()
     fresh = stats.bootstrap_t_mean_intervals([np.arange(37.0) ** 1.5], resamples=500, seed=11)
     np.testing.assert_array_equal(again, fresh)
+
+
+def test_large_resample_counts_are_not_kept(monkeypatch):
+    monkeypatch.setattr(stats, "KEPT_COUNTS", 500 * 36)
+    large = stats._resample_counts(37, 500, 11)
+    assert stats._resample_counts(37, 500, 11) is not large
+    np.testing.assert_array_equal(stats._resample_counts(37, 500, 11), large)
 
 
 def test_p_values_equal_scipy_stats_bit_for_bit():

@@ -270,11 +270,26 @@ def percentile_mean_intervals(samples: np.ndarray, resamples: int = 2000,
     return np.quantile(means, [0.025, 0.975], axis=1).T
 
 
-@lru_cache(maxsize=16)
+#: Largest table of resample counts kept for reuse (entries: 16 MB of int64; at most
+#: four kept), so a large group's bootstrap does not hold gigabytes after it is done.
+KEPT_COUNTS = 2_000_000
+
+
 def _resample_counts(n: int, resamples: int, seed: int) -> np.ndarray:
     """(resamples, n) counts of each value in each resample with replacement, read-only;
-    kept for the next group of ``n`` values (a report's tables draw the same few hundred
-    times)."""
+    kept for the next group of ``n`` values when small enough (a report's tables draw the
+    same few hundred times)."""
+    if n * resamples <= KEPT_COUNTS:
+        return _kept_resample_counts(n, resamples, seed)
+    return _draw_resample_counts(n, resamples, seed)
+
+
+@lru_cache(maxsize=4)
+def _kept_resample_counts(n: int, resamples: int, seed: int) -> np.ndarray:
+    return _draw_resample_counts(n, resamples, seed)
+
+
+def _draw_resample_counts(n: int, resamples: int, seed: int) -> np.ndarray:
     idx = np.random.default_rng(seed).integers(0, n, (resamples, n))
     counts = np.bincount((np.arange(resamples)[:, None] * n + idx).ravel(),
                          minlength=resamples * n).reshape(resamples, n)
