@@ -4,7 +4,7 @@ generator instead of one ``Generator`` per stream (``docs/runner.md``, "Seeding"
 Each child's PCG64 state is computed as numpy computes it (``SeedSequence`` entropy
 assembly, hash mixing and ``generate_state``, then PCG64's seeding of its 128-bit state and
 increment), for all trials at once; ``with stream as rng:`` sets the shared generator to the
-child's state and keeps the state it ends in. The draws are bit for bit those of
+child's state, once: each stream is visited once. The draws are bit for bit those of
 ``trial.common.spawn(children)`` (``tests/test_spawned_streams.py``), at a few microseconds
 per trial instead of about seventy.
 """
@@ -26,45 +26,37 @@ _PCG_MULT = 0x2360ED051FC65DA44385DF649FCCF645  # PCG64's 128-bit LCG multiplier
 
 
 class SharedStream:
-    """One spawned stream kept as its PCG64 state, made from its four 64-bit seed words when
-    first used. ``with stream as rng:`` sets the generator it shares with other streams to
-    that state and, on leaving, keeps where it ended; a stream made with ``revisit=False`` is
-    visited once and keeps nothing (reading the state back costs about a microsecond)."""
+    """One spawned stream, kept as its four 64-bit seed words until its one visit: ``with
+    stream as rng:`` sets the generator it shares with other streams to the stream's PCG64
+    state. Nothing is read back on leaving (that costs about a microsecond); a second visit
+    raises."""
 
-    __slots__ = ("_generator", "_seed_words", "_state", "_revisit", "_spent")
+    __slots__ = ("_generator", "_seed_words", "_spent")
 
-    def __init__(self, generator: np.random.Generator, seed_words: list[int],
-                 revisit: bool = True):
-        self._generator, self._seed_words, self._revisit = generator, seed_words, revisit
-        self._state: dict[str, Any] | None = None
-        self._spent = False
+    def __init__(self, generator: np.random.Generator, seed_words: list[int]):
+        self._generator, self._seed_words, self._spent = generator, seed_words, False
 
     def __enter__(self) -> np.random.Generator:
         if self._spent:
-            raise RuntimeError("this stream was spawned to be visited once (revisit=False)")
-        if self._state is None:
-            self._state = _pcg64_state(self._seed_words)
-        self._generator.bit_generator.state = self._state
+            raise RuntimeError("a shared stream is visited once")
+        self._spent = True
+        self._generator.bit_generator.state = _pcg64_state(self._seed_words)
         return self._generator
 
     def __exit__(self, *exc: object) -> None:
-        if self._revisit:
-            self._state = self._generator.bit_generator.state
-        else:
-            self._spent = True
+        return None
 
 
-def spawn_shared(streams: Sequence[TrialStreams], children: int, revisit: bool = True
+def spawn_shared(streams: Sequence[TrialStreams], children: int
                  ) -> list[tuple[SharedStream, ...]]:
     """For each trial, ``children`` streams equal to ``trial.common.spawn(children)`` of a
-    common stream not yet used; they share one generator, so use them from one thread.
-    ``revisit=False``: each stream is visited at most once."""
+    common stream not yet used, each to be visited once; they share one generator, so use
+    them from one thread."""
     if any("common" in vars(trial) for trial in streams):
         raise ValueError("spawn_shared needs trials whose common stream is still unused")
     generator = np.random.Generator(np.random.PCG64(0))
     words = _child_seed_words([(t.seed, t.trial) for t in streams], children)
-    return [tuple(SharedStream(generator, child, revisit) for child in trial)
-            for trial in words]
+    return [tuple(SharedStream(generator, child) for child in trial) for trial in words]
 
 
 def _child_seed_words(keys: Sequence[tuple[int, int]], children: int

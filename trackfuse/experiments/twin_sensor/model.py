@@ -313,7 +313,7 @@ def simulate(sc: Scenario, streams: Sequence[TrialStreams]) -> Batch:
     uniform, normal = np.empty((N, K, MAX_SENSORS)), np.empty((N, K, MAX_SENSORS, 2))
     wanted = np.tile(np.arange(MAX_SENSORS) < S, K)  # clutter cells: scan-, sensor-major
     nested = NestedClutter(sc.clutter_mean, N, K * MAX_SENSORS, wanted)
-    for n, (truth, init, trial_returns) in enumerate(spawn_shared(streams, 3, revisit=False)):
+    for n, (truth, init, trial_returns) in enumerate(spawn_shared(streams, 3)):
         if moving:
             with truth as rng:
                 x_true[n] = truth_trajectory(sc, rng)
