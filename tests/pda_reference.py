@@ -458,3 +458,18 @@ def run_filter(sc: Scenario, b: Batch, options: PDAOptions,
         est.X[:, k - 1], est.P[:, k - 1], est.n_valid[:, k - 1] = X, P, m
         est.inside[:, k - 1] = inside
     return score_estimates(sc, b, est, rules)
+
+
+def unit_disk(rng: np.random.Generator, n: int) -> np.ndarray:
+    """``n`` points ``(n, 2)`` uniform in the unit disk (polar sampling with sqrt radius)."""
+    return disk_points(rng.random(n), rng.random(n))
+
+
+def disk_points(u_radius: np.ndarray, u_angle: np.ndarray) -> np.ndarray:
+    """Unit-disk points (n, 2) from uniforms: radius ``sqrt(u_radius)``, angle ``2 pi u_angle``."""
+    r = np.sqrt(u_radius)
+    a = 2.0 * np.pi * u_angle
+    out = np.empty(r.shape + (2,))
+    np.multiply(r, np.cos(a), out=out[..., 0])
+    np.multiply(r, np.sin(a), out=out[..., 1])
+    return out

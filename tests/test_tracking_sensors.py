@@ -3,6 +3,7 @@
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from pda_reference import unit_disk
 
 from trackfuse.tracking.models import wrap
 from trackfuse.tracking.sensors import (
@@ -12,7 +13,6 @@ from trackfuse.tracking.sensors import (
     gate_threshold,
     gate_volume,
     modified_rows,
-    unit_disk,
 )
 
 coord = st.floats(-3e5, 3e5, allow_nan=False)

@@ -166,8 +166,9 @@ def test_one_and_two_workers_and_any_batch_size_write_identical_csvs(model, writ
 def test_padded_disk_points_are_the_numpy_disk_points_bit_for_bit():
     """The compiled placement of the in-gate clutter gives exactly the numpy disk points
     (same square root, sine and cosine) in each cell's first slots, zero after them."""
+    from pda_reference import disk_points
+
     from trackfuse.tracking.nested_clutter import padded_disk_points
-    from trackfuse.tracking.sensors import disk_points
 
     rng = np.random.default_rng(11)
     counts = rng.poisson(6.0, (30, 4, 2))

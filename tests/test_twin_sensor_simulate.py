@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from pda_reference import disk_points
 
 from trackfuse.experiments.twin_sensor import EXPERIMENT
 from trackfuse.experiments.twin_sensor.model import (
@@ -12,7 +13,7 @@ from trackfuse.experiments.twin_sensor.model import (
 )
 from trackfuse.seeding import trial_streams
 from trackfuse.tracking.models import wrap
-from trackfuse.tracking.sensors import azel, disk_points
+from trackfuse.tracking.sensors import azel
 
 
 def clutter_one(rng, mean, K, S):

@@ -92,8 +92,8 @@ def padded_disk_points(counts: np.ndarray, uniforms: np.ndarray,
     """Unit-disk points ``(N, K, S, slots, 2)`` and their validity ``(N, K, S, slots)`` of
     cells with ``counts`` (N, K, S) returns from the uniforms ``(2, total)`` behind them
     (trial-, scan-, sensor-major, as :class:`NestedClutter` gives them): radius
-    ``sqrt(u0)``, angle ``2 pi u1`` (:func:`trackfuse.tracking.sensors.disk_points`, the
-    same arithmetic); zero where not valid. Allocated by numpy, whose large arrays get
+    ``sqrt(u0)``, angle ``2 pi u1`` (numpy's ``disk_points`` in ``tests/pda_reference.py``,
+    the same arithmetic); zero where not valid. Allocated by numpy, whose large arrays get
     huge pages where the system allows (far fewer page faults than compiled code's)."""
     points = np.zeros(counts.shape + (slots, 2))
     valid = np.zeros(counts.shape + (slots,), dtype=np.bool_)

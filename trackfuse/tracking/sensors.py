@@ -86,21 +86,6 @@ def gate_volume(S: np.ndarray, gamma: float) -> np.ndarray:
         return c_n * gamma ** (n / 2) * np.sqrt(det)
 
 
-def unit_disk(rng: np.random.Generator, n: int) -> np.ndarray:
-    """``n`` points ``(n, 2)`` uniform in the unit disk (polar sampling with sqrt radius)."""
-    return disk_points(rng.random(n), rng.random(n))
-
-
-def disk_points(u_radius: np.ndarray, u_angle: np.ndarray) -> np.ndarray:
-    """Unit-disk points (n, 2) from uniforms: radius ``sqrt(u_radius)``, angle ``2 pi u_angle``."""
-    r = np.sqrt(u_radius)
-    a = 2.0 * np.pi * u_angle
-    out = np.empty(r.shape + (2,))
-    np.multiply(r, np.cos(a), out=out[..., 0])
-    np.multiply(r, np.sin(a), out=out[..., 1])
-    return out
-
-
 def inv2(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Inverse and determinant of ``S`` (..., 2, 2); never raises (a singular ``S`` gives
     non-finite entries, so one diverged trial cannot stop a batch)."""
