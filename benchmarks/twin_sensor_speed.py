@@ -99,15 +99,17 @@ def filter_rates(p: dict, batch: int) -> tuple[float, float]:
     return batch / best, batch / (time.perf_counter() - start)
 
 
-#: Times ``run_batch`` in a fresh process of either version (the same code for both: the
-#: experiment's ``run_batch(params, streams)`` has not changed its signature).
-RATE = """
+#: A fresh process of either version, ``run_batch`` run once on 8 trials (the same code for
+#: both: the experiment's ``run_batch(params, streams)`` has not changed its signature).
+WARMED = """
 import json, sys, time
 from trackfuse.experiments.twin_sensor import EXPERIMENT
 from trackfuse.seeding import trial_streams
 p, trials, batch = json.loads(sys.argv[1])
 EXPERIMENT.run_batch(p, [trial_streams(1, 0, t) for t in range(8)])
-start, cpu = time.perf_counter(), time.process_time()
+"""
+#: Then times ``run_batch`` over ``trials`` trials in batches of ``batch``.
+RATE = WARMED + """start, cpu = time.perf_counter(), time.process_time()
 for first in range(0, trials, batch):
     EXPERIMENT.run_batch(p, [trial_streams(1, 0, t) for t in range(first, min(first + batch,
                                                                             trials))])
@@ -215,8 +217,8 @@ def baseline_breakdown(batch: int) -> None:
 
 def first_batches(batch: int, batches: int = 4) -> None:
     """Print the whole ``run_batch``'s CPU microseconds a trial in each of the first
-    ``batches`` batches of a fresh process (after an 8-trial warm-up, as ``RATE``)."""
-    code = RATE.split("start, cpu =")[0] + f"""
+    ``batches`` batches of a fresh process (after :data:`WARMED`'s 8-trial warm-up)."""
+    code = WARMED + f"""
 import resource
 for first in range(0, {batches * batch}, {batch}):
     cpu, faults = time.process_time(), resource.getrusage(resource.RUSAGE_SELF).ru_minflt
