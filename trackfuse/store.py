@@ -66,7 +66,9 @@ def _read_chunks(path: Path, chunk_rows: int, wanted: set[str] | None
         reader = pq.ParquetFile(path)
         names = [c for c in reader.schema_arrow.names if wanted is None or c in wanted]
         for batch in reader.iter_batches(batch_size=chunk_rows, columns=names):
-            yield batch.to_pandas()
+            frame = batch.to_pandas()
+            del batch  # the Arrow batch is not held while the caller reads the next
+            yield frame
         return
     try:
         yield from pd.read_csv(path, chunksize=chunk_rows, low_memory=False,

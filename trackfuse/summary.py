@@ -22,9 +22,11 @@ STAT_COLUMNS = ("n", "mean", "m2")
 
 class ChunkStats:
     """The ``(*group, metric, n, mean, m2)`` rows of every chunk read so far, kept small: a
-    chunk whose groups and metrics are those of the chunk before it (the usual case: rows
-    come point by point, a point spans many chunks) keeps only its three statistics, 24
-    bytes a group and metric, and shares the key columns of the first such chunk."""
+    chunk whose groups and metrics come in the order of the chunk before it keeps only its
+    three statistics, 24 bytes a group and metric, and shares the key columns of the first
+    such chunk. That is the case when a point spans many chunks and a chunk holds whole
+    trials (200,000 rows of 40-row or 160-row trials); a chunk that starts mid-trial lists
+    its groups in another order and keeps its own key columns too."""
 
     def __init__(self) -> None:
         self.chunks: list[tuple[pd.DataFrame, list[np.ndarray]]] = []

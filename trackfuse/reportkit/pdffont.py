@@ -28,7 +28,7 @@ from matplotlib.backends import _backend_pdf_ps
 SUPERSET: tuple[int, ...] = (
     *range(0x20, 0x7F), *range(0xA0, 0x100),  # ASCII, Latin-1 (°, ±, ×, µ, ·, ²)
     *range(0x391, 0x3CA),  # Greek
-    *range(0x2010, 0x2045), 0x2030,  # dashes, quotes, bullets, ellipsis, per mille
+    *range(0x2010, 0x2045),  # dashes, quotes, bullets, ellipsis, per mille
     *range(0x2070, 0x209D),  # super- and subscripts
     *range(0x2190, 0x2194),  # arrows
     0x2202, 0x2207, 0x2208, 0x2211, 0x2212, 0x221A, 0x221D, 0x221E, 0x222B,
@@ -39,8 +39,6 @@ SUPERSET: tuple[int, ...] = (
 #: ``(font file, face index)`` -> (subset font as bytes, original -> subset glyph index).
 _subsets: dict[tuple[str, int], tuple[bytes, dict[int, int]]] = {}
 _matplotlib_subset: Callable[..., AbstractContextManager] = _backend_pdf_ps.get_glyphs_subset
-#: Number of PDF fonts taken from a shared subset in this process (for tests).
-hits = 0
 
 
 def supported() -> bool:
@@ -85,14 +83,12 @@ def prepare(fontfile: str) -> None:
 def glyphs_subset(fontfile: str, glyphs: Iterable[int]) -> AbstractContextManager:
     """matplotlib's ``get_glyphs_subset``: the prepared subset of ``fontfile`` when it holds
     every one of ``glyphs``, else matplotlib's own exact subset."""
-    global hits
     glyphs = set(glyphs)
     found = _subsets.get((str(fontfile), getattr(fontfile, "face_index", 0)))
     if found is None or not glyphs <= found[1].keys():
         return _matplotlib_subset(fontfile, glyphs)
     from fontTools.ttLib import TTFont
 
-    hits += 1
     data, index_map = found
     font = TTFont(io.BytesIO(data), recalcTimestamp=False, recalcBBoxes=False)
     return _backend_pdf_ps.SubsetResults(font, dict(index_map))._as_cm()

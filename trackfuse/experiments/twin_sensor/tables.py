@@ -131,10 +131,9 @@ def final_scan_table(run: RunData) -> pd.DataFrame:
     table = grouped[swept_keys(run.config)].first().reset_index()
     table["algorithm"] = table.pop("algorithm")  # after the swept keys
     table["trials"] = grouped.size().to_numpy()
-    n = table["trials"].to_numpy()
     for rule in rules_in(trials):
         k = grouped[rule].sum().to_numpy()
-        n_rule = n if rule in RULES else grouped[rule].count().to_numpy()  # IPDA rows only
+        n_rule = grouped[rule].count().to_numpy()  # the existence rules: IPDA rows only
         lo, hi = wilson_interval(k, n_rule)
         with np.errstate(invalid="ignore", divide="ignore"):
             _with_interval(table, f"{rule}_pct", 100 * k / n_rule, 100 * lo, 100 * hi)
