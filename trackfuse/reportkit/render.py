@@ -215,8 +215,9 @@ def draw(run: RunData, plot: Plot, title: str = "", decorate: Decorate | None = 
     fig, axes = panels(nrows, ncols, plot.width, plot.panel_height,
                        extra_height=0.75 + 0.35 * bool(title), sharex=True, sharey=share)
     with context():
+        groups = _grouped_rows(data)
         for ax, metric, cell in _cells(axes, plot, cells):
-            _panel(ax, run.experiment, data, plot, (metric, cell), names, order)
+            _panel(ax, run.experiment, (data, groups), plot, (metric, cell), names, order)
             if decorate is not None:
                 decorate(ax, metric, cell, _factor(run.experiment, plot, data, metric))
         _frame(fig, axes, run.experiment, plot, data, cells, order)
@@ -241,24 +242,22 @@ def _cells(axes: np.ndarray, plot: Plot, cells: list[dict[str, Any]]
         ax.set_visible(False)
 
 
-#: The last plot's rows grouped by (metric, algorithm), with the frame they came from:
-#: a figure looks up each panel's curves there instead of filtering every row again.
-_grouped: tuple[pd.DataFrame, dict[tuple[Any, Any], pd.DataFrame]] | None = None
+RowGroups = dict[tuple[Any, Any], pd.DataFrame]
+"""A plot's summary rows grouped by (metric, algorithm), once a figure: each panel looks its
+curves up there instead of filtering every row again."""
 
 
-def _series_rows(data: pd.DataFrame, metric: str, name: str) -> pd.DataFrame:
-    """The rows of ``data`` of ``metric`` and algorithm ``name``, in their order."""
-    global _grouped
-    if _grouped is None or _grouped[0] is not data:
-        _grouped = (data, dict(tuple(data.groupby(["metric", "algorithm"], sort=False))))
-    found = _grouped[1].get((metric, name))
-    return data.iloc[:0] if found is None else found
+def _grouped_rows(data: pd.DataFrame) -> RowGroups:
+    """``data``'s rows by (metric, algorithm), each group in its order."""
+    return dict(tuple(data.groupby(["metric", "algorithm"], sort=False)))
 
 
-def _rows(data: pd.DataFrame, metric: str, cell: dict[str, Any], name: str, x: str
-          ) -> pd.DataFrame:
-    """One algorithm's rows of one panel, sorted by ``x``."""
-    sel = _series_rows(data, metric, name)
+def _rows(data: pd.DataFrame, groups: RowGroups, metric: str, cell: dict[str, Any], name: str,
+          x: str) -> pd.DataFrame:
+    """One algorithm's rows of one panel (from ``groups``, ``data``'s groups), sorted by
+    ``x``."""
+    found = groups.get((metric, name))
+    sel = data.iloc[:0] if found is None else found
     for key, value in cell.items():
         sel = sel[sel[key] == value]
     return sel.sort_values(x)
@@ -291,15 +290,15 @@ def _factor(experiment: Experiment, plot: Plot, data: pd.DataFrame, metric: str)
     return y_quantity(experiment, plot, metric).shown(means)[0]
 
 
-def _panel(ax: Axes, experiment: Experiment, data: pd.DataFrame, plot: Plot,
+def _panel(ax: Axes, experiment: Experiment, summary: tuple[pd.DataFrame, RowGroups], plot: Plot,
            where: tuple[str, dict[str, Any]], names: list[str], order: list[Any]) -> None:
-    """One panel (``where``: its metric and setting): each algorithm's mean with its
-    interval, then the references."""
-    metric, cell = where
+    """One panel (``where``: its metric and setting; ``summary``: the plot's rows and their
+    :func:`_grouped_rows`): each algorithm's mean with its interval, then the references."""
+    (data, groups), (metric, cell) = summary, where
     scale = _factor(experiment, plot, data, metric)
     drawn: list[np.ndarray] = []
     for i, name in enumerate(names):
-        rows = _rows(data, metric, cell, name, plot.x)
+        rows = _rows(data, groups, metric, cell, name, plot.x)
         if rows.empty:
             continue
         x = _positions(rows, plot, order, _slot(i, len(names)))
@@ -313,9 +312,9 @@ def _panel(ax: Axes, experiment: Experiment, data: pd.DataFrame, plot: Plot,
         drawn.append(mean)
         _series(ax, x, mean, low, high, looks_of(experiment, name), plot.categories)
     for reference in (r for r in plot.references if not r.metrics or metric in r.metrics):
-        _reference(ax, experiment, data, plot, where, reference, (scale, order))
+        _reference(ax, experiment, summary, plot, where, reference, (scale, order))
         if reference.values:
-            _paper_values(ax, experiment, data, plot, where, reference, (scale, order))
+            _paper_values(ax, experiment, summary, plot, where, reference, (scale, order))
 
 
 def _series(ax: Axes, x: np.ndarray, mean: np.ndarray, low: np.ndarray, high: np.ndarray,
@@ -334,7 +333,8 @@ def _series(ax: Axes, x: np.ndarray, mean: np.ndarray, low: np.ndarray, high: np
         ax.fill_between(x, low, high, color=look.colour, alpha=BAND_ALPHA, linewidth=0)
 
 
-def _reference(ax: Axes, experiment: Experiment, data: pd.DataFrame, plot: Plot,
+def _reference(ax: Axes, experiment: Experiment, summary: tuple[pd.DataFrame, RowGroups],
+               plot: Plot,
                where: tuple[str, dict[str, Any]], ref: Reference,
                shown: tuple[float, list[Any]]) -> None:
     """One :class:`~trackfuse.reportkit.spec.Reference` in a panel (``shown``: the y
@@ -355,7 +355,7 @@ def _reference(ax: Axes, experiment: Experiment, data: pd.DataFrame, plot: Plot,
                         label=ref.label)
     if not ref.algorithm:
         return
-    rows = _rows(data, metric, cell, ref.algorithm, plot.x)
+    rows = _rows(*summary, metric, cell, ref.algorithm, plot.x)
     if rows.empty:
         return
     label = ref.label or looks_of(experiment, ref.algorithm).label
@@ -379,7 +379,8 @@ PAPER_STAR = {"marker": "*", "markersize": 8, "markerfacecolor": "white",
               "markeredgewidth": 1.0, "linestyle": "none", "zorder": 5}
 
 
-def _paper_values(ax: Axes, experiment: Experiment, data: pd.DataFrame, plot: Plot,
+def _paper_values(ax: Axes, experiment: Experiment, summary: tuple[pd.DataFrame, RowGroups],
+                  plot: Plot,
                   where: tuple[str, dict[str, Any]], ref: Reference,
                   shown: tuple[float, list[Any]]) -> None:
     """The paper's value of each method of ``ref.values`` as an open star in its colour,
@@ -387,7 +388,7 @@ def _paper_values(ax: Axes, experiment: Experiment, data: pd.DataFrame, plot: Pl
     category, beside our marker on a curve; one legend entry (``ref.label``, grey)."""
     (metric, cell), (scale, order) = where, shown
     for name, value in ref.values:
-        rows = _rows(data, metric, cell, name, plot.x)
+        rows = _rows(*summary, metric, cell, name, plot.x)
         rows = rows[rows["point"].isin(ref.points)]
         if rows.empty:
             continue
@@ -479,7 +480,7 @@ def draw_beside(parts: Sequence[tuple[RunData, str]], plot: Plot, title: str = "
         for ax, (run, panel_title) in zip(axes[0], parts, strict=True):
             data = selected(run.summary, plot)
             order = x_order(run, plot, data)
-            _panel(ax, run.experiment, data, plot, (plot.metrics[0], {}),
+            _panel(ax, run.experiment, (data, _grouped_rows(data)), plot, (plot.metrics[0], {}),
                    algorithms(data, plot), order)
             ax.set_xlabel(kit_axes.x_axis([ax], order, plot.xscale,
                                           quantity(run.experiment, plot.x), plot.categories,
